@@ -1,0 +1,80 @@
+//! Commands 22–25: datasets and transfer functions.
+
+use crate::ffi::{c_path, either, library, null, unsupported};
+use crate::types::{vlfloat, vlint};
+use std::os::raw::c_char;
+use vlib_core::mapping::{MAX_OUTPUTS, MAX_POINTS};
+use vlib_core::{Command, Error, ErrorCode, MappingType};
+
+/// Loads a `.vlb` dataset under the id `id`.
+///
+/// # Safety
+/// `file` must be NULL or a NUL-terminated string.
+#[no_mangle]
+pub unsafe extern "C" fn vlLoad(id: vlint, file: *const c_char) {
+    library(Command::Load, (), |lib| {
+        let path = c_path(Command::Load.name(), "file", file)?;
+        lib.load(id, path)
+    })
+}
+
+/// Frees the dataset `id`.
+#[no_mangle]
+pub unsafe extern "C" fn vlUnload(id: vlint) {
+    library(Command::Unload, (), |lib| lib.unload(id))
+}
+
+/// The normalised value of dataset `id` at dataset coordinates (x, y, z) in [0, 1]^3; 0 on
+/// error.
+#[no_mangle]
+pub unsafe extern "C" fn vlSample(id: vlint, x: vlfloat, y: vlfloat, z: vlfloat) -> vlfloat {
+    either(
+        Command::Sample,
+        0.0,
+        |_| {
+            Err(unsupported(
+                Command::Sample,
+                "sampling a dataset inside a field function is",
+            ))
+        },
+        |lib| lib.sample(id, x, y, z),
+    )
+}
+
+/// Declares transfer function `id`, `VL_LOOKUP` or `VL_RAMP`: `table` holds `points` rows of
+/// (a, b_1 … b_outputs), the a strictly increasing.
+///
+/// # Safety
+/// `table` must be NULL or point to `points * (outputs + 1)` floats.
+#[no_mangle]
+pub unsafe extern "C" fn vlMapping(
+    id: vlint,
+    r#type: vlint,
+    points: vlint,
+    outputs: vlint,
+    table: *const vlfloat,
+) {
+    library(Command::Mapping, (), |lib| {
+        let kind = MappingType::from_raw(r#type)?;
+        if table.is_null() {
+            return Err(null(Command::Mapping.name(), "table"));
+        }
+        // The sizes are checked before the length is computed, so no huge slice is ever formed.
+        if points < 1
+            || points as usize > MAX_POINTS
+            || outputs < 1
+            || outputs as usize > MAX_OUTPUTS
+        {
+            return Err(Error::new(
+                ErrorCode::BadValue,
+                format!(
+                    "vlMapping: {points} points, {outputs} outputs (must be 1 … {MAX_POINTS} and 1 … {MAX_OUTPUTS})"
+                ),
+            ));
+        }
+        let len = points as usize * (outputs as usize + 1);
+        // SAFETY: non-NULL, and `len` floats long by the caller's contract.
+        let table = std::slice::from_raw_parts(table, len);
+        lib.mapping(id, kind, points, outputs, table)
+    })
+}

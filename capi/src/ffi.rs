@@ -1,0 +1,205 @@
+//! The boundary between C and the core: the panic guard, the global library state, the scope
+//! dispatch every command goes through, and pointer and string helpers.
+//!
+//! Every exported function's body runs inside [`boundary`]: an `Err` from the core or from
+//! argument checks is recorded for `vlError` and a neutral value returned; a panic is caught and
+//! recorded as `VL_INTERNAL`. No error ever crosses into C as anything but a queued code.
+//!
+//! The library lives in [`STATE`] (`None` before `vlInit` and after the final `vlEnd`). Scope
+//! dispatch ([`dispatch`], [`library`]) first asks the thread-local sample context: in sample scope
+//! the state is never locked (the rendering `vlEnd` holds it), and which commands are legal comes
+//! from `vlib_core::scope`, the one table of legality.
+
+use crate::errors;
+use crate::sample;
+use std::ffi::{CStr, OsStr};
+use std::os::raw::c_char;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::Path;
+use std::sync::{Mutex, MutexGuard};
+use vlib_core::scope::require;
+use vlib_core::{Command, Error, ErrorCode, Library, Result, Sample, Scope};
+
+/// The library of the process, `None` when uninitialised.
+static STATE: Mutex<Option<Library>> = Mutex::new(None);
+
+/// Locks the state, recovering from poisoning: the core changes nothing before it has validated
+/// a call, and a scene is taken out of the state before it is rendered, so a panic never leaves a
+/// half-built value behind.
+pub(crate) fn lock_state() -> MutexGuard<'static, Option<Library>> {
+    STATE.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Runs `f`, turning an `Err` or a panic into a recorded error and `neutral`.
+pub(crate) fn boundary<T>(neutral: T, f: impl FnOnce() -> Result<T>) -> T {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(Ok(v)) => v,
+        Ok(Err(e)) => {
+            errors::record(e);
+            neutral
+        }
+        Err(payload) => {
+            let msg = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            errors::record(Error::new(
+                ErrorCode::Internal,
+                format!("panic caught: {msg}"),
+            ));
+            neutral
+        }
+    }
+}
+
+/// Runs command `cmd` inside the panic boundary: in sample scope `in_sample` gets the current
+/// sample (if `cmd` is legal there, else `VL_BADSCOPE` without locking the state); otherwise
+/// `outside` gets the locked state.
+pub(crate) fn dispatch<T>(
+    cmd: Command,
+    neutral: T,
+    in_sample: impl FnOnce(&mut Sample) -> Result<T>,
+    outside: impl FnOnce(&mut Option<Library>) -> Result<T>,
+) -> T {
+    boundary(neutral, || {
+        let sampled = sample::with_current(|s| {
+            require(cmd, Scope::Sample)?;
+            in_sample(s)
+        });
+        match sampled {
+            Some(r) => r,
+            None => outside(&mut lock_state()),
+        }
+    })
+}
+
+/// The scope of the locked state.
+pub(crate) fn scope_of(state: &Option<Library>) -> Scope {
+    state.as_ref().map_or(Scope::Uninitialised, Library::scope)
+}
+
+/// Runs command `cmd`: in sample scope `in_sample` gets the current sample; otherwise the scope of
+/// the state is checked (before any argument is converted, so an illegal call always reports
+/// `VL_BADSCOPE`) and `outside` gets the library.
+pub(crate) fn either<T>(
+    cmd: Command,
+    neutral: T,
+    in_sample: impl FnOnce(&mut Sample) -> Result<T>,
+    outside: impl FnOnce(&mut Library) -> Result<T>,
+) -> T {
+    dispatch(cmd, neutral, in_sample, |state| {
+        require(cmd, scope_of(state))?;
+        match state {
+            Some(lib) => outside(lib),
+            None => never(cmd),
+        }
+    })
+}
+
+/// Runs a command that is legal only outside sample scope, in an initialised library.
+pub(crate) fn library<T>(cmd: Command, neutral: T, f: impl FnOnce(&mut Library) -> Result<T>) -> T {
+    either(cmd, neutral, |_| never(cmd), f)
+}
+
+/// The result for a scope that the scope table allows but a command's C form does not handle;
+/// unreachable while the table and the command agree.
+pub(crate) fn never<T>(cmd: Command) -> Result<T> {
+    Err(Error::new(
+        ErrorCode::Internal,
+        format!("{} has no implementation for this scope", cmd.name()),
+    ))
+}
+
+/// The error of a command that is valid but not implemented yet.
+pub(crate) fn unsupported(cmd: Command, what: &str) -> Error {
+    Error::new(
+        ErrorCode::Unsupported,
+        format!("{}: {what} not implemented yet", cmd.name()),
+    )
+}
+
+/// The error for a NULL argument.
+pub(crate) fn null(name: &str, arg: &str) -> Error {
+    Error::new(ErrorCode::NullPointer, format!("{name}: {arg} is NULL"))
+}
+
+/// Reads `N` floats from a C array.
+///
+/// # Safety
+/// `p` must be NULL or point to `N` readable floats.
+pub(crate) unsafe fn read_floats<const N: usize>(
+    name: &str,
+    arg: &str,
+    p: *const f32,
+) -> Result<[f32; N]> {
+    if p.is_null() {
+        return Err(null(name, arg));
+    }
+    let mut out = [0.0; N];
+    // SAFETY: non-NULL and, by the caller's contract, N floats long; unaligned reads are fine.
+    std::ptr::copy_nonoverlapping(p, out.as_mut_ptr(), N);
+    Ok(out)
+}
+
+/// A C string as a path; any bytes are accepted (paths need not be UTF-8).
+///
+/// # Safety
+/// `s` must be NULL or a NUL-terminated string that outlives the returned reference.
+pub(crate) unsafe fn c_path<'a>(name: &str, arg: &str, s: *const c_char) -> Result<&'a Path> {
+    if s.is_null() {
+        return Err(null(name, arg));
+    }
+    // SAFETY: non-NULL and NUL-terminated by the caller's contract.
+    let bytes = CStr::from_ptr(s).to_bytes();
+    os_str(name, bytes).map(Path::new)
+}
+
+#[cfg(unix)]
+fn os_str<'a>(_: &str, bytes: &'a [u8]) -> Result<&'a OsStr> {
+    use std::os::unix::ffi::OsStrExt;
+    Ok(OsStr::from_bytes(bytes))
+}
+
+#[cfg(not(unix))]
+fn os_str<'a>(name: &str, bytes: &'a [u8]) -> Result<&'a OsStr> {
+    // Elsewhere a path must be UTF-8.
+    std::str::from_utf8(bytes)
+        .map(OsStr::new)
+        .map_err(|_| Error::new(ErrorCode::BadFile, format!("{name}: path is not UTF-8")))
+}
+
+/// A textual snapshot of the library state ("uninitialised" before `vlInit`), for tests that
+/// check a refused call changed nothing. Not callable from a field function (the state is locked
+/// by the renderer then): in sample scope it returns "sample scope".
+pub fn state_fingerprint() -> String {
+    if sample::active() {
+        return "sample scope".into();
+    }
+    match &*lock_state() {
+        Some(lib) => lib.fingerprint(),
+        None => "uninitialised".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_panic_becomes_vl_internal_and_a_poisoned_state_is_recovered() {
+        let v = boundary(7, || -> Result<i32> {
+            let _state = lock_state();
+            panic!("boom");
+        });
+        assert_eq!(v, 7, "the neutral value");
+        assert_eq!(errors::pop(), ErrorCode::Internal);
+        assert!(errors::last_error_message().is_some_and(|m| m.contains("boom")));
+        assert!(STATE.is_poisoned());
+        assert!(
+            lock_state().is_none(),
+            "the state is usable after the panic"
+        );
+        STATE.clear_poison();
+    }
+}

@@ -1,0 +1,137 @@
+//! Commands 26–38: objects, their transforms and their field programs.
+
+use crate::callbacks::{CField, CNormal};
+use crate::ffi::{either, library, null, read_floats};
+use crate::types::{vlfloat, vlint};
+use std::os::raw::c_void;
+use vlib_core::{Command, Fields};
+
+/// Opens an object; it captures the rendering parameters in force.
+#[no_mangle]
+pub unsafe extern "C" fn vlObject() {
+    library(Command::Object, (), |lib| lib.object())
+}
+
+/// Scales the object (non-zero factors).
+#[no_mangle]
+pub unsafe extern "C" fn vlScale(x: vlfloat, y: vlfloat, z: vlfloat) {
+    library(Command::Scale, (), |lib| lib.scale(x, y, z))
+}
+
+/// Translates the object.
+#[no_mangle]
+pub unsafe extern "C" fn vlTranslate(x: vlfloat, y: vlfloat, z: vlfloat) {
+    library(Command::Translate, (), |lib| lib.translate(x, y, z))
+}
+
+/// Rotates the object by degrees about x, then y, then z.
+#[no_mangle]
+pub unsafe extern "C" fn vlRotate(x: vlfloat, y: vlfloat, z: vlfloat) {
+    library(Command::Rotate, (), |lib| lib.rotate(x, y, z))
+}
+
+/// Mirrors object space (p → 1 − p) on the axes `VL_X | VL_Y | VL_Z` named.
+#[no_mangle]
+pub unsafe extern "C" fn vlFlip(axes: vlint) {
+    library(Command::Flip, (), |lib| lib.flip(axes))
+}
+
+/// Applies a general affine 4×4 transform, row-major (bottom row 0 0 0 1).
+///
+/// # Safety
+/// `m` must be NULL or point to 16 floats.
+#[no_mangle]
+pub unsafe extern "C" fn vlMatrix(m: *const vlfloat) {
+    library(Command::Matrix, (), |lib| {
+        let m = read_floats::<16>(Command::Matrix.name(), "m", m)?;
+        lib.matrix(&m)
+    })
+}
+
+/// Scales the object's boundary box about its centre without scaling the object.
+#[no_mangle]
+pub unsafe extern "C" fn vlBoundary(x: vlfloat, y: vlfloat, z: vlfloat) {
+    library(Command::Boundary, (), |lib| lib.boundary(x, y, z))
+}
+
+/// Adds a spatial transfer function, which may rewrite p for the instructions after it.
+///
+/// # Safety
+/// `f` must be NULL or a function that is safe to call concurrently with `misc`.
+#[no_mangle]
+pub unsafe extern "C" fn vlSpatial(
+    f: Option<unsafe extern "C" fn(p: *mut vlfloat, misc: *mut c_void)>,
+    misc: *mut c_void,
+) {
+    library(Command::Spatial, (), |lib| {
+        let f = CField::new(f, misc).ok_or_else(|| null(Command::Spatial.name(), "f"))?;
+        lib.spatial(f.into_core())
+    })
+}
+
+/// In an object: an instruction assigning `value` to `fields`. In a field function: assigns
+/// `value` at the current point to the fields of `fields` that the `vlFunction` call named.
+/// Values are clamped to [0, 1]; NaN becomes 0.
+#[no_mangle]
+pub unsafe extern "C" fn vlSet(fields: vlint, value: vlfloat) {
+    either(
+        Command::Set,
+        (),
+        |s| s.set(Fields::from_raw(fields)?, value),
+        |lib| lib.set(Fields::from_raw(fields)?, value),
+    )
+}
+
+/// An instruction running the field function `f` at every sample point; it may write `fields`.
+///
+/// # Safety
+/// `f` must be NULL or a function that is safe to call concurrently from several threads with
+/// `misc`, for as long as the scene that uses it is being rendered.
+#[no_mangle]
+pub unsafe extern "C" fn vlFunction(
+    fields: vlint,
+    f: Option<unsafe extern "C" fn(p: *mut vlfloat, misc: *mut c_void)>,
+    misc: *mut c_void,
+) {
+    library(Command::Function, (), |lib| {
+        let f = CField::new(f, misc).ok_or_else(|| null(Command::Function.name(), "f"))?;
+        lib.function_arc(Fields::from_raw(fields)?, f.into_core())
+    })
+}
+
+/// An instruction casting dataset `id` to `fields`, with the interpolation in force now.
+#[no_mangle]
+pub unsafe extern "C" fn vlDataset(fields: vlint, id: vlint) {
+    library(Command::Dataset, (), |lib| {
+        lib.dataset(Fields::from_raw(fields)?, id)
+    })
+}
+
+/// An instruction: `targets` = Φ(`mapping`)(value of field `source`), output `output` (from 1).
+#[no_mangle]
+pub unsafe extern "C" fn vlMap(targets: vlint, source: vlint, mapping: vlint, output: vlint) {
+    library(Command::Map, (), |lib| {
+        lib.map(
+            Fields::from_raw(targets)?,
+            Fields::from_raw(source)?,
+            mapping,
+            output,
+        )
+    })
+}
+
+/// Appends a normal function to the object's chain; it may rewrite the normal n at point p.
+///
+/// # Safety
+/// `f` must be NULL or a function that is safe to call concurrently from several threads with
+/// `misc`.
+#[no_mangle]
+pub unsafe extern "C" fn vlNormal(
+    f: Option<unsafe extern "C" fn(n: *mut vlfloat, p: *mut vlfloat, misc: *mut c_void)>,
+    misc: *mut c_void,
+) {
+    library(Command::Normal, (), |lib| {
+        let f = CNormal::new(f, misc).ok_or_else(|| null(Command::Normal.name(), "f"))?;
+        lib.normal_arc(f.into_core())
+    })
+}

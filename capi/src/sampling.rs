@@ -1,0 +1,99 @@
+//! Commands 39–44: what a field or normal function may ask about the current point.
+//!
+//! All of them are legal only in sample scope; elsewhere they record `VL_BADSCOPE`. Children
+//! (nested objects) are not implemented yet, so the `vlChild*` commands record `VL_UNSUPPORTED`.
+
+use crate::ffi::{either, never, null, unsupported};
+use crate::types::{vlfloat, vlint};
+use vlib_core::{Command, Fields};
+
+/// Inside a field or normal function: the current value of one field at this point; 0 on error.
+#[no_mangle]
+pub unsafe extern "C" fn vlField(field: vlint) -> vlfloat {
+    either(
+        Command::Field,
+        0.0,
+        |s| s.field(Fields::from_raw(field)?),
+        |_| never(Command::Field),
+    )
+}
+
+/// Inside a field or normal function: writes the world-space position of the current point.
+///
+/// # Safety
+/// `world` must be NULL or point to 3 writable floats.
+#[no_mangle]
+pub unsafe extern "C" fn vlPosition(world: *mut vlfloat) {
+    either(
+        Command::Position,
+        (),
+        |s| {
+            if world.is_null() {
+                return Err(null(Command::Position.name(), "world"));
+            }
+            let w = s.world_position();
+            // SAFETY: non-NULL and 3 floats long by the caller's contract.
+            std::ptr::copy_nonoverlapping(w.as_ptr(), world, 3);
+            Ok(())
+        },
+        |_| never(Command::Position),
+    )
+}
+
+/// Inside a field function: the number of children of the object being evaluated.
+#[no_mangle]
+pub unsafe extern "C" fn vlChildCount() -> vlint {
+    either(
+        Command::ChildCount,
+        0,
+        |_| Err(unsupported(Command::ChildCount, "children are")),
+        |_| never(Command::ChildCount),
+    )
+}
+
+/// Inside a field function: whether the current point lies inside child `child` (from 1).
+#[no_mangle]
+pub unsafe extern "C" fn vlChildHit(child: vlint) -> vlint {
+    let _ = child;
+    either(
+        Command::ChildHit,
+        0,
+        |_| Err(unsupported(Command::ChildHit, "children are")),
+        |_| never(Command::ChildHit),
+    )
+}
+
+/// Inside a field function: a field of child `child` (from 1) at the current point.
+#[no_mangle]
+pub unsafe extern "C" fn vlChildField(child: vlint, field: vlint) -> vlfloat {
+    let _ = child;
+    either(
+        Command::ChildField,
+        0.0,
+        |_| {
+            Fields::single_from_raw(field)?;
+            Err(unsupported(Command::ChildField, "children are"))
+        },
+        |_| never(Command::ChildField),
+    )
+}
+
+/// Inside a normal function: writes the normal of child `child` (from 1) at the current point.
+///
+/// # Safety
+/// `n` must be NULL or point to 3 writable floats.
+#[no_mangle]
+pub unsafe extern "C" fn vlChildNormal(child: vlint, n: *mut vlfloat) {
+    let _ = child;
+    either(
+        Command::ChildNormal,
+        (),
+        |_| {
+            if n.is_null() {
+                return Err(null(Command::ChildNormal.name(), "n"));
+            }
+            Err(unsupported(Command::ChildNormal, "children are"))
+        },
+        |_| never(Command::ChildNormal),
+    )
+}

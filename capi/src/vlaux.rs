@@ -1,0 +1,129 @@
+//! vlaux, the auxiliary library (`vlaux.h`): camera shorthand, noise, turbulence, splines and
+//! ready-made field functions, all thin wrappers over `vlib_core::aux`.
+//!
+//! These are not commands and have no scope of their own, except that the field functions call
+//! `vlSet`. Errors (NULL pointers, bad counts) are recorded for `vlError` and yield 0.
+
+use crate::ffi::{boundary, null, read_floats};
+use crate::types::{vlfloat, vlint, VLCAMERA, VL_ALLFIELDS};
+use std::os::raw::c_void;
+use vlib_core::{Error, ErrorCode};
+
+/// The most knots `vluSpline` accepts.
+pub const MAX_SPLINE_KNOTS: vlint = 1 << 16;
+
+/// Sets the camera at eye (ex, ey, ez) looking at (lx, ly, lz), +y up, default field of view.
+#[no_mangle]
+pub unsafe extern "C" fn vluCamera(
+    ex: vlfloat,
+    ey: vlfloat,
+    ez: vlfloat,
+    lx: vlfloat,
+    ly: vlfloat,
+    lz: vlfloat,
+) {
+    let camera = VLCAMERA {
+        eye: [ex, ey, ez],
+        at: [lx, ly, lz],
+        up: [0.0, 1.0, 0.0],
+        fov: vlib_core::scene::DEFAULT_FOV,
+    };
+    crate::vlCamera(&camera)
+}
+
+/// Perlin noise in [-1, 1] at `p * size`, with a seeded permutation (0 = Perlin's).
+///
+/// # Safety
+/// `p` must be NULL or point to 3 floats.
+#[no_mangle]
+pub unsafe extern "C" fn vluNoise(p: *const vlfloat, size: vlfloat, seed: vlint) -> vlfloat {
+    boundary(0.0, || {
+        let p = read_floats::<3>("vluNoise", "p", p)?;
+        Ok(vlib_core::vlaux::noise(p, size, seed))
+    })
+}
+
+/// Perlin turbulence in [0, 2): the sum of |noise| over `octaves` octaves from `size`.
+///
+/// # Safety
+/// `p` must be NULL or point to 3 floats.
+#[no_mangle]
+pub unsafe extern "C" fn vluTurbulence(
+    p: *const vlfloat,
+    size: vlfloat,
+    octaves: vlint,
+    seed: vlint,
+) -> vlfloat {
+    boundary(0.0, || {
+        let p = read_floats::<3>("vluTurbulence", "p", p)?;
+        Ok(vlib_core::vlaux::turbulence(p, size, octaves, seed))
+    })
+}
+
+/// The Catmull-Rom spline through `count` knots at `v` in [0, 1]. A negative count or more than
+/// 65536 knots is `VL_BADVALUE`; NULL knots with a positive count is `VL_NULLPOINTER`.
+///
+/// # Safety
+/// `knots` must be NULL or point to `count` floats.
+#[no_mangle]
+pub unsafe extern "C" fn vluSpline(v: vlfloat, count: vlint, knots: *const vlfloat) -> vlfloat {
+    boundary(0.0, || {
+        if !(0..=MAX_SPLINE_KNOTS).contains(&count) {
+            return Err(Error::new(
+                ErrorCode::BadValue,
+                format!("vluSpline: {count} knots (must be 0 … {MAX_SPLINE_KNOTS})"),
+            ));
+        }
+        if count == 0 {
+            return Ok(vlib_core::vlaux::spline(v, &[]));
+        }
+        if knots.is_null() {
+            return Err(null("vluSpline", "knots"));
+        }
+        // SAFETY: non-NULL and `count` floats long by the caller's contract (count ≤ 65536).
+        let knots = std::slice::from_raw_parts(knots, count as usize);
+        Ok(vlib_core::vlaux::spline(v, knots))
+    })
+}
+
+/// Evaluates `field` at `p` and hands the value to `vlSet(VL_ALLFIELDS, value)`: in a field
+/// function that writes the fields its `vlFunction` call named.
+unsafe fn set_all(name: &str, p: *mut vlfloat, field: fn([f32; 3]) -> f32) {
+    let value = boundary(None, || Ok(Some(field(read_floats::<3>(name, "p", p)?))));
+    if let Some(v) = value {
+        crate::vlSet(VL_ALLFIELDS, v);
+    }
+}
+
+/// Field function: the paraboloid 1 − 4·|p − c|² about the cube centre c (0 outside the
+/// inscribed sphere), written through `vlSet(VL_ALLFIELDS, …)`.
+///
+/// # Safety
+/// `p` must be NULL or point to 3 floats.
+#[no_mangle]
+pub unsafe extern "C" fn VL_PARAB1(p: *mut vlfloat, misc: *mut c_void) {
+    let _ = misc;
+    set_all("VL_PARAB1", p, vlib_core::vlaux::parab1)
+}
+
+/// Field function: the spherical distance field 1 − 2·|p − c|, written through
+/// `vlSet(VL_ALLFIELDS, …)`.
+///
+/// # Safety
+/// `p` must be NULL or point to 3 floats.
+#[no_mangle]
+pub unsafe extern "C" fn VLU_SPHERE(p: *mut vlfloat, misc: *mut c_void) {
+    let _ = misc;
+    set_all("VLU_SPHERE", p, vlib_core::vlaux::sphere)
+}
+
+/// Field function: the cylindrical distance field about the z axis through the cube centre,
+/// written through `vlSet(VL_ALLFIELDS, …)`.
+///
+/// # Safety
+/// `p` must be NULL or point to 3 floats.
+#[no_mangle]
+pub unsafe extern "C" fn VLU_CYLINDER(p: *mut vlfloat, misc: *mut c_void) {
+    let _ = misc;
+    set_all("VLU_CYLINDER", p, vlib_core::vlaux::cylinder)
+}

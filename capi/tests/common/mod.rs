@@ -1,0 +1,175 @@
+//! Helpers shared by the integration tests of the C interface.
+//!
+//! The C interface has process-global state (the library and the error queue), so every test
+//! that touches it takes [`serial`] first. The built libraries are found from the test binary's
+//! own path: it lives in `target/<profile>/deps/`.
+
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+/// The workspace root (`capi/..`).
+pub fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("capi has a parent")
+        .to_path_buf()
+}
+
+/// `target/<profile>`: the directory above the `deps/` that holds this test binary.
+pub fn profile_dir() -> PathBuf {
+    let exe = std::env::current_exe().expect("current_exe");
+    let deps = exe.parent().expect("test binary directory");
+    assert_eq!(
+        deps.file_name().and_then(|n| n.to_str()),
+        Some("deps"),
+        "test binary not in deps/"
+    );
+    deps.parent().expect("profile directory").to_path_buf()
+}
+
+/// `profile_dir()` relative to the workspace root when it lies inside it (as `target/release`).
+pub fn profile_dir_arg() -> PathBuf {
+    let dir = profile_dir();
+    match dir.strip_prefix(workspace_root()) {
+        Ok(rel) => rel.to_path_buf(),
+        Err(_) => dir,
+    }
+}
+
+/// Makes sure `libvlib.so` and `libvlib.a` in `target/<profile>/` are fresh.
+///
+/// `cargo test` builds the library (all three crate types) into `target/<profile>/deps/` but
+/// does not copy ("uplift") the `.so` and `.a` to `target/<profile>/`, where C programs link
+/// against them; so this runs `cargo build -p vlib-capi` with the same profile and target
+/// directory once per test binary. Cargo releases its build lock before running tests, so the
+/// nested build does not deadlock.
+pub fn ensure_libraries() -> &'static Path {
+    static BUILT: OnceLock<PathBuf> = OnceLock::new();
+    BUILT.get_or_init(|| {
+        let dir = profile_dir();
+        let profile = match dir.file_name().and_then(|n| n.to_str()) {
+            Some("debug") => "dev".to_string(),
+            Some(name) => name.to_string(),
+            None => panic!("cannot tell the profile from {}", dir.display()),
+        };
+        let target_dir = dir.parent().expect("target directory");
+        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+        let out = Command::new(cargo)
+            .args([
+                "build",
+                "-p",
+                "vlib-capi",
+                "--lib",
+                "--profile",
+                &profile,
+                "--target-dir",
+            ])
+            .arg(target_dir)
+            .current_dir(workspace_root())
+            .output()
+            .expect("run cargo build");
+        assert!(
+            out.status.success(),
+            "cargo build -p vlib-capi --profile {profile} failed:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        for lib in ["libvlib.so", "libvlib.a"] {
+            assert!(
+                dir.join(lib).is_file(),
+                "{} was not built",
+                dir.join(lib).display()
+            );
+        }
+        dir
+    })
+}
+
+/// A fresh, empty temporary directory (removed by [`TempDir`]'s drop).
+pub struct TempDir(pub PathBuf);
+
+impl TempDir {
+    pub fn new(tag: &str) -> TempDir {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static N: AtomicUsize = AtomicUsize::new(0);
+        let p = std::env::temp_dir().join(format!(
+            "vlib-capi-{tag}-{}-{}",
+            std::process::id(),
+            N.fetch_add(1, Ordering::Relaxed)
+        ));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).expect("create temp dir");
+        TempDir(p)
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+/// A decoded binary PPM (P6, maxval 255).
+pub struct Ppm {
+    pub width: usize,
+    pub height: usize,
+    pub rgb: Vec<u8>,
+}
+
+impl Ppm {
+    pub fn read(path: &Path) -> Ppm {
+        let data = std::fs::read(path).unwrap_or_else(|e| panic!("read {}: {e}", path.display()));
+        let mut fields = Vec::new();
+        let mut i = 0;
+        while fields.len() < 4 {
+            while i < data.len() && data[i].is_ascii_whitespace() {
+                i += 1;
+            }
+            let start = i;
+            while i < data.len() && !data[i].is_ascii_whitespace() {
+                i += 1;
+            }
+            assert!(start < i, "{}: truncated PPM header", path.display());
+            fields.push(String::from_utf8_lossy(&data[start..i]).into_owned());
+        }
+        assert_eq!(fields[0], "P6", "{}: not a binary PPM", path.display());
+        assert_eq!(fields[3], "255", "{}: maxval", path.display());
+        let width: usize = fields[1].parse().expect("width");
+        let height: usize = fields[2].parse().expect("height");
+        let rgb = data[i + 1..].to_vec();
+        assert_eq!(
+            rgb.len(),
+            width * height * 3,
+            "{}: pixel data size",
+            path.display()
+        );
+        Ppm { width, height, rgb }
+    }
+
+    pub fn pixel(&self, x: usize, y: usize) -> [u8; 3] {
+        let i = 3 * (y * self.width + x);
+        [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
+    }
+}
+
+/// Width and height from a PNG's IHDR chunk.
+pub fn png_size(path: &Path) -> (u32, u32) {
+    let data = std::fs::read(path).unwrap_or_else(|e| panic!("read {}: {e}", path.display()));
+    assert!(
+        data.len() > 24 && data.starts_with(b"\x89PNG\r\n\x1a\n"),
+        "{}: not a PNG",
+        path.display()
+    );
+    assert_eq!(&data[12..16], b"IHDR");
+    let w = u32::from_be_bytes(data[16..20].try_into().unwrap());
+    let h = u32::from_be_bytes(data[20..24].try_into().unwrap());
+    (w, h)
+}

@@ -1,0 +1,57 @@
+/* vlaux: the auxiliary library of vlib (camera shorthand, noise, splines, ready-made field
+   functions and colour macros). Written by hand; the functions live in libvlib (capi/src/aux.rs).
+   C89. */
+
+#ifndef VLAUX_H
+#define VLAUX_H
+
+#include "vlib.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Colours, expanding to three comma-separated components: vlBackground(WHITE),
+   vlAmbient(WHITE, 1.0). */
+#define WHITE 1.0, 1.0, 1.0
+#define BLACK 0.0, 0.0, 0.0
+#define RED 1.0, 0.0, 0.0
+#define GREEN 0.0, 1.0, 0.0
+#define BLUE 0.0, 0.0, 1.0
+#define YELLOW 1.0, 1.0, 0.0
+#define CYAN 0.0, 1.0, 1.0
+#define MAGENTA 1.0, 0.0, 1.0
+#define GREY 0.5, 0.5, 0.5
+#define GRAY 0.5, 0.5, 0.5
+
+/* Sets the camera at eye (ex, ey, ez) looking at (lx, ly, lz), with +y up and the default field
+   of view (60 degrees). */
+void vluCamera(vlfloat ex, vlfloat ey, vlfloat ez, vlfloat lx, vlfloat ly, vlfloat lz);
+
+/* Perlin's improved gradient noise in [-1, 1] at p * size; seed 0 is Perlin's permutation, other
+   seeds shuffle it. p NULL: VL_NULLPOINTER, returns 0. */
+vlfloat vluNoise(const vlfloat *p, vlfloat size, vlint seed);
+
+/* Perlin turbulence in [0, 2): the sum over octaves i of |noise(p, size * 2^i)| / 2^i.
+   p NULL: VL_NULLPOINTER, returns 0. */
+vlfloat vluTurbulence(const vlfloat *p, vlfloat size, vlint octaves, vlint seed);
+
+/* The Catmull-Rom spline through count knots at v in [0, 1] (Ebert et al.). count < 0 or above
+   65536: VL_BADVALUE; knots NULL with count > 0: VL_NULLPOINTER; both return 0. */
+vlfloat vluSpline(vlfloat v, vlint count, const vlfloat *knots);
+
+/* Field functions for vlFunction. Each evaluates a distance field at p and assigns it with
+   vlSet(VL_ALLFIELDS, value), which writes the fields the vlFunction call named. */
+
+/* The paraboloid 1 - 4 |p - c|^2 about the cube centre c, 0 outside the inscribed sphere. */
+void VL_PARAB1(vlfloat *p, void *misc);
+/* The spherical distance field 1 - 2 |p - c|. */
+void VLU_SPHERE(vlfloat *p, void *misc);
+/* The cylindrical distance field about the z axis through the cube centre. */
+void VLU_CYLINDER(vlfloat *p, void *misc);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* VLAUX_H */

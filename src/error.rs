@@ -1,0 +1,164 @@
+//! Error codes and the error type of the core.
+//!
+//! Every fallible operation of the core returns [`Result`]. Each [`ErrorCode`] has a fixed number
+//! that the C interface exposes as a `VL_*` constant; numbers are never renumbered or reused (see
+//! `docs/errors.md`). The C layer turns an `Err` into an entry of the `vlError` queue; Rust users
+//! get the error value directly.
+
+use std::fmt;
+
+/// The error codes. The discriminant is the number `vlError` returns in C.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(i32)]
+pub enum ErrorCode {
+    /// No error (`VL_NOERROR`).
+    NoError = 0,
+    /// The command is not legal in the current scope (`VL_BADSCOPE`).
+    BadScope = 1,
+    /// A numeric argument is out of range, NaN or infinite (`VL_BADVALUE`).
+    BadValue = 2,
+    /// A field mask is empty, has unknown bits, or names more than one field where one is
+    /// required (`VL_BADFIELD`).
+    BadField = 3,
+    /// An enumerated argument has no meaning (`VL_BADENUM`).
+    BadEnum = 4,
+    /// A required pointer is NULL (`VL_NULLPOINTER`).
+    NullPointer = 5,
+    /// No mapping or dataset has this id (`VL_BADID`).
+    BadId = 6,
+    /// The command is valid but this version does not implement it yet (`VL_UNSUPPORTED`).
+    Unsupported = 7,
+    /// A file could not be read or written (`VL_IOERROR`).
+    IoError = 8,
+    /// A file's contents or name are malformed or of an unsupported format (`VL_BADFILE`).
+    BadFile = 9,
+    /// A requested size exceeds what can be allocated (`VL_NOMEMORY`).
+    NoMemory = 10,
+    /// An internal failure (a caught panic, for instance in a Rust callback) (`VL_INTERNAL`).
+    Internal = 11,
+    /// An index (mapping output, child number) is out of range (`VL_BADINDEX`).
+    BadIndex = 12,
+    /// A dataset file does not start with the `.vlb` magic number (`VL_BADMAGIC`).
+    BadMagic = 13,
+    /// A dataset's dimensions are zero or too large (`VL_BADDIMENSIONS`).
+    BadDimensions = 14,
+    /// A dataset's voxel width is not 1 or 2 bytes (`VL_BADVOXELWIDTH`).
+    BadVoxelWidth = 15,
+    /// A dataset's normalisation a, b is not finite or a = b (`VL_BADRANGE`).
+    BadRange = 16,
+    /// A dataset file's size disagrees with its header (truncated or trailing data)
+    /// (`VL_BADSIZE`).
+    BadSize = 17,
+}
+
+impl ErrorCode {
+    /// Every code, in numeric order.
+    pub const ALL: [ErrorCode; 18] = [
+        ErrorCode::NoError,
+        ErrorCode::BadScope,
+        ErrorCode::BadValue,
+        ErrorCode::BadField,
+        ErrorCode::BadEnum,
+        ErrorCode::NullPointer,
+        ErrorCode::BadId,
+        ErrorCode::Unsupported,
+        ErrorCode::IoError,
+        ErrorCode::BadFile,
+        ErrorCode::NoMemory,
+        ErrorCode::Internal,
+        ErrorCode::BadIndex,
+        ErrorCode::BadMagic,
+        ErrorCode::BadDimensions,
+        ErrorCode::BadVoxelWidth,
+        ErrorCode::BadRange,
+        ErrorCode::BadSize,
+    ];
+
+    /// The code with this number, if there is one.
+    pub fn from_raw(code: i32) -> Option<ErrorCode> {
+        ErrorCode::ALL.iter().copied().find(|c| *c as i32 == code)
+    }
+
+    /// A static description of the code, as `vlErrorString` returns it (NUL-terminated, so the C
+    /// layer can hand it out without copying).
+    pub fn description_nul(self) -> &'static str {
+        match self {
+            ErrorCode::NoError => "no error\0",
+            ErrorCode::BadScope => "command not legal in the current scope\0",
+            ErrorCode::BadValue => "argument out of range, NaN or infinite\0",
+            ErrorCode::BadField => "bad field mask\0",
+            ErrorCode::BadEnum => "unknown enumerated value\0",
+            ErrorCode::NullPointer => "NULL pointer argument\0",
+            ErrorCode::BadId => "no mapping or dataset has this id\0",
+            ErrorCode::Unsupported => "not supported by this version of vlib\0",
+            ErrorCode::IoError => "file could not be read or written\0",
+            ErrorCode::BadFile => "malformed file or unsupported file format\0",
+            ErrorCode::NoMemory => "requested size too large\0",
+            ErrorCode::Internal => "internal error (a panic was caught)\0",
+            ErrorCode::BadIndex => "index out of range\0",
+            ErrorCode::BadMagic => "not a .vlb dataset (bad magic number)\0",
+            ErrorCode::BadDimensions => "dataset dimensions are zero or too large\0",
+            ErrorCode::BadVoxelWidth => "dataset voxel width is not 1 or 2 bytes\0",
+            ErrorCode::BadRange => "dataset normalisation a, b is not finite or a = b\0",
+            ErrorCode::BadSize => "dataset file size disagrees with its header\0",
+        }
+    }
+
+    /// A static description of the code.
+    pub fn description(self) -> &'static str {
+        let s = self.description_nul();
+        &s[..s.len() - 1]
+    }
+}
+
+/// An error: a code and a message saying what was wrong.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Error {
+    /// The code, as `vlError` reports it.
+    pub code: ErrorCode,
+    /// A human-readable explanation naming the command and the offending argument.
+    pub message: String,
+}
+
+impl Error {
+    /// An error with this code and message.
+    pub fn new(code: ErrorCode, message: impl Into<String>) -> Error {
+        Error {
+            code,
+            message: message.into(),
+        }
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.code.description(), self.message)
+    }
+}
+
+impl std::error::Error for Error {}
+
+/// The result type of the core.
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// Shorthand for an `Err` with a code and message.
+pub(crate) fn err<T>(code: ErrorCode, message: impl Into<String>) -> Result<T> {
+    Err(Error::new(code, message))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn codes_are_fixed_and_round_trip() {
+        for (i, c) in ErrorCode::ALL.iter().enumerate() {
+            assert_eq!(*c as i32, i as i32);
+            assert_eq!(ErrorCode::from_raw(i as i32), Some(*c));
+            assert!(c.description_nul().ends_with('\0'));
+            assert!(!c.description().contains('\0'));
+        }
+        assert_eq!(ErrorCode::from_raw(-1), None);
+        assert_eq!(ErrorCode::from_raw(ErrorCode::ALL.len() as i32), None);
+    }
+}

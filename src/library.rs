@@ -1,0 +1,702 @@
+//! The state machine: one [`Library`] value is one `vlInit … vlEnd` session.
+//!
+//! Every method is one command of the API. Each first checks its scope against the table in
+//! [`crate::scope`], then validates every argument, and only then changes state, so a call that
+//! returns `Err` has changed nothing. The C interface calls these methods one to one; Rust users
+//! call them directly (field functions are closures).
+
+use crate::error::{err, Error, ErrorCode, Result};
+use crate::mapping::Mapping;
+use crate::program::{clamp_field, Instr, NormalFn, Sample};
+use crate::scene::{Camera, ImageRequest, Light, ObjectDesc, SceneDesc, Settings};
+use crate::scope::{require, Command, Scope};
+use crate::types::{axes, Attenuation, Feature, Fields, Interpolation, MappingType, RenderType};
+use glam::{DMat4, DVec4};
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// The largest image side in pixels.
+pub const MAX_IMAGE_SIDE: i32 = 1 << 15;
+/// The largest number of pixels of one image.
+pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
+/// The largest super-sampling rate n (n×n samples per pixel).
+pub const MAX_SUPER_SAMPLE: i32 = 16;
+/// The largest recursion depth.
+pub const MAX_RECURSION: i32 = 64;
+
+/// What a successful `vlEnd` closed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Closed {
+    /// An object (its definition is now part of the scene).
+    Object,
+    /// A scene (it was rendered and its outputs written).
+    Scene,
+    /// The library (the session is over).
+    Library,
+}
+
+#[derive(Clone, Debug)]
+struct OpenScene {
+    settings: Settings,
+    lights: Vec<Light>,
+    images: Vec<ImageRequest>,
+    objects: Vec<ObjectDesc>,
+    /// Objects being specified (nested ones after their parents).
+    open: Vec<ObjectDesc>,
+}
+
+/// One session of the API (`vlInit` … `vlEnd`).
+#[derive(Debug, Default)]
+pub struct Library {
+    /// Defaults that each new scene starts from (set at library scope).
+    defaults: Settings,
+    mappings: BTreeMap<i32, Arc<Mapping>>,
+    scene: Option<OpenScene>,
+    ended: bool,
+}
+
+fn finite(cmd: &str, vals: &[f32]) -> Result<()> {
+    if let Some(v) = vals.iter().find(|v| !v.is_finite()) {
+        return err(ErrorCode::BadValue, format!("{cmd}: {v} is not finite"));
+    }
+    Ok(())
+}
+
+fn colour(cmd: &str, c: [f32; 3]) -> Result<()> {
+    finite(cmd, &c)?;
+    if c.iter().any(|v| !(0.0..=1.0).contains(v)) {
+        return err(
+            ErrorCode::BadValue,
+            format!("{cmd}: colour {c:?} must lie in [0, 1]"),
+        );
+    }
+    Ok(())
+}
+
+fn intensity(cmd: &str, i: f32) -> Result<()> {
+    finite(cmd, &[i])?;
+    if i < 0.0 {
+        return err(
+            ErrorCode::BadValue,
+            format!("{cmd}: intensity {i} is negative"),
+        );
+    }
+    Ok(())
+}
+
+fn positive(cmd: &str, vals: &[f32]) -> Result<()> {
+    finite(cmd, vals)?;
+    if let Some(v) = vals.iter().find(|v| **v <= 0.0) {
+        return err(ErrorCode::BadValue, format!("{cmd}: {v} must be positive"));
+    }
+    Ok(())
+}
+
+/// Accepts an affine transform whose matrix and inverse are finite and whose determinant is not
+/// negligible against the size of its entries.
+fn invertible(cmd: &str, m: &DMat4) -> Result<()> {
+    let det = m.determinant();
+    let scale =
+        m.x_axis.truncate().length() * m.y_axis.truncate().length() * m.z_axis.truncate().length();
+    let inv = m.inverse();
+    if !det.is_finite() || !scale.is_finite() || det.abs() <= 1e-12 * scale || !inv.is_finite() {
+        return err(
+            ErrorCode::BadValue,
+            format!("{cmd}: the object transform would become singular"),
+        );
+    }
+    Ok(())
+}
+
+impl Library {
+    /// `vlInit`: a new session in library scope.
+    pub fn new() -> Library {
+        Library::default()
+    }
+
+    /// The scope the session is in.
+    pub fn scope(&self) -> Scope {
+        match &self.scene {
+            _ if self.ended => Scope::Uninitialised,
+            None => Scope::Library,
+            Some(s) if s.open.is_empty() => Scope::Scene,
+            Some(_) => Scope::Object,
+        }
+    }
+
+    fn check(&self, cmd: Command) -> Result<()> {
+        require(cmd, self.scope())
+    }
+
+    /// The settings a command at the current scope changes: the scene's, or the defaults.
+    fn settings_mut(&mut self) -> &mut Settings {
+        match &mut self.scene {
+            Some(s) => &mut s.settings,
+            None => &mut self.defaults,
+        }
+    }
+
+    fn scene_mut(&mut self) -> &mut OpenScene {
+        self.scene.as_mut().expect("scope checked: a scene is open")
+    }
+
+    fn object_mut(&mut self) -> &mut ObjectDesc {
+        self.scene_mut()
+            .open
+            .last_mut()
+            .expect("scope checked: an object is open")
+    }
+
+    /// `vlEnd`: closes the innermost open object, the scene (rendering it and writing its
+    /// outputs), or the library. When a scene's rendering or output fails the scene is closed all
+    /// the same and the error says what was not written.
+    pub fn end(&mut self) -> Result<Closed> {
+        self.check(Command::End)?;
+        match self.scope() {
+            Scope::Object => {
+                let scene = self.scene_mut();
+                let obj = scene.open.pop().expect("object scope");
+                scene.objects.push(obj);
+                Ok(Closed::Object)
+            }
+            Scope::Scene => {
+                let s = self.scene.take().expect("scene scope");
+                let desc = SceneDesc {
+                    settings: s.settings,
+                    lights: s.lights,
+                    images: s.images,
+                    objects: s.objects,
+                };
+                crate::render::render_outputs(&desc)?;
+                Ok(Closed::Scene)
+            }
+            _ => {
+                self.ended = true;
+                self.scene = None;
+                self.mappings.clear();
+                Ok(Closed::Library)
+            }
+        }
+    }
+
+    /// `vlScene`: opens a scene that starts from the library-scope settings.
+    pub fn scene(&mut self) -> Result<()> {
+        self.check(Command::Scene)?;
+        self.scene = Some(OpenScene {
+            settings: self.defaults.clone(),
+            lights: Vec::new(),
+            images: Vec::new(),
+            objects: Vec::new(),
+            open: Vec::new(),
+        });
+        Ok(())
+    }
+
+    /// `vlImage`: requests an image of the scene. The extension (`.ppm`, `.png`, any case) selects
+    /// the format; `aspect` is the view plane's width / height.
+    pub fn image(
+        &mut self,
+        path: impl AsRef<Path>,
+        aspect: f32,
+        width: i32,
+        height: i32,
+    ) -> Result<()> {
+        self.check(Command::Image)?;
+        let path = path.as_ref();
+        crate::output::ImageFormat::from_path(path)?;
+        positive("vlImage", &[aspect])?;
+        if !(1..=MAX_IMAGE_SIDE).contains(&width) || !(1..=MAX_IMAGE_SIDE).contains(&height) {
+            return err(
+                ErrorCode::BadValue,
+                format!("vlImage: size {width}x{height} (each side must be 1 … {MAX_IMAGE_SIDE})"),
+            );
+        }
+        if width as u64 * height as u64 > MAX_IMAGE_PIXELS {
+            return err(
+                ErrorCode::NoMemory,
+                format!("vlImage: {width}x{height} exceeds {MAX_IMAGE_PIXELS} pixels"),
+            );
+        }
+        self.scene_mut().images.push(ImageRequest {
+            path: path.to_path_buf(),
+            aspect,
+            width: width as u32,
+            height: height as u32,
+        });
+        Ok(())
+    }
+
+    /// `vlVolume`: voxelization (not implemented yet: `Unsupported` after validation).
+    #[allow(clippy::too_many_arguments)]
+    pub fn volume(
+        &mut self,
+        _prefix: &str,
+        fields: Fields,
+        corner0: [f32; 3],
+        corner1: [f32; 3],
+        nodes: [i32; 3],
+        bytes: i32,
+    ) -> Result<()> {
+        self.check(Command::Volume)?;
+        fields.validate()?;
+        finite("vlVolume", &corner0)?;
+        finite("vlVolume", &corner1)?;
+        if nodes.iter().any(|n| *n < 1) || !(bytes == 1 || bytes == 2) {
+            return err(
+                ErrorCode::BadValue,
+                "vlVolume: node counts must be ≥ 1 and bytes 1 or 2",
+            );
+        }
+        err(
+            ErrorCode::Unsupported,
+            "vlVolume: voxelization is not implemented yet",
+        )
+    }
+
+    /// `vlCamera`.
+    pub fn camera(&mut self, camera: &Camera) -> Result<()> {
+        self.check(Command::Camera)?;
+        camera.validate()?;
+        self.settings_mut().camera = *camera;
+        Ok(())
+    }
+
+    /// `vlBackground`: colour components in [0, 1].
+    pub fn background(&mut self, r: f32, g: f32, b: f32) -> Result<()> {
+        self.check(Command::Background)?;
+        colour("vlBackground", [r, g, b])?;
+        self.settings_mut().background = [r, g, b];
+        Ok(())
+    }
+
+    /// `vlSuperSample`: adaptive super-sampling with up to n×n samples per pixel (1 … 16).
+    pub fn super_sample(&mut self, n: i32) -> Result<()> {
+        self.check(Command::SuperSample)?;
+        if !(1..=MAX_SUPER_SAMPLE).contains(&n) {
+            return err(
+                ErrorCode::BadValue,
+                format!("vlSuperSample: {n} (must be 1 … {MAX_SUPER_SAMPLE})"),
+            );
+        }
+        self.settings_mut().super_sample = n;
+        Ok(())
+    }
+
+    /// `vlAmbient`: ambient light colour in [0, 1] and intensity ≥ 0.
+    pub fn ambient(&mut self, r: f32, g: f32, b: f32, i: f32) -> Result<()> {
+        self.check(Command::Ambient)?;
+        colour("vlAmbient", [r, g, b])?;
+        intensity("vlAmbient", i)?;
+        self.settings_mut().ambient = [r * i, g * i, b * i];
+        Ok(())
+    }
+
+    /// `vlPointLight`.
+    pub fn point_light(
+        &mut self,
+        position: [f32; 3],
+        attenuation: Attenuation,
+        rgb: [f32; 3],
+        i: f32,
+    ) -> Result<()> {
+        self.check(Command::PointLight)?;
+        finite("vlPointLight", &position)?;
+        colour("vlPointLight", rgb)?;
+        intensity("vlPointLight", i)?;
+        self.scene_mut().lights.push(Light::Point {
+            position: crate::scene::v3(position),
+            attenuation,
+            radiance: rgb.map(|c| c * i),
+        });
+        Ok(())
+    }
+
+    /// `vlDirectionalLight`: light travelling in direction `dir` (non-zero).
+    pub fn directional_light(&mut self, dir: [f32; 3], rgb: [f32; 3], i: f32) -> Result<()> {
+        self.check(Command::DirectionalLight)?;
+        finite("vlDirectionalLight", &dir)?;
+        colour("vlDirectionalLight", rgb)?;
+        intensity("vlDirectionalLight", i)?;
+        let d = crate::scene::v3(dir);
+        let len = d.length();
+        if len.is_nan() || len <= 0.0 || !len.is_finite() {
+            return err(ErrorCode::BadValue, "vlDirectionalLight: zero direction");
+        }
+        self.scene_mut().lights.push(Light::Directional {
+            to_light: -d / len,
+            radiance: rgb.map(|c| c * i),
+        });
+        Ok(())
+    }
+
+    /// `vlRenderType`. DSR and MIP are not implemented yet (`Unsupported`, nothing changes).
+    pub fn render_type(&mut self, t: RenderType) -> Result<()> {
+        self.check(Command::RenderType)?;
+        if t != RenderType::Dvr {
+            return err(
+                ErrorCode::Unsupported,
+                format!("vlRenderType: {t:?} is not implemented yet"),
+            );
+        }
+        self.settings_mut().render.render_type = t;
+        Ok(())
+    }
+
+    /// `vlStepSize`: world-space sampling interval and the interval over which opacity is exact;
+    /// both finite and positive.
+    pub fn step_size(&mut self, step: f32, reference: f32) -> Result<()> {
+        self.check(Command::StepSize)?;
+        positive("vlStepSize", &[step, reference])?;
+        let r = &mut self.settings_mut().render;
+        r.step = step;
+        r.reference = reference;
+        Ok(())
+    }
+
+    /// `vlSurface`: validated, then `Unsupported` until DSR lands.
+    pub fn surface(&mut self, field: Fields, threshold: f32) -> Result<()> {
+        self.check(Command::Surface)?;
+        field.validate_single()?;
+        finite("vlSurface", &[threshold])?;
+        err(
+            ErrorCode::Unsupported,
+            "vlSurface: DSR is not implemented yet",
+        )
+    }
+
+    /// `vlToggle`. `Visible` and `FlipNormals` are implemented; switching on shadows,
+    /// reflections or refraction reports `Unsupported` (their default, off, is accepted).
+    pub fn toggle(&mut self, feature: Feature, on: bool) -> Result<()> {
+        self.check(Command::Toggle)?;
+        let implemented = matches!(feature, Feature::Visible | Feature::FlipNormals);
+        if on && !implemented {
+            return err(
+                ErrorCode::Unsupported,
+                format!("vlToggle: {feature:?} is not implemented yet"),
+            );
+        }
+        self.settings_mut().render.toggles[feature as usize] = on;
+        Ok(())
+    }
+
+    /// `vlRecursion`: maximum depth of secondary rays, 0 … 64.
+    pub fn recursion(&mut self, depth: i32) -> Result<()> {
+        self.check(Command::Recursion)?;
+        if !(0..=MAX_RECURSION).contains(&depth) {
+            return err(
+                ErrorCode::BadValue,
+                format!("vlRecursion: {depth} (must be 0 … {MAX_RECURSION})"),
+            );
+        }
+        self.settings_mut().render.recursion = depth;
+        Ok(())
+    }
+
+    /// `vlInterpolationType`.
+    pub fn interpolation(&mut self, i: Interpolation) -> Result<()> {
+        self.check(Command::InterpolationType)?;
+        self.settings_mut().render.interpolation = i;
+        Ok(())
+    }
+
+    /// `vlCubicFilter`: B and C of the BC-spline family, finite.
+    pub fn cubic_filter(&mut self, b: f32, c: f32) -> Result<()> {
+        self.check(Command::CubicFilter)?;
+        finite("vlCubicFilter", &[b, c])?;
+        self.settings_mut().render.cubic = (b, c);
+        Ok(())
+    }
+
+    /// `vlNeighborhood`: central-difference offsets in world units, finite and positive.
+    pub fn neighborhood(&mut self, dx: f32, dy: f32, dz: f32) -> Result<()> {
+        self.check(Command::Neighborhood)?;
+        positive("vlNeighborhood", &[dx, dy, dz])?;
+        self.settings_mut().render.neighborhood = Some([dx, dy, dz]);
+        Ok(())
+    }
+
+    /// `vlLoad`: not implemented yet.
+    pub fn load(&mut self, _id: i32, _path: impl AsRef<Path>) -> Result<()> {
+        self.check(Command::Load)?;
+        err(
+            ErrorCode::Unsupported,
+            "vlLoad: datasets are not implemented yet",
+        )
+    }
+
+    /// `vlUnload`: not implemented yet.
+    pub fn unload(&mut self, _id: i32) -> Result<()> {
+        self.check(Command::Unload)?;
+        err(
+            ErrorCode::Unsupported,
+            "vlUnload: datasets are not implemented yet",
+        )
+    }
+
+    /// `vlSample` outside sample scope: not implemented yet.
+    pub fn sample(&self, _id: i32, x: f32, y: f32, z: f32) -> Result<f32> {
+        self.check(Command::Sample)?;
+        finite("vlSample", &[x, y, z])?;
+        err(
+            ErrorCode::Unsupported,
+            "vlSample: datasets are not implemented yet",
+        )
+    }
+
+    /// `vlMapping`: declares (or replaces) transfer function `id`. Objects that already mapped
+    /// through the old definition keep it.
+    pub fn mapping(
+        &mut self,
+        id: i32,
+        kind: MappingType,
+        points: i32,
+        outputs: i32,
+        table: &[f32],
+    ) -> Result<()> {
+        self.check(Command::Mapping)?;
+        let m = Mapping::new(kind, points, outputs, table)?;
+        self.mappings.insert(id, Arc::new(m));
+        Ok(())
+    }
+
+    /// `vlObject`: opens an object capturing the rendering state in force. Nested objects
+    /// (children) are not implemented yet.
+    pub fn object(&mut self) -> Result<()> {
+        self.check(Command::Object)?;
+        if self.scope() == Scope::Object {
+            return err(
+                ErrorCode::Unsupported,
+                "vlObject: nested objects (children) are not implemented yet",
+            );
+        }
+        let s = self.scene_mut();
+        let state = s.settings.render.clone();
+        s.open.push(ObjectDesc::new(state));
+        Ok(())
+    }
+
+    fn transform(&mut self, cmd: Command, m: DMat4) -> Result<()> {
+        self.check(cmd)?;
+        let obj = self.object_mut();
+        let next = m * obj.to_world;
+        invertible(cmd.name(), &next)?;
+        obj.to_world = next;
+        Ok(())
+    }
+
+    /// `vlScale`: non-zero finite factors (negative mirrors).
+    pub fn scale(&mut self, x: f32, y: f32, z: f32) -> Result<()> {
+        self.check(Command::Scale)?;
+        finite("vlScale", &[x, y, z])?;
+        if [x, y, z].contains(&0.0) {
+            return err(
+                ErrorCode::BadValue,
+                "vlScale: a factor of 0 makes the object flat",
+            );
+        }
+        self.transform(
+            Command::Scale,
+            DMat4::from_scale(crate::scene::v3([x, y, z])),
+        )
+    }
+
+    /// `vlTranslate`.
+    pub fn translate(&mut self, x: f32, y: f32, z: f32) -> Result<()> {
+        self.check(Command::Translate)?;
+        finite("vlTranslate", &[x, y, z])?;
+        self.transform(
+            Command::Translate,
+            DMat4::from_translation(crate::scene::v3([x, y, z])),
+        )
+    }
+
+    /// `vlRotate`: degrees about x, then y, then z.
+    pub fn rotate(&mut self, x: f32, y: f32, z: f32) -> Result<()> {
+        self.check(Command::Rotate)?;
+        finite("vlRotate", &[x, y, z])?;
+        let r = |d: f32| (d as f64).to_radians();
+        let m = DMat4::from_rotation_z(r(z))
+            * DMat4::from_rotation_y(r(y))
+            * DMat4::from_rotation_x(r(x));
+        self.transform(Command::Rotate, m)
+    }
+
+    /// `vlFlip`: mirrors object space (p → 1 − p) on the axes of the mask (`VL_X|VL_Y|VL_Z`).
+    /// Flips act in object space, before every other transform, whenever they are issued.
+    pub fn flip(&mut self, axes_mask: i32) -> Result<()> {
+        self.check(Command::Flip)?;
+        if axes_mask & !(axes::X | axes::Y | axes::Z) != 0 {
+            return err(
+                ErrorCode::BadEnum,
+                format!("vlFlip: axis mask {axes_mask:#x} has unknown bits"),
+            );
+        }
+        let obj = self.object_mut();
+        for (i, bit) in [axes::X, axes::Y, axes::Z].iter().enumerate() {
+            if axes_mask & bit != 0 {
+                obj.flip[i] = !obj.flip[i];
+            }
+        }
+        Ok(())
+    }
+
+    /// `vlMatrix`: a general affine 4×4 transform, row-major, acting on column vectors
+    /// (translation in the last column); the bottom row must be (0, 0, 0, 1).
+    pub fn matrix(&mut self, m: &[f32; 16]) -> Result<()> {
+        self.check(Command::Matrix)?;
+        finite("vlMatrix", m)?;
+        if m[12..16] != [0.0, 0.0, 0.0, 1.0] {
+            return err(
+                ErrorCode::BadValue,
+                "vlMatrix: only affine transforms (bottom row 0 0 0 1) are supported",
+            );
+        }
+        let row = |i: usize| {
+            DVec4::new(
+                m[4 * i] as f64,
+                m[4 * i + 1] as f64,
+                m[4 * i + 2] as f64,
+                m[4 * i + 3] as f64,
+            )
+        };
+        let mat = DMat4::from_cols(row(0), row(1), row(2), row(3)).transpose();
+        self.transform(Command::Matrix, mat)
+    }
+
+    /// `vlBoundary`: scales the boundary box about the cube centre (positive factors).
+    pub fn boundary(&mut self, x: f32, y: f32, z: f32) -> Result<()> {
+        self.check(Command::Boundary)?;
+        positive("vlBoundary", &[x, y, z])?;
+        self.object_mut().boundary = [x, y, z];
+        Ok(())
+    }
+
+    /// `vlSpatial`: not implemented yet.
+    pub fn spatial(&mut self, _f: crate::program::FieldFn) -> Result<()> {
+        self.check(Command::Spatial)?;
+        err(
+            ErrorCode::Unsupported,
+            "vlSpatial: spatial transfer functions are not implemented yet",
+        )
+    }
+
+    /// `vlSet` in an object: an instruction assigning a constant (clamped to [0, 1], NaN → 0).
+    pub fn set(&mut self, fields: Fields, value: f32) -> Result<()> {
+        self.check(Command::Set)?;
+        fields.validate()?;
+        self.object_mut().program.push(Instr::Set {
+            fields,
+            value: clamp_field(value),
+        });
+        Ok(())
+    }
+
+    /// `vlFunction`: an instruction running `f` at each sample; it may write `fields`.
+    pub fn function<F>(&mut self, fields: Fields, f: F) -> Result<()>
+    where
+        F: Fn(&mut Sample) + Send + Sync + 'static,
+    {
+        self.function_arc(fields, Arc::new(f))
+    }
+
+    /// `vlFunction` with a shared function.
+    pub fn function_arc(&mut self, fields: Fields, f: crate::program::FieldFn) -> Result<()> {
+        self.check(Command::Function)?;
+        fields.validate()?;
+        self.object_mut()
+            .program
+            .push(Instr::Function { fields, f });
+        Ok(())
+    }
+
+    /// `vlDataset`: not implemented yet.
+    pub fn dataset(&mut self, fields: Fields, _id: i32) -> Result<()> {
+        self.check(Command::Dataset)?;
+        fields.validate()?;
+        err(
+            ErrorCode::Unsupported,
+            "vlDataset: datasets are not implemented yet",
+        )
+    }
+
+    /// `vlMap`: targets = Φ(mapping)(source), with `output` counted from 1.
+    pub fn map(
+        &mut self,
+        targets: Fields,
+        source: Fields,
+        mapping: i32,
+        output: i32,
+    ) -> Result<()> {
+        self.check(Command::Map)?;
+        targets.validate()?;
+        let source = source.validate_single()?;
+        let m =
+            self.mappings.get(&mapping).cloned().ok_or_else(|| {
+                Error::new(ErrorCode::BadId, format!("vlMap: no mapping {mapping}"))
+            })?;
+        if output < 1 || output as usize > m.outputs() {
+            return err(
+                ErrorCode::BadIndex,
+                format!(
+                    "vlMap: output {output} of mapping {mapping}, which has {} output(s)",
+                    m.outputs()
+                ),
+            );
+        }
+        self.object_mut().program.push(Instr::Map {
+            targets,
+            source,
+            mapping: m,
+            output: output as usize - 1,
+        });
+        Ok(())
+    }
+
+    /// `vlNormal`: appends a normal function to the object's chain.
+    pub fn normal<F>(&mut self, f: F) -> Result<()>
+    where
+        F: Fn(&mut [f32; 3], &mut Sample) + Send + Sync + 'static,
+    {
+        self.normal_arc(Arc::new(f))
+    }
+
+    /// `vlNormal` with a shared function.
+    pub fn normal_arc(&mut self, f: NormalFn) -> Result<()> {
+        self.check(Command::Normal)?;
+        self.object_mut().normals.push(f);
+        Ok(())
+    }
+
+    /// Renders the open scene (at scene scope) to an image in memory without closing it or
+    /// writing its outputs: a preview for Rust users and tests. Not a command of the C API.
+    pub fn render_preview(&self, width: u32, height: u32, aspect: f32) -> Result<crate::Image> {
+        if self.scope() != Scope::Scene {
+            return err(
+                ErrorCode::BadScope,
+                "render_preview needs an open scene outside objects",
+            );
+        }
+        positive("render_preview", &[aspect])?;
+        if width == 0 || height == 0 || width as u64 * height as u64 > MAX_IMAGE_PIXELS {
+            return err(
+                ErrorCode::BadValue,
+                format!("render_preview: size {width}x{height}"),
+            );
+        }
+        let s = self.scene.as_ref().expect("scene scope");
+        let desc = SceneDesc {
+            settings: s.settings.clone(),
+            lights: s.lights.clone(),
+            images: Vec::new(),
+            objects: s.objects.clone(),
+        };
+        crate::render::render_image(&crate::render::Compiled::new(&desc), width, height, aspect)
+    }
+
+    /// A textual snapshot of the whole state, for tests that check a refused call changed
+    /// nothing.
+    pub fn fingerprint(&self) -> String {
+        format!("{self:?}")
+    }
+}

@@ -1,0 +1,189 @@
+//! Transfer functions: the lookup table Φ_t and the linear ramp Φ_r of the paper (§4.4).
+//!
+//! A [`Mapping`] is validated once when it is declared (`vlMapping`) and is immutable afterwards;
+//! objects hold it by `Arc`, so redefining an id later does not change objects already built. The
+//! evaluation follows the paper's case analysis literally; where the formulas leave a value open
+//! (Φ_r at v = 1 when a_n < 1, v = 0 when a_1 = 0) the choice is documented on [`Mapping::eval`]
+//! and in `docs/compat.md`.
+
+use crate::error::{err, ErrorCode, Result};
+use crate::types::MappingType;
+
+/// The largest number of rows a mapping may have.
+pub const MAX_POINTS: usize = 1 << 20;
+/// The largest number of outputs a mapping may have.
+pub const MAX_OUTPUTS: usize = 64;
+
+/// A validated transfer function.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mapping {
+    kind: MappingType,
+    /// The input points a_1 < … < a_n.
+    a: Vec<f32>,
+    /// Row-major outputs: b[i * outputs + j] = b_{i+1, j+1}.
+    b: Vec<f32>,
+    outputs: usize,
+}
+
+impl Mapping {
+    /// Validates a table of `points` rows `(a, b_1, …, b_outputs)`: every value finite and in
+    /// [0, 1], the a strictly increasing, and the table exactly `points * (outputs + 1)` long.
+    pub fn new(kind: MappingType, points: i32, outputs: i32, table: &[f32]) -> Result<Mapping> {
+        if points < 1 || points as usize > MAX_POINTS {
+            return err(
+                ErrorCode::BadValue,
+                format!("vlMapping: {points} points (must be 1 … {MAX_POINTS})"),
+            );
+        }
+        if outputs < 1 || outputs as usize > MAX_OUTPUTS {
+            return err(
+                ErrorCode::BadValue,
+                format!("vlMapping: {outputs} outputs (must be 1 … {MAX_OUTPUTS})"),
+            );
+        }
+        let (n, k) = (points as usize, outputs as usize);
+        if table.len() != n * (k + 1) {
+            return err(
+                ErrorCode::BadValue,
+                format!(
+                    "vlMapping: table holds {} values, expected {}",
+                    table.len(),
+                    n * (k + 1)
+                ),
+            );
+        }
+        if let Some(i) = table
+            .iter()
+            .position(|v| !v.is_finite() || !(0.0..=1.0).contains(v))
+        {
+            return err(
+                ErrorCode::BadValue,
+                format!(
+                    "vlMapping: table value {} at index {i} is not in [0, 1]",
+                    table[i]
+                ),
+            );
+        }
+        let mut a = Vec::with_capacity(n);
+        let mut b = Vec::with_capacity(n * k);
+        for row in table.chunks_exact(k + 1) {
+            if let Some(&last) = a.last() {
+                if row[0] <= last {
+                    return err(
+                        ErrorCode::BadValue,
+                        format!(
+                            "vlMapping: input points must increase strictly ({} follows {last})",
+                            row[0]
+                        ),
+                    );
+                }
+            }
+            a.push(row[0]);
+            b.extend_from_slice(&row[1..]);
+        }
+        Ok(Mapping {
+            kind,
+            a,
+            b,
+            outputs: k,
+        })
+    }
+
+    /// The kind of transfer function.
+    pub fn kind(&self) -> MappingType {
+        self.kind
+    }
+
+    /// The number of outputs per row.
+    pub fn outputs(&self) -> usize {
+        self.outputs
+    }
+
+    /// The number of rows.
+    pub fn points(&self) -> usize {
+        self.a.len()
+    }
+
+    fn b(&self, i: usize, j: usize) -> f32 {
+        self.b[i * self.outputs + j]
+    }
+
+    /// Φ(v, j) for output `j` counted from 0 (the API counts from 1). `v` is a field value, so it
+    /// is clamped to [0, 1] first (NaN → 0).
+    ///
+    /// Φ_t: 0 if v ≤ a_1 or v > a_n, otherwise b_{i+1} where a_i < v ≤ a_{i+1}.
+    ///
+    /// Φ_r: v·b_1/a_1 on 0 < v ≤ a_1; linear between rows on a_i < v ≤ a_{i+1};
+    /// b_n + (v − a_n)(1 − b_n)/(1 − a_n) on a_n < v < 1; the ramp's final segment ends at (1, 1),
+    /// so Φ_r(1) = 1 when a_n < 1; and Φ_r(0) = 0 (every case of the paper excludes v = 0 except the
+    /// last segment when a_1 = 0 — see `docs/compat.md`).
+    pub fn eval(&self, v: f32, j: usize) -> f32 {
+        debug_assert!(j < self.outputs);
+        let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+        let n = self.a.len();
+        // k = number of a_i strictly less than v; then a_k < v ≤ a_{k+1} in 1-based terms.
+        let k = self.a.partition_point(|&a| a < v);
+        match self.kind {
+            MappingType::Lookup => {
+                if k == 0 || k == n {
+                    0.0
+                } else {
+                    self.b(k, j)
+                }
+            }
+            MappingType::Ramp => {
+                if v <= 0.0 {
+                    return 0.0;
+                }
+                if k == 0 {
+                    // 0 < v ≤ a_1 (a_1 > 0 here since v > 0 and v ≤ a_1).
+                    let (a1, b1) = (self.a[0] as f64, self.b(0, j) as f64);
+                    return (v as f64 * b1 / a1) as f32;
+                }
+                if k == n {
+                    // a_n < v ≤ 1.
+                    let (an, bn) = (self.a[n - 1] as f64, self.b(n - 1, j) as f64);
+                    if v >= 1.0 {
+                        return 1.0;
+                    }
+                    return (bn + (v as f64 - an) * (1.0 - bn) / (1.0 - an)) as f32;
+                }
+                let (a0, a1) = (self.a[k - 1] as f64, self.a[k] as f64);
+                let (b0, b1) = (self.b(k - 1, j) as f64, self.b(k, j) as f64);
+                (b0 + (v as f64 - a0) * (b1 - b0) / (a1 - a0)) as f32
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lookup(table: &[f32], points: i32, outputs: i32) -> Mapping {
+        Mapping::new(MappingType::Lookup, points, outputs, table).unwrap()
+    }
+
+    #[test]
+    fn rejects_bad_tables() {
+        let bad = |p, o, t: &[f32]| Mapping::new(MappingType::Ramp, p, o, t).unwrap_err().code;
+        assert_eq!(bad(0, 1, &[]), ErrorCode::BadValue);
+        assert_eq!(bad(1, 0, &[0.5]), ErrorCode::BadValue);
+        assert_eq!(bad(2, 1, &[0.1, 0.2, 0.3]), ErrorCode::BadValue);
+        assert_eq!(bad(2, 1, &[0.5, 0.2, 0.5, 0.3]), ErrorCode::BadValue);
+        assert_eq!(bad(2, 1, &[0.6, 0.2, 0.5, 0.3]), ErrorCode::BadValue);
+        assert_eq!(bad(1, 1, &[f32::NAN, 0.2]), ErrorCode::BadValue);
+        assert_eq!(bad(1, 1, &[0.5, 1.5]), ErrorCode::BadValue);
+    }
+
+    #[test]
+    fn figure2_table() {
+        // {0.001, 1.0, 1.0, 0.3}: 2 points, 1 output.
+        let m = lookup(&[0.001, 1.0, 1.0, 0.3], 2, 1);
+        assert_eq!(m.eval(0.0, 0), 0.0);
+        assert_eq!(m.eval(0.001, 0), 0.0);
+        assert_eq!(m.eval(0.0011, 0), 0.3);
+        assert_eq!(m.eval(1.0, 0), 0.3);
+        assert_eq!(m.outputs(), 1);
+    }
+}

@@ -1,0 +1,308 @@
+//! The ordered field program of an object and the per-sample context its functions see.
+//!
+//! An object's fields are defined by a list of [`Instr`]uctions (`vlSet`, `vlFunction`, `vlMap`)
+//! run in issue order at every sample point; each sees what the previous ones wrote. A field
+//! function receives a [`Sample`]: the point in object space, its world position, the ten field
+//! values, and the mask of fields that the function's `vlFunction` call named — writes outside that
+//! mask are ignored (the paper's Figure 5 sphere writes all fields and is used for one). Every
+//! written value is clamped to [0, 1] and NaN becomes 0, so no callback can put a NaN into a pixel.
+//!
+//! This module does not know about rays or the C interface: the C layer wraps C function pointers
+//! into closures of the types below.
+
+use crate::error::{err, ErrorCode, Result};
+use crate::mapping::Mapping;
+use crate::types::{Fields, FIELD_COUNT};
+use std::fmt;
+use std::sync::Arc;
+
+/// A field function: runs at a sample point and writes fields through [`Sample::set`].
+pub type FieldFn = Arc<dyn Fn(&mut Sample) + Send + Sync>;
+
+/// A normal function: receives the current normal (to rewrite in place) and the sample, whose
+/// fields and position it may read.
+pub type NormalFn = Arc<dyn Fn(&mut [f32; 3], &mut Sample) + Send + Sync>;
+
+/// Clamps a value written to a field: into [0, 1], NaN to 0.
+#[inline]
+pub fn clamp_field(v: f32) -> f32 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(0.0, 1.0)
+    }
+}
+
+/// What a sample's callback may do (the sample scope of the state machine).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SampleRole {
+    /// A field function: may write the fields of its mask.
+    Field,
+    /// A normal function: may read fields, may not write them.
+    Normal,
+}
+
+/// The context of one sample point, handed to field and normal functions.
+pub struct Sample {
+    /// The point in object space (the unit cube is [0, 1]^3).
+    pub(crate) p: [f32; 3],
+    /// The point in world space.
+    pub(crate) world: [f64; 3],
+    /// The ten field values, in bit order of [`Fields`].
+    pub(crate) fields: [f32; FIELD_COUNT],
+    /// The fields the running function may write.
+    pub(crate) mask: Fields,
+    pub(crate) role: SampleRole,
+}
+
+impl Sample {
+    /// A fresh sample at object point `p` and world point `world`, all fields 0.
+    pub fn new(p: [f32; 3], world: [f64; 3]) -> Sample {
+        Sample {
+            p,
+            world,
+            fields: [0.0; FIELD_COUNT],
+            mask: Fields::NONE,
+            role: SampleRole::Field,
+        }
+    }
+
+    /// The point in object space.
+    pub fn position(&self) -> [f32; 3] {
+        self.p
+    }
+
+    /// The point in world space (`vlPosition`).
+    pub fn world_position(&self) -> [f32; 3] {
+        self.world.map(|c| c as f32)
+    }
+
+    /// The role of the function now running.
+    pub fn role(&self) -> SampleRole {
+        self.role
+    }
+
+    /// The current value of field number `index` (0 = opacity … 9 = geometry).
+    pub fn value(&self, index: usize) -> f32 {
+        self.fields[index]
+    }
+
+    /// All ten field values.
+    pub fn values(&self) -> [f32; FIELD_COUNT] {
+        self.fields
+    }
+
+    /// `vlField`: the current value of one field, named by a single-bit mask.
+    pub fn field(&self, field: Fields) -> Result<f32> {
+        match field.single_index() {
+            Some(i) => Ok(self.fields[i]),
+            None => err(ErrorCode::BadField, "vlField needs exactly one field"),
+        }
+    }
+
+    /// `vlSet` inside a field function: writes `value` (clamped to [0, 1], NaN → 0) to the fields
+    /// of `fields` that the running function's `vlFunction` call named; others are left alone.
+    pub fn set(&mut self, fields: Fields, value: f32) -> Result<()> {
+        if fields == Fields::NONE {
+            return err(ErrorCode::BadField, "vlSet: empty field mask");
+        }
+        if self.role != SampleRole::Field {
+            return err(
+                ErrorCode::BadScope,
+                "vlSet is not legal inside a normal function",
+            );
+        }
+        self.write(fields & self.mask, value);
+        Ok(())
+    }
+
+    #[inline]
+    pub(crate) fn write(&mut self, fields: Fields, value: f32) {
+        let v = clamp_field(value);
+        for i in fields.indices() {
+            self.fields[i] = v;
+        }
+    }
+}
+
+impl fmt::Debug for Sample {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Sample")
+            .field("p", &self.p)
+            .field("world", &self.world)
+            .field("fields", &self.fields)
+            .finish()
+    }
+}
+
+/// One instruction of an object's field program.
+#[derive(Clone)]
+pub enum Instr {
+    /// `vlSet` in an object: assign a constant (already clamped) to fields.
+    Set {
+        /// The fields written.
+        fields: Fields,
+        /// The value, in [0, 1].
+        value: f32,
+    },
+    /// `vlFunction`: run a field function that may write `fields`.
+    Function {
+        /// The fields the function may write.
+        fields: Fields,
+        /// The function.
+        f: FieldFn,
+    },
+    /// `vlMap`: targets = Φ(value of source field), output `output` (from 0).
+    Map {
+        /// The fields written.
+        targets: Fields,
+        /// Index of the source field.
+        source: usize,
+        /// The transfer function, captured at `vlMap`.
+        mapping: Arc<Mapping>,
+        /// The output column, counted from 0.
+        output: usize,
+    },
+}
+
+impl Instr {
+    /// The fields this instruction may write.
+    pub fn writes(&self) -> Fields {
+        match self {
+            Instr::Set { fields, .. } | Instr::Function { fields, .. } => *fields,
+            Instr::Map { targets, .. } => *targets,
+        }
+    }
+}
+
+impl fmt::Debug for Instr {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Instr::Set { fields, value } => write!(f, "Set({fields:?}, {value})"),
+            Instr::Function { fields, f: func } => {
+                write!(
+                    f,
+                    "Function({fields:?}, {:p})",
+                    Arc::as_ptr(func) as *const ()
+                )
+            }
+            Instr::Map {
+                targets,
+                source,
+                mapping,
+                output,
+            } => write!(
+                f,
+                "Map({targets:?} <- field {source}, {:p}, output {output})",
+                Arc::as_ptr(mapping)
+            ),
+        }
+    }
+}
+
+/// Runs a program on a sample: every instruction in order.
+#[inline]
+pub fn run(program: &[Instr], s: &mut Sample) {
+    for ins in program {
+        match ins {
+            Instr::Set { fields, value } => s.write(*fields, *value),
+            Instr::Function { fields, f } => {
+                s.mask = *fields;
+                s.role = SampleRole::Field;
+                f(s);
+                s.mask = Fields::NONE;
+            }
+            Instr::Map {
+                targets,
+                source,
+                mapping,
+                output,
+            } => {
+                let v = mapping.eval(s.fields[*source], *output);
+                s.write(*targets, v);
+            }
+        }
+    }
+}
+
+/// The shortest prefix of `program` after which `field` can no longer change: everything after
+/// the last instruction that may write it is irrelevant to that field.
+pub fn prefix_for(program: &[Instr], field: Fields) -> usize {
+    program
+        .iter()
+        .rposition(|i| i.writes().intersects(field))
+        .map_or(0, |i| i + 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::types::MappingType;
+
+    #[test]
+    fn set_is_masked_and_clamped() {
+        let prog = vec![
+            Instr::Set {
+                fields: Fields::KA,
+                value: 0.3,
+            },
+            Instr::Function {
+                fields: Fields::F,
+                f: Arc::new(|s: &mut Sample| {
+                    s.set(Fields::ALL, 2.0).unwrap();
+                }),
+            },
+            Instr::Function {
+                fields: Fields::O | Fields::R,
+                f: Arc::new(|s: &mut Sample| {
+                    let f = s.field(Fields::F).unwrap();
+                    s.set(Fields::O, f - 0.25).unwrap();
+                    s.set(Fields::R, f32::NAN).unwrap();
+                    s.set(Fields::G, 0.5).unwrap();
+                }),
+            },
+        ];
+        let mut s = Sample::new([0.5; 3], [0.0; 3]);
+        run(&prog, &mut s);
+        let v = s.values();
+        assert_eq!(v[4], 0.3);
+        assert_eq!(v[9], 1.0, "2.0 clamps to 1");
+        assert_eq!(v[0], 0.75);
+        assert_eq!(v[1], 0.0, "NaN becomes 0");
+        assert_eq!(v[2], 0.0, "G was not in the function's mask");
+        assert_eq!(prefix_for(&prog, Fields::F), 2);
+        assert_eq!(prefix_for(&prog, Fields::KS), 0);
+    }
+
+    #[test]
+    fn map_reads_source_field() {
+        let m = Arc::new(Mapping::new(MappingType::Lookup, 2, 1, &[0.001, 1.0, 1.0, 0.3]).unwrap());
+        let prog = vec![
+            Instr::Set {
+                fields: Fields::F,
+                value: 0.5,
+            },
+            Instr::Map {
+                targets: Fields::O | Fields::KS,
+                source: 9,
+                mapping: m,
+                output: 0,
+            },
+        ];
+        let mut s = Sample::new([0.5; 3], [0.0; 3]);
+        run(&prog, &mut s);
+        assert_eq!(s.value(0), 0.3);
+        assert_eq!(s.value(6), 0.3);
+    }
+
+    #[test]
+    fn normal_role_cannot_write() {
+        let mut s = Sample::new([0.5; 3], [0.0; 3]);
+        s.role = SampleRole::Normal;
+        assert_eq!(s.set(Fields::O, 1.0).unwrap_err().code, ErrorCode::BadScope);
+        assert_eq!(
+            s.field(Fields::O | Fields::R).unwrap_err().code,
+            ErrorCode::BadField
+        );
+    }
+}

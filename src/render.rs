@@ -1,0 +1,531 @@
+//! The discrete ray tracer (direct volume rendering).
+//!
+//! A finished [`SceneDesc`] is compiled once into an immutable [`Compiled`] scene: each object's
+//! world-to-object matrix, boundary box, step and opacity exponent, normal neighbourhood and the
+//! prefix of its program that determines the geometry field. Rays are then traced over image
+//! tiles in parallel (rayon); every pixel is computed independently in a fixed order, so the bytes
+//! of an image do not depend on the number of threads.
+//!
+//! Along a ray, each object's box is clipped exactly; its interval is cut into segments of the
+//! step size, the last one shorter, and each segment is represented by the sample at its midpoint
+//! with opacity `α = 1 − (1 − o)^(ℓ / reference)` for its true length ℓ. For constant media the
+//! product of the transmittances is therefore exactly the Beer–Lambert value `(1 − o)^(L/ref)`
+//! for any step. Samples of overlapping objects are merged in order of depth. Compositing is
+//! front to back with early termination once the transmittance falls below [`T_MIN`].
+
+use crate::error::{Error, ErrorCode, Result};
+use crate::program::{prefix_for, run, Instr, NormalFn, Sample, SampleRole};
+use crate::scene::{Light, ObjectDesc, SceneDesc, Settings};
+use crate::types::{Attenuation, Feature, Fields, MAX_SPECULAR};
+use glam::{DMat4, DVec3};
+use rayon::prelude::*;
+
+/// Rays stop once their transmittance falls below this: what remains can change an 8-bit pixel
+/// by at most 1/8192 < 1/510 (half a grey level).
+pub const T_MIN: f64 = 1.0 / 8192.0;
+
+/// Super-sampling refines a pixel when a colour channel differs from a 4-neighbour's by more
+/// than this.
+pub const SUPER_SAMPLE_CONTRAST: f32 = 4.0 / 255.0;
+
+/// Central differences below this change of F count as a zero gradient.
+const ZERO_GRADIENT: f64 = 1e-7;
+
+/// Side of the square pixel tiles traced in parallel.
+const TILE: u32 = 16;
+
+/// A rendered image: linear RGB in [0, 1], row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Pixels, `width * height` of them.
+    pub pixels: Vec<[f32; 3]>,
+}
+
+impl Image {
+    /// The pixel at column `x`, row `y` (row 0 at the top).
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    /// 8-bit RGB, rounded; anything non-finite becomes 0.
+    pub fn to_rgb8(&self) -> Vec<u8> {
+        self.pixels.iter().flat_map(|p| p.map(to_u8)).collect()
+    }
+}
+
+fn to_u8(v: f32) -> u8 {
+    if v.is_finite() {
+        (v.clamp(0.0, 1.0) * 255.0).round() as u8
+    } else {
+        0
+    }
+}
+
+struct CObj {
+    program: Vec<Instr>,
+    /// The program up to its last instruction that may write opacity: where that leaves o = 0
+    /// the rest cannot change it, and is skipped.
+    o_prefix: usize,
+    /// The program up to its last instruction that may write the geometry field.
+    f_prefix: usize,
+    to_object: DMat4,
+    box_min: DVec3,
+    box_max: DVec3,
+    step: f64,
+    inv_ref: f64,
+    delta: DVec3,
+    visible: bool,
+    flip_normals: bool,
+    normals: Vec<NormalFn>,
+}
+
+impl CObj {
+    fn new(o: &ObjectDesc) -> CObj {
+        let to_world = o.matrix();
+        let b = crate::scene::v3(o.boundary);
+        let box_min = DVec3::splat(0.5) - b * 0.5;
+        let box_max = DVec3::splat(0.5) + b * 0.5;
+        let step = o.state.step as f64;
+        let delta = match o.state.neighborhood {
+            Some(d) => crate::scene::v3(d),
+            None => {
+                let extent = (0..3)
+                    .map(|i| to_world.col(i).truncate().length() * b[i])
+                    .fold(f64::INFINITY, f64::min);
+                DVec3::splat((step * 0.5).max(extent * 1e-3))
+            }
+        };
+        CObj {
+            o_prefix: prefix_for(&o.program, Fields::O),
+            f_prefix: prefix_for(&o.program, Fields::F),
+            program: o.program.clone(),
+            to_object: to_world.inverse(),
+            box_min,
+            box_max,
+            step,
+            inv_ref: 1.0 / o.state.reference as f64,
+            delta,
+            visible: o.state.toggle(Feature::Visible),
+            flip_normals: o.state.toggle(Feature::FlipNormals),
+            normals: o.normals.clone(),
+        }
+    }
+
+    /// The parameter interval [t0, t1] (t ≥ 0) where the ray lies inside the boundary box.
+    fn clip(&self, origin: DVec3, dir: DVec3) -> Option<(f64, f64)> {
+        let o = self.to_object.transform_point3(origin);
+        let d = self.to_object.transform_vector3(dir);
+        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+        for i in 0..3 {
+            if d[i] == 0.0 {
+                if o[i] < self.box_min[i] || o[i] > self.box_max[i] {
+                    return None;
+                }
+                continue;
+            }
+            let inv = 1.0 / d[i];
+            let (a, b) = (
+                (self.box_min[i] - o[i]) * inv,
+                (self.box_max[i] - o[i]) * inv,
+            );
+            t0 = t0.max(a.min(b));
+            t1 = t1.min(a.max(b));
+        }
+        (t0 < t1 && t1.is_finite()).then_some((t0, t1))
+    }
+
+    fn inside(&self, p: DVec3) -> bool {
+        p.cmpge(self.box_min).all() && p.cmple(self.box_max).all()
+    }
+
+    fn sample_at(&self, w: DVec3) -> Sample {
+        let p = self.to_object.transform_point3(w);
+        Sample::new(p.as_vec3().to_array(), w.to_array())
+    }
+
+    /// The geometry field at world point `w` (0 outside the boundary: fields are bounded).
+    fn geometry(&self, w: DVec3) -> f64 {
+        let p = self.to_object.transform_point3(w);
+        if !self.inside(p) {
+            return 0.0;
+        }
+        let mut s = Sample::new(p.as_vec3().to_array(), w.to_array());
+        run(&self.program[..self.f_prefix], &mut s);
+        s.value(9) as f64
+    }
+
+    /// The normal at `w`: −∇F by world-space central differences, then flipped towards the viewer
+    /// if asked, then the normal functions in order. `None` where the gradient vanishes.
+    fn normal(&self, w: DVec3, view: DVec3, s: &mut Sample) -> Option<DVec3> {
+        let mut diff = DVec3::ZERO;
+        let mut grad = DVec3::ZERO;
+        for i in 0..3 {
+            let mut e = DVec3::ZERO;
+            e[i] = self.delta[i];
+            let d = self.geometry(w + e) - self.geometry(w - e);
+            diff[i] = d;
+            grad[i] = d / (2.0 * self.delta[i]);
+        }
+        let mut n = if diff.abs().max_element() <= ZERO_GRADIENT {
+            None
+        } else {
+            (-grad).try_normalize()
+        };
+        if let Some(v) = n {
+            if self.flip_normals && v.dot(view) < 0.0 {
+                n = Some(-v);
+            }
+        }
+        if self.normals.is_empty() {
+            return n;
+        }
+        let mut nv = n.unwrap_or(DVec3::ZERO).as_vec3().to_array();
+        s.role = SampleRole::Normal;
+        for f in &self.normals {
+            f(&mut nv, s);
+        }
+        s.role = SampleRole::Field;
+        let v = DVec3::new(nv[0] as f64, nv[1] as f64, nv[2] as f64);
+        if v.is_finite() {
+            v.try_normalize()
+        } else {
+            None
+        }
+    }
+}
+
+/// A scene compiled for tracing: immutable, shared by all worker threads.
+pub struct Compiled {
+    objects: Vec<CObj>,
+    lights: Vec<Light>,
+    settings: Settings,
+}
+
+impl Compiled {
+    /// Compiles a scene description.
+    pub fn new(desc: &SceneDesc) -> Compiled {
+        Compiled {
+            objects: desc.objects.iter().map(CObj::new).collect(),
+            lights: desc.lights.clone(),
+            settings: desc.settings.clone(),
+        }
+    }
+
+    /// Shades one sample: returns (α, colour) or `None` where the opacity is 0.
+    fn shade(&self, obj: &CObj, w: DVec3, dir: DVec3, len: f64) -> Option<(f64, DVec3)> {
+        let mut s = obj.sample_at(w);
+        run(&obj.program[..obj.o_prefix], &mut s);
+        let o = s.value(0) as f64;
+        if o <= 0.0 {
+            return None;
+        }
+        run(&obj.program[obj.o_prefix..], &mut s);
+        let f = s.values();
+        let alpha = if o >= 1.0 {
+            1.0
+        } else {
+            1.0 - (1.0 - o).powf(len * obj.inv_ref)
+        };
+        let c = DVec3::new(f[1] as f64, f[2] as f64, f[3] as f64);
+        let (ka, kd, ks) = (f[4] as f64, f[5] as f64, f[6] as f64);
+        let e = f[7] as f64 * MAX_SPECULAR as f64;
+        let amb = crate::scene::v3(self.settings.ambient);
+        let mut col = ka * amb * c;
+        if !self.lights.is_empty() && (kd > 0.0 || ks > 0.0) {
+            let view = -dir;
+            let n = obj.normal(w, view, &mut s);
+            for light in &self.lights {
+                let (l, att, rad) = match *light {
+                    Light::Point {
+                        position,
+                        attenuation,
+                        radiance,
+                    } => {
+                        let to = position - w;
+                        let d = to.length();
+                        let att = match attenuation {
+                            Attenuation::None => 1.0,
+                            Attenuation::Inverse => 1.0 / d.max(1e-6),
+                            Attenuation::InverseSquare => 1.0 / (d * d).max(1e-12),
+                        };
+                        (to.try_normalize().unwrap_or(view), att, radiance)
+                    }
+                    Light::Directional { to_light, radiance } => (to_light, 1.0, radiance),
+                };
+                let rad = crate::scene::v3(rad) * att;
+                let lit = match n {
+                    Some(n) => {
+                        let ndl = n.dot(l);
+                        let mut term = kd * c * ndl.max(0.0);
+                        if ks > 0.0 && ndl > 0.0 {
+                            let r = 2.0 * ndl * n - l;
+                            let rv = r.dot(view);
+                            if rv > 0.0 {
+                                term += DVec3::splat(ks * rv.powf(e));
+                            }
+                        }
+                        term
+                    }
+                    // A vanishing gradient: no preferred direction, the medium is lit
+                    // isotropically (diffuse at full strength, no highlight).
+                    None => kd * c,
+                };
+                col += rad * lit;
+            }
+        }
+        if !col.is_finite() {
+            col = DVec3::ZERO;
+        }
+        Some((alpha, col))
+    }
+
+    /// Traces one primary ray; returns the pixel colour.
+    fn trace(&self, origin: DVec3, dir: DVec3) -> DVec3 {
+        // Each visible object's interval, cut into segments: (object, t0, t1, next segment, count).
+        let mut cursors: Vec<(usize, f64, f64, u64, u64)> = Vec::new();
+        for (i, obj) in self.objects.iter().enumerate() {
+            if !obj.visible {
+                continue;
+            }
+            if let Some((t0, t1)) = obj.clip(origin, dir) {
+                let n = ((t1 - t0) / obj.step).ceil().max(1.0);
+                let n = if n.is_finite() && n < u64::MAX as f64 {
+                    n as u64
+                } else {
+                    u64::MAX
+                };
+                cursors.push((i, t0, t1, 0, n));
+            }
+        }
+        let mut col = DVec3::ZERO;
+        let mut t = 1.0f64;
+        loop {
+            // The next segment in depth order (ties: object order).
+            let mut best: Option<(usize, f64)> = None;
+            for (ci, &(oi, t0, t1, k, n)) in cursors.iter().enumerate() {
+                if k >= n {
+                    continue;
+                }
+                let step = self.objects[oi].step;
+                let a = t0 + k as f64 * step;
+                let b = if k + 1 == n {
+                    t1
+                } else {
+                    (t0 + (k + 1) as f64 * step).min(t1)
+                };
+                let mid = 0.5 * (a + b);
+                if best.is_none_or(|(_, m)| mid < m) {
+                    best = Some((ci, mid));
+                }
+            }
+            let Some((ci, mid)) = best else { break };
+            let (oi, t0, t1, k, n) = cursors[ci];
+            cursors[ci].3 += 1;
+            let obj = &self.objects[oi];
+            let a = t0 + k as f64 * obj.step;
+            let b = if k + 1 == n {
+                t1
+            } else {
+                (t0 + (k + 1) as f64 * obj.step).min(t1)
+            };
+            let len = b - a;
+            if len <= 0.0 {
+                continue;
+            }
+            if let Some((alpha, c)) = self.shade(obj, origin + mid * dir, dir, len) {
+                col += t * alpha * c;
+                t *= 1.0 - alpha;
+                if t < T_MIN {
+                    t = 0.0;
+                    break;
+                }
+            }
+        }
+        col + t * crate::scene::v3(self.settings.background)
+    }
+}
+
+/// The primary-ray generator of one image.
+struct View {
+    eye: DVec3,
+    right: DVec3,
+    up: DVec3,
+    forward: DVec3,
+    width: u32,
+    height: u32,
+}
+
+impl View {
+    fn new(settings: &Settings, width: u32, height: u32, aspect: f32) -> View {
+        let cam = &settings.camera;
+        let (r, u, f) = cam.basis();
+        let half = (cam.fov as f64 * 0.5).to_radians().tan();
+        let aspect = aspect as f64;
+        let (hw, hh) = if aspect >= 1.0 {
+            (half * aspect, half)
+        } else {
+            (half, half / aspect)
+        };
+        View {
+            eye: crate::scene::v3(cam.eye),
+            right: r * hw,
+            up: u * hh,
+            forward: f,
+            width,
+            height,
+        }
+    }
+
+    /// The ray through image position (x, y) in pixels from the top-left corner.
+    fn ray(&self, x: f64, y: f64) -> DVec3 {
+        let sx = x / self.width as f64 * 2.0 - 1.0;
+        let sy = 1.0 - y / self.height as f64 * 2.0;
+        (self.forward + sx * self.right + sy * self.up).normalize()
+    }
+}
+
+fn tiles(width: u32, height: u32) -> Vec<(u32, u32)> {
+    let mut v = Vec::new();
+    for ty in (0..height).step_by(TILE as usize) {
+        for tx in (0..width).step_by(TILE as usize) {
+            v.push((tx, ty));
+        }
+    }
+    v
+}
+
+/// Evaluates `f` for every pixel, in parallel over tiles, deterministically.
+fn per_pixel<F>(width: u32, height: u32, f: F) -> Vec<[f32; 3]>
+where
+    F: Fn(u32, u32) -> [f32; 3] + Sync,
+{
+    type Tile = ((u32, u32), Vec<[f32; 3]>);
+    let results: Vec<Tile> = tiles(width, height)
+        .into_par_iter()
+        .map(|(tx, ty)| {
+            let mut out = Vec::with_capacity((TILE * TILE) as usize);
+            for y in ty..(ty + TILE).min(height) {
+                for x in tx..(tx + TILE).min(width) {
+                    out.push(f(x, y));
+                }
+            }
+            ((tx, ty), out)
+        })
+        .collect();
+    let mut pixels = vec![[0.0f32; 3]; (width * height) as usize];
+    for ((tx, ty), out) in results {
+        let mut it = out.into_iter();
+        for y in ty..(ty + TILE).min(height) {
+            for x in tx..(tx + TILE).min(width) {
+                pixels[(y * width + x) as usize] = it.next().expect("tile size");
+            }
+        }
+    }
+    pixels
+}
+
+fn to_f32(c: DVec3) -> [f32; 3] {
+    let f = |v: f64| {
+        if v.is_finite() {
+            v.clamp(0.0, 1.0) as f32
+        } else {
+            0.0
+        }
+    };
+    [f(c.x), f(c.y), f(c.z)]
+}
+
+/// Renders the compiled scene to an image of `width × height` pixels whose view plane has the
+/// given width / height `aspect`. Adaptive super-sampling: one ray through each pixel centre,
+/// then pixels that differ from a neighbour by more than [`SUPER_SAMPLE_CONTRAST`] are replaced
+/// by the mean of an n×n grid of rays.
+pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> Result<Image> {
+    let run = || {
+        let view = View::new(&scene.settings, width, height, aspect);
+        let first = per_pixel(width, height, |x, y| {
+            to_f32(scene.trace(view.eye, view.ray(x as f64 + 0.5, y as f64 + 0.5)))
+        });
+        let n = scene.settings.super_sample.max(1) as u32;
+        if n == 1 {
+            return first;
+        }
+        let differs = |x: u32, y: u32| {
+            let p = first[(y * width + x) as usize];
+            let neighbours = [
+                (x.wrapping_sub(1), y),
+                (x + 1, y),
+                (x, y.wrapping_sub(1)),
+                (x, y + 1),
+            ];
+            neighbours.iter().any(|&(nx, ny)| {
+                nx < width && ny < height && {
+                    let q = first[(ny * width + nx) as usize];
+                    (0..3).any(|c| (p[c] - q[c]).abs() > SUPER_SAMPLE_CONTRAST)
+                }
+            })
+        };
+        per_pixel(width, height, |x, y| {
+            if !differs(x, y) {
+                return first[(y * width + x) as usize];
+            }
+            let mut sum = DVec3::ZERO;
+            for j in 0..n {
+                for i in 0..n {
+                    let sx = x as f64 + (i as f64 + 0.5) / n as f64;
+                    let sy = y as f64 + (j as f64 + 0.5) / n as f64;
+                    sum += crate::scene::v3(to_f32(scene.trace(view.eye, view.ray(sx, sy))));
+                }
+            }
+            to_f32(sum / (n * n) as f64)
+        })
+    };
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(run)) {
+        Ok(pixels) => Ok(Image {
+            width,
+            height,
+            pixels,
+        }),
+        Err(payload) => {
+            let msg = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            Err(Error::new(
+                ErrorCode::Internal,
+                format!("rendering stopped by a panic (in a field function?): {msg}"),
+            ))
+        }
+    }
+}
+
+/// Renders every image a scene requested and writes the files. All images are attempted; the
+/// first failure is returned (its message counts the others).
+pub fn render_outputs(desc: &SceneDesc) -> Result<()> {
+    if desc.images.is_empty() {
+        return Ok(());
+    }
+    let compiled = Compiled::new(desc);
+    let mut errors: Vec<Error> = Vec::new();
+    for req in &desc.images {
+        let result = render_image(&compiled, req.width, req.height, req.aspect).and_then(|img| {
+            crate::output::write_image(&req.path, img.width, img.height, &img.to_rgb8())
+        });
+        if let Err(e) = result {
+            errors.push(e);
+        }
+    }
+    match errors.len() {
+        0 => Ok(()),
+        1 => Err(errors.remove(0)),
+        n => {
+            let mut e = errors.remove(0);
+            e.message = format!("{} (and {} more output(s) failed)", e.message, n - 1);
+            Err(e)
+        }
+    }
+}

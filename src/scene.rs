@@ -1,0 +1,291 @@
+//! The description of a scene as the state machine builds it: camera, lights, rendering state,
+//! outputs, and objects with their programs and transforms.
+//!
+//! These are plain data; [`crate::Library`] fills them in command by command and hands a finished
+//! [`SceneDesc`] to the renderer when the scene closes.
+
+use crate::error::{err, ErrorCode, Result};
+use crate::program::{Instr, NormalFn};
+use crate::types::{Attenuation, Feature, Fields, Interpolation, RenderType};
+use glam::{DMat4, DVec3};
+use std::fmt;
+use std::path::PathBuf;
+
+/// The camera (`VLCAMERA`): eye, look-at point, up vector and the full field of view in degrees
+/// across the shorter side of the view plane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: [f32; 3],
+    /// Point looked at.
+    pub at: [f32; 3],
+    /// Up direction (need not be orthogonal to the view direction, only not parallel to it).
+    pub up: [f32; 3],
+    /// Full field of view in degrees across the shorter side, in (0, 180).
+    pub fov: f32,
+}
+
+/// The field of view `vluCamera` and the default camera use, in degrees.
+pub const DEFAULT_FOV: f32 = 60.0;
+
+impl Default for Camera {
+    /// Looks at the centre of the unit cube from 2 units in front of it (−z), +y up, 60°.
+    fn default() -> Camera {
+        Camera {
+            eye: [0.5, 0.5, -1.5],
+            at: [0.5, 0.5, 0.5],
+            up: [0.0, 1.0, 0.0],
+            fov: DEFAULT_FOV,
+        }
+    }
+}
+
+impl Camera {
+    /// Checks that the camera defines a view: finite values, eye ≠ look-at point, up not parallel
+    /// to the view direction, field of view in (0°, 180°).
+    pub fn validate(&self) -> Result<()> {
+        let all = self.eye.iter().chain(&self.at).chain(&self.up);
+        if all.clone().any(|v| !v.is_finite()) || !self.fov.is_finite() {
+            return err(ErrorCode::BadValue, "vlCamera: values must be finite");
+        }
+        if !(self.fov > 0.0 && self.fov < 180.0) {
+            return err(
+                ErrorCode::BadValue,
+                format!(
+                    "vlCamera: field of view {} must lie in (0, 180) degrees",
+                    self.fov
+                ),
+            );
+        }
+        let (f, up) = (self.forward_raw(), v3(self.up));
+        if f.length() <= 1e-12 * (1.0 + v3(self.eye).length()) {
+            return err(
+                ErrorCode::BadValue,
+                "vlCamera: eye and look-at point coincide",
+            );
+        }
+        let (fl, ul) = (f.length(), up.length());
+        if ul == 0.0 || f.cross(up).length() <= 1e-9 * fl * ul {
+            return err(
+                ErrorCode::BadValue,
+                "vlCamera: up vector is zero or parallel to the view direction",
+            );
+        }
+        Ok(())
+    }
+
+    fn forward_raw(&self) -> DVec3 {
+        v3(self.at) - v3(self.eye)
+    }
+
+    /// The orthonormal basis (right, up, forward) of the view, left-handed as in RenderMan:
+    /// looking along +z with +y up, +x is to the right.
+    pub fn basis(&self) -> (DVec3, DVec3, DVec3) {
+        let f = self.forward_raw().normalize();
+        let r = v3(self.up).cross(f).normalize();
+        let u = f.cross(r);
+        (r, u, f)
+    }
+}
+
+/// Converts a float triple to a double vector.
+pub fn v3(a: [f32; 3]) -> DVec3 {
+    DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64)
+}
+
+/// A light source, with colour premultiplied by intensity.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Light {
+    /// A point light.
+    Point {
+        /// Position.
+        position: DVec3,
+        /// Attenuation with distance.
+        attenuation: Attenuation,
+        /// Colour × intensity.
+        radiance: [f32; 3],
+    },
+    /// A directional light.
+    Directional {
+        /// Unit vector pointing towards the light (against its direction of travel).
+        to_light: DVec3,
+        /// Colour × intensity.
+        radiance: [f32; 3],
+    },
+}
+
+/// Default sampling interval and opacity reference, in world units.
+pub const DEFAULT_STEP: f32 = 1.0;
+
+/// The rendering state an object captures at its `vlObject`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderState {
+    /// Rendering algorithm.
+    pub render_type: RenderType,
+    /// World-space sampling interval.
+    pub step: f32,
+    /// World-space interval over which opacity is exact.
+    pub reference: f32,
+    /// Iso-surfaces: (field index, threshold).
+    pub surfaces: Vec<(usize, f32)>,
+    /// The eight toggles, indexed by [`Feature`].
+    pub toggles: [bool; 8],
+    /// Maximum depth of secondary rays.
+    pub recursion: i32,
+    /// Dataset interpolation.
+    pub interpolation: Interpolation,
+    /// B and C of the tricubic filter.
+    pub cubic: (f32, f32),
+    /// Central-difference neighbourhood in world units; `None` = automatic (see
+    /// `docs/compat.md`: half the step, at least 1/1000 of the object's smallest extent).
+    pub neighborhood: Option<[f32; 3]>,
+}
+
+impl Default for RenderState {
+    fn default() -> RenderState {
+        let mut toggles = [false; 8];
+        toggles[Feature::Visible as usize] = true;
+        RenderState {
+            render_type: RenderType::Dvr,
+            step: DEFAULT_STEP,
+            reference: DEFAULT_STEP,
+            surfaces: Vec::new(),
+            toggles,
+            recursion: 4,
+            interpolation: Interpolation::Trilinear,
+            cubic: (0.0, 0.5),
+            neighborhood: None,
+        }
+    }
+}
+
+impl RenderState {
+    /// The state of one toggle.
+    pub fn toggle(&self, f: Feature) -> bool {
+        self.toggles[f as usize]
+    }
+}
+
+/// Scene-wide settings that the library scope may set as defaults for later scenes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// The camera.
+    pub camera: Camera,
+    /// Background colour.
+    pub background: [f32; 3],
+    /// Super-sampling: up to n×n samples per pixel.
+    pub super_sample: i32,
+    /// Ambient colour × intensity.
+    pub ambient: [f32; 3],
+    /// The state objects capture.
+    pub render: RenderState,
+}
+
+impl Default for Settings {
+    fn default() -> Settings {
+        Settings {
+            camera: Camera::default(),
+            background: [0.0; 3],
+            super_sample: 1,
+            ambient: [0.0; 3],
+            render: RenderState::default(),
+        }
+    }
+}
+
+/// An image request (`vlImage`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageRequest {
+    /// Output file; the extension selects the format.
+    pub path: PathBuf,
+    /// Width / height of the view plane.
+    pub aspect: f32,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+}
+
+/// An object: its program, placement, boundary, normal chain and captured rendering state.
+#[derive(Clone)]
+pub struct ObjectDesc {
+    /// The field program.
+    pub program: Vec<Instr>,
+    /// Object-to-world transform (composed in issue order).
+    pub to_world: DMat4,
+    /// Object-space flips applied before `to_world`.
+    pub flip: [bool; 3],
+    /// Boundary scale about the cube centre (`vlBoundary`).
+    pub boundary: [f32; 3],
+    /// Normal functions, in order.
+    pub normals: Vec<NormalFn>,
+    /// Rendering state captured at `vlObject`.
+    pub state: RenderState,
+}
+
+impl ObjectDesc {
+    /// A new object capturing `state`: identity transform, unit boundary, empty program.
+    pub fn new(state: RenderState) -> ObjectDesc {
+        ObjectDesc {
+            program: Vec::new(),
+            to_world: DMat4::IDENTITY,
+            flip: [false; 3],
+            boundary: [1.0; 3],
+            normals: Vec::new(),
+            state,
+        }
+    }
+
+    /// The full object-to-world matrix, flips included.
+    pub fn matrix(&self) -> DMat4 {
+        let mut f = DMat4::IDENTITY;
+        for (axis, &on) in self.flip.iter().enumerate() {
+            if on {
+                let mut s = DVec3::ONE;
+                let mut t = DVec3::ZERO;
+                s[axis] = -1.0;
+                t[axis] = 1.0;
+                f = DMat4::from_translation(t) * DMat4::from_scale(s) * f;
+            }
+        }
+        self.to_world * f
+    }
+
+    /// Whether the program or normal chain reads fields by way of the geometry field.
+    pub fn writes(&self, fields: Fields) -> bool {
+        self.program.iter().any(|i| i.writes().intersects(fields))
+    }
+}
+
+impl fmt::Debug for ObjectDesc {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("ObjectDesc")
+            .field("program", &self.program)
+            .field("to_world", &self.to_world)
+            .field("flip", &self.flip)
+            .field("boundary", &self.boundary)
+            .field(
+                "normals",
+                &self
+                    .normals
+                    .iter()
+                    .map(|n| std::sync::Arc::as_ptr(n) as *const ())
+                    .collect::<Vec<_>>(),
+            )
+            .field("state", &self.state)
+            .finish()
+    }
+}
+
+/// A complete scene, ready to render.
+#[derive(Clone, Debug)]
+pub struct SceneDesc {
+    /// Scene-wide settings.
+    pub settings: Settings,
+    /// Lights, in definition order.
+    pub lights: Vec<Light>,
+    /// Image outputs.
+    pub images: Vec<ImageRequest>,
+    /// Root objects, in definition order.
+    pub objects: Vec<ObjectDesc>,
+}
