@@ -28,6 +28,7 @@
 
 #![warn(missing_docs)]
 
+pub mod dataset;
 pub mod error;
 pub mod library;
 pub mod mapping;
@@ -36,6 +37,7 @@ pub mod program;
 pub mod render;
 pub mod scene;
 pub mod scope;
+mod skip;
 pub mod types;
 pub mod vlaux;
 

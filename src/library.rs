@@ -5,6 +5,7 @@
 //! returns `Err` has changed nothing. The C interface calls these methods one to one; Rust users
 //! call them directly (field functions are closures).
 
+use crate::dataset::{Dataset, Filter};
 use crate::error::{err, Error, ErrorCode, Result};
 use crate::mapping::Mapping;
 use crate::program::{clamp_field, Instr, NormalFn, Sample};
@@ -52,6 +53,7 @@ pub struct Library {
     /// Defaults that each new scene starts from (set at library scope).
     defaults: Settings,
     mappings: BTreeMap<i32, Arc<Mapping>>,
+    datasets: crate::program::Datasets,
     scene: Option<OpenScene>,
     ended: bool,
 }
@@ -167,6 +169,7 @@ impl Library {
                     lights: s.lights,
                     images: s.images,
                     objects: s.objects,
+                    datasets: Arc::new(self.datasets.clone()),
                 };
                 crate::render::render_outputs(&desc)?;
                 Ok(Closed::Scene)
@@ -175,6 +178,7 @@ impl Library {
                 self.ended = true;
                 self.scene = None;
                 self.mappings.clear();
+                self.datasets.clear();
                 Ok(Closed::Library)
             }
         }
@@ -416,32 +420,55 @@ impl Library {
         Ok(())
     }
 
-    /// `vlLoad`: not implemented yet.
-    pub fn load(&mut self, _id: i32, _path: impl AsRef<Path>) -> Result<()> {
+    /// `vlLoad`: reads a `.vlb` dataset and files it under `id`, replacing any dataset of that
+    /// id (objects that already cast the old one keep it). A file that cannot be read or is
+    /// malformed changes nothing.
+    pub fn load(&mut self, id: i32, path: impl AsRef<Path>) -> Result<()> {
         self.check(Command::Load)?;
-        err(
-            ErrorCode::Unsupported,
-            "vlLoad: datasets are not implemented yet",
-        )
+        let d = Dataset::load(path.as_ref())?;
+        self.datasets.insert(id, Arc::new(d));
+        Ok(())
     }
 
-    /// `vlUnload`: not implemented yet.
-    pub fn unload(&mut self, _id: i32) -> Result<()> {
+    /// Files an in-memory dataset under `id` (the Rust counterpart of `vlLoad`).
+    pub fn add_dataset(&mut self, id: i32, dataset: Dataset) -> Result<()> {
+        self.check(Command::Load)?;
+        self.datasets.insert(id, Arc::new(dataset));
+        Ok(())
+    }
+
+    /// The dataset filed under `id`.
+    pub fn dataset_of(&self, id: i32) -> Option<&Arc<Dataset>> {
+        self.datasets.get(&id)
+    }
+
+    /// `vlUnload`: forgets dataset `id`; objects that cast it keep their reference, so the
+    /// memory is freed when the last of them is gone.
+    pub fn unload(&mut self, id: i32) -> Result<()> {
         self.check(Command::Unload)?;
-        err(
-            ErrorCode::Unsupported,
-            "vlUnload: datasets are not implemented yet",
-        )
+        match self.datasets.remove(&id) {
+            Some(_) => Ok(()),
+            None => err(ErrorCode::BadId, format!("vlUnload: no dataset {id}")),
+        }
     }
 
-    /// `vlSample` outside sample scope: not implemented yet.
-    pub fn sample(&self, _id: i32, x: f32, y: f32, z: f32) -> Result<f32> {
+    fn settings(&self) -> &Settings {
+        match &self.scene {
+            Some(s) => &s.settings,
+            None => &self.defaults,
+        }
+    }
+
+    fn filter(&self) -> Filter {
+        let r = &self.settings().render;
+        Filter::new(r.interpolation, r.cubic)
+    }
+
+    /// `vlSample` outside sample scope: dataset `id`'s normalised value at dataset coordinates
+    /// (x, y, z), under the interpolation in force.
+    pub fn sample(&self, id: i32, x: f32, y: f32, z: f32) -> Result<f32> {
         self.check(Command::Sample)?;
-        finite("vlSample", &[x, y, z])?;
-        err(
-            ErrorCode::Unsupported,
-            "vlSample: datasets are not implemented yet",
-        )
+        crate::program::sample_dataset(&self.datasets, id, [x, y, z], self.filter())
     }
 
     /// `vlMapping`: declares (or replaces) transfer function `id`. Objects that already mapped
@@ -610,14 +637,22 @@ impl Library {
         Ok(())
     }
 
-    /// `vlDataset`: not implemented yet.
-    pub fn dataset(&mut self, fields: Fields, _id: i32) -> Result<()> {
+    /// `vlDataset`: an instruction writing dataset `id`, interpolated with the filter in force
+    /// now, to `fields`.
+    pub fn dataset(&mut self, fields: Fields, id: i32) -> Result<()> {
         self.check(Command::Dataset)?;
         fields.validate()?;
-        err(
-            ErrorCode::Unsupported,
-            "vlDataset: datasets are not implemented yet",
-        )
+        let data =
+            self.datasets.get(&id).cloned().ok_or_else(|| {
+                Error::new(ErrorCode::BadId, format!("vlDataset: no dataset {id}"))
+            })?;
+        let filter = self.filter();
+        self.object_mut().program.push(Instr::Dataset {
+            fields,
+            data,
+            filter,
+        });
+        Ok(())
     }
 
     /// `vlMap`: targets = Φ(mapping)(source), with `output` counted from 1.
@@ -690,8 +725,23 @@ impl Library {
             lights: s.lights.clone(),
             images: Vec::new(),
             objects: s.objects.clone(),
+            datasets: Arc::new(self.datasets.clone()),
         };
         crate::render::render_image(&crate::render::Compiled::new(&desc), width, height, aspect)
+    }
+
+    /// Switches the pixel-preserving speed-ups (empty-space skipping, early ray termination)
+    /// on or off, for benchmarks; at library or scene scope like the other settings. Not a
+    /// command of the C API.
+    pub fn set_optimise(&mut self, optimise: crate::scene::Optimise) -> Result<()> {
+        if !matches!(self.scope(), Scope::Library | Scope::Scene) {
+            return err(
+                ErrorCode::BadScope,
+                "set_optimise: library or scene scope only",
+            );
+        }
+        self.settings_mut().optimise = optimise;
+        Ok(())
     }
 
     /// A textual snapshot of the whole state, for tests that check a refused call changed

@@ -23,6 +23,8 @@ pub struct Mapping {
     /// Row-major outputs: b[i * outputs + j] = b_{i+1, j+1}.
     b: Vec<f32>,
     outputs: usize,
+    /// Per row i ≥ 1 and output j: (b_{i+1} − b_i)/(a_{i+1} − a_i), for the ramp.
+    slopes: Vec<f64>,
 }
 
 impl Mapping {
@@ -81,11 +83,19 @@ impl Mapping {
             a.push(row[0]);
             b.extend_from_slice(&row[1..]);
         }
+        let mut slopes = vec![0.0f64; n * k];
+        for i in 1..n {
+            for j in 0..k {
+                let db = b[i * k + j] as f64 - b[(i - 1) * k + j] as f64;
+                slopes[i * k + j] = db / (a[i] as f64 - a[i - 1] as f64);
+            }
+        }
         Ok(Mapping {
             kind,
             a,
             b,
             outputs: k,
+            slopes,
         })
     }
 
@@ -122,7 +132,11 @@ impl Mapping {
         let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
         let n = self.a.len();
         // k = number of a_i strictly less than v; then a_k < v ≤ a_{k+1} in 1-based terms.
-        let k = self.a.partition_point(|&a| a < v);
+        let k = if n <= 16 {
+            self.a.iter().take_while(|&&a| a < v).count()
+        } else {
+            self.a.partition_point(|&a| a < v)
+        };
         match self.kind {
             MappingType::Lookup => {
                 if k == 0 || k == n {
@@ -148,11 +162,50 @@ impl Mapping {
                     }
                     return (bn + (v as f64 - an) * (1.0 - bn) / (1.0 - an)) as f32;
                 }
-                let (a0, a1) = (self.a[k - 1] as f64, self.a[k] as f64);
-                let (b0, b1) = (self.b(k - 1, j) as f64, self.b(k, j) as f64);
-                (b0 + (v as f64 - a0) * (b1 - b0) / (a1 - a0)) as f32
+                let a0 = self.a[k - 1] as f64;
+                let b0 = self.b(k - 1, j) as f64;
+                (b0 + (v as f64 - a0) * self.slopes[k * self.outputs + j]) as f32
             }
         }
+    }
+}
+
+impl Mapping {
+    /// The smallest and largest value of Φ(v, j) over all v in [lo, hi] (clamped to [0, 1]):
+    /// exact, from the values at the ends and at every breakpoint inside, and for Φ_t the
+    /// output of every step the interval meets. Used to prove that a region is transparent.
+    pub fn range(&self, lo: f32, hi: f32, j: usize) -> (f32, f32) {
+        let clamp = |v: f32| if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+        let (lo, hi) = (clamp(lo), clamp(hi.max(lo)));
+        let mut min = self.eval(lo, j).min(self.eval(hi, j));
+        let mut max = self.eval(lo, j).max(self.eval(hi, j));
+        let mut take = |v: f32| {
+            min = min.min(v);
+            max = max.max(v);
+        };
+        let n = self.a.len();
+        match self.kind {
+            MappingType::Lookup => {
+                // Φ_t is b_{i+1} on (a_i, a_{i+1}] and 0 outside (a_1, a_n].
+                if lo <= self.a[0] || hi > self.a[n - 1] {
+                    take(0.0);
+                }
+                for i in 0..n.saturating_sub(1) {
+                    if hi > self.a[i] && lo <= self.a[i + 1] {
+                        take(self.b(i + 1, j));
+                    }
+                }
+            }
+            MappingType::Ramp => {
+                // Piecewise linear: extremes at the ends or at breakpoints inside.
+                for &a in &self.a {
+                    if a > lo && a < hi {
+                        take(self.eval(a, j));
+                    }
+                }
+            }
+        }
+        (min, max)
     }
 }
 
@@ -185,5 +238,39 @@ mod tests {
         assert_eq!(m.eval(0.0011, 0), 0.3);
         assert_eq!(m.eval(1.0, 0), 0.3);
         assert_eq!(m.outputs(), 1);
+    }
+
+    #[test]
+    fn range_bounds_every_value_in_the_interval() {
+        let tables: [(MappingType, i32, &[f32]); 3] = [
+            (MappingType::Lookup, 3, &[0.2, 0.5, 0.4, 0.9, 0.7, 0.1]),
+            (MappingType::Ramp, 3, &[0.2, 0.5, 0.4, 0.0, 0.7, 0.9]),
+            (MappingType::Ramp, 2, &[0.0, 0.3, 1.0, 0.6]),
+        ];
+        for (kind, n, t) in tables {
+            let m = Mapping::new(kind, n, 1, t).unwrap();
+            for i in 0..=40 {
+                for k in i..=40 {
+                    let (lo, hi) = (i as f32 / 40.0, k as f32 / 40.0);
+                    let (rmin, rmax) = m.range(lo, hi, 0);
+                    let mut seen = (f32::INFINITY, f32::NEG_INFINITY);
+                    for s in 0..=400 {
+                        let v = (lo + (hi - lo) * s as f32 / 400.0).min(hi);
+                        let y = m.eval(v, 0);
+                        assert!(
+                            y >= rmin - 1e-6 && y <= rmax + 1e-6,
+                            "{kind:?} [{lo},{hi}] v={v}: {y} outside [{rmin},{rmax}]"
+                        );
+                        seen = (seen.0.min(y), seen.1.max(y));
+                    }
+                    // And the bound is tight where the scan visits the extremes.
+                    assert!(
+                        rmax - seen.1 < 0.05 + 1e-6 || kind == MappingType::Lookup,
+                        "{kind:?} [{lo},{hi}] loose: {rmax} vs {}",
+                        seen.1
+                    );
+                }
+            }
+        }
     }
 }

@@ -10,18 +10,57 @@
 //! This module does not know about rays or the C interface: the C layer wraps C function pointers
 //! into closures of the types below.
 
-use crate::error::{err, ErrorCode, Result};
+use crate::dataset::{Dataset, Filter};
+use crate::error::{err, Error, ErrorCode, Result};
 use crate::mapping::Mapping;
 use crate::types::{Fields, FIELD_COUNT};
+use std::collections::BTreeMap;
 use std::fmt;
 use std::sync::Arc;
 
 /// A field function: runs at a sample point and writes fields through [`Sample::set`].
-pub type FieldFn = Arc<dyn Fn(&mut Sample) + Send + Sync>;
+pub type FieldFn = Arc<dyn Fn(&mut Sample<'_>) + Send + Sync>;
 
 /// A normal function: receives the current normal (to rewrite in place) and the sample, whose
 /// fields and position it may read.
-pub type NormalFn = Arc<dyn Fn(&mut [f32; 3], &mut Sample) + Send + Sync>;
+pub type NormalFn = Arc<dyn Fn(&mut [f32; 3], &mut Sample<'_>) + Send + Sync>;
+
+/// The datasets of a library, by id, shared without copies.
+pub type Datasets = BTreeMap<i32, Arc<Dataset>>;
+
+/// What a sample can reach besides its own point: the library's datasets (for `vlSample`) and
+/// the interpolation filter of the object being evaluated.
+#[derive(Clone, Debug, Default)]
+pub struct SampleEnv {
+    pub(crate) datasets: Arc<Datasets>,
+    pub(crate) filter: Filter,
+}
+
+impl SampleEnv {
+    /// An environment with these datasets and filter.
+    pub fn new(datasets: Arc<Datasets>, filter: Filter) -> SampleEnv {
+        SampleEnv { datasets, filter }
+    }
+}
+
+/// `vlSample`: dataset `id` at dataset coordinates `p` with `filter`.
+pub(crate) fn sample_dataset(
+    datasets: &Datasets,
+    id: i32,
+    p: [f32; 3],
+    filter: Filter,
+) -> Result<f32> {
+    if p.iter().any(|v| !v.is_finite()) {
+        return err(
+            ErrorCode::BadValue,
+            format!("vlSample: point {p:?} is not finite"),
+        );
+    }
+    let d = datasets
+        .get(&id)
+        .ok_or_else(|| Error::new(ErrorCode::BadId, format!("vlSample: no dataset {id}")))?;
+    Ok(d.sample(p, filter))
+}
 
 /// Clamps a value written to a field: into [0, 1], NaN to 0.
 #[inline]
@@ -43,7 +82,7 @@ pub enum SampleRole {
 }
 
 /// The context of one sample point, handed to field and normal functions.
-pub struct Sample {
+pub struct Sample<'a> {
     /// The point in object space (the unit cube is [0, 1]^3).
     pub(crate) p: [f32; 3],
     /// The point in world space.
@@ -53,17 +92,43 @@ pub struct Sample {
     /// The fields the running function may write.
     pub(crate) mask: Fields,
     pub(crate) role: SampleRole,
+    env: Option<&'a SampleEnv>,
 }
 
-impl Sample {
-    /// A fresh sample at object point `p` and world point `world`, all fields 0.
-    pub fn new(p: [f32; 3], world: [f64; 3]) -> Sample {
+impl Sample<'static> {
+    /// A fresh sample at object point `p` and world point `world`, all fields 0, with no
+    /// datasets in reach.
+    pub fn new(p: [f32; 3], world: [f64; 3]) -> Sample<'static> {
         Sample {
             p,
             world,
             fields: [0.0; FIELD_COUNT],
             mask: Fields::NONE,
             role: SampleRole::Field,
+            env: None,
+        }
+    }
+}
+
+impl<'a> Sample<'a> {
+    /// A fresh sample that can reach the datasets and filter of `env`.
+    pub fn with_env(p: [f32; 3], world: [f64; 3], env: &'a SampleEnv) -> Sample<'a> {
+        Sample {
+            p,
+            world,
+            fields: [0.0; FIELD_COUNT],
+            mask: Fields::NONE,
+            role: SampleRole::Field,
+            env: Some(env),
+        }
+    }
+
+    /// `vlSample` inside a field function: dataset `id` at dataset coordinates `p`, with the
+    /// interpolation the object captured.
+    pub fn dataset(&self, id: i32, p: [f32; 3]) -> Result<f32> {
+        match self.env {
+            Some(env) => sample_dataset(&env.datasets, id, p, env.filter),
+            None => err(ErrorCode::BadId, format!("vlSample: no dataset {id}")),
         }
     }
 
@@ -119,13 +184,15 @@ impl Sample {
     #[inline]
     pub(crate) fn write(&mut self, fields: Fields, value: f32) {
         let v = clamp_field(value);
-        for i in fields.indices() {
-            self.fields[i] = v;
+        let mut bits = fields.bits() & Fields::ALL.bits();
+        while bits != 0 {
+            self.fields[bits.trailing_zeros() as usize] = v;
+            bits &= bits - 1;
         }
     }
 }
 
-impl fmt::Debug for Sample {
+impl fmt::Debug for Sample<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("Sample")
             .field("p", &self.p)
@@ -152,6 +219,15 @@ pub enum Instr {
         /// The function.
         f: FieldFn,
     },
+    /// `vlDataset`: write a dataset's interpolated value to fields.
+    Dataset {
+        /// The fields written.
+        fields: Fields,
+        /// The dataset, shared.
+        data: Arc<Dataset>,
+        /// The interpolation captured at `vlDataset`.
+        filter: Filter,
+    },
     /// `vlMap`: targets = Φ(value of source field), output `output` (from 0).
     Map {
         /// The fields written.
@@ -169,7 +245,9 @@ impl Instr {
     /// The fields this instruction may write.
     pub fn writes(&self) -> Fields {
         match self {
-            Instr::Set { fields, .. } | Instr::Function { fields, .. } => *fields,
+            Instr::Set { fields, .. }
+            | Instr::Function { fields, .. }
+            | Instr::Dataset { fields, .. } => *fields,
             Instr::Map { targets, .. } => *targets,
         }
     }
@@ -186,6 +264,15 @@ impl fmt::Debug for Instr {
                     Arc::as_ptr(func) as *const ()
                 )
             }
+            Instr::Dataset {
+                fields,
+                data,
+                filter,
+            } => write!(
+                f,
+                "Dataset({fields:?}, {:p}, {filter:?})",
+                Arc::as_ptr(data)
+            ),
             Instr::Map {
                 targets,
                 source,
@@ -202,7 +289,7 @@ impl fmt::Debug for Instr {
 
 /// Runs a program on a sample: every instruction in order.
 #[inline]
-pub fn run(program: &[Instr], s: &mut Sample) {
+pub fn run(program: &[Instr], s: &mut Sample<'_>) {
     for ins in program {
         match ins {
             Instr::Set { fields, value } => s.write(*fields, *value),
@@ -211,6 +298,14 @@ pub fn run(program: &[Instr], s: &mut Sample) {
                 s.role = SampleRole::Field;
                 f(s);
                 s.mask = Fields::NONE;
+            }
+            Instr::Dataset {
+                fields,
+                data,
+                filter,
+            } => {
+                let v = data.sample(s.p, *filter);
+                s.write(*fields, v);
             }
             Instr::Map {
                 targets,

@@ -13,12 +13,15 @@
 //! for any step. Samples of overlapping objects are merged in order of depth. Compositing is
 //! front to back with early termination once the transmittance falls below [`T_MIN`].
 
+use crate::dataset::{Dataset, Filter};
 use crate::error::{Error, ErrorCode, Result};
-use crate::program::{prefix_for, run, Instr, NormalFn, Sample, SampleRole};
+use crate::program::{prefix_for, run, Instr, NormalFn, Sample, SampleEnv, SampleRole};
 use crate::scene::{Light, ObjectDesc, SceneDesc, Settings};
+use crate::skip::{SkipGrid, Walk};
 use crate::types::{Attenuation, Feature, Fields, MAX_SPECULAR};
 use glam::{DMat4, DVec3};
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// Rays stop once their transmittance falls below this: what remains can change an 8-bit pixel
 /// by at most 1/8192 < 1/510 (half a grey level).
@@ -81,10 +84,16 @@ struct CObj {
     visible: bool,
     flip_normals: bool,
     normals: Vec<NormalFn>,
+    /// Where the geometry field is a dataset's value (its last writer is `vlDataset`), normals
+    /// come from that dataset's interpolated grid gradients.
+    f_dataset: Option<(Arc<Dataset>, Filter)>,
+    env: SampleEnv,
+    /// Blocks where opacity is provably 0.
+    skip: Option<Arc<SkipGrid>>,
 }
 
 impl CObj {
-    fn new(o: &ObjectDesc) -> CObj {
+    fn new(o: &ObjectDesc, datasets: &Arc<crate::program::Datasets>) -> CObj {
         let to_world = o.matrix();
         let b = crate::scene::v3(o.boundary);
         let box_min = DVec3::splat(0.5) - b * 0.5;
@@ -99,9 +108,24 @@ impl CObj {
                 DVec3::splat((step * 0.5).max(extent * 1e-3))
             }
         };
+        let f_prefix = prefix_for(&o.program, Fields::F);
+        let f_dataset = match f_prefix.checked_sub(1).map(|i| &o.program[i]) {
+            Some(Instr::Dataset { data, filter, .. }) => Some((data.clone(), *filter)),
+            _ => None,
+        };
+        let r = &o.state;
+        let o_prefix = prefix_for(&o.program, Fields::O);
         CObj {
-            o_prefix: prefix_for(&o.program, Fields::O),
-            f_prefix: prefix_for(&o.program, Fields::F),
+            skip: o
+                .skip
+                .get_or_init(|| {
+                    SkipGrid::build(&o.program[..o_prefix], box_min, box_max).map(Arc::new)
+                })
+                .clone(),
+            o_prefix,
+            f_prefix,
+            f_dataset,
+            env: SampleEnv::new(datasets.clone(), Filter::new(r.interpolation, r.cubic)),
             program: o.program.clone(),
             to_object: to_world.inverse(),
             box_min,
@@ -142,9 +166,9 @@ impl CObj {
         p.cmpge(self.box_min).all() && p.cmple(self.box_max).all()
     }
 
-    fn sample_at(&self, w: DVec3) -> Sample {
+    fn sample_at(&self, w: DVec3) -> Sample<'_> {
         let p = self.to_object.transform_point3(w);
-        Sample::new(p.as_vec3().to_array(), w.to_array())
+        Sample::with_env(p.as_vec3().to_array(), w.to_array(), &self.env)
     }
 
     /// The geometry field at world point `w` (0 outside the boundary: fields are bounded).
@@ -153,14 +177,23 @@ impl CObj {
         if !self.inside(p) {
             return 0.0;
         }
-        let mut s = Sample::new(p.as_vec3().to_array(), w.to_array());
+        let mut s = Sample::with_env(p.as_vec3().to_array(), w.to_array(), &self.env);
         run(&self.program[..self.f_prefix], &mut s);
         s.value(9) as f64
     }
 
-    /// The normal at `w`: −∇F by world-space central differences, then flipped towards the viewer
-    /// if asked, then the normal functions in order. `None` where the gradient vanishes.
-    fn normal(&self, w: DVec3, view: DVec3, s: &mut Sample) -> Option<DVec3> {
+    /// The world-space gradient of F: from the dataset's grid gradients where F is a dataset's
+    /// value, else by central differences over the neighbourhood. Also returns whether it
+    /// vanishes.
+    fn gradient(&self, w: DVec3, p: [f32; 3]) -> (DVec3, bool) {
+        if let Some((data, filter)) = &self.f_dataset {
+            let g = data.gradient(p, *filter);
+            let g = DVec3::from_array(g);
+            // ∇_world F = Aᵀ ∇_object F, A the linear part of world → object.
+            let gw = glam::DMat3::from_mat4(self.to_object).transpose() * g;
+            let zero = g.abs().max_element() <= ZERO_GRADIENT;
+            return (gw, zero);
+        }
         let mut diff = DVec3::ZERO;
         let mut grad = DVec3::ZERO;
         for i in 0..3 {
@@ -170,11 +203,14 @@ impl CObj {
             diff[i] = d;
             grad[i] = d / (2.0 * self.delta[i]);
         }
-        let mut n = if diff.abs().max_element() <= ZERO_GRADIENT {
-            None
-        } else {
-            (-grad).try_normalize()
-        };
+        (grad, diff.abs().max_element() <= ZERO_GRADIENT)
+    }
+
+    /// The normal at `w`: −∇F by world-space central differences, then flipped towards the viewer
+    /// if asked, then the normal functions in order. `None` where the gradient vanishes.
+    fn normal(&self, w: DVec3, view: DVec3, s: &mut Sample<'_>) -> Option<DVec3> {
+        let (grad, zero) = self.gradient(w, s.position());
+        let mut n = if zero { None } else { (-grad).try_normalize() };
         if let Some(v) = n {
             if self.flip_normals && v.dot(view) < 0.0 {
                 n = Some(-v);
@@ -209,7 +245,11 @@ impl Compiled {
     /// Compiles a scene description.
     pub fn new(desc: &SceneDesc) -> Compiled {
         Compiled {
-            objects: desc.objects.iter().map(CObj::new).collect(),
+            objects: desc
+                .objects
+                .iter()
+                .map(|o| CObj::new(o, &desc.datasets))
+                .collect(),
             lights: desc.lights.clone(),
             settings: desc.settings.clone(),
         }
@@ -285,8 +325,7 @@ impl Compiled {
 
     /// Traces one primary ray; returns the pixel colour.
     fn trace(&self, origin: DVec3, dir: DVec3) -> DVec3 {
-        // Each visible object's interval, cut into segments: (object, t0, t1, next segment, count).
-        let mut cursors: Vec<(usize, f64, f64, u64, u64)> = Vec::new();
+        let mut cursors: Vec<Cursor> = Vec::new();
         for (i, obj) in self.objects.iter().enumerate() {
             if !obj.visible {
                 continue;
@@ -298,54 +337,120 @@ impl Compiled {
                 } else {
                     u64::MAX
                 };
-                cursors.push((i, t0, t1, 0, n));
+                let walk = match (&obj.skip, self.settings.optimise.skip_empty) {
+                    (Some(grid), true) => {
+                        let o = obj.to_object.transform_point3(origin);
+                        let d = obj.to_object.transform_vector3(dir);
+                        Some(grid.walk(o, d, t0))
+                    }
+                    _ => None,
+                };
+                cursors.push(Cursor {
+                    object: i,
+                    t0,
+                    t1,
+                    step: obj.step,
+                    k: 0,
+                    n,
+                    walk,
+                });
             }
         }
+        let early = self.settings.optimise.early_termination;
         let mut col = DVec3::ZERO;
         let mut t = 1.0f64;
         loop {
             // The next segment in depth order (ties: object order).
             let mut best: Option<(usize, f64)> = None;
-            for (ci, &(oi, t0, t1, k, n)) in cursors.iter().enumerate() {
-                if k >= n {
-                    continue;
-                }
-                let step = self.objects[oi].step;
-                let a = t0 + k as f64 * step;
-                let b = if k + 1 == n {
-                    t1
-                } else {
-                    (t0 + (k + 1) as f64 * step).min(t1)
-                };
-                let mid = 0.5 * (a + b);
-                if best.is_none_or(|(_, m)| mid < m) {
-                    best = Some((ci, mid));
+            for (ci, c) in cursors.iter_mut().enumerate() {
+                let grid = self.objects[c.object].skip.as_deref();
+                if let Some(mid) = c.peek(grid) {
+                    if best.is_none_or(|(_, m)| mid < m) {
+                        best = Some((ci, mid));
+                    }
                 }
             }
             let Some((ci, mid)) = best else { break };
-            let (oi, t0, t1, k, n) = cursors[ci];
-            cursors[ci].3 += 1;
-            let obj = &self.objects[oi];
-            let a = t0 + k as f64 * obj.step;
-            let b = if k + 1 == n {
-                t1
-            } else {
-                (t0 + (k + 1) as f64 * obj.step).min(t1)
-            };
+            let c = &mut cursors[ci];
+            let (a, b) = c.segment(c.k);
+            c.k += 1;
             let len = b - a;
             if len <= 0.0 {
                 continue;
             }
-            if let Some((alpha, c)) = self.shade(obj, origin + mid * dir, dir, len) {
-                col += t * alpha * c;
+            let obj = &self.objects[c.object];
+            if let Some((alpha, colour)) = self.shade(obj, origin + mid * dir, dir, len) {
+                col += t * alpha * colour;
                 t *= 1.0 - alpha;
-                if t < T_MIN {
+                if early && t < T_MIN {
                     t = 0.0;
                     break;
                 }
             }
         }
         col + t * crate::scene::v3(self.settings.background)
+    }
+}
+
+/// One object's segments along a ray: segment k spans [t0 + k·step, t0 + (k + 1)·step], the last
+/// one ending at t1; its sample is at its midpoint.
+struct Cursor {
+    object: usize,
+    t0: f64,
+    t1: f64,
+    step: f64,
+    k: u64,
+    n: u64,
+    walk: Option<Walk>,
+}
+
+impl Cursor {
+    #[inline]
+    fn segment(&self, k: u64) -> (f64, f64) {
+        let a = self.t0 + k as f64 * self.step;
+        let b = if k + 1 >= self.n {
+            self.t1
+        } else {
+            (self.t0 + (k + 1) as f64 * self.step).min(self.t1)
+        };
+        (a, b)
+    }
+
+    #[inline]
+    fn mid(&self, k: u64) -> f64 {
+        let (a, b) = self.segment(k);
+        0.5 * (a + b)
+    }
+
+    /// The midpoint of the next segment that must be sampled, passing over segments whose
+    /// samples lie in empty blocks.
+    fn peek(&mut self, grid: Option<&SkipGrid>) -> Option<f64> {
+        loop {
+            if self.k >= self.n {
+                return None;
+            }
+            let mid = self.mid(self.k);
+            let (Some(walk), Some(grid)) = (self.walk.as_mut(), grid) else {
+                return Some(mid);
+            };
+            let Some(exit) = walk.skip_until(grid, mid) else {
+                return Some(mid);
+            };
+            // Skip every segment whose midpoint is before `exit`.
+            let guess = ((exit - self.t0) / self.step - 0.5).ceil();
+            let mut k = if guess.is_finite() && guess > self.k as f64 {
+                (guess as u64).min(self.n)
+            } else {
+                self.k + 1
+            };
+            while k > self.k + 1 && self.mid(k - 1) >= exit {
+                k -= 1;
+            }
+            while k < self.n && self.mid(k) < exit {
+                k += 1;
+            }
+            self.k = k;
+        }
     }
 }
 

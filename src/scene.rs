@@ -179,6 +179,27 @@ pub struct Settings {
     pub ambient: [f32; 3],
     /// The state objects capture.
     pub render: RenderState,
+    /// Speed-ups that never change a pixel (switchable for benchmarks).
+    pub optimise: Optimise,
+}
+
+/// Speed-ups that never change a pixel (beyond what early termination documents), switchable
+/// so that benchmarks can show what each is worth. Both are on by default.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Optimise {
+    /// Skip blocks where opacity is provably 0.
+    pub skip_empty: bool,
+    /// Stop rays whose transmittance falls below `render::T_MIN`.
+    pub early_termination: bool,
+}
+
+impl Default for Optimise {
+    fn default() -> Optimise {
+        Optimise {
+            skip_empty: true,
+            early_termination: true,
+        }
+    }
 }
 
 impl Default for Settings {
@@ -189,6 +210,7 @@ impl Default for Settings {
             super_sample: 1,
             ambient: [0.0; 3],
             render: RenderState::default(),
+            optimise: Optimise::default(),
         }
     }
 }
@@ -221,6 +243,10 @@ pub struct ObjectDesc {
     pub normals: Vec<NormalFn>,
     /// Rendering state captured at `vlObject`.
     pub state: RenderState,
+    /// The empty-space grid, built by the first render after the object is closed (its
+    /// program and boundary no longer change then) and shared by later renders.
+    pub(crate) skip:
+        std::sync::Arc<std::sync::OnceLock<Option<std::sync::Arc<crate::skip::SkipGrid>>>>,
 }
 
 impl ObjectDesc {
@@ -233,6 +259,7 @@ impl ObjectDesc {
             boundary: [1.0; 3],
             normals: Vec::new(),
             state,
+            skip: Default::default(),
         }
     }
 
@@ -288,4 +315,6 @@ pub struct SceneDesc {
     pub images: Vec<ImageRequest>,
     /// Root objects, in definition order.
     pub objects: Vec<ObjectDesc>,
+    /// The library's datasets when the scene closed (for `vlSample` in field functions).
+    pub datasets: std::sync::Arc<crate::program::Datasets>,
 }

@@ -42,10 +42,10 @@ impl CField {
     /// The core closure: enters sample scope and calls `f` with a copy of the object-space point.
     pub(crate) fn into_core(self) -> vlib_core::program::FieldFn {
         // A method call captures the whole wrapper (not its raw-pointer fields one by one).
-        Arc::new(move |s: &mut Sample| self.call(s))
+        Arc::new(move |s: &mut Sample<'_>| self.call(s))
     }
 
-    fn call(&self, s: &mut Sample) {
+    fn call(&self, s: &mut Sample<'_>) {
         let mut p = s.position();
         let _scope = Enter::new(s);
         // SAFETY: `f` is a valid C function by the contract of `vlFunction`; `p` is 3 floats.
@@ -73,10 +73,10 @@ impl CNormal {
 
     /// The core closure: enters sample scope and calls `f` on the normal and a copy of the point.
     pub(crate) fn into_core(self) -> vlib_core::program::NormalFn {
-        Arc::new(move |n: &mut [f32; 3], s: &mut Sample| self.call(n, s))
+        Arc::new(move |n: &mut [f32; 3], s: &mut Sample<'_>| self.call(n, s))
     }
 
-    fn call(&self, n: &mut [f32; 3], s: &mut Sample) {
+    fn call(&self, n: &mut [f32; 3], s: &mut Sample<'_>) {
         let mut p = s.position();
         let _scope = Enter::new(s);
         // SAFETY: `f` is a valid C function by the contract of `vlNormal`; `n` and `p` are

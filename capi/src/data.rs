@@ -1,6 +1,6 @@
 //! Commands 22–25: datasets and transfer functions.
 
-use crate::ffi::{c_path, either, library, null, unsupported};
+use crate::ffi::{c_path, either, library, null};
 use crate::types::{vlfloat, vlint};
 use std::os::raw::c_char;
 use vlib_core::mapping::{MAX_OUTPUTS, MAX_POINTS};
@@ -31,12 +31,7 @@ pub unsafe extern "C" fn vlSample(id: vlint, x: vlfloat, y: vlfloat, z: vlfloat)
     either(
         Command::Sample,
         0.0,
-        |_| {
-            Err(unsupported(
-                Command::Sample,
-                "sampling a dataset inside a field function is",
-            ))
-        },
+        |s| s.dataset(id, [x, y, z]),
         |lib| lib.sample(id, x, y, z),
     )
 }

@@ -59,7 +59,7 @@ pub(crate) fn boundary<T>(neutral: T, f: impl FnOnce() -> Result<T>) -> T {
 pub(crate) fn dispatch<T>(
     cmd: Command,
     neutral: T,
-    in_sample: impl FnOnce(&mut Sample) -> Result<T>,
+    in_sample: impl FnOnce(&mut Sample<'_>) -> Result<T>,
     outside: impl FnOnce(&mut Option<Library>) -> Result<T>,
 ) -> T {
     boundary(neutral, || {
@@ -85,7 +85,7 @@ pub(crate) fn scope_of(state: &Option<Library>) -> Scope {
 pub(crate) fn either<T>(
     cmd: Command,
     neutral: T,
-    in_sample: impl FnOnce(&mut Sample) -> Result<T>,
+    in_sample: impl FnOnce(&mut Sample<'_>) -> Result<T>,
     outside: impl FnOnce(&mut Library) -> Result<T>,
 ) -> T {
     dispatch(cmd, neutral, in_sample, |state| {

@@ -11,20 +11,23 @@ use std::ptr;
 use vlib_core::Sample;
 
 thread_local! {
-    static CURRENT: Cell<*mut Sample> = const { Cell::new(ptr::null_mut()) };
+    // The lifetime is erased: the pointer is only dereferenced while the `Enter` guard that set
+    // it is alive, which is within the borrow the renderer handed to the callback.
+    static CURRENT: Cell<*mut Sample<'static>> = const { Cell::new(ptr::null_mut()) };
 }
 
 /// Marks this thread as evaluating `sample` until dropped.
 pub(crate) struct Enter {
-    previous: *mut Sample,
+    previous: *mut Sample<'static>,
 }
 
 impl Enter {
     /// Enters sample scope. `sample` must stay valid, and must not be used through any other
     /// reference, until the returned guard is dropped.
-    pub(crate) fn new(sample: *mut Sample) -> Enter {
+    pub(crate) fn new(sample: *mut Sample<'_>) -> Enter {
+        let erased = sample.cast::<Sample<'static>>();
         Enter {
-            previous: CURRENT.with(|c| c.replace(sample)),
+            previous: CURRENT.with(|c| c.replace(erased)),
         }
     }
 }
@@ -41,7 +44,7 @@ pub(crate) fn active() -> bool {
 }
 
 /// Runs `f` on the current sample, or returns `None` outside sample scope.
-pub(crate) fn with_current<R>(f: impl FnOnce(&mut Sample) -> R) -> Option<R> {
+pub(crate) fn with_current<R>(f: impl FnOnce(&mut Sample<'_>) -> R) -> Option<R> {
     let p = CURRENT.with(|c| c.get());
     if p.is_null() {
         return None;

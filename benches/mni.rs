@@ -1,0 +1,92 @@
+//! The MNI brain at 512×512, sample distance 0.5 voxel, shaded (the VTK peer scene of
+//! `../shared/bench/README.md`): the steady frame with and without empty-space skipping and
+//! early ray termination, measured in one process so the ratios are meaningful, plus the first
+//! frame (dataset load and precomputation included) and the unshaded frame.
+//!
+//! ```text
+//! cargo bench --bench mni            # or benches/peer.sh for the side-by-side with VTK
+//! ```
+//!
+//! The dataset is converted from `../shared/data/…nii.gz` with `vlconvert` on first use
+//! (into `target/bench-data/mni.vlb`), or taken from `$VLIB_MNI_VLB`.
+
+#[path = "../examples/common/mni_scene.rs"]
+mod mni_scene;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+use vlib::scene::Optimise;
+use vlib::Library;
+
+fn dataset() -> PathBuf {
+    if let Some(p) = std::env::var_os("VLIB_MNI_VLB") {
+        return p.into();
+    }
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let out = root.join("target/bench-data/mni.vlb");
+    if !out.exists() {
+        std::fs::create_dir_all(out.parent().unwrap()).unwrap();
+        let nii = root.join("../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz");
+        let st = std::process::Command::new(env!("CARGO_BIN_EXE_vlconvert"))
+            .arg("nifti")
+            .arg(&nii)
+            .arg(&out)
+            .status()
+            .expect("run vlconvert");
+        assert!(st.success(), "vlconvert failed on {}", nii.display());
+    }
+    out
+}
+
+/// A library with the brain loaded and the scene open, ready to render.
+fn scene(vlb: &PathBuf, step: f32, shaded: bool, optimise: Optimise) -> Library {
+    let mut vl = Library::new();
+    vl.load(mni_scene::BRAIN, vlb).unwrap();
+    let dims = vl.dataset_of(mni_scene::BRAIN).unwrap().dims();
+    mni_scene::mappings(&mut vl).unwrap();
+    vl.scene().unwrap();
+    vl.set_optimise(optimise).unwrap();
+    mni_scene::build(&mut vl, dims, step, shaded).unwrap();
+    vl
+}
+
+fn bench(c: &mut Criterion) {
+    let vlb = dataset();
+    // The first frame: load, brick ranges, skip grid and render, as a user sees it once.
+    let t = Instant::now();
+    let vl = scene(&vlb, 0.5, true, Optimise::default());
+    vl.render_preview(512, 512, 1.0).unwrap();
+    println!(
+        "mni first frame (load + precomputation + render): {:.3} s",
+        t.elapsed().as_secs_f64()
+    );
+
+    let mut g = c.benchmark_group("mni_512_sd0.5");
+    g.sample_size(10).measurement_time(Duration::from_secs(8));
+    let variants = [
+        ("shaded", true, true, true),
+        ("shaded_no_skipping", true, false, true),
+        ("shaded_no_early_termination", true, true, false),
+        ("shaded_neither", true, false, false),
+        ("unshaded", false, true, true),
+    ];
+    for (name, shaded, skip_empty, early_termination) in variants {
+        let vl = scene(
+            &vlb,
+            0.5,
+            shaded,
+            Optimise {
+                skip_empty,
+                early_termination,
+            },
+        );
+        g.bench_function(name, |b| {
+            b.iter(|| vl.render_preview(512, 512, 1.0).unwrap())
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

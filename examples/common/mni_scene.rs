@@ -1,0 +1,89 @@
+//! The MNI brain scene of `../shared/bench/README.md` (the VTK peer benchmark), built with the
+//! Rust API; shared by `examples/mni.rs`, `benches/mni.rs` and the tests.
+//!
+//! One voxel is one world unit (1 mm). The dataset's nodes span [0, n − 1] per axis, so the unit
+//! cube is scaled by (196, 232, 188). NIfTI's RAS axes are right-handed and vlib's world is
+//! left-handed, so the object is flipped in x: the image then shows the subject's right on the
+//! left, as VTK (and a radiologist facing the patient) does.
+
+#![allow(dead_code)]
+
+use vlib::{Attenuation, Camera, Fields, Library, MappingType};
+
+/// Mapping ids used by the scene.
+const OPACITY: i32 = 1;
+const COLOUR: i32 = 2;
+
+/// Dataset id of the brain.
+pub const BRAIN: i32 = 1;
+
+/// The transfer functions of `peer_settings.py` on the normalised scale (value / 255).
+pub fn mappings(vl: &mut Library) -> Result<(), vlib::Error> {
+    let opacity: Vec<f32> = [
+        (40.0, 0.0),
+        (80.0, 0.10),
+        (120.0, 0.35),
+        (180.0, 0.60),
+        (255.0, 0.85),
+    ]
+    .iter()
+    .flat_map(|&(s, a): &(f32, f32)| [s / 255.0, a])
+    .collect();
+    vl.mapping(OPACITY, MappingType::Ramp, 5, 1, &opacity)?;
+    // VTK's colour function starts at (0: black); Φ_r's implicit first segment from (0, 0) to the
+    // first point gives exactly that.
+    let colour: Vec<f32> = [
+        (60.0, [0.55, 0.35, 0.30]),
+        (110.0, [0.88, 0.66, 0.56]),
+        (180.0, [0.96, 0.92, 0.86]),
+        (255.0, [1.0, 1.0, 1.0]),
+    ]
+    .iter()
+    .flat_map(|&(s, c): &(f32, [f32; 3])| [s / 255.0, c[0], c[1], c[2]])
+    .collect();
+    vl.mapping(COLOUR, MappingType::Ramp, 4, 3, &colour)
+}
+
+/// Builds the scene (camera, light, object) in an open scene; `step` is the sample distance in
+/// voxels, `shaded` switches the diffuse and specular terms.
+pub fn build(
+    vl: &mut Library,
+    dims: [usize; 3],
+    step: f32,
+    shaded: bool,
+) -> Result<(), vlib::Error> {
+    let ext = dims.map(|n| (n - 1) as f32);
+    let centre = ext.map(|e| e / 2.0);
+    vl.camera(&Camera {
+        eye: [centre[0], centre[1] + 360.0, centre[2]],
+        at: centre,
+        up: [0.0, 0.0, 1.0],
+        fov: 30.0,
+    })?;
+    vl.background(0.0, 0.0, 0.0)?;
+    vl.ambient(1.0, 1.0, 1.0, 1.0)?;
+    // VTK's headlight: a white light travelling along the view direction.
+    vl.directional_light([0.0, -1.0, 0.0], [1.0, 1.0, 1.0], 1.0)?;
+    vl.step_size(step, 1.0)?;
+    vl.interpolation(vlib::Interpolation::Trilinear)?;
+    vl.object()?;
+    vl.flip(vlib::types::axes::X)?;
+    vl.scale(ext[0], ext[1], ext[2])?;
+    vl.dataset(Fields::F, BRAIN)?;
+    vl.map(Fields::O, Fields::F, OPACITY, 1)?;
+    vl.map(Fields::R, Fields::F, COLOUR, 1)?;
+    vl.map(Fields::G, Fields::F, COLOUR, 2)?;
+    vl.map(Fields::B, Fields::F, COLOUR, 3)?;
+    vl.set(Fields::KA, 0.2)?;
+    if shaded {
+        vl.set(Fields::KD, 0.7)?;
+        vl.set(Fields::KS, 0.3)?;
+        vl.set(Fields::N, vlib::types::specular_to_field(10.0))?;
+    } else {
+        // Unshaded, VTK shows the classified colour: ambient 1.
+        vl.set(Fields::KA, 1.0)?;
+    }
+    vl.end()?;
+    let _ = Attenuation::None;
+    Ok(())
+}

@@ -1,0 +1,41 @@
+//! The MNI ICBM152 brain rendered like the VTK peer benchmark (`../shared/bench/README.md`):
+//! 512×512, sample distance 0.5 voxel, shaded.
+//!
+//! ```text
+//! target/release/vlconvert nifti ../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz out/mni.vlb
+//! cargo run --release --example mni -- out/mni.vlb out/mni.png [step] [--unshaded] [--size=N]
+//! ```
+
+#[path = "common/mni_scene.rs"]
+mod mni_scene;
+
+use std::time::Instant;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let vlb = args.first().map(String::as_str).unwrap_or("out/mni.vlb");
+    let png = args.get(1).map(String::as_str).unwrap_or("out/mni.png");
+    let step: f32 = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(0.5);
+    let shaded = !args.iter().any(|a| a == "--unshaded");
+    let size: i32 = args
+        .iter()
+        .find_map(|a| a.strip_prefix("--size="))
+        .map(str::parse)
+        .transpose()?
+        .unwrap_or(512);
+    let start = Instant::now();
+    let mut vl = vlib::Library::new();
+    vl.load(mni_scene::BRAIN, vlb)?;
+    let loaded = start.elapsed().as_secs_f64();
+    let dims = vl.dataset_of(mni_scene::BRAIN).expect("loaded").dims();
+    mni_scene::mappings(&mut vl)?;
+    vl.scene()?;
+    vl.image(png, 1.0, size, size)?;
+    mni_scene::build(&mut vl, dims, step, shaded)?;
+    vl.end()?;
+    println!(
+        "wrote {png} in {:.3} s (load {loaded:.3} s, then precomputation and render)",
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}

@@ -1,0 +1,1071 @@
+//! Volume datasets: the `.vlb` file format, normalisation, and interpolation filters.
+//!
+//! A [`Dataset`] is a regular grid of nodes (node i of n lies at object coordinate i/(n − 1); a
+//! dimension of 1 is constant along its axis) holding 8- or 16-bit voxels normalised by
+//! `min(1, max(0, (v − a)/(b − a)))`. It is immutable once loaded and shared by `Arc` between
+//! every object that casts it, so 32 chess pieces made from six datasets hold six grids.
+//!
+//! Filters ([`Filter`]): nearest node, trilinear, and the Mitchell–Netravali BC family of
+//! tricubic filters (B = 0, C = 0.5 is Catmull–Rom, the default; B = 1, C = 0 the cubic B-spline).
+//! Values and gradients use the same filter: the gradient at a point is the filter applied to the
+//! central-difference gradients of the nodes (one-sided at the faces), so a linear field has an
+//! exact gradient everywhere. Points outside [0, 1]^3 take the value of the nearest face
+//! (clamp to edge).
+//!
+//! The reader refuses a malformed file before allocating anything: the header's claims are
+//! checked against each other and against the file's real length.
+
+use crate::error::{err, Error, ErrorCode, Result};
+use crate::types::Interpolation;
+use std::io::Read;
+use std::path::Path;
+
+/// The magic number of a `.vlb` file.
+pub const MAGIC: &[u8; 4] = b"VLB1";
+/// The size of the `.vlb` header in bytes.
+pub const HEADER_LEN: usize = 28;
+/// The largest number of voxels a dataset may have (2^32; 16 GiB of normalised values).
+pub const MAX_VOXELS: u64 = 1 << 32;
+
+/// The raw voxels of a dataset, as stored in the file.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Voxels {
+    /// One byte per voxel.
+    U8(Vec<u8>),
+    /// Two bytes per voxel.
+    U16(Vec<u16>),
+}
+
+impl Voxels {
+    /// Bytes per voxel.
+    pub fn width(&self) -> u32 {
+        match self {
+            Voxels::U8(_) => 1,
+            Voxels::U16(_) => 2,
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Voxels::U8(v) => v.len(),
+            Voxels::U16(v) => v.len(),
+        }
+    }
+
+    fn get(&self, i: usize) -> f64 {
+        match self {
+            Voxels::U8(v) => v[i] as f64,
+            Voxels::U16(v) => v[i] as f64,
+        }
+    }
+}
+
+/// An interpolation filter with its parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum Filter {
+    /// The nearest node.
+    Nearest,
+    /// Trilinear interpolation (the default).
+    #[default]
+    Trilinear,
+    /// The separable BC-spline with parameters B and C.
+    Cubic {
+        /// Mitchell–Netravali B.
+        b: f32,
+        /// Mitchell–Netravali C.
+        c: f32,
+    },
+}
+
+impl Filter {
+    /// The filter for an interpolation type and the cubic parameters in force.
+    pub fn new(kind: Interpolation, cubic: (f32, f32)) -> Filter {
+        match kind {
+            Interpolation::Nearest => Filter::Nearest,
+            Interpolation::Trilinear => Filter::Trilinear,
+            Interpolation::Tricubic => Filter::Cubic {
+                b: cubic.0,
+                c: cubic.1,
+            },
+        }
+    }
+}
+
+/// The largest sum of |weights| of the BC-spline filter along one axis, over all positions: a
+/// value interpolated in 3D lies within min − (P − 1)(max − min) … max + (P − 1)(max − min),
+/// P = (S³ + 1)/2 the largest total positive weight. Sampled on a fine grid, plus a margin.
+pub fn bc_abs_sum(b: f64, c: f64) -> f64 {
+    let mut worst: f64 = 1.0;
+    for i in 0..=1024 {
+        let t = i as f64 / 1024.0;
+        let s: f64 = (-1..=2).map(|m| bc_kernel(t - m as f64, b, c).abs()).sum();
+        worst = worst.max(s);
+    }
+    worst * (1.0 + 1e-6)
+}
+
+/// The Mitchell–Netravali BC-spline kernel k(x), support |x| < 2.
+pub fn bc_kernel(x: f64, b: f64, c: f64) -> f64 {
+    let x = x.abs();
+    if x < 1.0 {
+        ((12.0 - 9.0 * b - 6.0 * c) * x * x * x
+            + (-18.0 + 12.0 * b + 6.0 * c) * x * x
+            + (6.0 - 2.0 * b))
+            / 6.0
+    } else if x < 2.0 {
+        ((-b - 6.0 * c) * x * x * x
+            + (6.0 * b + 30.0 * c) * x * x
+            + (-12.0 * b - 48.0 * c) * x
+            + (8.0 * b + 24.0 * c))
+            / 6.0
+    } else {
+        0.0
+    }
+}
+
+/// Nodes per side of a brick, the unit of empty-space skipping.
+pub const BRICK: usize = 4;
+
+/// The range of node values that any point of each brick can read under a filter: brick
+/// (i, j, k) covers object coordinates of node indices [4i, 4i + 4] × …, and its range is taken
+/// over every node the filter can reach from there, including from points a rounding error
+/// outside it.
+#[derive(Clone, Debug)]
+pub struct Bricks {
+    /// Brick counts per axis.
+    pub dims: [usize; 3],
+    /// Smallest value per brick, x fastest.
+    pub min: Vec<f32>,
+    /// Largest value per brick.
+    pub max: Vec<f32>,
+}
+
+impl Bricks {
+    /// The (min, max) of brick (i, j, k); indices are clamped to the grid.
+    #[inline]
+    pub fn get(&self, i: usize, j: usize, k: usize) -> (f32, f32) {
+        let d = self.dims;
+        let idx = i.min(d[0] - 1) + d[0] * (j.min(d[1] - 1) + d[1] * k.min(d[2] - 1));
+        (self.min[idx], self.max[idx])
+    }
+}
+
+/// A loaded dataset: dimensions, raw voxels, normalisation and the normalised node values.
+#[derive(Clone, Debug)]
+pub struct Dataset {
+    dims: [usize; 3],
+    a: f32,
+    b: f32,
+    raw: Voxels,
+    /// Normalised node values, x fastest.
+    values: Vec<f32>,
+    /// Brick ranges, computed on first use: for reach 1 (nearest, trilinear) and 2 (cubic).
+    bricks: [std::sync::OnceLock<Bricks>; 2],
+    /// n − 1 per axis, as f64 (int ↔ float conversions of usize are slow on x86-64).
+    last: [f64; 3],
+    /// n − 1 per axis, as f32.
+    last32: [f32; 3],
+    /// Node strides (1, nx, nx·ny), 0 along axes of one node.
+    strides: [usize; 3],
+}
+
+impl PartialEq for Dataset {
+    /// Datasets are equal when their contents are (caches aside).
+    fn eq(&self, other: &Dataset) -> bool {
+        self.dims == other.dims
+            && self.a.to_bits() == other.a.to_bits()
+            && self.b.to_bits() == other.b.to_bits()
+            && self.raw == other.raw
+    }
+}
+
+fn bad(code: ErrorCode, msg: impl Into<String>) -> Error {
+    Error::new(code, msg)
+}
+
+impl Dataset {
+    /// A dataset from raw voxels (x fastest, then y, then z) and normalisation a, b.
+    pub fn new(dims: [usize; 3], raw: Voxels, a: f32, b: f32) -> Result<Dataset> {
+        if dims.contains(&0) {
+            return err(
+                ErrorCode::BadValue,
+                format!("dataset dimensions {dims:?} contain 0"),
+            );
+        }
+        let n = dims
+            .iter()
+            .try_fold(1u64, |acc, &d| acc.checked_mul(d as u64));
+        match n {
+            Some(n) if n <= MAX_VOXELS && n as usize == raw.len() => {}
+            _ => {
+                return err(
+                    ErrorCode::BadValue,
+                    format!(
+                        "dataset dimensions {dims:?} do not match {} voxels",
+                        raw.len()
+                    ),
+                )
+            }
+        }
+        if !a.is_finite() || !b.is_finite() || a == b {
+            return err(
+                ErrorCode::BadValue,
+                format!("dataset normalisation a = {a}, b = {b}: both finite and different"),
+            );
+        }
+        let (af, bf) = (a as f64, b as f64);
+        let norm = |v: f64| ((v - af) / (bf - af)).clamp(0.0, 1.0) as f32;
+        let values = match &raw {
+            Voxels::U8(v) => {
+                let lut: Vec<f32> = (0..256).map(|x| norm(x as f64)).collect();
+                v.iter().map(|&x| lut[x as usize]).collect()
+            }
+            Voxels::U16(v) => v.iter().map(|&x| norm(x as f64)).collect(),
+        };
+        Ok(Dataset {
+            dims,
+            a,
+            b,
+            raw,
+            values,
+            bricks: Default::default(),
+            last: dims.map(|n| (n - 1) as f64),
+            last32: dims.map(|n| (n - 1) as f32),
+            strides: [
+                usize::from(dims[0] > 1),
+                if dims[1] > 1 { dims[0] } else { 0 },
+                if dims[2] > 1 { dims[0] * dims[1] } else { 0 },
+            ],
+        })
+    }
+
+    /// The brick ranges for `filter` (computed once per dataset and reach, then shared).
+    pub fn bricks(&self, filter: Filter) -> &Bricks {
+        let reach = match filter {
+            Filter::Nearest | Filter::Trilinear => 1,
+            Filter::Cubic { .. } => 2,
+        };
+        self.bricks[reach - 1].get_or_init(|| self.compute_bricks(reach))
+    }
+
+    fn compute_bricks(&self, reach: usize) -> Bricks {
+        let d = self.dims;
+        let counts = d.map(|n| (n.saturating_sub(1)).div_ceil(BRICK).max(1));
+        // Along each axis, a point of brick b has its continuous index u in [4b, 4b + 4], or a
+        // rounding error outside. Trilinear (reach 1) reads nodes floor(u) and floor(u) + 1, so
+        // [4b − 1, 4b + 5] covers u from just below 4b to just above 4b + 4; nearest reads
+        // round(u), inside that; the cubic filter (reach 2) reads floor(u) − 1 … floor(u) + 2,
+        // so [4b − 2, 4b + 6].
+        let pad = reach;
+        let span = |b: usize, n: usize| {
+            let lo = (b * BRICK).saturating_sub(pad);
+            let hi = (b * BRICK + BRICK + pad).min(n - 1);
+            (lo, hi)
+        };
+        // Separable: min/max along x per brick column, then along y, then along z.
+        let (nx, ny, nz) = (d[0], d[1], d[2]);
+        let (bx, by, bz) = (counts[0], counts[1], counts[2]);
+        let mut min_x = vec![0f32; bx * ny * nz];
+        let mut max_x = vec![0f32; bx * ny * nz];
+        for z in 0..nz {
+            for y in 0..ny {
+                let row = &self.values[nx * (y + ny * z)..nx * (y + ny * z + 1)];
+                for b in 0..bx {
+                    let (lo, hi) = span(b, nx);
+                    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+                    for &v in &row[lo..=hi] {
+                        // Plain comparisons: the values are never NaN, and f32::min/max's NaN
+                        // handling costs several instructions per value.
+                        if v < mn {
+                            mn = v;
+                        }
+                        if v > mx {
+                            mx = v;
+                        }
+                    }
+                    min_x[b + bx * (y + ny * z)] = mn;
+                    max_x[b + bx * (y + ny * z)] = mx;
+                }
+            }
+        }
+        let mut min_y = vec![0f32; bx * by * nz];
+        let mut max_y = vec![0f32; bx * by * nz];
+        for z in 0..nz {
+            for b in 0..by {
+                let (lo, hi) = span(b, ny);
+                for x in 0..bx {
+                    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+                    for y in lo..=hi {
+                        let i = x + bx * (y + ny * z);
+                        if min_x[i] < mn {
+                            mn = min_x[i];
+                        }
+                        if max_x[i] > mx {
+                            mx = max_x[i];
+                        }
+                    }
+                    min_y[x + bx * (b + by * z)] = mn;
+                    max_y[x + bx * (b + by * z)] = mx;
+                }
+            }
+        }
+        let mut min = vec![0f32; bx * by * bz];
+        let mut max = vec![0f32; bx * by * bz];
+        for b in 0..bz {
+            let (lo, hi) = span(b, nz);
+            for y in 0..by {
+                for x in 0..bx {
+                    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+                    for z in lo..=hi {
+                        let i = x + bx * (y + by * z);
+                        if min_y[i] < mn {
+                            mn = min_y[i];
+                        }
+                        if max_y[i] > mx {
+                            mx = max_y[i];
+                        }
+                    }
+                    min[x + bx * (y + by * b)] = mn;
+                    max[x + bx * (y + by * b)] = mx;
+                }
+            }
+        }
+        Bricks {
+            dims: counts,
+            min,
+            max,
+        }
+    }
+
+    /// Dimensions (nx, ny, nz).
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// Normalisation parameters (a, b).
+    pub fn range(&self) -> (f32, f32) {
+        (self.a, self.b)
+    }
+
+    /// The raw voxels.
+    pub fn raw(&self) -> &Voxels {
+        &self.raw
+    }
+
+    /// The normalised value of node (i, j, k).
+    #[inline]
+    pub fn node(&self, i: usize, j: usize, k: usize) -> f32 {
+        self.values[i + self.dims[0] * (j + self.dims[1] * k)]
+    }
+
+    /// The normalised node values, x fastest.
+    pub fn values(&self) -> &[f32] {
+        &self.values
+    }
+
+    /// The raw value of node (i, j, k) before normalisation.
+    pub fn raw_node(&self, i: usize, j: usize, k: usize) -> f64 {
+        self.raw.get(i + self.dims[0] * (j + self.dims[1] * k))
+    }
+
+    /// Parses a `.vlb` file held in memory.
+    pub fn from_vlb_bytes(bytes: &[u8]) -> Result<Dataset> {
+        check_magic(bytes)?;
+        let header = parse_header(bytes.get(..HEADER_LEN).ok_or_else(|| {
+            bad(
+                ErrorCode::BadSize,
+                format!("truncated header: {} of {HEADER_LEN} bytes", bytes.len()),
+            )
+        })?)?;
+        header.check_len(bytes.len() as u64)?;
+        Dataset::from_body(&header, &bytes[HEADER_LEN..])
+    }
+
+    fn from_body(h: &Header, body: &[u8]) -> Result<Dataset> {
+        let raw = if h.bytes == 1 {
+            Voxels::U8(body.to_vec())
+        } else {
+            Voxels::U16(
+                body.chunks_exact(2)
+                    .map(|c| u16::from_le_bytes([c[0], c[1]]))
+                    .collect(),
+            )
+        };
+        Dataset::new(h.dims, raw, h.a, h.b)
+    }
+
+    /// Reads a `.vlb` file: the header is checked against the file's length before the voxels
+    /// are allocated, and nothing is read past the end.
+    pub fn load(path: &Path) -> Result<Dataset> {
+        let io =
+            |e: std::io::Error| Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()));
+        let mut f = std::fs::File::open(path).map_err(io)?;
+        let len = f.metadata().map_err(io)?.len();
+        let named = |e: Error| bad(e.code, format!("{}: {}", path.display(), e.message));
+        let mut head = [0u8; HEADER_LEN];
+        let got = (len as usize).min(HEADER_LEN);
+        f.read_exact(&mut head[..got]).map_err(io)?;
+        // A file that is not a .vlb at all says so, however short it is.
+        check_magic(&head[..got]).map_err(named)?;
+        if len < HEADER_LEN as u64 {
+            return Err(bad(
+                ErrorCode::BadSize,
+                format!("{}: truncated header ({len} bytes)", path.display()),
+            ));
+        }
+        let h = parse_header(&head).map_err(named)?;
+        h.check_len(len).map_err(named)?;
+        let mut body = vec![0u8; (len - HEADER_LEN as u64) as usize];
+        f.read_exact(&mut body).map_err(io)?;
+        Dataset::from_body(&h, &body)
+    }
+
+    /// The `.vlb` encoding of the dataset.
+    pub fn to_vlb_bytes(&self) -> Vec<u8> {
+        let mut out =
+            Vec::with_capacity(HEADER_LEN + self.values.len() * self.raw.width() as usize);
+        out.extend_from_slice(MAGIC);
+        for d in self.dims {
+            out.extend_from_slice(&(d as u32).to_le_bytes());
+        }
+        out.extend_from_slice(&self.raw.width().to_le_bytes());
+        out.extend_from_slice(&self.a.to_le_bytes());
+        out.extend_from_slice(&self.b.to_le_bytes());
+        match &self.raw {
+            Voxels::U8(v) => out.extend_from_slice(v),
+            Voxels::U16(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+        }
+        out
+    }
+
+    /// Writes the dataset as a `.vlb` file, atomically.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        crate::output::write_atomic(path, &self.to_vlb_bytes())
+    }
+
+    /// The continuous index of object coordinate `p` along axis `axis`, clamped to the grid
+    /// (NaN → 0).
+    #[inline]
+    fn index(&self, p: f32, axis: usize) -> f64 {
+        let last = self.last[axis];
+        let u = p as f64 * last;
+        // max/min in this order map NaN to 0.
+        u.max(0.0).min(last)
+    }
+
+    /// The interpolated normalised value at object coordinates `p`.
+    #[inline]
+    pub fn sample(&self, p: [f32; 3], filter: Filter) -> f32 {
+        if filter == Filter::Trilinear {
+            return self.trilinear(p);
+        }
+        self.sample_generic(p, filter)
+    }
+
+    #[inline(never)]
+    fn sample_generic(&self, p: [f32; 3], filter: Filter) -> f32 {
+        let u = [
+            self.index(p[0], 0),
+            self.index(p[1], 1),
+            self.index(p[2], 2),
+        ];
+        let v = self.filter(u, filter, |i, j, k| self.node(i, j, k) as f64);
+        (v as f32).clamp(0.0, 1.0)
+    }
+
+    /// The gradient of the normalised field with respect to object coordinates at `p`, from
+    /// node gradients interpolated with `filter`.
+    #[inline]
+    pub fn gradient(&self, p: [f32; 3], filter: Filter) -> [f64; 3] {
+        if filter == Filter::Trilinear {
+            if let Some(g) = self.trilinear_gradient_interior(p) {
+                return g;
+            }
+        }
+        self.gradient_generic(p, filter)
+    }
+
+    #[inline(never)]
+    fn gradient_generic(&self, p: [f32; 3], filter: Filter) -> [f64; 3] {
+        let u = [
+            self.index(p[0], 0),
+            self.index(p[1], 1),
+            self.index(p[2], 2),
+        ];
+        let mut g = [0.0; 3];
+        for (axis, g) in g.iter_mut().enumerate() {
+            let n = self.dims[axis];
+            if n == 1 {
+                continue;
+            }
+            let d = self.filter(u, filter, |i, j, k| self.node_derivative(i, j, k, axis));
+            *g = d * (n - 1) as f64;
+        }
+        g
+    }
+
+    /// The trilinear cell of object point `p` in f32 index arithmetic: first node and weight of
+    /// the second per axis (for an axis of one node: (0, 0)).
+    #[inline]
+    fn cell32(&self, p: [f32; 3]) -> ([usize; 3], [f32; 3]) {
+        let mut i = [0usize; 3];
+        let mut f = [0f32; 3];
+        for axis in 0..3 {
+            let last = self.last32[axis];
+            // max/min in this order map NaN to 0; for n = 1, last = 0 and the cell is (0, 0).
+            let u = (p[axis] * last).max(0.0).min(last);
+            let c = (u as i32).min(self.dims[axis] as i32 - 2).max(0);
+            i[axis] = c as usize;
+            f[axis] = u - c as f32;
+        }
+        (i, f)
+    }
+
+    /// Trilinear interpolation, specialised for speed: f32 index arithmetic (its rounding,
+    /// below 2⁻¹⁶ of a voxel for grids under 512 nodes a side, is far below anything visible),
+    /// i32 conversions, strided loads from one bounds-checked window.
+    #[inline]
+    pub(crate) fn trilinear(&self, p: [f32; 3]) -> f32 {
+        let [nx, ny, _] = self.dims;
+        let ([x0, y0, z0], [fx, fy, fz]) = self.cell32(p);
+        let base = x0 + nx * (y0 + ny * z0);
+        let (sx, sy, sz) = (self.strides[0], self.strides[1], self.strides[2]);
+        let Some(w) = self.values.get(base..=base + sx + sy + sz) else {
+            return 0.0; // unreachable: the cell lies inside the grid
+        };
+        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+        let (c00, c10) = (lerp(w[0], w[sx], fx), lerp(w[sy], w[sy + sx], fx));
+        let (c01, c11) = (
+            lerp(w[sz], w[sz + sx], fx),
+            lerp(w[sz + sy], w[sz + sy + sx], fx),
+        );
+        lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz).clamp(0.0, 1.0)
+    }
+
+    /// The trilinear gradient where all the nodes it reads are interior (central differences
+    /// everywhere): the same value as the generic path, with strided loads.
+    #[inline]
+    fn trilinear_gradient_interior(&self, p: [f32; 3]) -> Option<[f64; 3]> {
+        let [nx, ny, nz] = self.dims;
+        if nx < 4 || ny < 4 || nz < 4 {
+            return None;
+        }
+        let ([x0, y0, z0], [fx, fy, fz]) = self.cell32(p);
+        if x0 == 0 || y0 == 0 || z0 == 0 || x0 + 2 >= nx || y0 + 2 >= ny || z0 + 2 >= nz {
+            return None;
+        }
+        let (sx, sy, sz) = (1usize, nx, nx * ny);
+        // One window from node (x0−1, y0−1, z0−1) to (x0+2, y0+2, z0+2): one bounds check.
+        let lo = (x0 - 1) + nx * ((y0 - 1) + ny * (z0 - 1));
+        let w = self.values.get(lo..=lo + 3 * (sx + sy + sz))?;
+        let base = sx + sy + sz;
+        // The 8 corners of the cell, as window offsets.
+        let corners = [
+            base,
+            base + sx,
+            base + sy,
+            base + sy + sx,
+            base + sz,
+            base + sz + sx,
+            base + sz + sy,
+            base + sz + sy + sx,
+        ];
+        // Trilinear weights of the corners.
+        let (gx, gy, gz) = (1.0 - fx, 1.0 - fy, 1.0 - fz);
+        let weights = [
+            gx * gy * gz,
+            fx * gy * gz,
+            gx * fy * gz,
+            fx * fy * gz,
+            gx * gy * fz,
+            fx * gy * fz,
+            gx * fy * fz,
+            fx * fy * fz,
+        ];
+        let mut g = [0f32; 3];
+        for (c, wt) in corners.iter().zip(weights) {
+            // Central differences (per grid step) at the corner, along x, y and z.
+            g[0] += wt * (w[c + sx] - w[c - sx]);
+            g[1] += wt * (w[c + sy] - w[c - sy]);
+            g[2] += wt * (w[c + sz] - w[c - sz]);
+        }
+        Some([
+            0.5 * g[0] as f64 * self.last[0],
+            0.5 * g[1] as f64 * self.last[1],
+            0.5 * g[2] as f64 * self.last[2],
+        ])
+    }
+
+    /// The derivative along `axis` at a node, per grid step: central inside, one-sided at faces.
+    fn node_derivative(&self, i: usize, j: usize, k: usize, axis: usize) -> f64 {
+        let n = self.dims[axis];
+        let mut lo = [i, j, k];
+        let mut hi = [i, j, k];
+        let c = lo[axis];
+        lo[axis] = c.saturating_sub(1);
+        hi[axis] = (c + 1).min(n - 1);
+        let span = (hi[axis] - lo[axis]) as f64;
+        (self.node(hi[0], hi[1], hi[2]) as f64 - self.node(lo[0], lo[1], lo[2]) as f64) / span
+    }
+
+    /// Applies `filter` at continuous index `u` to the node function `f`.
+    #[inline]
+    fn filter(&self, u: [f64; 3], filter: Filter, f: impl Fn(usize, usize, usize) -> f64) -> f64 {
+        let d = self.dims;
+        match filter {
+            Filter::Nearest => {
+                let r = |x: f64, n: usize| (x.round() as usize).min(n - 1);
+                f(r(u[0], d[0]), r(u[1], d[1]), r(u[2], d[2]))
+            }
+            Filter::Trilinear => {
+                let cell = |x: f64, n: usize| {
+                    let i = (x.floor() as usize).min(n.saturating_sub(2));
+                    (i, (i + 1).min(n - 1), x - i as f64)
+                };
+                let (x0, x1, fx) = cell(u[0], d[0]);
+                let (y0, y1, fy) = cell(u[1], d[1]);
+                let (z0, z1, fz) = cell(u[2], d[2]);
+                let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
+                let plane = |z: usize| {
+                    lerp(
+                        lerp(f(x0, y0, z), f(x1, y0, z), fx),
+                        lerp(f(x0, y1, z), f(x1, y1, z), fx),
+                        fy,
+                    )
+                };
+                lerp(plane(z0), plane(z1), fz)
+            }
+            Filter::Cubic { b, c } => {
+                let (b, c) = (b as f64, c as f64);
+                let taps = |x: f64, n: usize| {
+                    let i0 = x.floor() as i64;
+                    let t = x - i0 as f64;
+                    let mut idx = [0usize; 4];
+                    let mut w = [0.0f64; 4];
+                    for m in 0..4 {
+                        let i = i0 - 1 + m as i64;
+                        idx[m] = i.clamp(0, n as i64 - 1) as usize;
+                        w[m] = bc_kernel(t - (m as f64 - 1.0), b, c);
+                    }
+                    (idx, w)
+                };
+                let (ix, wx) = taps(u[0], d[0]);
+                let (iy, wy) = taps(u[1], d[1]);
+                let (iz, wz) = taps(u[2], d[2]);
+                let mut sum = 0.0;
+                for kz in 0..4 {
+                    if wz[kz] == 0.0 {
+                        continue;
+                    }
+                    for ky in 0..4 {
+                        if wy[ky] == 0.0 {
+                            continue;
+                        }
+                        let mut row = 0.0;
+                        for kx in 0..4 {
+                            row += wx[kx] * f(ix[kx], iy[ky], iz[kz]);
+                        }
+                        sum += wz[kz] * wy[ky] * row;
+                    }
+                }
+                sum
+            }
+        }
+    }
+}
+
+struct Header {
+    dims: [usize; 3],
+    bytes: u32,
+    a: f32,
+    b: f32,
+}
+
+impl Header {
+    /// Checks that the file length is exactly header + voxels.
+    fn check_len(&self, len: u64) -> Result<()> {
+        let voxels = self.dims.iter().map(|&d| d as u64).product::<u64>();
+        let need = voxels
+            .checked_mul(self.bytes as u64)
+            .and_then(|v| v.checked_add(HEADER_LEN as u64));
+        match need {
+            Some(n) if n == len => Ok(()),
+            Some(n) if n > len => Err(bad(
+                ErrorCode::BadSize,
+                format!("file holds {len} bytes but its header claims {n} (truncated)"),
+            )),
+            Some(n) => Err(bad(
+                ErrorCode::BadSize,
+                format!("file holds {len} bytes but its header claims {n} (trailing data)"),
+            )),
+            None => Err(bad(
+                ErrorCode::BadDimensions,
+                "header claims an impossibly large volume",
+            )),
+        }
+    }
+}
+
+/// Checks the magic number as far as `bytes` reach (a file shorter than the magic is judged on
+/// what it has; the length check reports it).
+fn check_magic(bytes: &[u8]) -> Result<()> {
+    let n = bytes.len().min(MAGIC.len());
+    if bytes[..n] != MAGIC[..n] {
+        return Err(bad(
+            ErrorCode::BadMagic,
+            format!("bad magic {:?} (expected \"VLB1\")", &bytes[..n]),
+        ));
+    }
+    Ok(())
+}
+
+fn parse_header(h: &[u8]) -> Result<Header> {
+    if &h[0..4] != MAGIC {
+        return Err(bad(
+            ErrorCode::BadMagic,
+            format!("bad magic {:?} (expected \"VLB1\")", &h[0..4]),
+        ));
+    }
+    let u = |o: usize| u32::from_le_bytes([h[o], h[o + 1], h[o + 2], h[o + 3]]);
+    let f = |o: usize| f32::from_le_bytes([h[o], h[o + 1], h[o + 2], h[o + 3]]);
+    let dims = [u(4) as usize, u(8) as usize, u(12) as usize];
+    if dims.contains(&0) {
+        return Err(bad(
+            ErrorCode::BadDimensions,
+            format!("dimensions {dims:?} contain 0"),
+        ));
+    }
+    let voxels = dims.iter().map(|&d| d as u64).product::<u64>();
+    if voxels > MAX_VOXELS {
+        return Err(bad(
+            ErrorCode::BadDimensions,
+            format!("dimensions {dims:?} exceed {MAX_VOXELS} voxels"),
+        ));
+    }
+    let bytes = u(16);
+    if bytes != 1 && bytes != 2 {
+        return Err(bad(
+            ErrorCode::BadVoxelWidth,
+            format!("voxel width {bytes} (must be 1 or 2 bytes)"),
+        ));
+    }
+    let (a, b) = (f(20), f(24));
+    if !a.is_finite() || !b.is_finite() || a == b {
+        return Err(bad(
+            ErrorCode::BadRange,
+            format!("normalisation a = {a}, b = {b} (must be finite and different)"),
+        ));
+    }
+    Ok(Header { dims, bytes, a, b })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// A 16-bit dataset whose raw values are the integer linear function 1000 + 7i + 300j + 20k
+    /// (no clamping: all within [0, 65535]), normalised by a = 0, b = 65535.
+    fn linear(dims: [usize; 3]) -> (Dataset, impl Fn([f64; 3]) -> f64) {
+        let mut raw = Vec::new();
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    raw.push((1000 + 7 * i + 300 * j + 20 * k) as u16);
+                }
+            }
+        }
+        let d = Dataset::new(dims, Voxels::U16(raw), 0.0, 65535.0).unwrap();
+        let n = dims.map(|n| (n.max(2) - 1) as f64);
+        let f = move |p: [f64; 3]| {
+            let c = |x: f64, axis: usize| {
+                if dims[axis] == 1 {
+                    0.0
+                } else {
+                    x.clamp(0.0, 1.0) * n[axis]
+                }
+            };
+            (1000.0 + 7.0 * c(p[0], 0) + 300.0 * c(p[1], 1) + 20.0 * c(p[2], 2)) / 65535.0
+        };
+        (d, f)
+    }
+
+    #[test]
+    fn trilinear_reproduces_linear_functions() {
+        let mut rng = Lcg(1);
+        for dims in [[5, 7, 3], [2, 2, 2], [9, 1, 4]] {
+            let (d, f) = linear(dims);
+            for _ in 0..2000 {
+                // Includes points outside [0, 1]^3, which clamp to the faces.
+                let p = [
+                    rng.next() * 1.2 - 0.1,
+                    rng.next() * 1.2 - 0.1,
+                    rng.next() * 1.2 - 0.1,
+                ];
+                let got = d.sample(p.map(|x| x as f32), Filter::Trilinear) as f64;
+                let want = f([p[0] as f32 as f64, p[1] as f32 as f64, p[2] as f32 as f64]);
+                // f32 node values and result: a few ulps of values < 1.
+                assert!((got - want).abs() < 1e-6, "{dims:?} {p:?}: {got} vs {want}");
+            }
+        }
+    }
+
+    #[test]
+    fn gradient_of_a_linear_field_is_exact_for_every_filter() {
+        let (d, _) = linear([6, 5, 4]);
+        let want = [
+            7.0 * 5.0 / 65535.0,
+            300.0 * 4.0 / 65535.0,
+            20.0 * 3.0 / 65535.0,
+        ];
+        let mut rng = Lcg(2);
+        for filter in [
+            Filter::Nearest,
+            Filter::Trilinear,
+            Filter::Cubic { b: 0.0, c: 0.5 },
+            Filter::Cubic { b: 1.0, c: 0.0 },
+        ] {
+            for _ in 0..500 {
+                let p = [rng.next() as f32, rng.next() as f32, rng.next() as f32];
+                let g = d.gradient(p, filter);
+                for a in 0..3 {
+                    // Node values are f32 (error ≤ 6e-8 each); a difference of two, times up to
+                    // n − 1 = 5 per unit, stays below 1e-6.
+                    assert!(
+                        (g[a] - want[a]).abs() < 1e-6,
+                        "{filter:?} {p:?} axis {a}: {g:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    fn random_u8(dims: [usize; 3], seed: u64) -> Dataset {
+        let mut rng = Lcg(seed);
+        let n = dims.iter().product();
+        let raw: Vec<u8> = (0..n).map(|_| (rng.next() * 256.0) as u8).collect();
+        Dataset::new(dims, Voxels::U8(raw), 10.0, 240.0).unwrap()
+    }
+
+    #[test]
+    fn nearest_and_cardinal_cubics_pass_through_nodes() {
+        let d = random_u8([5, 4, 6], 3);
+        let [nx, ny, nz] = d.dims();
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    let p = [
+                        i as f32 / (nx - 1) as f32,
+                        j as f32 / (ny - 1) as f32,
+                        k as f32 / (nz - 1) as f32,
+                    ];
+                    let node = d.node(i, j, k);
+                    assert_eq!(d.sample(p, Filter::Nearest), node);
+                    assert!((d.sample(p, Filter::Trilinear) - node).abs() < 1e-6);
+                    for c in [0.0, 0.5, 1.0] {
+                        let v = d.sample(p, Filter::Cubic { b: 0.0, c });
+                        assert!(
+                            (v - node).abs() < 1e-5,
+                            "C={c} node ({i},{j},{k}): {v} vs {node}"
+                        );
+                    }
+                }
+            }
+        }
+        // The B-spline (B = 1) smooths: it does not interpolate a random field.
+        let p = [0.5f32, 1.0 / 3.0, 0.4];
+        let (i, j, k) = (2, 1, 2);
+        assert!((d.sample(p, Filter::Cubic { b: 1.0, c: 0.0 }) - d.node(i, j, k)).abs() > 1e-4);
+    }
+
+    #[test]
+    fn nearest_returns_node_values_between_nodes() {
+        let d = random_u8([4, 4, 4], 4);
+        let mut rng = Lcg(5);
+        for _ in 0..1000 {
+            let p = [rng.next() as f32, rng.next() as f32, rng.next() as f32];
+            let idx = p.map(|x| (x as f64 * 3.0).round() as usize);
+            assert_eq!(d.sample(p, Filter::Nearest), d.node(idx[0], idx[1], idx[2]));
+        }
+    }
+
+    #[test]
+    fn kernel_is_a_partition_of_unity() {
+        for (b, c) in [(0.0, 0.5), (1.0, 0.0), (1.0 / 3.0, 1.0 / 3.0)] {
+            for t in [0.0, 0.1, 0.5, 0.77] {
+                let s: f64 = (-1..=2).map(|m| bc_kernel(t - m as f64, b, c)).sum();
+                assert!((s - 1.0).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn normalisation_clamps() {
+        let d = Dataset::new([3, 1, 1], Voxels::U8(vec![0, 100, 255]), 50.0, 150.0).unwrap();
+        assert_eq!(d.values(), &[0.0, 0.5, 1.0]);
+        // b < a inverts.
+        let d = Dataset::new([2, 1, 1], Voxels::U8(vec![0, 255]), 255.0, 0.0).unwrap();
+        assert_eq!(d.values(), &[1.0, 0.0]);
+        // A dimension of 1 is constant along its axis.
+        assert_eq!(d.sample([1.0, 0.3, 0.9], Filter::Trilinear), 0.0);
+    }
+
+    #[test]
+    fn vlb_round_trip_is_bit_exact() {
+        let d8 = random_u8([7, 3, 5], 6);
+        let back = Dataset::from_vlb_bytes(&d8.to_vlb_bytes()).unwrap();
+        assert_eq!(back, d8);
+        assert_eq!(back.to_vlb_bytes(), d8.to_vlb_bytes());
+        let (d16, _) = linear([4, 3, 2]);
+        let bytes = d16.to_vlb_bytes();
+        assert_eq!(bytes.len(), HEADER_LEN + 4 * 3 * 2 * 2);
+        assert_eq!(&bytes[..4], b"VLB1");
+        assert_eq!(Dataset::from_vlb_bytes(&bytes).unwrap(), d16);
+        // Files too.
+        let path = std::env::temp_dir().join(format!("vlib-rt-{}.vlb", std::process::id()));
+        d16.save(&path).unwrap();
+        assert_eq!(Dataset::load(&path).unwrap(), d16);
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    #[test]
+    fn malformed_files_are_refused_with_the_right_error() {
+        let good = random_u8([3, 2, 2], 7).to_vlb_bytes();
+        let patch = |at: usize, bytes: &[u8]| {
+            let mut v = good.clone();
+            v[at..at + bytes.len()].copy_from_slice(bytes);
+            v
+        };
+        let cases: Vec<(&str, Vec<u8>, ErrorCode)> = vec![
+            ("empty", vec![], ErrorCode::BadSize),
+            ("short header", good[..20].to_vec(), ErrorCode::BadSize),
+            ("short non-vlb file", b"P6\n".to_vec(), ErrorCode::BadMagic),
+            ("bad magic", patch(0, b"VLB2"), ErrorCode::BadMagic),
+            (
+                "zero dimension",
+                patch(8, &0u32.to_le_bytes()),
+                ErrorCode::BadDimensions,
+            ),
+            (
+                "10^15 voxels",
+                {
+                    let mut v = patch(4, &100_000u32.to_le_bytes());
+                    v[8..12].copy_from_slice(&100_000u32.to_le_bytes());
+                    v[12..16].copy_from_slice(&100_000u32.to_le_bytes());
+                    v
+                },
+                ErrorCode::BadDimensions,
+            ),
+            (
+                "voxel width 3",
+                patch(16, &3u32.to_le_bytes()),
+                ErrorCode::BadVoxelWidth,
+            ),
+            (
+                "voxel width 0",
+                patch(16, &0u32.to_le_bytes()),
+                ErrorCode::BadVoxelWidth,
+            ),
+            (
+                "a = b",
+                patch(24, &10.0f32.to_le_bytes()),
+                ErrorCode::BadRange,
+            ),
+            (
+                "a NaN",
+                patch(20, &f32::NAN.to_le_bytes()),
+                ErrorCode::BadRange,
+            ),
+            (
+                "b infinite",
+                patch(24, &f32::INFINITY.to_le_bytes()),
+                ErrorCode::BadRange,
+            ),
+            (
+                "truncated voxels",
+                good[..good.len() - 1].to_vec(),
+                ErrorCode::BadSize,
+            ),
+            (
+                "trailing data",
+                [good.clone(), vec![0]].concat(),
+                ErrorCode::BadSize,
+            ),
+            (
+                "16-bit claim on 8-bit data",
+                patch(16, &2u32.to_le_bytes()),
+                ErrorCode::BadSize,
+            ),
+        ];
+        let dir = std::env::temp_dir().join(format!("vlib-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (name, bytes, code) in cases {
+            assert_eq!(
+                Dataset::from_vlb_bytes(&bytes).unwrap_err().code,
+                code,
+                "{name} (memory)"
+            );
+            let path = dir.join("bad.vlb");
+            std::fs::write(&path, &bytes).unwrap();
+            assert_eq!(
+                Dataset::load(&path).unwrap_err().code,
+                code,
+                "{name} (file)"
+            );
+        }
+        assert_eq!(
+            Dataset::load(&dir.join("missing.vlb")).unwrap_err().code,
+            ErrorCode::IoError
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn specialised_trilinear_paths_agree_with_the_generic_filter() {
+        let d = random_u8([9, 7, 8], 8);
+        let mut rng = Lcg(9);
+        for _ in 0..5000 {
+            let p = [
+                (rng.next() * 1.4 - 0.2) as f32,
+                (rng.next() * 1.4 - 0.2) as f32,
+                (rng.next() * 1.4 - 0.2) as f32,
+            ];
+            let u = [d.index(p[0], 0), d.index(p[1], 1), d.index(p[2], 2)];
+            let generic = d.filter(u, Filter::Trilinear, |i, j, k| d.node(i, j, k) as f64);
+            // f32 index arithmetic: the weights are off by at most an ulp of the index (n < 16
+            // here: 1e-6), times node differences of at most 1.
+            assert!(
+                (d.trilinear(p) as f64 - generic.clamp(0.0, 1.0)).abs() < 4e-6,
+                "{p:?}"
+            );
+            if let Some(g) = d.trilinear_gradient_interior(p) {
+                for (axis, g) in g.into_iter().enumerate() {
+                    let n = d.dims()[axis];
+                    let want = d.filter(u, Filter::Trilinear, |i, j, k| {
+                        d.node_derivative(i, j, k, axis)
+                    }) * (n - 1) as f64;
+                    assert!(
+                        (g - want).abs() < 1e-5 * (n as f64),
+                        "{p:?} axis {axis}: {g} vs {want}"
+                    );
+                }
+            }
+        }
+        // Degenerate axes take the generic route where needed and stay constant.
+        let slab = random_u8([5, 4, 1], 10);
+        let a = slab.sample([0.3, 0.6, 0.0], Filter::Trilinear);
+        assert_eq!(a, slab.sample([0.3, 0.6, 0.9], Filter::Trilinear));
+    }
+}

@@ -1,0 +1,412 @@
+//! Exact empty-space skipping.
+//!
+//! For an object whose opacity is computed from datasets (through any chain of `vlDataset`,
+//! `vlMap` and `vlSet` instructions), the part of its program that determines opacity is
+//! evaluated over *intervals*, once per block of the object: each dataset contributes the range
+//! of node values its filter can read anywhere in the block ([`Dataset::bricks`]), each mapping
+//! the exact range of Φ over its input interval ([`Mapping::range`]), each constant itself, and
+//! each field function the whole [0, 1] (nothing is known of it). A block whose opacity interval
+//! is [0, 0] is *empty*: every sample in it has o = 0 and contributes nothing. Rays walk the
+//! block grid (a 3D DDA) and skip the segments whose sample points lie in empty blocks; the
+//! remaining samples are exactly the ones that would have been taken, so skipping never changes
+//! a pixel.
+
+use crate::dataset::{bc_abs_sum, Dataset, Filter, BRICK};
+use crate::program::Instr;
+use crate::types::FIELD_COUNT;
+use glam::DVec3;
+
+/// The blocks of one object and which of them are empty.
+pub(crate) struct SkipGrid {
+    dims: [usize; 3],
+    /// Object-space corner of block (0, 0, 0).
+    origin: DVec3,
+    /// Object-space size of a block.
+    cell: DVec3,
+    /// Per block: 0 if it may hold opacity, else the chessboard distance (in blocks, capped at
+    /// [`MAX_LEAP`]) to the nearest such block: every block within `dist − 1` of it is empty.
+    dist: Vec<u8>,
+}
+
+/// The largest leap, in blocks.
+const MAX_LEAP: u8 = 16;
+
+/// The chessboard (L∞) distance transform of `dist` in place: on entry 0 for occupied blocks
+/// and `MAX_LEAP` for empty ones; on exit each empty block holds min(distance, MAX_LEAP).
+/// Separable: d(x) = min over y of max(|x − y|, d_prev(y)) along each axis in turn.
+fn chessboard(dist: &mut [u8], dims: [usize; 3]) {
+    let stride = [1, dims[0], dims[0] * dims[1]];
+    for axis in 0..3 {
+        let n = dims[axis];
+        let (s, others) = (stride[axis], [0usize, 1, 2]);
+        let lines: Vec<usize> = {
+            // The first index of every line along `axis`.
+            let o: Vec<usize> = others.iter().copied().filter(|&a| a != axis).collect();
+            let mut v = Vec::with_capacity(dims[o[0]] * dims[o[1]]);
+            for j in 0..dims[o[1]] {
+                for i in 0..dims[o[0]] {
+                    v.push(i * stride[o[0]] + j * stride[o[1]]);
+                }
+            }
+            v
+        };
+        let mut line = vec![0u8; n];
+        for start in lines {
+            for (x, l) in line.iter_mut().enumerate() {
+                *l = dist[start + x * s];
+            }
+            for x in 0..n {
+                let mut best = line[x];
+                let r = best as usize;
+                let lo = x.saturating_sub(r);
+                let hi = (x + r).min(n - 1);
+                for (y, &v) in line.iter().enumerate().take(hi + 1).skip(lo) {
+                    let d = (x.abs_diff(y) as u8).max(v);
+                    best = best.min(d);
+                }
+                dist[start + x * s] = best;
+            }
+        }
+    }
+}
+
+/// The most blocks a grid may have.
+const MAX_BLOCKS: usize = 1 << 24;
+
+/// The (min, max) of dataset `d` under `filter` over the object-space box [lo, hi].
+fn dataset_range(d: &Dataset, filter: Filter, lo: DVec3, hi: DVec3) -> (f32, f32) {
+    let bricks = d.bricks(filter);
+    let dims = d.dims();
+    let idx = |x: f64, axis: usize| -> usize {
+        let n = dims[axis];
+        if n == 1 {
+            return 0;
+        }
+        let u = (x * (n - 1) as f64 / BRICK as f64).floor();
+        u.clamp(0.0, (bricks.dims[axis] - 1) as f64) as usize
+    };
+    let (i0, i1) = (idx(lo.x, 0), idx(hi.x, 0));
+    let (j0, j1) = (idx(lo.y, 1), idx(hi.y, 1));
+    let (k0, k1) = (idx(lo.z, 2), idx(hi.z, 2));
+    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+    for k in k0..=k1 {
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let (a, b) = bricks.get(i, j, k);
+                mn = mn.min(a);
+                mx = mx.max(b);
+            }
+        }
+    }
+    if let Filter::Cubic { b, c } = filter {
+        // Negative lobes can overshoot the node range by (P − 1)·(max − min).
+        let s = bc_abs_sum(b as f64, c as f64);
+        let p = (s * s * s + 1.0) / 2.0;
+        let spread = (mx - mn) as f64 * (p - 1.0);
+        mn = (mn as f64 - spread).max(0.0) as f32;
+        mx = (mx as f64 + spread).min(1.0) as f32;
+    }
+    (mn, mx)
+}
+
+impl SkipGrid {
+    /// The grid for an object whose opacity is decided by `prefix` (its program up to the last
+    /// instruction that may write opacity), over the boundary box [box_min, box_max]. `None`
+    /// when no dataset feeds the opacity or no block is provably empty.
+    pub(crate) fn build(prefix: &[Instr], box_min: DVec3, box_max: DVec3) -> Option<SkipGrid> {
+        // The finest dataset feeding the prefix sets the block size: one brick of it.
+        let reference = prefix
+            .iter()
+            .filter_map(|i| match i {
+                Instr::Dataset { data, .. } => Some(data),
+                _ => None,
+            })
+            .max_by_key(|d| d.dims().iter().product::<usize>())?;
+        let n = reference.dims();
+        let mut cell = DVec3::ZERO;
+        let mut first = [0i64; 3];
+        let mut dims = [1usize; 3];
+        for axis in 0..3 {
+            if n[axis] == 1 {
+                cell[axis] = box_max[axis] - box_min[axis];
+                first[axis] = 0;
+                continue;
+            }
+            cell[axis] = BRICK as f64 / (n[axis] - 1) as f64;
+            let a = (box_min[axis] / cell[axis]).floor();
+            let b = (box_max[axis] / cell[axis]).floor();
+            if !(a.is_finite() && b.is_finite()) || b - a > MAX_BLOCKS as f64 {
+                return None;
+            }
+            first[axis] = a as i64;
+            dims[axis] = (b - a) as usize + 1;
+        }
+        let total = dims.iter().try_fold(1usize, |acc, &d| acc.checked_mul(d))?;
+        if total > MAX_BLOCKS {
+            return None;
+        }
+        let origin = DVec3::new(
+            if n[0] == 1 {
+                box_min.x
+            } else {
+                first[0] as f64 * cell.x
+            },
+            if n[1] == 1 {
+                box_min.y
+            } else {
+                first[1] as f64 * cell.y
+            },
+            if n[2] == 1 {
+                box_min.z
+            } else {
+                first[2] as f64 * cell.z
+            },
+        );
+        let mut dist = vec![0u8; total];
+        let mut any = false;
+        // The opacity interval depends on the block only through the datasets' ranges there, and
+        // blocks share few distinct ranges: evaluate the interval program once per distinct set.
+        let mut memo: std::collections::HashMap<Vec<(u32, u32)>, bool> = Default::default();
+        let data: Vec<(&Dataset, Filter)> = prefix
+            .iter()
+            .filter_map(|i| match i {
+                Instr::Dataset { data, filter, .. } => Some((&**data, *filter)),
+                _ => None,
+            })
+            .collect();
+        let mut key = Vec::with_capacity(data.len());
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let lo = origin + DVec3::new(i as f64, j as f64, k as f64) * cell;
+                    let hi = lo + cell;
+                    key.clear();
+                    key.extend(data.iter().map(|(d, f)| {
+                        let (a, b) = dataset_range(d, *f, lo, hi);
+                        (a.to_bits(), b.to_bits())
+                    }));
+                    let e = match memo.get(&key) {
+                        Some(&e) => e,
+                        None => {
+                            let ranges: Vec<(f32, f32)> = key
+                                .iter()
+                                .map(|&(a, b)| (f32::from_bits(a), f32::from_bits(b)))
+                                .collect();
+                            let e = opacity_range(prefix, &ranges).1 <= 0.0;
+                            memo.insert(key.clone(), e);
+                            e
+                        }
+                    };
+                    dist[i + dims[0] * (j + dims[1] * k)] = if e { MAX_LEAP } else { 0 };
+                    any |= e;
+                }
+            }
+        }
+        if !any {
+            return None;
+        }
+        chessboard(&mut dist, dims);
+        Some(SkipGrid {
+            dims,
+            origin,
+            cell,
+            dist,
+        })
+    }
+
+    #[inline]
+    fn distance(&self, c: [i64; 3]) -> u8 {
+        self.dist[c[0] as usize + self.dims[0] * (c[1] as usize + self.dims[1] * c[2] as usize)]
+    }
+
+    /// Starts a walk along the object-space ray `o + t·d` at parameter `t0`.
+    pub(crate) fn walk(&self, o: DVec3, d: DVec3, t0: f64) -> Walk {
+        self.walk_from(o, d, t0, None)
+    }
+
+    /// A walk starting at `t0`; `forced` sets the block index on the axes where the ray is
+    /// known to have just crossed into a block (so rounding cannot put it back).
+    fn walk_from(&self, o: DVec3, d: DVec3, t0: f64, forced: Option<[Option<i64>; 3]>) -> Walk {
+        let p = o + t0 * d;
+        let mut w = Walk {
+            o,
+            d,
+            cell: [0; 3],
+            step: [0; 3],
+            t_max: [f64::INFINITY; 3],
+            t_delta: [f64::INFINITY; 3],
+            done: false,
+            entry: t0,
+        };
+        for axis in 0..3 {
+            let c = match forced.and_then(|f| f[axis]) {
+                Some(c) => c,
+                None => {
+                    let rel = (p[axis] - self.origin[axis]) / self.cell[axis];
+                    rel.floor().clamp(0.0, (self.dims[axis] - 1) as f64) as i64
+                }
+            };
+            if c < 0 || c >= self.dims[axis] as i64 {
+                w.done = true;
+                return w;
+            }
+            w.cell[axis] = c;
+            let size = self.cell[axis];
+            if d[axis] > 0.0 {
+                let boundary = self.origin[axis] + (c + 1) as f64 * size;
+                w.step[axis] = 1;
+                w.t_max[axis] = t0 + (boundary - p[axis]) / d[axis];
+                w.t_delta[axis] = size / d[axis];
+            } else if d[axis] < 0.0 {
+                let boundary = self.origin[axis] + c as f64 * size;
+                w.step[axis] = -1;
+                w.t_max[axis] = t0 + (boundary - p[axis]) / d[axis];
+                w.t_delta[axis] = -size / d[axis];
+            }
+        }
+        w
+    }
+}
+
+/// The interval of every field after `prefix`, given the range of each of its `vlDataset`
+/// instructions (in order) over a block; returns the opacity interval.
+fn opacity_range(prefix: &[Instr], data_ranges: &[(f32, f32)]) -> (f32, f32) {
+    let mut r = [(0.0f32, 0.0f32); FIELD_COUNT];
+    let mut next = data_ranges.iter();
+    for ins in prefix {
+        let (fields, range) = match ins {
+            Instr::Set { fields, value } => (*fields, (*value, *value)),
+            Instr::Function { fields, .. } => (*fields, (0.0, 1.0)),
+            Instr::Dataset { fields, .. } => {
+                (*fields, *next.next().expect("one range per dataset"))
+            }
+            Instr::Map {
+                targets,
+                source,
+                mapping,
+                output,
+            } => {
+                let (a, b) = r[*source];
+                (*targets, mapping.range(a, b, *output))
+            }
+        };
+        for i in fields.indices() {
+            r[i] = range;
+        }
+    }
+    r[0]
+}
+
+/// A walk through the blocks of a [`SkipGrid`] along a ray (Amanatides & Woo), leaping over
+/// runs of empty blocks with the distance map.
+pub(crate) struct Walk {
+    o: DVec3,
+    d: DVec3,
+    cell: [i64; 3],
+    step: [i64; 3],
+    t_max: [f64; 3],
+    t_delta: [f64; 3],
+    /// The ray has left the grid (everything after is treated as non-empty).
+    done: bool,
+    /// The ray parameter at which the current block was entered.
+    entry: f64,
+}
+
+impl Walk {
+    /// The ray parameter at which the current block is left.
+    #[inline]
+    fn exit(&self) -> f64 {
+        self.t_max[0].min(self.t_max[1]).min(self.t_max[2])
+    }
+
+    fn advance(&mut self, grid: &SkipGrid) {
+        let axis = if self.t_max[0] <= self.t_max[1] && self.t_max[0] <= self.t_max[2] {
+            0
+        } else if self.t_max[1] <= self.t_max[2] {
+            1
+        } else {
+            2
+        };
+        self.entry = self.t_max[axis];
+        self.cell[axis] += self.step[axis];
+        self.t_max[axis] += self.t_delta[axis];
+        if self.step[axis] == 0 || self.cell[axis] < 0 || self.cell[axis] >= grid.dims[axis] as i64
+        {
+            self.done = true;
+        }
+    }
+
+    /// If the sample at parameter `t` lies in an empty block, the parameter at which that block
+    /// (and the empty blocks right after it) is left; `None` if the sample must be taken.
+    /// Calls must come with non-decreasing `t`.
+    #[inline]
+    pub(crate) fn skip_until(&mut self, grid: &SkipGrid, t: f64) -> Option<f64> {
+        while !self.done && t >= self.exit() {
+            self.advance(grid);
+        }
+        if self.done || grid.distance(self.cell) == 0 {
+            return None;
+        }
+        // Leave this and every following empty block at once.
+        loop {
+            let r = grid.distance(self.cell) as i64;
+            if r == 0 {
+                // The entry of this occupied block is where the empty run ended.
+                return Some(self.entry);
+            }
+            if r == 1 {
+                let exit = self.exit();
+                self.advance(grid);
+                self.entry = exit;
+                if self.done {
+                    return Some(exit);
+                }
+                continue;
+            }
+            // Every block within r − 1 of this one is empty: leave that cube in one step.
+            let mut t_exit = f64::INFINITY;
+            let mut axis_exit = 0;
+            for axis in 0..3 {
+                let (lo, hi) = (self.cell[axis] - (r - 1), self.cell[axis] + r);
+                let t = match self.step[axis] {
+                    1 => {
+                        (grid.origin[axis] + hi as f64 * grid.cell[axis] - self.o[axis])
+                            / self.d[axis]
+                    }
+                    -1 => {
+                        (grid.origin[axis] + lo as f64 * grid.cell[axis] - self.o[axis])
+                            / self.d[axis]
+                    }
+                    _ => f64::INFINITY,
+                };
+                if t < t_exit {
+                    t_exit = t;
+                    axis_exit = axis;
+                }
+            }
+            if !t_exit.is_finite() || t_exit <= self.entry {
+                // No progress possible by leaping (degenerate direction): step instead.
+                let exit = self.exit();
+                self.advance(grid);
+                self.entry = exit;
+                if self.done {
+                    return Some(exit);
+                }
+                continue;
+            }
+            // The block just outside the cube on the axis the ray leaves it by.
+            let mut forced = [None; 3];
+            forced[axis_exit] = Some(if self.step[axis_exit] == 1 {
+                self.cell[axis_exit] + r
+            } else {
+                self.cell[axis_exit] - r
+            });
+            let entry = t_exit;
+            *self = grid.walk_from(self.o, self.d, t_exit, Some(forced));
+            self.entry = entry;
+            if self.done {
+                return Some(t_exit);
+            }
+        }
+    }
+}

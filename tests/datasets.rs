@@ -1,0 +1,306 @@
+//! Datasets in scenes: `vlSample` against direct evaluation, empty-space skipping that never
+//! changes a pixel, dataset-driven normals, and the MNI brain end to end.
+
+use std::sync::{Arc, Mutex};
+use vlib::dataset::{Dataset, Filter, Voxels};
+use vlib::scene::Optimise;
+use vlib::{Camera, Fields, Interpolation, Library, MappingType};
+
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// A 40×36×32 volume of a few Gaussian blobs over an empty background, 8-bit.
+fn blobs() -> Dataset {
+    let dims = [40usize, 36, 32];
+    let centres = [
+        ([0.3, 0.4, 0.5], 0.2),
+        ([0.7, 0.6, 0.4], 0.15),
+        ([0.5, 0.25, 0.7], 0.17),
+    ];
+    let mut raw = Vec::new();
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                let p = [i as f64 / 39.0, j as f64 / 35.0, k as f64 / 31.0];
+                let v: f64 = centres
+                    .iter()
+                    .map(|(c, r)| {
+                        let d2: f64 = (0..3).map(|a| (p[a] - c[a]).powi(2)).sum();
+                        (-d2 / (r * r)).exp()
+                    })
+                    .sum();
+                raw.push((v.min(1.0) * 255.0).round() as u8);
+            }
+        }
+    }
+    Dataset::new(dims, Voxels::U8(raw), 0.0, 255.0).unwrap()
+}
+
+fn blob_scene(
+    interp: Interpolation,
+    cubic: (f32, f32),
+    optimise: Optimise,
+    boundary: f32,
+) -> Vec<u8> {
+    let mut vl = Library::new();
+    vl.add_dataset(7, blobs()).unwrap();
+    vl.mapping(1, MappingType::Ramp, 3, 1, &[0.3, 0.0, 0.6, 0.5, 0.9, 0.9])
+        .unwrap();
+    vl.scene().unwrap();
+    vl.set_optimise(optimise).unwrap();
+    vl.camera(&Camera {
+        eye: [0.0, 30.0, -80.0],
+        at: [0.0, 0.0, 0.0],
+        up: [0.0, 1.0, 0.0],
+        fov: 45.0,
+    })
+    .unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 0.3).unwrap();
+    vl.directional_light([1.0, -1.0, 1.0], [1.0, 1.0, 1.0], 1.0)
+        .unwrap();
+    vl.step_size(0.7, 1.0).unwrap();
+    vl.interpolation(interp).unwrap();
+    vl.cubic_filter(cubic.0, cubic.1).unwrap();
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, -0.5).unwrap();
+    vl.scale(39.0, 35.0, 31.0).unwrap();
+    vl.rotate(10.0, 25.0, -5.0).unwrap();
+    vl.boundary(boundary, boundary, boundary).unwrap();
+    vl.dataset(Fields::F, 7).unwrap();
+    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+    vl.set(Fields::COLORS | Fields::KA | Fields::KD, 0.8)
+        .unwrap();
+    vl.end().unwrap();
+    vl.render_preview(64, 48, 64.0 / 48.0).unwrap().to_rgb8()
+}
+
+#[test]
+fn empty_space_skipping_never_changes_a_pixel() {
+    let off = Optimise {
+        skip_empty: false,
+        early_termination: true,
+    };
+    for (interp, cubic) in [
+        (Interpolation::Nearest, (0.0, 0.5)),
+        (Interpolation::Trilinear, (0.0, 0.5)),
+        (Interpolation::Tricubic, (0.0, 0.5)),
+        (Interpolation::Tricubic, (1.0, 0.0)),
+    ] {
+        for boundary in [1.0, 1.3] {
+            let with = blob_scene(interp, cubic, Optimise::default(), boundary);
+            let without = blob_scene(interp, cubic, off, boundary);
+            assert!(
+                with == without,
+                "{interp:?} {cubic:?} boundary {boundary}: skipping changed pixels"
+            );
+            let lit = with.iter().filter(|&&v| v > 10).count();
+            assert!(
+                lit > 500,
+                "{interp:?}: the blobs are visible ({lit} channels lit)"
+            );
+        }
+    }
+}
+
+#[test]
+fn early_termination_changes_pixels_by_less_than_its_threshold() {
+    let on = blob_scene(
+        Interpolation::Trilinear,
+        (0.0, 0.5),
+        Optimise::default(),
+        1.0,
+    );
+    let off = blob_scene(
+        Interpolation::Trilinear,
+        (0.0, 0.5),
+        Optimise {
+            skip_empty: true,
+            early_termination: false,
+        },
+        1.0,
+    );
+    // T_MIN = 1/8192 bounds the light left out; after rounding, at most one grey level.
+    for (a, b) in on.iter().zip(&off) {
+        assert!(a.abs_diff(*b) <= 1);
+    }
+}
+
+#[test]
+fn vl_sample_matches_direct_evaluation() {
+    let d = blobs();
+    let mut vl = Library::new();
+    vl.add_dataset(3, d.clone()).unwrap();
+    let mut rng = Lcg(11);
+    for (interp, filter) in [
+        (Interpolation::Nearest, Filter::Nearest),
+        (Interpolation::Trilinear, Filter::Trilinear),
+        (Interpolation::Tricubic, Filter::Cubic { b: 0.0, c: 0.5 }),
+    ] {
+        vl.interpolation(interp).unwrap();
+        for _ in 0..500 {
+            let p = [rng.next() as f32, rng.next() as f32, rng.next() as f32];
+            assert_eq!(vl.sample(3, p[0], p[1], p[2]).unwrap(), d.sample(p, filter));
+        }
+    }
+    assert_eq!(
+        vl.sample(4, 0.5, 0.5, 0.5).unwrap_err().code,
+        vlib::ErrorCode::BadId
+    );
+    assert_eq!(
+        vl.sample(3, f32::NAN, 0.5, 0.5).unwrap_err().code,
+        vlib::ErrorCode::BadValue
+    );
+}
+
+#[test]
+fn vl_sample_inside_a_field_function_uses_the_objects_interpolation() {
+    let d = blobs();
+    type Log = Arc<Mutex<Vec<([f32; 3], f32)>>>;
+    let seen: Log = Arc::default();
+    let mut vl = Library::new();
+    vl.add_dataset(3, d.clone()).unwrap();
+    vl.scene().unwrap();
+    vl.interpolation(Interpolation::Nearest).unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.object().unwrap();
+    let log = seen.clone();
+    vl.function(Fields::O, move |s| {
+        let p = s.position();
+        let v = s.dataset(3, p).unwrap();
+        let mut l = log.lock().unwrap();
+        if l.len() < 200 {
+            l.push((p, v));
+        }
+        let _ = s.set(Fields::O, v);
+    })
+    .unwrap();
+    vl.end().unwrap();
+    vl.render_preview(8, 8, 1.0).unwrap();
+    let seen = seen.lock().unwrap();
+    assert!(!seen.is_empty());
+    for (p, v) in seen.iter() {
+        assert_eq!(*v, d.sample(*p, Filter::Nearest));
+    }
+}
+
+#[test]
+fn dataset_commands_validate() {
+    use vlib::ErrorCode;
+    let mut vl = Library::new();
+    assert_eq!(vl.unload(1).unwrap_err().code, ErrorCode::BadId);
+    assert_eq!(
+        vl.load(1, "/no/such/file.vlb").unwrap_err().code,
+        ErrorCode::IoError
+    );
+    vl.add_dataset(1, blobs()).unwrap();
+    vl.scene().unwrap();
+    vl.object().unwrap();
+    assert_eq!(vl.dataset(Fields::O, 2).unwrap_err().code, ErrorCode::BadId);
+    assert_eq!(
+        vl.dataset(Fields::NONE, 1).unwrap_err().code,
+        ErrorCode::BadField
+    );
+    let before = vl.fingerprint();
+    assert_eq!(vl.load(2, "x.vlb").unwrap_err().code, ErrorCode::BadScope);
+    assert_eq!(vl.fingerprint(), before);
+    vl.dataset(Fields::O, 1).unwrap();
+    vl.end().unwrap();
+    // Unloading keeps objects that already cast the dataset working.
+    vl.unload(1).unwrap();
+    assert!(vl.render_preview(4, 4, 1.0).is_ok());
+}
+
+/// The MNI brain: convert, render small with and without skipping, and check the cortex shows.
+#[test]
+fn mni_brain_renders_identically_with_and_without_skipping() {
+    let nii = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz"
+    );
+    if !std::path::Path::new(nii).exists() {
+        eprintln!("skipped: {nii} not found");
+        return;
+    }
+    let exe = std::env::current_exe().unwrap();
+    let bin = exe.parent().unwrap().parent().unwrap().join("vlconvert");
+    let dir = std::env::temp_dir().join(format!("vlib-mni-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let vlb = dir.join("mni.vlb");
+    let st = std::process::Command::new(&bin)
+        .args(["nifti", nii])
+        .arg(&vlb)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let info = std::process::Command::new(&bin)
+        .arg("info")
+        .arg(&vlb)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(text.contains("197 x 233 x 189"), "{text}");
+    assert!(text.contains("voxel width: 1 byte"), "{text}");
+    let d = Dataset::load(&vlb).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    let dims = d.dims();
+    let render = |skip: bool| {
+        let mut vl = Library::new();
+        vl.add_dataset(1, d.clone()).unwrap();
+        let op: Vec<f32> = [
+            (40.0, 0.0),
+            (80.0, 0.1),
+            (120.0, 0.35),
+            (180.0, 0.6),
+            (255.0, 0.85),
+        ]
+        .iter()
+        .flat_map(|&(s, a): &(f32, f32)| [s / 255.0, a])
+        .collect();
+        vl.mapping(1, MappingType::Ramp, 5, 1, &op).unwrap();
+        vl.scene().unwrap();
+        vl.set_optimise(Optimise {
+            skip_empty: skip,
+            early_termination: true,
+        })
+        .unwrap();
+        let c = [98.0, 116.0, 94.0];
+        vl.camera(&Camera {
+            eye: [c[0], c[1] + 360.0, c[2]],
+            at: c,
+            up: [0.0, 0.0, 1.0],
+            fov: 30.0,
+        })
+        .unwrap();
+        vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+        vl.directional_light([0.0, -1.0, 0.0], [1.0; 3], 1.0)
+            .unwrap();
+        vl.step_size(0.5, 1.0).unwrap();
+        vl.object().unwrap();
+        vl.scale(
+            (dims[0] - 1) as f32,
+            (dims[1] - 1) as f32,
+            (dims[2] - 1) as f32,
+        )
+        .unwrap();
+        vl.dataset(Fields::F, 1).unwrap();
+        vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+        vl.set(Fields::COLORS, 0.9).unwrap();
+        vl.set(Fields::KA, 0.2).unwrap();
+        vl.set(Fields::KD, 0.7).unwrap();
+        vl.end().unwrap();
+        vl.render_preview(96, 96, 1.0).unwrap().to_rgb8()
+    };
+    let (a, b) = (render(true), render(false));
+    assert!(a == b, "skipping changed the MNI image");
+    // The brain covers a good part of the frame (the VTK image: about 47 % of rays hit it).
+    let hit = a.chunks(3).filter(|p| p[0] > 20).count() as f64 / (96.0 * 96.0);
+    assert!((0.3..0.7).contains(&hit), "coverage {hit}");
+}
