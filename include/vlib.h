@@ -602,17 +602,20 @@ void vlPosition(vlfloat *world);
 vlint vlChildCount(void);
 
 /*
- Inside a field function: whether the current point lies inside child `child` (from 1).
+ Inside a field function: whether the current point lies inside child `child` (from 1);
+ `VL_TRUE` or `VL_FALSE`.
  */
 vlint vlChildHit(vlint child);
 
 /*
- Inside a field function: a field of child `child` (from 1) at the current point.
+ Inside a field function: a field of child `child` (from 1) at the current point, from the
+ child's own program in the child's space (0 outside its boundary).
  */
 vlfloat vlChildField(vlint child, vlint field);
 
 /*
- Inside a normal function: writes the normal of child `child` (from 1) at the current point.
+ Inside a normal function: writes the world-space normal of child `child` (from 1) at the
+ current point.
 
  # Safety
  `n` must be NULL or point to 3 writable floats.

@@ -28,6 +28,7 @@
 
 #![warn(missing_docs)]
 
+pub mod cvg;
 pub mod dataset;
 pub mod error;
 pub mod library;
@@ -40,6 +41,7 @@ pub mod scope;
 mod skip;
 pub mod types;
 pub mod vlaux;
+pub mod voxel;
 
 pub use error::{Error, ErrorCode, Result};
 pub use library::{Closed, Library};

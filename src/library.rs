@@ -25,6 +25,10 @@ pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
 pub const MAX_SUPER_SAMPLE: i32 = 16;
 /// The largest recursion depth.
 pub const MAX_RECURSION: i32 = 64;
+/// The deepest nesting of objects.
+pub const MAX_DEPTH: usize = 64;
+/// The most nodes one voxelization may have (2³⁰: 4 GiB of field values while it runs).
+pub const MAX_VOLUME_NODES: u64 = 1 << 30;
 
 /// What a successful `vlEnd` closed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,6 +46,7 @@ struct OpenScene {
     settings: Settings,
     lights: Vec<Light>,
     images: Vec<ImageRequest>,
+    volumes: Vec<crate::scene::VolumeRequest>,
     objects: Vec<ObjectDesc>,
     /// Objects being specified (nested ones after their parents).
     open: Vec<ObjectDesc>,
@@ -159,7 +164,10 @@ impl Library {
             Scope::Object => {
                 let scene = self.scene_mut();
                 let obj = scene.open.pop().expect("object scope");
-                scene.objects.push(obj);
+                match scene.open.last_mut() {
+                    Some(parent) => parent.children.push(obj),
+                    None => scene.objects.push(obj),
+                }
                 Ok(Closed::Object)
             }
             Scope::Scene => {
@@ -168,6 +176,7 @@ impl Library {
                     settings: s.settings,
                     lights: s.lights,
                     images: s.images,
+                    volumes: s.volumes,
                     objects: s.objects,
                     datasets: Arc::new(self.datasets.clone()),
                 };
@@ -191,6 +200,7 @@ impl Library {
             settings: self.defaults.clone(),
             lights: Vec::new(),
             images: Vec::new(),
+            volumes: Vec::new(),
             objects: Vec::new(),
             open: Vec::new(),
         });
@@ -231,11 +241,14 @@ impl Library {
         Ok(())
     }
 
-    /// `vlVolume`: voxelization (not implemented yet: `Unsupported` after validation).
+    /// `vlVolume`: requests voxelization of the world box `corner0` … `corner1` at
+    /// `nodes` nodes per axis (node i of n at corner0 + i/(n − 1)·(corner1 − corner0); a single
+    /// node sits at corner0), one `.vlb` file per field named `<prefix>_<field>.vlb`, with 1 or 2
+    /// bytes per voxel. Written when the scene closes.
     #[allow(clippy::too_many_arguments)]
     pub fn volume(
         &mut self,
-        _prefix: &str,
+        prefix: impl AsRef<Path>,
         fields: Fields,
         corner0: [f32; 3],
         corner1: [f32; 3],
@@ -243,19 +256,53 @@ impl Library {
         bytes: i32,
     ) -> Result<()> {
         self.check(Command::Volume)?;
+        let prefix = prefix.as_ref();
+        if prefix.as_os_str().is_empty() || prefix.file_name().is_none() {
+            return err(
+                ErrorCode::BadFile,
+                format!("vlVolume: bad prefix {prefix:?}"),
+            );
+        }
         fields.validate()?;
         finite("vlVolume", &corner0)?;
         finite("vlVolume", &corner1)?;
-        if nodes.iter().any(|n| *n < 1) || !(bytes == 1 || bytes == 2) {
+        if !(bytes == 1 || bytes == 2) {
             return err(
                 ErrorCode::BadValue,
-                "vlVolume: node counts must be ≥ 1 and bytes 1 or 2",
+                format!("vlVolume: {bytes} bytes per voxel (1 or 2)"),
             );
         }
-        err(
-            ErrorCode::Unsupported,
-            "vlVolume: voxelization is not implemented yet",
-        )
+        for axis in 0..3 {
+            let n = nodes[axis];
+            if n < 1 || n as u64 > crate::dataset::MAX_VOXELS {
+                return err(
+                    ErrorCode::BadValue,
+                    format!("vlVolume: {n} nodes along an axis"),
+                );
+            }
+            if n > 1 && corner1[axis] <= corner0[axis] {
+                return err(
+                    ErrorCode::BadValue,
+                    format!("vlVolume: the box must have positive size along axis {axis}"),
+                );
+            }
+        }
+        let total = nodes.iter().map(|&n| n as u64).product::<u64>();
+        if total > MAX_VOLUME_NODES {
+            return err(
+                ErrorCode::NoMemory,
+                format!("vlVolume: {total} nodes exceed {MAX_VOLUME_NODES}"),
+            );
+        }
+        self.scene_mut().volumes.push(crate::scene::VolumeRequest {
+            prefix: prefix.to_path_buf(),
+            fields,
+            corner0,
+            corner1,
+            nodes: nodes.map(|n| n as usize),
+            bytes: bytes as u32,
+        });
+        Ok(())
     }
 
     /// `vlCamera`.
@@ -487,14 +534,14 @@ impl Library {
         Ok(())
     }
 
-    /// `vlObject`: opens an object capturing the rendering state in force. Nested objects
-    /// (children) are not implemented yet.
+    /// `vlObject`: opens an object capturing the rendering state in force. Inside an object it
+    /// opens a child, placed in its parent's space; only root objects are rendered.
     pub fn object(&mut self) -> Result<()> {
         self.check(Command::Object)?;
-        if self.scope() == Scope::Object {
+        if self.scene_mut().open.len() >= MAX_DEPTH {
             return err(
-                ErrorCode::Unsupported,
-                "vlObject: nested objects (children) are not implemented yet",
+                ErrorCode::BadValue,
+                format!("vlObject: objects nest at most {MAX_DEPTH} deep"),
             );
         }
         let s = self.scene_mut();
@@ -599,13 +646,20 @@ impl Library {
         Ok(())
     }
 
-    /// `vlSpatial`: not implemented yet.
-    pub fn spatial(&mut self, _f: crate::program::FieldFn) -> Result<()> {
+    /// `vlSpatial`: an instruction running a spatial transfer function, which may move the
+    /// sample point ([`Sample::set_position`]); later instructions see the new point.
+    pub fn spatial<F>(&mut self, f: F) -> Result<()>
+    where
+        F: Fn(&mut Sample) + Send + Sync + 'static,
+    {
+        self.spatial_arc(Arc::new(f))
+    }
+
+    /// `vlSpatial` with a shared function.
+    pub fn spatial_arc(&mut self, f: crate::program::FieldFn) -> Result<()> {
         self.check(Command::Spatial)?;
-        err(
-            ErrorCode::Unsupported,
-            "vlSpatial: spatial transfer functions are not implemented yet",
-        )
+        self.object_mut().program.push(Instr::Spatial { f });
+        Ok(())
     }
 
     /// `vlSet` in an object: an instruction assigning a constant (clamped to [0, 1], NaN → 0).
@@ -724,6 +778,7 @@ impl Library {
             settings: s.settings.clone(),
             lights: s.lights.clone(),
             images: Vec::new(),
+            volumes: Vec::new(),
             objects: s.objects.clone(),
             datasets: Arc::new(self.datasets.clone()),
         };

@@ -28,18 +28,62 @@ pub type NormalFn = Arc<dyn Fn(&mut [f32; 3], &mut Sample<'_>) + Send + Sync>;
 /// The datasets of a library, by id, shared without copies.
 pub type Datasets = BTreeMap<i32, Arc<Dataset>>;
 
-/// What a sample can reach besides its own point: the library's datasets (for `vlSample`) and
-/// the interpolation filter of the object being evaluated.
+/// What a sample can reach besides its own point: the library's datasets (for `vlSample`), the
+/// interpolation filter of the object being evaluated, and its children (for `vlChild*`).
 #[derive(Clone, Debug, Default)]
 pub struct SampleEnv {
     pub(crate) datasets: Arc<Datasets>,
     pub(crate) filter: Filter,
+    pub(crate) children: Arc<Vec<Child>>,
 }
 
 impl SampleEnv {
-    /// An environment with these datasets and filter.
+    /// An environment with these datasets and filter, and no children.
     pub fn new(datasets: Arc<Datasets>, filter: Filter) -> SampleEnv {
-        SampleEnv { datasets, filter }
+        SampleEnv {
+            datasets,
+            filter,
+            children: Arc::default(),
+        }
+    }
+}
+
+/// A child object as its parent's field and normal functions see it: its own program and
+/// environment, placed in the parent's object space.
+#[derive(Clone)]
+pub struct Child {
+    pub(crate) program: Vec<Instr>,
+    /// Parent object space → child object space.
+    pub(crate) to_child: glam::DMat4,
+    /// World → child object space (for world-space normals).
+    pub(crate) world_to_child: glam::DMat4,
+    pub(crate) box_min: glam::DVec3,
+    pub(crate) box_max: glam::DVec3,
+    pub(crate) env: SampleEnv,
+}
+
+impl fmt::Debug for Child {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Child")
+            .field("program", &self.program)
+            .field("to_child", &self.to_child)
+            .finish()
+    }
+}
+
+impl Child {
+    fn inside(&self, q: glam::DVec3) -> bool {
+        q.cmpge(self.box_min).all() && q.cmple(self.box_max).all()
+    }
+
+    /// All fields of the child at child-space point `q` (0 outside its boundary).
+    pub(crate) fn fields_at(&self, q: glam::DVec3, world: [f64; 3]) -> [f32; FIELD_COUNT] {
+        if !self.inside(q) {
+            return [0.0; FIELD_COUNT];
+        }
+        let mut s = Sample::with_env(q.as_vec3().to_array(), world, &self.env);
+        run(&self.program, &mut s);
+        s.fields
     }
 }
 
@@ -79,6 +123,8 @@ pub enum SampleRole {
     Field,
     /// A normal function: may read fields, may not write them.
     Normal,
+    /// A spatial transfer function: may move the point, may not write fields.
+    Spatial,
 }
 
 /// The context of one sample point, handed to field and normal functions.
@@ -121,6 +167,95 @@ impl<'a> Sample<'a> {
             role: SampleRole::Field,
             env: Some(env),
         }
+    }
+
+    /// `vlSpatial`: moves the sample point (object space); later instructions see the new
+    /// point. Only a spatial transfer function may do this; a non-finite point is refused.
+    pub fn set_position(&mut self, p: [f32; 3]) -> Result<()> {
+        if self.role != SampleRole::Spatial {
+            return err(
+                ErrorCode::BadScope,
+                "only a spatial transfer function may move the point",
+            );
+        }
+        if p.iter().any(|v| !v.is_finite()) {
+            return err(
+                ErrorCode::BadValue,
+                format!("spatial function moved the point to {p:?}"),
+            );
+        }
+        self.p = p;
+        Ok(())
+    }
+
+    fn child(&self, i: i32) -> Result<&'a Child> {
+        let children = self.env.map(|e| &e.children[..]).unwrap_or(&[]);
+        if i < 1 || i as usize > children.len() {
+            return err(
+                ErrorCode::BadIndex,
+                format!("child {i} of an object with {} children", children.len()),
+            );
+        }
+        Ok(&children[i as usize - 1])
+    }
+
+    fn child_point(&self, c: &Child) -> glam::DVec3 {
+        let p = glam::DVec3::new(self.p[0] as f64, self.p[1] as f64, self.p[2] as f64);
+        c.to_child.transform_point3(p)
+    }
+
+    /// `vlChildCount`: the number of children of the object being evaluated.
+    pub fn child_count(&self) -> usize {
+        self.env.map_or(0, |e| e.children.len())
+    }
+
+    /// `vlChildHit`: whether the current point lies inside child `i`'s (transformed) boundary;
+    /// children count from 1 in declaration order.
+    pub fn child_hit(&self, i: i32) -> Result<bool> {
+        let c = self.child(i)?;
+        Ok(c.inside(self.child_point(c)))
+    }
+
+    /// `vlChildField`: field `field` of child `i`, evaluated with the child's own program at the
+    /// current point in the child's space (0 outside the child's boundary).
+    pub fn child_field(&self, i: i32, field: Fields) -> Result<f32> {
+        let index = field.validate_single()?;
+        let c = self.child(i)?;
+        Ok(c.fields_at(self.child_point(c), self.world)[index])
+    }
+
+    /// All ten fields of child `i` at the current point (what the CVG operators combine).
+    pub fn child_fields(&self, i: i32) -> Result<[f32; FIELD_COUNT]> {
+        let c = self.child(i)?;
+        Ok(c.fields_at(self.child_point(c), self.world))
+    }
+
+    /// `vlChildNormal` (normal functions only): the world-space normal of child `i` at the current
+    /// point, −∇F of the child by central differences in its object space (offset 10⁻³ of its
+    /// cube), taken to world space; zero where the gradient vanishes.
+    pub fn child_normal(&self, i: i32) -> Result<[f32; 3]> {
+        if self.role != SampleRole::Normal {
+            return err(
+                ErrorCode::BadScope,
+                "vlChildNormal is legal only in normal functions",
+            );
+        }
+        let c = self.child(i)?;
+        let q = self.child_point(c);
+        let h = 1e-3;
+        let mut g = glam::DVec3::ZERO;
+        for axis in 0..3 {
+            let mut e = glam::DVec3::ZERO;
+            e[axis] = h;
+            let f = |q: glam::DVec3| c.fields_at(q, self.world)[9] as f64;
+            g[axis] = (f(q + e) - f(q - e)) / (2.0 * h);
+        }
+        let gw = glam::DMat3::from_mat4(c.world_to_child).transpose() * g;
+        Ok((-gw)
+            .try_normalize()
+            .unwrap_or(glam::DVec3::ZERO)
+            .as_vec3()
+            .to_array())
     }
 
     /// `vlSample` inside a field function: dataset `id` at dataset coordinates `p`, with the
@@ -174,7 +309,7 @@ impl<'a> Sample<'a> {
         if self.role != SampleRole::Field {
             return err(
                 ErrorCode::BadScope,
-                "vlSet is not legal inside a normal function",
+                "vlSet is legal only inside field functions (not normal or spatial ones)",
             );
         }
         self.write(fields & self.mask, value);
@@ -228,6 +363,11 @@ pub enum Instr {
         /// The interpolation captured at `vlDataset`.
         filter: Filter,
     },
+    /// `vlSpatial`: a spatial transfer function that may move the point.
+    Spatial {
+        /// The function.
+        f: FieldFn,
+    },
     /// `vlMap`: targets = Φ(value of source field), output `output` (from 0).
     Map {
         /// The fields written.
@@ -249,6 +389,7 @@ impl Instr {
             | Instr::Function { fields, .. }
             | Instr::Dataset { fields, .. } => *fields,
             Instr::Map { targets, .. } => *targets,
+            Instr::Spatial { .. } => Fields::NONE,
         }
     }
 }
@@ -263,6 +404,9 @@ impl fmt::Debug for Instr {
                     "Function({fields:?}, {:p})",
                     Arc::as_ptr(func) as *const ()
                 )
+            }
+            Instr::Spatial { f: func } => {
+                write!(f, "Spatial({:p})", Arc::as_ptr(func) as *const ())
             }
             Instr::Dataset {
                 fields,
@@ -306,6 +450,11 @@ pub fn run(program: &[Instr], s: &mut Sample<'_>) {
             } => {
                 let v = data.sample(s.p, *filter);
                 s.write(*fields, v);
+            }
+            Instr::Spatial { f } => {
+                s.role = SampleRole::Spatial;
+                f(s);
+                s.role = SampleRole::Field;
             }
             Instr::Map {
                 targets,

@@ -24,8 +24,8 @@ use rayon::prelude::*;
 use std::sync::Arc;
 
 /// Rays stop once their transmittance falls below this: what remains can change an 8-bit pixel
-/// by at most 1/8192 < 1/510 (half a grey level).
-pub const T_MIN: f64 = 1.0 / 8192.0;
+/// by at most 1/512 < 1/510 (half a grey level of an 8-bit image).
+pub const T_MIN: f64 = 1.0 / 512.0;
 
 /// Super-sampling refines a pixel when a colour channel differs from a 4-neighbour's by more
 /// than this.
@@ -109,10 +109,16 @@ impl CObj {
             }
         };
         let f_prefix = prefix_for(&o.program, Fields::F);
+        // Grid gradients apply where F is a dataset's value at the sample point itself, i.e. no
+        // spatial function moved the point first.
+        let moved = o.program[..f_prefix]
+            .iter()
+            .any(|i| matches!(i, Instr::Spatial { .. }));
         let f_dataset = match f_prefix.checked_sub(1).map(|i| &o.program[i]) {
-            Some(Instr::Dataset { data, filter, .. }) => Some((data.clone(), *filter)),
+            Some(Instr::Dataset { data, filter, .. }) if !moved => Some((data.clone(), *filter)),
             _ => None,
         };
+        let to_object = to_world.inverse();
         let r = &o.state;
         let o_prefix = prefix_for(&o.program, Fields::O);
         CObj {
@@ -125,9 +131,13 @@ impl CObj {
             o_prefix,
             f_prefix,
             f_dataset,
-            env: SampleEnv::new(datasets.clone(), Filter::new(r.interpolation, r.cubic)),
+            env: SampleEnv {
+                datasets: datasets.clone(),
+                filter: Filter::new(r.interpolation, r.cubic),
+                children: Arc::new(compile_children(o, to_object, datasets)),
+            },
             program: o.program.clone(),
-            to_object: to_world.inverse(),
+            to_object,
             box_min,
             box_max,
             step,
@@ -234,6 +244,35 @@ impl CObj {
     }
 }
 
+/// The children of `o` as its functions see them; `world_to_o` maps the world to `o`'s space.
+pub(crate) fn compile_children(
+    o: &ObjectDesc,
+    world_to_o: DMat4,
+    datasets: &Arc<crate::program::Datasets>,
+) -> Vec<crate::program::Child> {
+    o.children
+        .iter()
+        .map(|c| {
+            let to_child = c.matrix().inverse();
+            let world_to_child = to_child * world_to_o;
+            let b = crate::scene::v3(c.boundary);
+            let r = &c.state;
+            crate::program::Child {
+                program: c.program.clone(),
+                to_child,
+                world_to_child,
+                box_min: DVec3::splat(0.5) - b * 0.5,
+                box_max: DVec3::splat(0.5) + b * 0.5,
+                env: SampleEnv {
+                    datasets: datasets.clone(),
+                    filter: Filter::new(r.interpolation, r.cubic),
+                    children: Arc::new(compile_children(c, world_to_child, datasets)),
+                },
+            }
+        })
+        .collect()
+}
+
 /// A scene compiled for tracing: immutable, shared by all worker threads.
 pub struct Compiled {
     objects: Vec<CObj>,
@@ -253,6 +292,25 @@ impl Compiled {
             lights: desc.lights.clone(),
             settings: desc.settings.clone(),
         }
+    }
+
+    /// All fields of the scene at world point `w`: those of the root object containing it with
+    /// the largest opacity (the first on ties), or all 0 (see [`crate::voxel`]).
+    pub fn fields_at(&self, w: DVec3) -> [f32; crate::types::FIELD_COUNT] {
+        let mut best: Option<[f32; crate::types::FIELD_COUNT]> = None;
+        for obj in &self.objects {
+            let p = obj.to_object.transform_point3(w);
+            if !obj.inside(p) {
+                continue;
+            }
+            let mut s = Sample::with_env(p.as_vec3().to_array(), w.to_array(), &obj.env);
+            run(&obj.program, &mut s);
+            let f = s.values();
+            if best.is_none_or(|b| f[0] > b[0]) {
+                best = Some(f);
+            }
+        }
+        best.unwrap_or([0.0; crate::types::FIELD_COUNT])
     }
 
     /// Shades one sample: returns (α, colour) or `None` where the opacity is 0.
@@ -608,10 +666,10 @@ pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> R
     }
 }
 
-/// Renders every image a scene requested and writes the files. All images are attempted; the
+/// Renders every image and voxelization a scene requested and writes the files. All images are attempted; the
 /// first failure is returned (its message counts the others).
 pub fn render_outputs(desc: &SceneDesc) -> Result<()> {
-    if desc.images.is_empty() {
+    if desc.images.is_empty() && desc.volumes.is_empty() {
         return Ok(());
     }
     let compiled = Compiled::new(desc);
@@ -621,6 +679,11 @@ pub fn render_outputs(desc: &SceneDesc) -> Result<()> {
             crate::output::write_image(&req.path, img.width, img.height, &img.to_rgb8())
         });
         if let Err(e) = result {
+            errors.push(e);
+        }
+    }
+    for req in &desc.volumes {
+        if let Err(e) = crate::voxel::write(&compiled, req) {
             errors.push(e);
         }
     }

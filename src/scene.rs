@@ -228,12 +228,29 @@ pub struct ImageRequest {
     pub height: u32,
 }
 
+/// A voxelization request (`vlVolume`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct VolumeRequest {
+    /// Output files are `<prefix>_<field>.vlb`.
+    pub prefix: PathBuf,
+    /// The fields to write.
+    pub fields: Fields,
+    /// World-space corner of node (0, 0, 0).
+    pub corner0: [f32; 3],
+    /// World-space corner of the last node.
+    pub corner1: [f32; 3],
+    /// Nodes per axis.
+    pub nodes: [usize; 3],
+    /// Bytes per voxel, 1 or 2.
+    pub bytes: u32,
+}
+
 /// An object: its program, placement, boundary, normal chain and captured rendering state.
 #[derive(Clone)]
 pub struct ObjectDesc {
     /// The field program.
     pub program: Vec<Instr>,
-    /// Object-to-world transform (composed in issue order).
+    /// Object-to-parent transform (the world for a root), composed in issue order.
     pub to_world: DMat4,
     /// Object-space flips applied before `to_world`.
     pub flip: [bool; 3],
@@ -243,6 +260,8 @@ pub struct ObjectDesc {
     pub normals: Vec<NormalFn>,
     /// Rendering state captured at `vlObject`.
     pub state: RenderState,
+    /// Children (nested objects), in declaration order; placed in this object's space.
+    pub children: Vec<ObjectDesc>,
     /// The empty-space grid, built by the first render after the object is closed (its
     /// program and boundary no longer change then) and shared by later renders.
     pub(crate) skip:
@@ -259,6 +278,7 @@ impl ObjectDesc {
             boundary: [1.0; 3],
             normals: Vec::new(),
             state,
+            children: Vec::new(),
             skip: Default::default(),
         }
     }
@@ -300,6 +320,7 @@ impl fmt::Debug for ObjectDesc {
                     .collect::<Vec<_>>(),
             )
             .field("state", &self.state)
+            .field("children", &self.children)
             .finish()
     }
 }
@@ -313,6 +334,8 @@ pub struct SceneDesc {
     pub lights: Vec<Light>,
     /// Image outputs.
     pub images: Vec<ImageRequest>,
+    /// Voxelization outputs.
+    pub volumes: Vec<VolumeRequest>,
     /// Root objects, in definition order.
     pub objects: Vec<ObjectDesc>,
     /// The library's datasets when the scene closed (for `vlSample` in field functions).

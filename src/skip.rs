@@ -114,6 +114,10 @@ impl SkipGrid {
     /// instruction that may write opacity), over the boundary box [box_min, box_max]. `None`
     /// when no dataset feeds the opacity or no block is provably empty.
     pub(crate) fn build(prefix: &[Instr], box_min: DVec3, box_max: DVec3) -> Option<SkipGrid> {
+        // A spatial transfer function moves points anywhere: no block bound holds after it.
+        if prefix.iter().any(|i| matches!(i, Instr::Spatial { .. })) {
+            return None;
+        }
         // The finest dataset feeding the prefix sets the block size: one brick of it.
         let reference = prefix
             .iter()
@@ -277,6 +281,7 @@ fn opacity_range(prefix: &[Instr], data_ranges: &[(f32, f32)]) -> (f32, f32) {
         let (fields, range) = match ins {
             Instr::Set { fields, value } => (*fields, (*value, *value)),
             Instr::Function { fields, .. } => (*fields, (0.0, 1.0)),
+            Instr::Spatial { .. } => continue, // excluded by `build`
             Instr::Dataset { fields, .. } => {
                 (*fields, *next.next().expect("one range per dataset"))
             }

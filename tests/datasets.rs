@@ -127,7 +127,7 @@ fn early_termination_changes_pixels_by_less_than_its_threshold() {
         },
         1.0,
     );
-    // T_MIN = 1/8192 bounds the light left out; after rounding, at most one grey level.
+    // T_MIN = 1/512 bounds the light left out; after rounding, at most one grey level.
     for (a, b) in on.iter().zip(&off) {
         assert!(a.abs_diff(*b) <= 1);
     }

@@ -53,6 +53,38 @@ impl CField {
     }
 }
 
+/// A C spatial transfer function with its `misc` pointer: it may rewrite the point in place.
+#[derive(Clone, Copy)]
+pub(crate) struct CSpatial(CField);
+
+impl CSpatial {
+    /// Wraps a non-NULL function; `None` for NULL.
+    pub(crate) fn new(f: FieldFn, misc: *mut c_void) -> Option<CSpatial> {
+        CField::new(f, misc).map(CSpatial)
+    }
+
+    /// The core closure: calls `f` on a copy of the point and moves the sample to wherever `f`
+    /// left it (a non-finite point is refused and recorded).
+    pub(crate) fn into_core(self) -> vlib_core::program::FieldFn {
+        // A method call captures the whole wrapper (not its raw-pointer fields one by one).
+        Arc::new(move |s: &mut Sample<'_>| self.call(s))
+    }
+
+    fn call(&self, s: &mut Sample<'_>) {
+        let mut p = s.position();
+        {
+            let _scope = Enter::new(s);
+            // SAFETY: a valid C function by the contract of `vlSpatial`; `p` is 3 floats.
+            unsafe { (self.0.f)(p.as_mut_ptr(), self.0.misc) }
+        }
+        if p != s.position() {
+            if let Err(e) = s.set_position(p) {
+                crate::errors::record(e);
+            }
+        }
+    }
+}
+
 /// A C normal function with its `misc` pointer.
 #[derive(Clone, Copy)]
 pub(crate) struct CNormal {

@@ -111,14 +111,6 @@ pub(crate) fn never<T>(cmd: Command) -> Result<T> {
     ))
 }
 
-/// The error of a command that is valid but not implemented yet.
-pub(crate) fn unsupported(cmd: Command, what: &str) -> Error {
-    Error::new(
-        ErrorCode::Unsupported,
-        format!("{}: {what} not implemented yet", cmd.name()),
-    )
-}
-
 /// The error for a NULL argument.
 pub(crate) fn null(name: &str, arg: &str) -> Error {
     Error::new(ErrorCode::NullPointer, format!("{name}: {arg} is NULL"))

@@ -1,6 +1,6 @@
 //! Commands 26–38: objects, their transforms and their field programs.
 
-use crate::callbacks::{CField, CNormal};
+use crate::callbacks::{CField, CNormal, CSpatial};
 use crate::ffi::{either, library, null, read_floats};
 use crate::types::{vlfloat, vlint};
 use std::os::raw::c_void;
@@ -64,8 +64,8 @@ pub unsafe extern "C" fn vlSpatial(
     misc: *mut c_void,
 ) {
     library(Command::Spatial, (), |lib| {
-        let f = CField::new(f, misc).ok_or_else(|| null(Command::Spatial.name(), "f"))?;
-        lib.spatial(f.into_core())
+        let f = CSpatial::new(f, misc).ok_or_else(|| null(Command::Spatial.name(), "f"))?;
+        lib.spatial_arc(f.into_core())
     })
 }
 

@@ -1,9 +1,9 @@
 //! Commands 39–44: what a field or normal function may ask about the current point.
 //!
-//! All of them are legal only in sample scope; elsewhere they record `VL_BADSCOPE`. Children
-//! (nested objects) are not implemented yet, so the `vlChild*` commands record `VL_UNSUPPORTED`.
+//! All of them are legal only in sample scope; elsewhere they record `VL_BADSCOPE`. Children are
+//! counted from 1 in declaration order; a bad index records `VL_BADINDEX`.
 
-use crate::ffi::{either, never, null, unsupported};
+use crate::ffi::{either, never, null};
 use crate::types::{vlfloat, vlint};
 use vlib_core::{Command, Fields};
 
@@ -46,53 +46,53 @@ pub unsafe extern "C" fn vlChildCount() -> vlint {
     either(
         Command::ChildCount,
         0,
-        |_| Err(unsupported(Command::ChildCount, "children are")),
+        |s| Ok(s.child_count() as vlint),
         |_| never(Command::ChildCount),
     )
 }
 
-/// Inside a field function: whether the current point lies inside child `child` (from 1).
+/// Inside a field function: whether the current point lies inside child `child` (from 1);
+/// `VL_TRUE` or `VL_FALSE`.
 #[no_mangle]
 pub unsafe extern "C" fn vlChildHit(child: vlint) -> vlint {
-    let _ = child;
     either(
         Command::ChildHit,
         0,
-        |_| Err(unsupported(Command::ChildHit, "children are")),
+        |s| s.child_hit(child).map(vlint::from),
         |_| never(Command::ChildHit),
     )
 }
 
-/// Inside a field function: a field of child `child` (from 1) at the current point.
+/// Inside a field function: a field of child `child` (from 1) at the current point, from the
+/// child's own program in the child's space (0 outside its boundary).
 #[no_mangle]
 pub unsafe extern "C" fn vlChildField(child: vlint, field: vlint) -> vlfloat {
-    let _ = child;
     either(
         Command::ChildField,
         0.0,
-        |_| {
-            Fields::single_from_raw(field)?;
-            Err(unsupported(Command::ChildField, "children are"))
-        },
+        |s| s.child_field(child, Fields::from_raw(field)?),
         |_| never(Command::ChildField),
     )
 }
 
-/// Inside a normal function: writes the normal of child `child` (from 1) at the current point.
+/// Inside a normal function: writes the world-space normal of child `child` (from 1) at the
+/// current point.
 ///
 /// # Safety
 /// `n` must be NULL or point to 3 writable floats.
 #[no_mangle]
 pub unsafe extern "C" fn vlChildNormal(child: vlint, n: *mut vlfloat) {
-    let _ = child;
     either(
         Command::ChildNormal,
         (),
-        |_| {
+        |s| {
             if n.is_null() {
                 return Err(null(Command::ChildNormal.name(), "n"));
             }
-            Err(unsupported(Command::ChildNormal, "children are"))
+            let v = s.child_normal(child)?;
+            // SAFETY: non-NULL and 3 floats long by the caller's contract.
+            std::ptr::copy_nonoverlapping(v.as_ptr(), n, 3);
+            Ok(())
         },
         |_| never(Command::ChildNormal),
     )

@@ -54,9 +54,8 @@ pub unsafe extern "C" fn vlVolume(
 ) {
     library(Command::Volume, (), |lib| {
         let prefix = c_path(Command::Volume.name(), "prefix", prefix)?;
-        // The core takes the prefix as `&str` (see the report on the core API).
         lib.volume(
-            &prefix.to_string_lossy(),
+            prefix,
             Fields::from_raw(fields)?,
             [x0, y0, z0],
             [x1, y1, z1],

@@ -291,8 +291,15 @@ extern "C" fn probe(_p: *mut vlfloat, _misc: *mut c_void) {
             misuse("vlChildField(1, 0)", VL_BADFIELD, &|| {
                 vlChildField(1, 0);
             });
-            misuse("vlChildCount()", VL_UNSUPPORTED, &|| {
-                vlChildCount();
+            misuse(
+                "vlChildHit(1) of an object without children",
+                VL_BADINDEX,
+                &|| {
+                    vlChildHit(1);
+                },
+            );
+            misuse("vlChildField(0, VL_O)", VL_BADINDEX, &|| {
+                vlChildField(0, VL_O);
             });
             misuse("VL_PARAB1(NULL)", VL_NULLPOINTER, &|| {
                 VL_PARAB1(ptr::null_mut(), ptr::null_mut())
@@ -348,6 +355,8 @@ fn every_command_in_sample_scope() {
     let failures: Vec<String> = log
         .calls
         .iter()
+        // vlChildNormal is legal in sample scope but only inside normal functions: checked below.
+        .filter(|(cmd, _)| *cmd != Command::ChildNormal)
         .filter_map(|(cmd, errors)| judge(*cmd, Scope::Sample, errors, true))
         .chain(
             log.misuse
@@ -364,14 +373,16 @@ fn every_command_in_sample_scope() {
         failures.len(),
         failures.join("\n")
     );
-    // The children are not implemented: legal in sample scope, VL_UNSUPPORTED.
+    // The probe object has no children: vlChildCount is 0, child 1 does not exist, and
+    // vlChildNormal belongs in normal functions, not field functions.
     for (cmd, errors) in &log.calls {
-        if matches!(
-            cmd,
-            Command::ChildCount | Command::ChildHit | Command::ChildField | Command::ChildNormal
-        ) {
-            assert_eq!(errors, &[VL_UNSUPPORTED], "{}", cmd.name());
-        }
+        let want: &[i32] = match cmd {
+            Command::ChildCount => &[],
+            Command::ChildHit | Command::ChildField => &[VL_BADINDEX],
+            Command::ChildNormal => &[VL_BADSCOPE],
+            _ => continue,
+        };
+        assert_eq!(errors, want, "{}", cmd.name());
     }
     assert_eq!(log.field_o, 0.75, "vlField reads what vlSet wrote");
     assert!(
