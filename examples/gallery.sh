@@ -1,12 +1,29 @@
 #!/usr/bin/env bash
-# The main job: builds the library in release, compiles every C example with the documented
-# build line, runs every example, and leaves the images in out/ (PNG for each, plus the PPM
-# files the programs ask for).
+# The main job: builds the library in release, makes the datasets the examples load (a word and
+# the chess profiles drawn by Rust examples, converted with vlconvert; the MNI brain when
+# ../shared/data holds it), compiles every C example with the documented build line, runs every
+# example, and leaves the images in out/ (PNG for each, plus the PPM files the programs ask for).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
-cargo build --release --workspace --examples
+cargo build --release --workspace --lib --bins --examples
 mkdir -p out/bin
+vlconvert=target/release/vlconvert
+# Inputs of the C examples, which run with cwd = out/: word.vlb (text.c) and the chess profiles
+# (chess.c).
+echo "== datasets"
+target/release/examples/word_png out/word.png
+"$vlconvert" image out/word.png out/word.vlb
+target/release/examples/profiles out
+for piece in pawn rook knight knight_head bishop queen king; do
+  "$vlconvert" image "out/$piece.png" "out/$piece.vlb"
+done
+mni=../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz
+if [ -e "$mni" ]; then
+  "$vlconvert" nifti "$mni" out/mni.vlb
+else
+  echo "($mni not found: no MNI dataset)"
+fi
 for src in examples/c/*.c; do
   name=$(basename "$src" .c)
   cc -std=gnu89 "$src" -Iinclude -Ltarget/release -lvlib -lm -o "out/bin/$name"
@@ -22,5 +39,9 @@ for ppm in out/*.ppm; do
 done
 echo "== figure2 (Rust)"
 target/release/examples/figure2 out/stone-rust.png
+if [ -e out/mni.vlb ]; then
+  echo "== mni (Rust)"
+  target/release/examples/mni out/mni.vlb out/mni.png
+fi
 echo "gallery:"
 ls -1 out/*.png

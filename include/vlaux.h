@@ -1,5 +1,5 @@
 /* vlaux: the auxiliary library of vlib (camera shorthand, noise, splines, ready-made field
-   functions and colour macros). Written by hand; the functions live in libvlib (capi/src/aux.rs).
+   functions and colour macros). Written by hand; the functions live in libvlib (capi/src/vlaux.rs).
    C89. */
 
 #ifndef VLAUX_H
@@ -49,6 +49,22 @@ void VL_PARAB1(vlfloat *p, void *misc);
 void VLU_SPHERE(vlfloat *p, void *misc);
 /* The cylindrical distance field about the z axis through the cube centre. */
 void VLU_CYLINDER(vlfloat *p, void *misc);
+
+/* The rotational sweep of a 2D profile dataset (a lathe; the paper's chess pieces were made so).
+   misc points to a vlint holding the id of a loaded profile dataset of nx x ny x 1 nodes:
+     profile x = distance from the axis (x = 0, the left column) to the rim (x = 1, the right
+                 column), which is the radius of the cube's inscribed cylinder;
+     profile y = height (y = 0 at the bottom of the object, y = 1 at its top).
+   vlconvert image flips rows so that y runs upwards: row 0 at the TOP of the image becomes the
+   top of the profile, so draw the right half of the piece's silhouette, upright, with its axis
+   on the left edge of the image. At object point p, with r the distance of p from the vertical
+   axis through (0.5, y, 0.5), the value is vlSample(id, 2r, p[1], 0) for 2r <= 1, and 0 outside
+   (so leave the right column empty for a closed surface). misc NULL: VL_NULLPOINTER, nothing is
+   written; unknown id: VL_BADID, 0 is written. The vlint is read at every sample, so it must
+   live until the scene has rendered (a static, for instance):
+     static vlint pawn = 1;
+     vlLoad(pawn, "pawn.vlb");  ...  vlFunction(VL_F, VLU_SWEEP, &pawn); */
+void VLU_SWEEP(vlfloat *p, void *misc);
 
 #ifdef __cplusplus
 }

@@ -1,9 +1,13 @@
 //! The auxiliary library ("vlaux"): procedural helpers used to build volume objects and
 //! textures. It owns Perlin's improved gradient noise and turbulence (with deterministic,
 //! seedable permutation tables), the Catmull-Rom `spline` of Ebert et al., and the analytic
-//! distance fields (`parab1`, `sphere`, `cylinder`) defined on the unit cube. Every function is
-//! pure, deterministic and total: any input, including NaN, infinities and huge values, yields a
-//! finite result.
+//! distance fields (`parab1`, `sphere`, `cylinder`) defined on the unit cube, and the rotational
+//! sweep of a 2D profile dataset (`sweep`, `sweep_coords`). Every function but `sweep` is pure,
+//! deterministic and total: any input, including NaN, infinities and huge values, yields a
+//! finite result; `sweep` reads a dataset through the sample it is given.
+
+use crate::error::Result;
+use crate::program::Sample;
 
 /// Ken Perlin's reference permutation of 0..=255 (from the "Improved Noise" reference code, 2002).
 pub const PERLIN_PERMUTATION: [u8; 256] = [
@@ -239,6 +243,32 @@ pub fn cylinder(p: [f32; 3]) -> f32 {
     clamp01(1.0 - 2.0 * dist2(p, 2).sqrt())
 }
 
+/// The dataset coordinates that the rotational sweep (`VLU_SWEEP`) reads for object point `p`:
+/// with `r` the distance of `p` from the vertical axis through (0.5, ·, 0.5), the profile is
+/// sampled at `(2r, p[1], 0)`: profile x runs from the axis (0) to the rim of the cube's inscribed
+/// cylinder (1), profile y is the height. `None` outside that cylinder (2r > 1) and for
+/// non-finite `p`.
+pub fn sweep_coords(p: [f32; 3]) -> Option<[f32; 3]> {
+    if p.iter().any(|c| !c.is_finite()) {
+        return None;
+    }
+    let (dx, dz) = (p[0] as f64 - 0.5, p[2] as f64 - 0.5);
+    let u = 2.0 * (dx * dx + dz * dz).sqrt();
+    (u <= 1.0).then_some([u as f32, p[1], 0.0])
+}
+
+/// The rotational sweep of the 2D profile dataset `id` at the sample's object point: the
+/// dataset's value at [`sweep_coords`] (with the interpolation the object captured), 0 outside
+/// the inscribed cylinder (where the dataset is not read, so an unknown `id` goes unnoticed
+/// there). Errors are those of `vlSample` (`VL_BADID` for an unknown dataset). The caller
+/// writes the value (the C `VLU_SWEEP` writes it to every field its `vlFunction` call named).
+pub fn sweep(s: &mut Sample<'_>, id: i32) -> Result<f32> {
+    match sweep_coords(s.position()) {
+        Some(q) => s.dataset(id, q),
+        None => Ok(0.0),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -439,5 +469,80 @@ mod tests {
         assert_eq!(noise([f32::NAN, 0.3, 0.4], 1.0, 0), 0.0);
         assert_eq!(noise([0.2, 0.3, 0.4], f32::INFINITY, 0), 0.0);
         assert_eq!(parab1([f32::NAN, 0.5, 0.5]), 0.0);
+    }
+    #[test]
+    fn sweep_coords_measure_the_radius() {
+        assert_eq!(sweep_coords([0.5, 0.3, 0.5]), Some([0.0, 0.3, 0.0]));
+        assert_eq!(sweep_coords([1.0, 0.7, 0.5]), Some([1.0, 0.7, 0.0]));
+        assert_eq!(sweep_coords([0.5, 0.1, 0.0]), Some([1.0, 0.1, 0.0]));
+        let q = sweep_coords([0.65, 0.2, 0.7]).unwrap();
+        assert!((q[0] - 2.0 * (0.15f32 * 0.15 + 0.2 * 0.2).sqrt()).abs() < 1e-6);
+        assert_eq!(q[1], 0.2);
+        // Outside the inscribed cylinder (the cube's corners), and non-finite points.
+        assert_eq!(sweep_coords([0.0, 0.5, 0.0]), None);
+        assert_eq!(sweep_coords([1.01, 0.5, 0.5]), None);
+        assert_eq!(sweep_coords([f32::NAN, 0.5, 0.5]), None);
+        assert_eq!(sweep_coords([0.5, f32::INFINITY, 0.5]), None);
+        // Rotationally symmetric about the axis.
+        let mut r = rng(8);
+        for _ in 0..1000 {
+            let (a, rad, y) = (r(0.0, std::f32::consts::TAU), r(0.0, 0.7), r(0.0, 1.0));
+            let p = [0.5 + rad * a.cos(), y, 0.5 + rad * a.sin()];
+            match sweep_coords(p) {
+                Some(q) => {
+                    assert!(rad <= 0.5 + 1e-6);
+                    assert!((q[0] - 2.0 * rad).abs() < 1e-5 && q[1] == y && q[2] == 0.0);
+                }
+                None => assert!(rad > 0.5 - 1e-6),
+            }
+        }
+    }
+
+    #[test]
+    fn sweep_samples_the_profile() {
+        use crate::dataset::{Dataset, Filter, Voxels};
+        use crate::program::{Datasets, SampleEnv};
+        use crate::ErrorCode;
+        use std::sync::Arc;
+        // A 3 × 2 profile: bottom row (y = 0) 255, 255, 0; top row (y = 1) 255, 0, 0.
+        let d = Dataset::new(
+            [3, 2, 1],
+            Voxels::U8(vec![255, 255, 0, 255, 0, 0]),
+            0.0,
+            255.0,
+        )
+        .unwrap();
+        let mut sets = Datasets::new();
+        sets.insert(7, Arc::new(d));
+        let env = SampleEnv::new(Arc::new(sets), Filter::Trilinear);
+        let at = |p: [f32; 3], id: i32| {
+            let mut s = Sample::with_env(p, [0.0; 3], &env);
+            sweep(&mut s, id)
+        };
+        assert_eq!(
+            at([0.5, 0.0, 0.5], 7).unwrap(),
+            1.0,
+            "on the axis, at the bottom"
+        );
+        assert_eq!(
+            at([0.5, 1.0, 0.5], 7).unwrap(),
+            1.0,
+            "on the axis, at the top"
+        );
+        // Radius 0.25 is profile x = 0.5 (the middle column): 1 at the bottom, 0 at the top,
+        // 0.5 halfway; the same in every direction.
+        for p in [[0.75, 0.0, 0.5], [0.5, 0.0, 0.25], [0.25, 0.0, 0.5]] {
+            assert!((at(p, 7).unwrap() - 1.0).abs() < 1e-6, "{p:?}");
+        }
+        assert!((at([0.5, 0.5, 0.75], 7).unwrap() - 0.5).abs() < 1e-6);
+        assert_eq!(at([0.5, 1.0, 0.75], 7).unwrap(), 0.0);
+        // Outside the inscribed cylinder: 0 without reading the dataset.
+        assert_eq!(at([0.0, 0.0, 0.0], 7).unwrap(), 0.0);
+        assert_eq!(at([0.0, 0.0, 0.0], 8).unwrap(), 0.0);
+        // Inside, an unknown id is vlSample's VL_BADID.
+        assert_eq!(at([0.5, 0.5, 0.5], 8).unwrap_err().code, ErrorCode::BadId);
+        // Without datasets in reach (a bare sample) the id is unknown too.
+        let mut bare = Sample::new([0.5; 3], [0.0; 3]);
+        assert_eq!(sweep(&mut bare, 7).unwrap_err().code, ErrorCode::BadId);
     }
 }

@@ -1,13 +1,14 @@
 //! vlaux, the auxiliary library (`vlaux.h`): camera shorthand, noise, turbulence, splines and
-//! ready-made field functions, all thin wrappers over `vlib_core::aux`.
+//! ready-made field functions, all thin wrappers over `vlib_core::vlaux`.
 //!
 //! These are not commands and have no scope of their own, except that the field functions call
 //! `vlSet`. Errors (NULL pointers, bad counts) are recorded for `vlError` and yield 0.
 
 use crate::ffi::{boundary, null, read_floats};
+use crate::sample;
 use crate::types::{vlfloat, vlint, VLCAMERA, VL_ALLFIELDS};
 use std::os::raw::c_void;
-use vlib_core::{Error, ErrorCode};
+use vlib_core::{Error, ErrorCode, Fields};
 
 /// The most knots `vluSpline` accepts.
 pub const MAX_SPLINE_KNOTS: vlint = 1 << 16;
@@ -126,4 +127,51 @@ pub unsafe extern "C" fn VLU_SPHERE(p: *mut vlfloat, misc: *mut c_void) {
 pub unsafe extern "C" fn VLU_CYLINDER(p: *mut vlfloat, misc: *mut c_void) {
     let _ = misc;
     set_all("VLU_CYLINDER", p, vlib_core::vlaux::cylinder)
+}
+
+/// Field function: the rotational sweep of a 2D profile dataset about the vertical axis through
+/// (0.5, ·, 0.5). `misc` points to a `vlint` holding the id of a loaded profile (nx × ny × 1:
+/// x from the axis to the rim, y the height). At p, with r the distance from the axis, the value
+/// is `vlSample(id, 2r, p[1], 0)` for 2r ≤ 1 and 0 outside, written through
+/// `vlSet(VL_ALLFIELDS, …)`. NULL `misc` (or `p`) records `VL_NULLPOINTER` and writes nothing;
+/// an unknown id records `VL_BADID` (as `vlSample`) and writes 0.
+///
+/// Not in `vlib.h` (it is declared in `vlaux.h`):
+/// cbindgen:ignore
+///
+/// # Safety
+/// `p` must be NULL or point to 3 floats; `misc` NULL or point to a `vlint`.
+#[no_mangle]
+pub unsafe extern "C" fn VLU_SWEEP(p: *mut vlfloat, misc: *mut c_void) {
+    let Some((p, id)) = boundary(None, || {
+        let p = read_floats::<3>("VLU_SWEEP", "p", p)?;
+        if misc.is_null() {
+            return Err(null("VLU_SWEEP", "misc"));
+        }
+        // SAFETY: non-NULL and pointing to a vlint by the caller's contract; no alignment assumed.
+        let id = std::ptr::read_unaligned(misc as *const vlint);
+        Ok(Some((p, id)))
+    }) else {
+        return;
+    };
+    // In a field function (the intended use) the core's sweep reads the dataset with the
+    // object's interpolation and writes the sample; elsewhere it behaves as the same vlSample
+    // and vlSet calls would (vlSample reads the library's datasets; vlSet records its scope
+    // error or, in an object, becomes an instruction), like the other field functions.
+    let handled = boundary(true, || {
+        sample::with_current(|s| {
+            let v = vlib_core::vlaux::sweep(s, id);
+            // The value is written even when the id is unknown (0, as vlSample returns).
+            s.set(Fields::ALL, *v.as_ref().unwrap_or(&0.0))?;
+            v.map(|_| true)
+        })
+        .unwrap_or(Ok(false))
+    });
+    if !handled {
+        let v = match vlib_core::vlaux::sweep_coords(p) {
+            Some(q) => crate::vlSample(id, q[0], q[1], q[2]),
+            None => 0.0,
+        };
+        crate::vlSet(VL_ALLFIELDS, v);
+    }
 }

@@ -3,6 +3,10 @@
 //! `cc -std=gnu89 <file> -Iinclude -Ltarget/<profile> -lvlib -lm -o <tmpdir>/<name>`
 //! (warnings allowed) and run in a fresh temporary directory with
 //! `LD_LIBRARY_PATH=target/<profile>`. Then the images they write are checked.
+//!
+//! `text.c` and `chess.c` load datasets from their working directory: before they run, the
+//! `word_png` and `profiles` examples draw them and `vlconvert` converts them there (see
+//! [`prepare`]), and they render small images (their optional `argv[1]` is the width).
 
 mod common;
 
@@ -40,8 +44,9 @@ fn compile(source: &Path, out_dir: &Path) -> PathBuf {
 }
 
 /// Runs `exe` with `cwd` as working directory; returns its standard output.
-fn run(exe: &Path, cwd: &Path) -> String {
+fn run(exe: &Path, cwd: &Path, args: &[String]) -> String {
     let out = Command::new(exe)
+        .args(args)
         .current_dir(cwd)
         .env("LD_LIBRARY_PATH", common::profile_dir())
         .output()
@@ -57,13 +62,94 @@ fn run(exe: &Path, cwd: &Path) -> String {
     stdout
 }
 
-/// Compiles and runs one C program in a fresh directory; returns (directory, stdout).
+/// Compiles and runs one C program in a fresh directory, after preparing its inputs there;
+/// returns (directory, stdout).
 fn build_and_run(source: &str) -> (TempDir, String) {
     let bin = TempDir::new("bin");
     let exe = compile(Path::new(source), bin.path());
     let cwd = TempDir::new("run");
-    let stdout = run(&exe, cwd.path());
+    let args = prepare(source, cwd.path());
+    let stdout = run(&exe, cwd.path(), &args);
     (cwd, stdout)
+}
+
+/// The width at which the tests render text.c and chess.c.
+const SMALL: usize = 160;
+
+/// Runs a tool from `target/<profile>/` (`vlconvert`, `examples/word_png`, …) in `cwd`.
+fn tool(name: &str, args: &[&str], cwd: &Path) {
+    let exe = common::ensure_tools().join(name);
+    let out = Command::new(&exe)
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .unwrap_or_else(|e| panic!("run {}: {e}", exe.display()));
+    assert!(
+        out.status.success(),
+        "{name} {args:?} failed:\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Makes the datasets the C program `source` loads, in `cwd`, as examples/gallery.sh does;
+/// returns the arguments to run it with.
+fn prepare(source: &str, cwd: &Path) -> Vec<String> {
+    let name = Path::new(source).file_stem().and_then(|n| n.to_str());
+    match name {
+        Some("text") => {
+            tool("examples/word_png", &["word.png"], cwd);
+            tool("vlconvert", &["image", "word.png", "word.vlb"], cwd);
+        }
+        Some("chess") => {
+            tool("examples/profiles", &["."], cwd);
+            for piece in [
+                "pawn",
+                "rook",
+                "knight",
+                "knight_head",
+                "bishop",
+                "queen",
+                "king",
+            ] {
+                let (png, vlb) = (format!("{piece}.png"), format!("{piece}.vlb"));
+                tool("vlconvert", &["image", &png, &vlb], cwd);
+            }
+        }
+        _ => return Vec::new(),
+    }
+    vec![SMALL.to_string()]
+}
+
+/// A PNG's pixels, decoded by `vlconvert image` (colour: one 8-bit .vlb per channel, rows
+/// flipped, which does not matter here) in the PNG's directory.
+fn read_png(path: &Path) -> Ppm {
+    let dir = path.parent().expect("directory");
+    let stem = path.file_stem().and_then(|n| n.to_str()).expect("name");
+    let vlb = format!("{stem}-decoded.vlb");
+    tool(
+        "vlconvert",
+        &["image", path.to_str().expect("utf-8 path"), &vlb],
+        dir,
+    );
+    let planes: Vec<(usize, usize, Vec<u8>)> = ["r", "g", "b"]
+        .iter()
+        .map(|c| {
+            let file = dir.join(format!("{stem}-decoded_{c}.vlb"));
+            let data = std::fs::read(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+            let u32_at = |i: usize| u32::from_le_bytes(data[i..i + 4].try_into().unwrap());
+            assert_eq!(&data[..4], b"VLB1");
+            assert_eq!((u32_at(12), u32_at(16)), (1, 1), "a 2D, 8-bit plane");
+            let (w, h) = (u32_at(4) as usize, u32_at(8) as usize);
+            assert_eq!(data.len(), 28 + w * h);
+            (w, h, data[28..].to_vec())
+        })
+        .collect();
+    let (width, height) = (planes[0].0, planes[0].1);
+    let rgb = (0..width * height)
+        .flat_map(|i| [planes[0].2[i], planes[1].2[i], planes[2].2[i]])
+        .collect();
+    Ppm { width, height, rgb }
 }
 
 fn c_files(dir: &str) -> Vec<String> {
@@ -86,8 +172,8 @@ fn every_c_program_compiles_and_runs() {
         .chain(c_files("capi/tests/c"))
         .collect();
     assert!(
-        files.len() >= 3,
-        "expected figure2.c, figure5.c and misuse.c, found {files:?}"
+        files.len() >= 6,
+        "expected figure2.c, figure5.c, text.c, chess.c, misuse.c and sweep.c, found {files:?}"
     );
     for f in files {
         build_and_run(&f);
@@ -273,4 +359,88 @@ fn misuse_program_passes() {
     assert!(stdout.contains("0 failure(s)"), "{stdout}");
     let img = Ppm::read(&dir.path().join("misuse.ppm"));
     assert_eq!((img.width, img.height), (16, 16));
+}
+
+/// The sweep program checks VLU_SWEEP's values and errors itself (exit status).
+#[test]
+fn sweep_program_passes() {
+    let (dir, stdout) = build_and_run("capi/tests/c/sweep.c");
+    assert!(stdout.contains("0 failure(s)"), "{stdout}");
+    let img = Ppm::read(&dir.path().join("sweep.ppm"));
+    assert_eq!((img.width, img.height), (24, 24));
+}
+
+/// Fraction of pixels differing from the top-left corner's colour, and the luminance of those.
+fn foreground(img: &Ppm) -> (f64, Vec<f64>) {
+    let bg = img.pixel(0, 0);
+    let lum: Vec<f64> = (0..img.width * img.height)
+        .map(|i| img.pixel(i % img.width, i / img.width))
+        .filter(|&p| differs(p, bg))
+        .map(luminance)
+        .collect();
+    (lum.len() as f64 / (img.width * img.height) as f64, lum)
+}
+
+/// text.c writes text.png (16:9): a shaded solid word on a plain background.
+#[test]
+fn text_renders_a_solid_word() {
+    let (dir, stdout) = build_and_run("examples/c/text.c");
+    assert!(
+        !stdout.contains("vlError"),
+        "text reported errors:\n{stdout}"
+    );
+    let png = dir.path().join("text.png");
+    assert_eq!(
+        common::png_size(&png),
+        (SMALL as u32, (SMALL * 9 / 16) as u32)
+    );
+    let img = read_png(&png);
+    let (coverage, lum) = foreground(&img);
+    // Measured: 20 % at 160 × 90.
+    assert!(
+        (0.08..=0.50).contains(&coverage),
+        "the word covers {:.1} % of the frame",
+        100.0 * coverage
+    );
+    // Lit faces and darker sides (measured deviation 0.12); flat colour would be about 0.
+    let sd = std_dev(&lum);
+    assert!(
+        sd > 0.04,
+        "the word's luminance deviation {sd:.4}: looks flat"
+    );
+}
+
+/// chess.c writes chess.png (16:10): a board covered with light and dark pieces.
+#[test]
+fn chess_renders_a_board_with_pieces() {
+    let (dir, stdout) = build_and_run("examples/c/chess.c");
+    assert!(
+        !stdout.contains("vlError"),
+        "chess reported errors:\n{stdout}"
+    );
+    let png = dir.path().join("chess.png");
+    assert_eq!(
+        common::png_size(&png),
+        (SMALL as u32, (SMALL * 5 / 8) as u32)
+    );
+    let img = read_png(&png);
+    let (coverage, lum) = foreground(&img);
+    // Measured: the board and pieces fill 35 % of the frame at 160 × 100.
+    assert!(
+        (0.20..=0.80).contains(&coverage),
+        "board and pieces cover {:.1} % of the frame",
+        100.0 * coverage
+    );
+    // The black pieces are the darkest things in the picture and the ivory ones the brightest
+    // (the squares lie between): both must be there. Measured: 14 % of the foreground below
+    // 0.12 and 5 % above 0.7; with every piece black, none is above 0.7.
+    let n = lum.len() as f64;
+    let dark = lum.iter().filter(|&&l| l < 0.12).count() as f64 / n;
+    let bright = lum.iter().filter(|&&l| l > 0.7).count() as f64 / n;
+    assert!(
+        dark > 0.03 && bright > 0.02,
+        "dark pixels {:.1} %, bright pixels {:.1} %: where are the pieces?",
+        100.0 * dark,
+        100.0 * bright
+    );
 }

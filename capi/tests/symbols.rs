@@ -55,7 +55,7 @@ const COMMANDS: [&str; 44] = [
 ];
 
 /// The functions of vlaux.h.
-const VLAUX: [&str; 7] = [
+const VLAUX: [&str; 8] = [
     "vluCamera",
     "vluNoise",
     "vluTurbulence",
@@ -63,6 +63,7 @@ const VLAUX: [&str; 7] = [
     "VL_PARAB1",
     "VLU_SPHERE",
     "VLU_CYLINDER",
+    "VLU_SWEEP",
 ];
 
 #[test]

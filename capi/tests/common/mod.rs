@@ -49,33 +49,7 @@ pub fn profile_dir_arg() -> PathBuf {
 pub fn ensure_libraries() -> &'static Path {
     static BUILT: OnceLock<PathBuf> = OnceLock::new();
     BUILT.get_or_init(|| {
-        let dir = profile_dir();
-        let profile = match dir.file_name().and_then(|n| n.to_str()) {
-            Some("debug") => "dev".to_string(),
-            Some(name) => name.to_string(),
-            None => panic!("cannot tell the profile from {}", dir.display()),
-        };
-        let target_dir = dir.parent().expect("target directory");
-        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-        let out = Command::new(cargo)
-            .args([
-                "build",
-                "-p",
-                "vlib-capi",
-                "--lib",
-                "--profile",
-                &profile,
-                "--target-dir",
-            ])
-            .arg(target_dir)
-            .current_dir(workspace_root())
-            .output()
-            .expect("run cargo build");
-        assert!(
-            out.status.success(),
-            "cargo build -p vlib-capi --profile {profile} failed:\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let dir = cargo_build(&["-p", "vlib-capi", "--lib"]);
         for lib in ["libvlib.so", "libvlib.a"] {
             assert!(
                 dir.join(lib).is_file(),
@@ -85,6 +59,61 @@ pub fn ensure_libraries() -> &'static Path {
         }
         dir
     })
+}
+
+/// Makes sure the tools that prepare the C examples' datasets are fresh in `target/<profile>/`:
+/// `vlconvert` and the `word_png` and `profiles` examples (in `examples/`). `cargo test` builds
+/// them only when it tests the core package; this works for `cargo test -p vlib-capi` too.
+pub fn ensure_tools() -> &'static Path {
+    static BUILT: OnceLock<PathBuf> = OnceLock::new();
+    BUILT.get_or_init(|| {
+        let dir = cargo_build(&[
+            "-p",
+            "vlib",
+            "--bin",
+            "vlconvert",
+            "--example",
+            "word_png",
+            "--example",
+            "profiles",
+        ]);
+        for tool in ["vlconvert", "examples/word_png", "examples/profiles"] {
+            assert!(
+                dir.join(tool).is_file(),
+                "{} was not built",
+                dir.join(tool).display()
+            );
+        }
+        dir
+    })
+}
+
+/// Runs `cargo build <args>` with this test binary's profile and target directory; returns
+/// `target/<profile>`.
+fn cargo_build(args: &[&str]) -> PathBuf {
+    let dir = profile_dir();
+    let profile = match dir.file_name().and_then(|n| n.to_str()) {
+        Some("debug") => "dev".to_string(),
+        Some(name) => name.to_string(),
+        None => panic!("cannot tell the profile from {}", dir.display()),
+    };
+    let target_dir = dir.parent().expect("target directory");
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let out = Command::new(cargo)
+        .arg("build")
+        .args(args)
+        .args(["--profile", &profile, "--target-dir"])
+        .arg(target_dir)
+        .current_dir(workspace_root())
+        .output()
+        .expect("run cargo build");
+    assert!(
+        out.status.success(),
+        "cargo build {} --profile {profile} failed:\n{}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    dir
 }
 
 /// A fresh, empty temporary directory (removed by [`TempDir`]'s drop).
