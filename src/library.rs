@@ -25,6 +25,8 @@ pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
 pub const MAX_SUPER_SAMPLE: i32 = 16;
 /// The largest recursion depth.
 pub const MAX_RECURSION: i32 = 64;
+/// The most iso-surfaces in force at once.
+pub const MAX_SURFACES: usize = 64;
 /// The deepest nesting of objects.
 pub const MAX_DEPTH: usize = 64;
 /// The most nodes one voxelization may have (2³⁰: 4 GiB of field values while it runs).
@@ -381,15 +383,10 @@ impl Library {
         Ok(())
     }
 
-    /// `vlRenderType`. DSR and MIP are not implemented yet (`Unsupported`, nothing changes).
+    /// `vlRenderType`: `Dvr` (direct volume rendering), `Dsr` (the iso-surfaces of
+    /// `vlSurface`) or `Mip` (maximum intensity projection), captured by later objects.
     pub fn render_type(&mut self, t: RenderType) -> Result<()> {
         self.check(Command::RenderType)?;
-        if t != RenderType::Dvr {
-            return err(
-                ErrorCode::Unsupported,
-                format!("vlRenderType: {t:?} is not implemented yet"),
-            );
-        }
         self.settings_mut().render.render_type = t;
         Ok(())
     }
@@ -405,22 +402,40 @@ impl Library {
         Ok(())
     }
 
-    /// `vlSurface`: validated, then `Unsupported` until DSR lands.
+    /// `vlSurface`: adds an iso-surface of `field` at `threshold` (in [0, 1]) to the surfaces
+    /// later objects capture for DSR; any number, on any fields.
     pub fn surface(&mut self, field: Fields, threshold: f32) -> Result<()> {
         self.check(Command::Surface)?;
-        field.validate_single()?;
+        let index = field.validate_single()?;
         finite("vlSurface", &[threshold])?;
-        err(
-            ErrorCode::Unsupported,
-            "vlSurface: DSR is not implemented yet",
-        )
+        if !(0.0..=1.0).contains(&threshold) {
+            return err(
+                ErrorCode::BadValue,
+                format!("vlSurface: threshold {threshold} must lie in [0, 1]"),
+            );
+        }
+        let surfaces = &mut self.settings_mut().render.surfaces;
+        if surfaces.len() >= MAX_SURFACES {
+            return err(
+                ErrorCode::BadValue,
+                format!("vlSurface: at most {MAX_SURFACES} surfaces"),
+            );
+        }
+        surfaces.push((index, threshold));
+        Ok(())
     }
 
-    /// `vlToggle`. `Visible` and `FlipNormals` are implemented; switching on shadows,
+    /// `vlToggle`. Visibility, normal flipping and shadows are implemented; switching on
     /// reflections or refraction reports `Unsupported` (their default, off, is accepted).
     pub fn toggle(&mut self, feature: Feature, on: bool) -> Result<()> {
         self.check(Command::Toggle)?;
-        let implemented = matches!(feature, Feature::Visible | Feature::FlipNormals);
+        let implemented = matches!(
+            feature,
+            Feature::Visible
+                | Feature::FlipNormals
+                | Feature::CastShadows
+                | Feature::ReceiveShadows
+        );
         if on && !implemented {
             return err(
                 ErrorCode::Unsupported,
@@ -783,6 +798,27 @@ impl Library {
             datasets: Arc::new(self.datasets.clone()),
         };
         crate::render::render_image(&crate::render::Compiled::new(&desc), width, height, aspect)
+    }
+
+    /// The render plan the open scene compiles to (which effects it calls for); at scene scope.
+    /// Not a command of the C API.
+    pub fn render_plan(&self) -> Result<crate::render::Plan> {
+        if self.scope() != Scope::Scene {
+            return err(
+                ErrorCode::BadScope,
+                "render_plan needs an open scene outside objects",
+            );
+        }
+        let s = self.scene.as_ref().expect("scene scope");
+        let desc = SceneDesc {
+            settings: s.settings.clone(),
+            lights: s.lights.clone(),
+            images: Vec::new(),
+            volumes: Vec::new(),
+            objects: s.objects.clone(),
+            datasets: Arc::new(self.datasets.clone()),
+        };
+        Ok(crate::render::Compiled::new(&desc).plan())
     }
 
     /// Switches the pixel-preserving speed-ups (empty-space skipping, early ray termination)

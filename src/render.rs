@@ -18,7 +18,7 @@ use crate::error::{Error, ErrorCode, Result};
 use crate::program::{prefix_for, run, Instr, NormalFn, Sample, SampleEnv, SampleRole};
 use crate::scene::{Light, ObjectDesc, SceneDesc, Settings};
 use crate::skip::{SkipGrid, Walk};
-use crate::types::{Attenuation, Feature, Fields, MAX_SPECULAR};
+use crate::types::{Attenuation, Feature, Fields, RenderType, FIELD_COUNT, MAX_SPECULAR};
 use glam::{DMat4, DVec3};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -73,8 +73,6 @@ struct CObj {
     /// The program up to its last instruction that may write opacity: where that leaves o = 0
     /// the rest cannot change it, and is skipped.
     o_prefix: usize,
-    /// The program up to its last instruction that may write the geometry field.
-    f_prefix: usize,
     to_object: DMat4,
     box_min: DVec3,
     box_max: DVec3,
@@ -90,6 +88,14 @@ struct CObj {
     env: SampleEnv,
     /// Blocks where opacity is provably 0.
     skip: Option<Arc<SkipGrid>>,
+    /// The rendering algorithm the object captured.
+    render_type: RenderType,
+    /// Iso-surfaces (field index, threshold) for DSR.
+    surfaces: Vec<(usize, f32)>,
+    /// Per field: the program up to its last instruction that may write it.
+    prefixes: [usize; FIELD_COUNT],
+    cast_shadows: bool,
+    receive_shadows: bool,
 }
 
 impl CObj {
@@ -121,7 +127,13 @@ impl CObj {
         let to_object = to_world.inverse();
         let r = &o.state;
         let o_prefix = prefix_for(&o.program, Fields::O);
+        let prefixes = std::array::from_fn(|i| prefix_for(&o.program, Fields::from_index(i)));
         CObj {
+            render_type: r.render_type,
+            surfaces: r.surfaces.clone(),
+            prefixes,
+            cast_shadows: r.toggle(Feature::CastShadows),
+            receive_shadows: r.toggle(Feature::ReceiveShadows),
             skip: o
                 .skip
                 .get_or_init(|| {
@@ -129,7 +141,6 @@ impl CObj {
                 })
                 .clone(),
             o_prefix,
-            f_prefix,
             f_dataset,
             env: SampleEnv {
                 datasets: datasets.clone(),
@@ -183,13 +194,37 @@ impl CObj {
 
     /// The geometry field at world point `w` (0 outside the boundary: fields are bounded).
     fn geometry(&self, w: DVec3) -> f64 {
+        self.field_at(w, 9)
+    }
+
+    /// Field `field` at world point `w` (0 outside the boundary: fields are bounded), running
+    /// only the part of the program that can change it.
+    fn field_at(&self, w: DVec3, field: usize) -> f64 {
         let p = self.to_object.transform_point3(w);
         if !self.inside(p) {
             return 0.0;
         }
         let mut s = Sample::with_env(p.as_vec3().to_array(), w.to_array(), &self.env);
-        run(&self.program[..self.f_prefix], &mut s);
-        s.value(9) as f64
+        run(&self.program[..self.prefixes[field]], &mut s);
+        s.value(field) as f64
+    }
+
+    /// The world-space gradient of any field by central differences over the neighbourhood
+    /// (the geometry field uses [`CObj::gradient`], which knows about datasets).
+    fn field_gradient(&self, w: DVec3, p: [f32; 3], field: usize) -> (DVec3, bool) {
+        if field == 9 {
+            return self.gradient(w, p);
+        }
+        let mut diff = DVec3::ZERO;
+        let mut grad = DVec3::ZERO;
+        for i in 0..3 {
+            let mut e = DVec3::ZERO;
+            e[i] = self.delta[i];
+            let d = self.field_at(w + e, field) - self.field_at(w - e, field);
+            diff[i] = d;
+            grad[i] = d / (2.0 * self.delta[i]);
+        }
+        (grad, diff.abs().max_element() <= ZERO_GRADIENT)
     }
 
     /// The world-space gradient of F: from the dataset's grid gradients where F is a dataset's
@@ -218,8 +253,8 @@ impl CObj {
 
     /// The normal at `w`: −∇F by world-space central differences, then flipped towards the viewer
     /// if asked, then the normal functions in order. `None` where the gradient vanishes.
-    fn normal(&self, w: DVec3, view: DVec3, s: &mut Sample<'_>) -> Option<DVec3> {
-        let (grad, zero) = self.gradient(w, s.position());
+    fn normal(&self, w: DVec3, view: DVec3, s: &mut Sample<'_>, field: usize) -> Option<DVec3> {
+        let (grad, zero) = self.field_gradient(w, s.position(), field);
         let mut n = if zero { None } else { (-grad).try_normalize() };
         if let Some(v) = n {
             if self.flip_normals && v.dot(view) < 0.0 {
@@ -273,25 +308,46 @@ pub(crate) fn compile_children(
         .collect()
 }
 
+/// What a scene calls for: effects its objects, toggles and lights can actually show. An
+/// effect that nothing in the scene can exhibit costs nothing (see `docs/render-plan.md`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Plan {
+    /// Shadow rays: some object casts, some object receives, and a light exists.
+    pub shadows: bool,
+}
+
 /// A scene compiled for tracing: immutable, shared by all worker threads.
 pub struct Compiled {
     objects: Vec<CObj>,
     lights: Vec<Light>,
     settings: Settings,
+    plan: Plan,
 }
 
 impl Compiled {
     /// Compiles a scene description.
     pub fn new(desc: &SceneDesc) -> Compiled {
+        let objects: Vec<CObj> = desc
+            .objects
+            .iter()
+            .map(|o| CObj::new(o, &desc.datasets))
+            .collect();
+        let plan = Plan {
+            shadows: !desc.lights.is_empty()
+                && objects.iter().any(|o| o.cast_shadows)
+                && objects.iter().any(|o| o.receive_shadows),
+        };
         Compiled {
-            objects: desc
-                .objects
-                .iter()
-                .map(|o| CObj::new(o, &desc.datasets))
-                .collect(),
+            objects,
             lights: desc.lights.clone(),
             settings: desc.settings.clone(),
+            plan,
         }
+    }
+
+    /// The render plan: which effects this scene calls for.
+    pub fn plan(&self) -> Plan {
+        self.plan
     }
 
     /// All fields of the scene at world point `w`: those of the root object containing it with
@@ -313,7 +369,7 @@ impl Compiled {
         best.unwrap_or([0.0; crate::types::FIELD_COUNT])
     }
 
-    /// Shades one sample: returns (α, colour) or `None` where the opacity is 0.
+    /// Shades one DVR sample: returns (α, colour) or `None` where the opacity is 0.
     fn shade(&self, obj: &CObj, w: DVec3, dir: DVec3, len: f64) -> Option<(f64, DVec3)> {
         let mut s = obj.sample_at(w);
         run(&obj.program[..obj.o_prefix], &mut s);
@@ -322,12 +378,27 @@ impl Compiled {
             return None;
         }
         run(&obj.program[obj.o_prefix..], &mut s);
-        let f = s.values();
         let alpha = if o >= 1.0 {
             1.0
         } else {
             1.0 - (1.0 - o).powf(len * obj.inv_ref)
         };
+        Some((alpha, self.illuminate(obj, w, dir, &mut s, 9)))
+    }
+
+    /// The illumination model at a sample whose fields are computed, with normals from the
+    /// gradient of field `normal_field`:
+    /// `ka·I_amb·C + Σ att·I·L·T·(kd·C·max(N·L, 0) + ks·(R·V)^e)`, T the transmittance towards
+    /// the light where shadows are simulated.
+    fn illuminate(
+        &self,
+        obj: &CObj,
+        w: DVec3,
+        dir: DVec3,
+        s: &mut Sample<'_>,
+        normal_field: usize,
+    ) -> DVec3 {
+        let f = s.values();
         let c = DVec3::new(f[1] as f64, f[2] as f64, f[3] as f64);
         let (ka, kd, ks) = (f[4] as f64, f[5] as f64, f[6] as f64);
         let e = f[7] as f64 * MAX_SPECULAR as f64;
@@ -335,9 +406,10 @@ impl Compiled {
         let mut col = ka * amb * c;
         if !self.lights.is_empty() && (kd > 0.0 || ks > 0.0) {
             let view = -dir;
-            let n = obj.normal(w, view, &mut s);
+            let n = obj.normal(w, view, s, normal_field);
+            let shadowed = self.plan.shadows && obj.receive_shadows;
             for light in &self.lights {
-                let (l, att, rad) = match *light {
+                let (l, att, rad, dist) = match *light {
                     Light::Point {
                         position,
                         attenuation,
@@ -350,11 +422,19 @@ impl Compiled {
                             Attenuation::Inverse => 1.0 / d.max(1e-6),
                             Attenuation::InverseSquare => 1.0 / (d * d).max(1e-12),
                         };
-                        (to.try_normalize().unwrap_or(view), att, radiance)
+                        (to.try_normalize().unwrap_or(view), att, radiance, d)
                     }
-                    Light::Directional { to_light, radiance } => (to_light, 1.0, radiance),
+                    Light::Directional { to_light, radiance } => {
+                        (to_light, 1.0, radiance, f64::INFINITY)
+                    }
                 };
-                let rad = crate::scene::v3(rad) * att;
+                let mut rad = crate::scene::v3(rad) * att;
+                if shadowed {
+                    rad *= self.transmittance(w, l, dist);
+                    if rad == DVec3::ZERO {
+                        continue;
+                    }
+                }
                 let lit = match n {
                     Some(n) => {
                         let ndl = n.dot(l);
@@ -375,49 +455,185 @@ impl Compiled {
                 col += rad * lit;
             }
         }
-        if !col.is_finite() {
-            col = DVec3::ZERO;
+        if col.is_finite() {
+            col
+        } else {
+            DVec3::ZERO
         }
-        Some((alpha, col))
     }
 
-    /// Traces one primary ray; returns the pixel colour.
+    /// The transmittance from `w` along unit direction `l` up to distance `dist` through the
+    /// objects that cast shadows (each sampled on its own step grid, exactly like primary rays,
+    /// empty-space skipping included). A shadow ray starts just off the point so a medium does
+    /// not shadow its own sample.
+    fn transmittance(&self, w: DVec3, l: DVec3, dist: f64) -> f64 {
+        let mut t_total = 1.0f64;
+        for obj in self.objects.iter().filter(|o| o.cast_shadows) {
+            let Some((t0, t1)) = obj.clip(w, l) else {
+                continue;
+            };
+            let t1 = t1.min(dist);
+            if t1 <= t0 {
+                continue;
+            }
+            let mut c = Cursor::new(self, obj, 0, w, l, t0, t1);
+            let grid = obj.skip.as_deref();
+            while let Some(mid) = c.peek(grid) {
+                let (a, b) = c.segment(c.k);
+                c.k += 1;
+                let len = b - a;
+                if len <= 0.0 {
+                    continue;
+                }
+                let mut s = obj.sample_at(w + mid * l);
+                run(&obj.program[..obj.o_prefix], &mut s);
+                let o = s.value(0) as f64;
+                if o > 0.0 {
+                    t_total *= if o >= 1.0 {
+                        0.0
+                    } else {
+                        (1.0 - o).powf(len * obj.inv_ref)
+                    };
+                    if t_total < T_MIN {
+                        return 0.0;
+                    }
+                }
+            }
+        }
+        t_total
+    }
+
+    /// The iso-surface hits of a DSR object along its ray interval, in depth order: for each
+    /// surface, crossings of its threshold between consecutive samples (the field is 0 outside
+    /// the boundary, so an object's faces count too), each refined by bisection to 10⁻⁶ of the
+    /// step; returns (t, α, colour) per hit, α the surface's opacity there.
+    fn surface_hits(
+        &self,
+        obj: &CObj,
+        c: &Cursor,
+        origin: DVec3,
+        dir: DVec3,
+    ) -> Vec<(f64, f64, DVec3)> {
+        let mut hits = Vec::new();
+        for &(field, threshold) in &obj.surfaces {
+            let thr = threshold as f64;
+            let value = |t: f64| obj.field_at(origin + t * dir, field) - thr;
+            let inside = |t: f64| t > c.t0 && t < c.t1;
+            // Outside the boundary the field is 0.
+            let mut prev_t = c.t0;
+            let mut prev_v = -thr;
+            let mut k = 0;
+            loop {
+                let (t, v) = if k < c.n {
+                    let mid = c.mid(k);
+                    (mid, value(mid))
+                } else {
+                    (c.t1, -thr)
+                };
+                if (prev_v < 0.0) != (v < 0.0) && !(prev_v == 0.0 && v == 0.0) {
+                    // Bisection on [prev_t, t]; the ends are the box faces where the field
+                    // jumps from or to 0.
+                    let (mut a, mut b, mut va) = (prev_t, t, prev_v);
+                    let tol = obj.step * 1e-6;
+                    for _ in 0..60 {
+                        if b - a <= tol {
+                            break;
+                        }
+                        let m = 0.5 * (a + b);
+                        let vm = if inside(m) { value(m) } else { -thr };
+                        if (vm < 0.0) == (va < 0.0) {
+                            a = m;
+                            va = vm;
+                        } else {
+                            b = m;
+                        }
+                    }
+                    let hit = 0.5 * (a + b);
+                    let w = origin + hit * dir;
+                    // Shade with the fields just inside the surface (on the side above the
+                    // threshold), so a surface on the box face sees the object's fields.
+                    let side = if va >= 0.0 { a } else { b };
+                    let ws = origin + side.clamp(c.t0 + tol * 0.5, c.t1 - tol * 0.5) * dir;
+                    let mut s = obj.sample_at(ws);
+                    run(&obj.program, &mut s);
+                    let o = s.value(0) as f64;
+                    if o > 0.0 {
+                        let col = self.illuminate(obj, w, dir, &mut s, field);
+                        hits.push((hit, o.min(1.0), col));
+                    }
+                }
+                if k >= c.n {
+                    break;
+                }
+                prev_t = t;
+                prev_v = v;
+                k += 1;
+            }
+        }
+        hits.sort_by(|a, b| a.0.total_cmp(&b.0));
+        hits
+    }
+
+    /// The maximum-intensity layer of a MIP object: the sample of greatest opacity along the
+    /// interval (the first on ties), shown as `o·(r, g, b)`; returns (t, o, colour).
+    fn mip_layer(
+        &self,
+        obj: &CObj,
+        c: &Cursor,
+        origin: DVec3,
+        dir: DVec3,
+    ) -> Option<(f64, f64, DVec3)> {
+        let mut best: Option<(f64, f64)> = None;
+        for k in 0..c.n {
+            let mid = c.mid(k);
+            let mut s = obj.sample_at(origin + mid * dir);
+            run(&obj.program[..obj.o_prefix], &mut s);
+            let o = s.value(0) as f64;
+            if o > 0.0 && best.is_none_or(|(_, b)| o > b) {
+                best = Some((mid, o));
+                if o >= 1.0 {
+                    break;
+                }
+            }
+        }
+        let (t, o) = best?;
+        let mut s = obj.sample_at(origin + t * dir);
+        run(&obj.program, &mut s);
+        let f = s.values();
+        Some((c.t1, o, DVec3::new(f[1] as f64, f[2] as f64, f[3] as f64)))
+    }
+
+    /// Traces one primary ray; returns the pixel colour. DVR objects contribute their samples,
+    /// DSR objects their surface hits and MIP objects their maximum-intensity layer, all
+    /// composited front to back in depth order.
     fn trace(&self, origin: DVec3, dir: DVec3) -> DVec3 {
         let mut cursors: Vec<Cursor> = Vec::new();
+        // Surface and MIP contributions: (t, α, colour), sorted by depth.
+        let mut layers: Vec<(f64, f64, DVec3)> = Vec::new();
         for (i, obj) in self.objects.iter().enumerate() {
             if !obj.visible {
                 continue;
             }
             if let Some((t0, t1)) = obj.clip(origin, dir) {
-                let n = ((t1 - t0) / obj.step).ceil().max(1.0);
-                let n = if n.is_finite() && n < u64::MAX as f64 {
-                    n as u64
-                } else {
-                    u64::MAX
-                };
-                let walk = match (&obj.skip, self.settings.optimise.skip_empty) {
-                    (Some(grid), true) => {
-                        let o = obj.to_object.transform_point3(origin);
-                        let d = obj.to_object.transform_vector3(dir);
-                        Some(grid.walk(o, d, t0))
-                    }
-                    _ => None,
-                };
-                cursors.push(Cursor {
-                    object: i,
-                    t0,
-                    t1,
-                    step: obj.step,
-                    k: 0,
-                    n,
-                    walk,
-                });
+                let c = Cursor::new(self, obj, i, origin, dir, t0, t1);
+                match obj.render_type {
+                    RenderType::Dvr => cursors.push(c),
+                    RenderType::Dsr => layers.extend(self.surface_hits(obj, &c, origin, dir)),
+                    RenderType::Mip => layers.extend(self.mip_layer(obj, &c, origin, dir)),
+                }
             }
         }
+        layers.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut layers = layers.into_iter().peekable();
         let early = self.settings.optimise.early_termination;
         let mut col = DVec3::ZERO;
         let mut t = 1.0f64;
-        loop {
+        let composite = |alpha: f64, colour: DVec3, col: &mut DVec3, t: &mut f64| {
+            *col += *t * alpha * colour;
+            *t *= 1.0 - alpha;
+            early && *t < T_MIN
+        };
+        'march: loop {
             // The next segment in depth order (ties: object order).
             let mut best: Option<(usize, f64)> = None;
             for (ci, c) in cursors.iter_mut().enumerate() {
@@ -426,6 +642,17 @@ impl Compiled {
                     if best.is_none_or(|(_, m)| mid < m) {
                         best = Some((ci, mid));
                     }
+                }
+            }
+            // Layers in front of that sample come first.
+            while let Some(&(lt, alpha, colour)) = layers.peek() {
+                if best.is_some_and(|(_, m)| lt > m) {
+                    break;
+                }
+                layers.next();
+                if composite(alpha, colour, &mut col, &mut t) {
+                    t = 0.0;
+                    break 'march;
                 }
             }
             let Some((ci, mid)) = best else { break };
@@ -438,9 +665,7 @@ impl Compiled {
             }
             let obj = &self.objects[c.object];
             if let Some((alpha, colour)) = self.shade(obj, origin + mid * dir, dir, len) {
-                col += t * alpha * colour;
-                t *= 1.0 - alpha;
-                if early && t < T_MIN {
+                if composite(alpha, colour, &mut col, &mut t) {
                     t = 0.0;
                     break;
                 }
@@ -463,6 +688,42 @@ struct Cursor {
 }
 
 impl Cursor {
+    /// The segments of object `obj` (number `index`) over [t0, t1] of the ray, with a block walk
+    /// when empty-space skipping is on.
+    fn new(
+        scene: &Compiled,
+        obj: &CObj,
+        index: usize,
+        origin: DVec3,
+        dir: DVec3,
+        t0: f64,
+        t1: f64,
+    ) -> Cursor {
+        let n = ((t1 - t0) / obj.step).ceil().max(1.0);
+        let n = if n.is_finite() && n < u64::MAX as f64 {
+            n as u64
+        } else {
+            u64::MAX
+        };
+        let walk = match (&obj.skip, scene.settings.optimise.skip_empty) {
+            (Some(grid), true) => {
+                let o = obj.to_object.transform_point3(origin);
+                let d = obj.to_object.transform_vector3(dir);
+                Some(grid.walk(o, d, t0))
+            }
+            _ => None,
+        };
+        Cursor {
+            object: index,
+            t0,
+            t1,
+            step: obj.step,
+            k: 0,
+            n,
+            walk,
+        }
+    }
+
     #[inline]
     fn segment(&self, k: u64) -> (f64, f64) {
         let a = self.t0 + k as f64 * self.step;
