@@ -425,23 +425,9 @@ impl Library {
         Ok(())
     }
 
-    /// `vlToggle`. Visibility, normal flipping and shadows are implemented; switching on
-    /// reflections or refraction reports `Unsupported` (their default, off, is accepted).
+    /// `vlToggle`: one of the eight features on or off for the objects defined after it.
     pub fn toggle(&mut self, feature: Feature, on: bool) -> Result<()> {
         self.check(Command::Toggle)?;
-        let implemented = matches!(
-            feature,
-            Feature::Visible
-                | Feature::FlipNormals
-                | Feature::CastShadows
-                | Feature::ReceiveShadows
-        );
-        if on && !implemented {
-            return err(
-                ErrorCode::Unsupported,
-                format!("vlToggle: {feature:?} is not implemented yet"),
-            );
-        }
         self.settings_mut().render.toggles[feature as usize] = on;
         Ok(())
     }

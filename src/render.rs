@@ -96,6 +96,11 @@ struct CObj {
     prefixes: [usize; FIELD_COUNT],
     cast_shadows: bool,
     receive_shadows: bool,
+    cast_reflections: bool,
+    receive_reflections: bool,
+    refract: bool,
+    reflect_background: bool,
+    recursion: i32,
 }
 
 impl CObj {
@@ -134,6 +139,11 @@ impl CObj {
             prefixes,
             cast_shadows: r.toggle(Feature::CastShadows),
             receive_shadows: r.toggle(Feature::ReceiveShadows),
+            cast_reflections: r.toggle(Feature::CastReflections),
+            receive_reflections: r.toggle(Feature::ReceiveReflections),
+            refract: r.toggle(Feature::Refract),
+            reflect_background: r.toggle(Feature::ReflectBackground),
+            recursion: r.recursion,
             skip: o
                 .skip
                 .get_or_init(|| {
@@ -308,12 +318,63 @@ pub(crate) fn compile_children(
         .collect()
 }
 
+/// What kind of ray is being traced: how many bounces it has made, whether it is a mirror ray
+/// (it then sees only objects that cast reflections) and what it shows where it escapes.
+#[derive(Clone, Copy, Debug)]
+struct Ray {
+    depth: i32,
+    mirror: bool,
+    background: bool,
+}
+
+impl Ray {
+    const PRIMARY: Ray = Ray {
+        depth: 0,
+        mirror: false,
+        background: true,
+    };
+}
+
+/// A contribution at one depth along a ray: a surface hit or a MIP layer; `bend` is the new
+/// direction of a refracting surface (the ray continues that way behind it).
+#[derive(Clone, Copy, Debug)]
+struct Layer {
+    t: f64,
+    alpha: f64,
+    colour: DVec3,
+    bend: Option<(DVec3, DVec3)>,
+}
+
+/// The mirror direction of `d` about the unit normal `n`.
+pub fn reflect(d: DVec3, n: DVec3) -> DVec3 {
+    d - 2.0 * d.dot(n) * n
+}
+
+/// Snell's law: the direction of unit ray `d` after crossing from index `n1` into `n2` at a
+/// surface of unit normal `n` (either orientation); the mirror direction when the angle is
+/// beyond the critical one (total internal reflection).
+pub fn refract(d: DVec3, n: DVec3, n1: f64, n2: f64) -> DVec3 {
+    let n = if d.dot(n) > 0.0 { -n } else { n };
+    let eta = n1 / n2;
+    let cos_i = -d.dot(n);
+    let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+    if k < 0.0 {
+        reflect(d, n)
+    } else {
+        (eta * d + (eta * cos_i - k.sqrt()) * n).normalize()
+    }
+}
+
 /// What a scene calls for: effects its objects, toggles and lights can actually show. An
 /// effect that nothing in the scene can exhibit costs nothing (see `docs/render-plan.md`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Plan {
     /// Shadow rays: some object casts, some object receives, and a light exists.
     pub shadows: bool,
+    /// Mirror rays: some object receives reflections (with recursion above 0).
+    pub reflections: bool,
+    /// Refracted rays: some object refracts (with recursion above 0).
+    pub refraction: bool,
 }
 
 /// A scene compiled for tracing: immutable, shared by all worker threads.
@@ -336,6 +397,10 @@ impl Compiled {
             shadows: !desc.lights.is_empty()
                 && objects.iter().any(|o| o.cast_shadows)
                 && objects.iter().any(|o| o.receive_shadows),
+            reflections: objects
+                .iter()
+                .any(|o| o.receive_reflections && o.recursion > 0),
+            refraction: objects.iter().any(|o| o.refract && o.recursion > 0),
         };
         Compiled {
             objects,
@@ -513,15 +578,22 @@ impl Compiled {
         c: &Cursor,
         origin: DVec3,
         dir: DVec3,
-    ) -> Vec<(f64, f64, DVec3)> {
+        ray: Ray,
+    ) -> Vec<Layer> {
         let mut hits = Vec::new();
+        let starts_inside = obj.inside(obj.to_object.transform_point3(origin + c.t0 * dir));
         for &(field, threshold) in &obj.surfaces {
             let thr = threshold as f64;
             let value = |t: f64| obj.field_at(origin + t * dir, field) - thr;
             let inside = |t: f64| t > c.t0 && t < c.t1;
-            // Outside the boundary the field is 0.
+            // Outside the boundary the field is 0; a ray that starts inside (a camera in the
+            // object, or a secondary ray) starts from the field's value there.
             let mut prev_t = c.t0;
-            let mut prev_v = -thr;
+            let mut prev_v = if starts_inside && c.t0 <= 0.0 {
+                value(c.t0)
+            } else {
+                -thr
+            };
             let mut k = 0;
             loop {
                 let (t, v) = if k < c.n {
@@ -557,9 +629,47 @@ impl Compiled {
                     let mut s = obj.sample_at(ws);
                     run(&obj.program, &mut s);
                     let o = s.value(0) as f64;
-                    if o > 0.0 {
-                        let col = self.illuminate(obj, w, dir, &mut s, field);
-                        hits.push((hit, o.min(1.0), col));
+                    let bends = self.plan.refraction && obj.refract && ray.depth < obj.recursion;
+                    if o > 0.0 || bends {
+                        let mut col = self.illuminate(obj, w, dir, &mut s, field);
+                        let mut bend = None;
+                        let secondary = (self.plan.reflections && obj.receive_reflections || bends)
+                            && ray.depth < obj.recursion;
+                        if secondary {
+                            let (g, zero) = obj.field_gradient(w, s.position(), field);
+                            if let Some(n) = (-g).try_normalize().filter(|_| !zero) {
+                                let eps = obj.step * 1e-3;
+                                if self.plan.reflections && obj.receive_reflections {
+                                    let ks = s.value(6) as f64;
+                                    if ks > 0.0 {
+                                        let r = reflect(dir, if n.dot(dir) > 0.0 { -n } else { n });
+                                        let mirror = Ray {
+                                            depth: ray.depth + 1,
+                                            mirror: true,
+                                            background: obj.reflect_background,
+                                        };
+                                        col += ks * self.trace_ray(w + eps * r, r, mirror);
+                                    }
+                                }
+                                if bends {
+                                    // Entering where the field rises along the ray, leaving
+                                    // where it falls; the object's index is its RF field.
+                                    let eta = 1.0
+                                        + s.value(8) as f64
+                                            * (crate::types::MAX_REFRACTION as f64 - 1.0);
+                                    let entering = va < 0.0;
+                                    let (n1, n2) = if entering { (1.0, eta) } else { (eta, 1.0) };
+                                    let t = refract(dir, n, n1, n2);
+                                    bend = Some((w + eps * t, t));
+                                }
+                            }
+                        }
+                        hits.push(Layer {
+                            t: hit,
+                            alpha: o.min(1.0),
+                            colour: col,
+                            bend,
+                        });
                     }
                 }
                 if k >= c.n {
@@ -570,19 +680,13 @@ impl Compiled {
                 k += 1;
             }
         }
-        hits.sort_by(|a, b| a.0.total_cmp(&b.0));
+        hits.sort_by(|a, b| a.t.total_cmp(&b.t));
         hits
     }
 
     /// The maximum-intensity layer of a MIP object: the sample of greatest opacity along the
     /// interval (the first on ties), shown as `o·(r, g, b)`; returns (t, o, colour).
-    fn mip_layer(
-        &self,
-        obj: &CObj,
-        c: &Cursor,
-        origin: DVec3,
-        dir: DVec3,
-    ) -> Option<(f64, f64, DVec3)> {
+    fn mip_layer(&self, obj: &CObj, c: &Cursor, origin: DVec3, dir: DVec3) -> Option<Layer> {
         let mut best: Option<(f64, f64)> = None;
         for k in 0..c.n {
             let mid = c.mid(k);
@@ -600,30 +704,44 @@ impl Compiled {
         let mut s = obj.sample_at(origin + t * dir);
         run(&obj.program, &mut s);
         let f = s.values();
-        Some((c.t1, o, DVec3::new(f[1] as f64, f[2] as f64, f[3] as f64)))
+        Some(Layer {
+            t: c.t1,
+            alpha: o,
+            colour: DVec3::new(f[1] as f64, f[2] as f64, f[3] as f64),
+            bend: None,
+        })
     }
 
-    /// Traces one primary ray; returns the pixel colour. DVR objects contribute their samples,
-    /// DSR objects their surface hits and MIP objects their maximum-intensity layer, all
-    /// composited front to back in depth order.
+    /// Traces one primary ray; returns the pixel colour.
     fn trace(&self, origin: DVec3, dir: DVec3) -> DVec3 {
+        self.trace_ray(origin, dir, Ray::PRIMARY)
+    }
+
+    /// Traces a ray. DVR objects contribute their samples, DSR objects their surface hits and
+    /// MIP objects their maximum-intensity layer, all composited front to back in depth order.
+    /// At a refracting surface the rest of the ray continues along the refracted direction.
+    fn trace_ray(&self, origin: DVec3, dir: DVec3, ray: Ray) -> DVec3 {
         let mut cursors: Vec<Cursor> = Vec::new();
-        // Surface and MIP contributions: (t, α, colour), sorted by depth.
-        let mut layers: Vec<(f64, f64, DVec3)> = Vec::new();
+        let mut layers: Vec<Layer> = Vec::new();
         for (i, obj) in self.objects.iter().enumerate() {
-            if !obj.visible {
+            let seen = if ray.mirror {
+                obj.cast_reflections
+            } else {
+                obj.visible
+            };
+            if !seen {
                 continue;
             }
             if let Some((t0, t1)) = obj.clip(origin, dir) {
                 let c = Cursor::new(self, obj, i, origin, dir, t0, t1);
                 match obj.render_type {
                     RenderType::Dvr => cursors.push(c),
-                    RenderType::Dsr => layers.extend(self.surface_hits(obj, &c, origin, dir)),
+                    RenderType::Dsr => layers.extend(self.surface_hits(obj, &c, origin, dir, ray)),
                     RenderType::Mip => layers.extend(self.mip_layer(obj, &c, origin, dir)),
                 }
             }
         }
-        layers.sort_by(|a, b| a.0.total_cmp(&b.0));
+        layers.sort_by(|a, b| a.t.total_cmp(&b.t));
         let mut layers = layers.into_iter().peekable();
         let early = self.settings.optimise.early_termination;
         let mut col = DVec3::ZERO;
@@ -645,14 +763,26 @@ impl Compiled {
                 }
             }
             // Layers in front of that sample come first.
-            while let Some(&(lt, alpha, colour)) = layers.peek() {
-                if best.is_some_and(|(_, m)| lt > m) {
+            while let Some(&layer) = layers.peek() {
+                if best.is_some_and(|(_, m)| layer.t > m) {
                     break;
                 }
                 layers.next();
-                if composite(alpha, colour, &mut col, &mut t) {
+                if composite(layer.alpha, layer.colour, &mut col, &mut t) {
                     t = 0.0;
                     break 'march;
+                }
+                if let Some((from, to)) = layer.bend {
+                    // Everything behind a refracting surface is seen along the bent ray.
+                    let behind = self.trace_ray(
+                        from,
+                        to,
+                        Ray {
+                            depth: ray.depth + 1,
+                            ..ray
+                        },
+                    );
+                    return col + t * behind;
                 }
             }
             let Some((ci, mid)) = best else { break };
@@ -671,7 +801,12 @@ impl Compiled {
                 }
             }
         }
-        col + t * crate::scene::v3(self.settings.background)
+        let background = if ray.background {
+            crate::scene::v3(self.settings.background)
+        } else {
+            DVec3::ZERO
+        };
+        col + t * background
     }
 }
 

@@ -1,0 +1,235 @@
+//! Reflection and refraction at surfaces against closed forms: Snell's law and total internal
+//! reflection, the lateral offset of a parallel-sided slab, and a mirror's angle in = angle out
+//! checked by where a reflected marker lands.
+
+use glam::DVec3;
+use vlib::render::{reflect, refract};
+use vlib::{Camera, Feature, Fields, Library, RenderType};
+
+#[test]
+fn snell_and_total_internal_reflection() {
+    let n = DVec3::Z;
+    for deg in [0.0f64, 10.0, 30.0, 41.0, 60.0, 85.0] {
+        let th = deg.to_radians();
+        let d = DVec3::new(th.sin(), 0.0, -th.cos()); // towards the surface from above
+                                                      // Into glass (1 → 1.5): n1 sin θ1 = n2 sin θ2, and the ray goes on through.
+        let t = refract(d, n, 1.0, 1.5);
+        assert!((t.x - th.sin() / 1.5).abs() < 1e-12, "{deg}: {t:?}");
+        assert!(t.z < 0.0 && (t.length() - 1.0).abs() < 1e-12);
+        // Out of glass (1.5 → 1): beyond the critical angle asin(1/1.5) = 41.8° it reflects.
+        let t = refract(d, n, 1.5, 1.0);
+        if 1.5 * th.sin() > 1.0 {
+            assert_eq!(t, reflect(d, n), "{deg}°: total internal reflection");
+            assert!(t.z > 0.0);
+        } else {
+            assert!((t.x - 1.5 * th.sin()).abs() < 1e-12, "{deg}°: {t:?}");
+        }
+    }
+    // The normal's orientation does not matter.
+    let d = DVec3::new(0.6, 0.0, -0.8);
+    assert_eq!(
+        refract(d, DVec3::Z, 1.0, 1.33),
+        refract(d, -DVec3::Z, 1.0, 1.33)
+    );
+}
+
+/// The scene: an opaque wall at z ≥ 100 whose left half (x < 0) is black and right half white,
+/// seen from z = −2000 through an optional glass slab (index 1.5, thickness `h`) at the origin,
+/// turned by `deg` about y. Returns the image's middle row.
+fn slab_row(h: f32, deg: f32, glass: bool, width: u32) -> Vec<f32> {
+    let mut vl = Library::new();
+    vl.scene().unwrap();
+    // The field of view spans the shorter (vertical) side: choose it so that the image is 3°
+    // wide.
+    let fov = 2.0
+        * ((1.5f64).to_radians().tan() * 3.0 / width as f64)
+            .atan()
+            .to_degrees();
+    vl.camera(&Camera {
+        eye: [0.0, 0.0, -2000.0],
+        at: [0.0; 3],
+        up: [0.0, 1.0, 0.0],
+        fov: fov as f32,
+    })
+    .unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.step_size(0.25, 0.25).unwrap();
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, 0.0).unwrap();
+    vl.scale(600.0, 600.0, 10.0).unwrap();
+    vl.translate(0.0, 0.0, 100.0).unwrap();
+    vl.function(Fields::COLORS, |s| {
+        let x = s.world_position()[0];
+        let _ = s.set(Fields::COLORS, if x < 0.0 { 0.0 } else { 1.0 });
+    })
+    .unwrap();
+    vl.set(Fields::O | Fields::KA, 1.0).unwrap();
+    vl.end().unwrap();
+    if glass {
+        vl.render_type(RenderType::Dsr).unwrap();
+        vl.surface(Fields::F, 0.5).unwrap();
+        vl.toggle(Feature::Refract, true).unwrap();
+        // F is a tent across the slab's depth, so the surfaces F = 0.5 are the planes a
+        // quarter of the depth in from each face, and F is smooth (linear) around them:
+        // central differences give the exact normal. (At a face where F jumps, they would not.)
+        vl.object().unwrap();
+        vl.translate(-0.5, -0.5, -0.5).unwrap();
+        vl.scale(400.0, 400.0, 2.0 * h).unwrap();
+        vl.rotate(0.0, deg, 0.0).unwrap();
+        vl.function(Fields::F, |s| {
+            let z = s.position()[2];
+            let _ = s.set(Fields::F, 1.0 - (2.0 * z - 1.0).abs());
+        })
+        .unwrap();
+        vl.set(Fields::RF, vlib::types::refraction_to_field(1.5))
+            .unwrap();
+        vl.end().unwrap();
+    }
+    let img = vl.render_preview(width, 3, width as f32 / 3.0).unwrap();
+    (0..width).map(|x| img.pixel(x, 1)[0]).collect()
+}
+
+/// The first column whose pixel is lit: where the edge x = 0 of the wall appears.
+fn edge(row: &[f32]) -> f64 {
+    row.iter().position(|&v| v > 0.5).unwrap() as f64
+}
+
+/// Where, independently of the renderer, the ray through column `col` lands on the wall
+/// (x coordinate), after crossing the slab: two planes n·p = ∓h/2, Snell's law by angles.
+fn landing_x(col: f64, width: f64, h: f64, deg: f64) -> f64 {
+    let eye = DVec3::new(0.0, 0.0, -2000.0);
+    let half_w = (1.5f64).to_radians().tan();
+    let sx = (col + 0.5) / width * 2.0 - 1.0;
+    let mut d = DVec3::new(sx * half_w, 0.0, 1.0).normalize();
+    let th = deg.to_radians();
+    // R_y(θ) applied to +z.
+    let n = DVec3::new(th.sin(), 0.0, th.cos());
+    let mut p = eye;
+    for (plane, n1, n2) in [(-h / 2.0, 1.0, 1.5), (h / 2.0, 1.5, 1.0)] {
+        let t = (plane - n.dot(p)) / n.dot(d);
+        p += t * d;
+        let dn = d.dot(n) * n;
+        let dt = d - dn;
+        let sin_t = n1 / n2 * dt.length();
+        let cos_t = (1.0 - sin_t * sin_t).sqrt();
+        d = dt.normalize_or_zero() * sin_t + n * cos_t;
+    }
+    // The wall's first sample lies half a step behind its face.
+    let t = (100.125 - p.z) / d.z;
+    (p + t * d).x
+}
+
+#[test]
+fn a_parallel_slab_displaces_rays_by_the_closed_form_offset() {
+    let (width, h, deg) = (512u32, 40.0f64, 40.0f64);
+    let without = edge(&slab_row(h as f32, deg as f32, false, width));
+    let with = edge(&slab_row(h as f32, deg as f32, true, width));
+    // The rays leave parallel to their entry, displaced by h·sin(θ − θt)/cos θt.
+    let th = deg.to_radians();
+    let tt = (th.sin() / 1.5).asin();
+    let offset = h * (th - tt).sin() / tt.cos();
+    // The independent trace finds the first column landing on the white half.
+    let want = (0..width)
+        .find(|&c| landing_x(c as f64, width as f64, h, deg) >= 0.0)
+        .unwrap() as f64;
+    let want_plain = (0..width)
+        .find(|&c| landing_x(c as f64, width as f64, 0.0, 0.0) >= 0.0)
+        .unwrap() as f64;
+    assert!(
+        (without - want_plain).abs() <= 1.0,
+        "no slab: {without} vs {want_plain}"
+    );
+    assert!(
+        (with - want).abs() <= 1.0,
+        "slab: edge at column {with}, expected {want}"
+    );
+    // And the shift is the closed-form offset, in pixels of the wall.
+    let px = 2.0 * 2100.125 * (1.5f64).to_radians().tan() / width as f64;
+    let shift = (without - with).abs() * px;
+    assert!(
+        (shift - offset).abs() < 2.0 * px,
+        "shift {shift:.2} vs offset {offset:.2} (pixel {px:.3})"
+    );
+    assert!(offset > 10.0 * px, "the test must see a real displacement");
+}
+
+/// Projects a world point with the renderer's camera model; returns pixel coordinates.
+fn project(cam: &Camera, p: DVec3, w: f64, h: f64) -> (f64, f64) {
+    let eye = DVec3::from_array(cam.eye.map(|v| v as f64));
+    let f = (DVec3::from_array(cam.at.map(|v| v as f64)) - eye).normalize();
+    let r = DVec3::from_array(cam.up.map(|v| v as f64))
+        .cross(f)
+        .normalize();
+    let u = f.cross(r);
+    let v = p - eye;
+    let half = (cam.fov as f64 / 2.0).to_radians().tan();
+    let (x, y, z) = (v.dot(r) / v.dot(f), v.dot(u) / v.dot(f), 1.0);
+    let _ = z;
+    (
+        (x / (half * w / h) + 1.0) / 2.0 * w,
+        (1.0 - y / half) / 2.0 * h,
+    )
+}
+
+#[test]
+fn a_mirror_reflects_a_marker_where_angle_in_equals_angle_out() {
+    let cam = Camera {
+        eye: [-300.0, 0.0, -300.0],
+        at: [0.0; 3],
+        up: [0.0, 1.0, 0.0],
+        fov: 40.0,
+    };
+    let marker = DVec3::new(120.0, 30.0, -90.0);
+    let (w, h) = (160u32, 120u32);
+    let mut vl = Library::new();
+    vl.scene().unwrap();
+    vl.camera(&cam).unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.render_type(RenderType::Dsr).unwrap();
+    vl.surface(Fields::F, 0.5).unwrap();
+    vl.step_size(0.5, 1.0).unwrap();
+    // The mirror: the plane z = 0 (a thin slab behind it), all specular.
+    vl.toggle(Feature::ReceiveReflections, true).unwrap();
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, 0.0).unwrap();
+    vl.scale(1000.0, 1000.0, 4.0).unwrap();
+    vl.set(Fields::F | Fields::O | Fields::KS, 1.0).unwrap();
+    vl.end().unwrap();
+    // The marker: a small sphere in front of the mirror, seen only in it.
+    vl.toggle(Feature::ReceiveReflections, false).unwrap();
+    vl.toggle(Feature::CastReflections, true).unwrap();
+    vl.toggle(Feature::Visible, false).unwrap();
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, -0.5).unwrap();
+    vl.scale(40.0, 40.0, 40.0).unwrap();
+    vl.translate(marker.x as f32, marker.y as f32, marker.z as f32)
+        .unwrap();
+    vl.function(Fields::F, |s| {
+        let v = vlib::vlaux::sphere(s.position());
+        let _ = s.set(Fields::F, v);
+    })
+    .unwrap();
+    vl.set(Fields::O | Fields::COLORS | Fields::KA, 1.0)
+        .unwrap();
+    vl.end().unwrap();
+    let img = vl.render_preview(w, h, w as f32 / h as f32).unwrap();
+    let (mut sx, mut sy, mut n) = (0.0, 0.0, 0.0);
+    for y in 0..h {
+        for x in 0..w {
+            if img.pixel(x, y)[0] > 0.5 {
+                sx += x as f64 + 0.5;
+                sy += y as f64 + 0.5;
+                n += 1.0;
+            }
+        }
+    }
+    assert!(n > 10.0, "the reflected marker is visible ({n} pixels)");
+    // Angle in = angle out: the marker appears where its mirror image behind the plane would.
+    let image = DVec3::new(marker.x, marker.y, -marker.z);
+    let (ex, ey) = project(&cam, image, w as f64, h as f64);
+    let (gx, gy) = (sx / n, sy / n);
+    assert!(
+        (gx - ex).abs() < 1.0 && (gy - ey).abs() < 1.0,
+        "marker at ({gx:.2}, {gy:.2}), expected ({ex:.2}, {ey:.2})"
+    );
+}
