@@ -542,6 +542,16 @@ impl Compiled {
                 continue;
             }
             let mut c = Cursor::new(self, obj, 0, w, l, t0, t1);
+            if obj.render_type == RenderType::Dsr {
+                // A surface object shadows by the opacity of the surfaces the ray crosses.
+                for hit in self.surface_hits(obj, &c, w, l, Ray::PRIMARY, false) {
+                    t_total *= 1.0 - hit.alpha;
+                }
+                if t_total < T_MIN {
+                    return 0.0;
+                }
+                continue;
+            }
             let grid = obj.skip.as_deref();
             while let Some(mid) = c.peek(grid) {
                 let (a, b) = c.segment(c.k);
@@ -579,6 +589,7 @@ impl Compiled {
         origin: DVec3,
         dir: DVec3,
         ray: Ray,
+        shade: bool,
     ) -> Vec<Layer> {
         let mut hits = Vec::new();
         let starts_inside = obj.inside(obj.to_object.transform_point3(origin + c.t0 * dir));
@@ -630,7 +641,17 @@ impl Compiled {
                     run(&obj.program, &mut s);
                     let o = s.value(0) as f64;
                     let bends = self.plan.refraction && obj.refract && ray.depth < obj.recursion;
-                    if o > 0.0 || bends {
+                    if !shade {
+                        // Shadow rays need only the opacity.
+                        if o > 0.0 {
+                            hits.push(Layer {
+                                t: hit,
+                                alpha: o.min(1.0),
+                                colour: DVec3::ZERO,
+                                bend: None,
+                            });
+                        }
+                    } else if o > 0.0 || bends {
                         let mut col = self.illuminate(obj, w, dir, &mut s, field);
                         let mut bend = None;
                         let secondary = (self.plan.reflections && obj.receive_reflections || bends)
@@ -736,7 +757,9 @@ impl Compiled {
                 let c = Cursor::new(self, obj, i, origin, dir, t0, t1);
                 match obj.render_type {
                     RenderType::Dvr => cursors.push(c),
-                    RenderType::Dsr => layers.extend(self.surface_hits(obj, &c, origin, dir, ray)),
+                    RenderType::Dsr => {
+                        layers.extend(self.surface_hits(obj, &c, origin, dir, ray, true))
+                    }
                     RenderType::Mip => layers.extend(self.mip_layer(obj, &c, origin, dir)),
                 }
             }

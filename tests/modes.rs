@@ -198,3 +198,47 @@ fn shadows_cost_nothing_without_a_receiver() {
         assert_eq!(vl.render_plan().unwrap().shadows, want);
     }
 }
+
+#[test]
+fn a_surface_shadows_by_the_opacity_of_each_crossing() {
+    // A DSR sphere of surface opacity o between the light and a receiver: the shadow ray
+    // through its centre crosses the surface twice, so the receiver gets (1 − o)².
+    for o in [0.3f32, 0.75] {
+        let mut vl = Library::new();
+        vl.scene().unwrap();
+        vl.camera(&Camera {
+            eye: [0.0, 0.0, -200.0],
+            at: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            fov: 10.0,
+        })
+        .unwrap();
+        vl.directional_light([0.0, 0.0, 1.0], [1.0; 3], 1.0)
+            .unwrap();
+        vl.toggle(Feature::CastShadows, true).unwrap();
+        vl.toggle(Feature::Visible, false).unwrap();
+        vl.render_type(RenderType::Dsr).unwrap();
+        vl.surface(Fields::F, 0.5).unwrap();
+        vl.object().unwrap();
+        vl.translate(-0.5, -0.5, -0.5).unwrap();
+        vl.scale(100.0, 100.0, 100.0).unwrap();
+        vl.translate(0.0, 0.0, -80.0).unwrap();
+        vl.function(Fields::F, radial).unwrap();
+        vl.set(Fields::O, o).unwrap();
+        vl.end().unwrap();
+        vl.render_type(RenderType::Dvr).unwrap();
+        vl.toggle(Feature::CastShadows, false).unwrap();
+        vl.toggle(Feature::Visible, true).unwrap();
+        vl.toggle(Feature::ReceiveShadows, true).unwrap();
+        vl.neighborhood(1.0, 1.0, 1.0).unwrap();
+        vl.object().unwrap();
+        vl.translate(-0.5, -0.5, 0.0).unwrap();
+        vl.scale(400.0, 400.0, 10.0).unwrap();
+        vl.set(Fields::O | Fields::F | Fields::COLORS | Fields::KD, 1.0)
+            .unwrap();
+        vl.end().unwrap();
+        let got = vl.render_preview(5, 5, 1.0).unwrap().pixel(2, 2)[0] as f64;
+        let want = (1.0 - o as f64).powi(2);
+        assert!((got - want).abs() < 1e-5, "o {o}: {got} vs {want}");
+    }
+}
