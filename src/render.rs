@@ -345,6 +345,17 @@ struct Layer {
     bend: Option<(DVec3, DVec3)>,
 }
 
+/// `x^e` for the specular term: integer exponents (the usual case: `VLSPECULAR(20)`) by
+/// repeated squaring, which is exact to rounding and much cheaper than `powf`.
+#[inline]
+fn spec_pow(x: f64, e: f64) -> f64 {
+    if e.fract() == 0.0 && (0.0..=MAX_SPECULAR as f64).contains(&e) {
+        x.powi(e as i32)
+    } else {
+        x.powf(e)
+    }
+}
+
 /// The mirror direction of `d` about the unit normal `n`.
 pub fn reflect(d: DVec3, n: DVec3) -> DVec3 {
     d - 2.0 * d.dot(n) * n
@@ -508,7 +519,7 @@ impl Compiled {
                             let r = 2.0 * ndl * n - l;
                             let rv = r.dot(view);
                             if rv > 0.0 {
-                                term += DVec3::splat(ks * rv.powf(e));
+                                term += DVec3::splat(ks * spec_pow(rv, e));
                             }
                         }
                         term
@@ -636,7 +647,13 @@ impl Compiled {
                     // Shade with the fields just inside the surface (on the side above the
                     // threshold), so a surface on the box face sees the object's fields.
                     let side = if va >= 0.0 { a } else { b };
-                    let ws = origin + side.clamp(c.t0 + tol * 0.5, c.t1 - tol * 0.5) * dir;
+                    let (lo, hi) = (c.t0 + tol * 0.5, c.t1 - tol * 0.5);
+                    let side = if lo < hi {
+                        side.clamp(lo, hi)
+                    } else {
+                        0.5 * (c.t0 + c.t1)
+                    };
+                    let ws = origin + side * dir;
                     let mut s = obj.sample_at(ws);
                     run(&obj.program, &mut s);
                     let o = s.value(0) as f64;
