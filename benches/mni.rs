@@ -86,6 +86,18 @@ fn bench(c: &mut Criterion) {
         });
     }
     g.finish();
+
+    // The sample-distance sweep of the VTK peer script, shaded and unshaded.
+    let mut g = c.benchmark_group("mni_sweep");
+    g.sample_size(10).measurement_time(Duration::from_secs(5));
+    for shaded in [true, false] {
+        for sd in [2.0f32, 1.0, 0.5, 0.25, 0.125] {
+            let vl = scene(&vlb, sd, shaded, Optimise::default());
+            let name = format!("{}_sd{sd}", if shaded { "shade" } else { "noshade" });
+            g.bench_function(name, |b| b.iter(|| vl.render_preview(512, 512, 1.0).unwrap()));
+        }
+    }
+    g.finish();
 }
 
 criterion_group!(benches, bench);
