@@ -761,12 +761,7 @@ impl Library {
     /// Renders the open scene (at scene scope) to an image in memory without closing it or
     /// writing its outputs: a preview for Rust users and tests. Not a command of the C API.
     pub fn render_preview(&self, width: u32, height: u32, aspect: f32) -> Result<crate::Image> {
-        if self.scope() != Scope::Scene {
-            return err(
-                ErrorCode::BadScope,
-                "render_preview needs an open scene outside objects",
-            );
-        }
+        let desc = self.open_scene("render_preview")?;
         positive("render_preview", &[aspect])?;
         if width == 0 || height == 0 || width as u64 * height as u64 > MAX_IMAGE_PIXELS {
             return err(
@@ -774,36 +769,32 @@ impl Library {
                 format!("render_preview: size {width}x{height}"),
             );
         }
+        crate::render::render_image(&crate::render::Compiled::new(&desc), width, height, aspect)
+    }
+
+    /// The open scene (at scene scope) as it would render now, without its outputs.
+    fn open_scene(&self, what: &str) -> Result<SceneDesc> {
+        if self.scope() != Scope::Scene {
+            return err(
+                ErrorCode::BadScope,
+                format!("{what} needs an open scene outside objects"),
+            );
+        }
         let s = self.scene.as_ref().expect("scene scope");
-        let desc = SceneDesc {
+        Ok(SceneDesc {
             settings: s.settings.clone(),
             lights: s.lights.clone(),
             images: Vec::new(),
             volumes: Vec::new(),
             objects: s.objects.clone(),
             datasets: Arc::new(self.datasets.clone()),
-        };
-        crate::render::render_image(&crate::render::Compiled::new(&desc), width, height, aspect)
+        })
     }
 
     /// The render plan the open scene compiles to (which effects it calls for); at scene scope.
     /// Not a command of the C API.
     pub fn render_plan(&self) -> Result<crate::render::Plan> {
-        if self.scope() != Scope::Scene {
-            return err(
-                ErrorCode::BadScope,
-                "render_plan needs an open scene outside objects",
-            );
-        }
-        let s = self.scene.as_ref().expect("scene scope");
-        let desc = SceneDesc {
-            settings: s.settings.clone(),
-            lights: s.lights.clone(),
-            images: Vec::new(),
-            volumes: Vec::new(),
-            objects: s.objects.clone(),
-            datasets: Arc::new(self.datasets.clone()),
-        };
+        let desc = self.open_scene("render_plan")?;
         Ok(crate::render::Compiled::new(&desc).plan())
     }
 
