@@ -94,7 +94,9 @@ fn bench(c: &mut Criterion) {
         for sd in [2.0f32, 1.0, 0.5, 0.25, 0.125] {
             let vl = scene(&vlb, sd, shaded, Optimise::default());
             let name = format!("{}_sd{sd}", if shaded { "shade" } else { "noshade" });
-            g.bench_function(name, |b| b.iter(|| vl.render_preview(512, 512, 1.0).unwrap()));
+            g.bench_function(name, |b| {
+                b.iter(|| vl.render_preview(512, 512, 1.0).unwrap())
+            });
         }
     }
     g.finish();

@@ -2,7 +2,9 @@
 # The main job: builds the library in release, makes the datasets the examples load (a word and
 # the chess profiles drawn by Rust examples, converted with vlconvert; the MNI brain when
 # ../shared/data holds it), compiles every C example with the documented build line, runs every
-# example, and leaves the images in out/ (PNG for each, plus the PPM files the programs ask for).
+# example (the C ones at their default sizes: figure2, figure5, text, chess, cvg, textures,
+# smoke, deform; the Rust ones figure2, and mni and twisted_brain when the brain is there), and
+# leaves the images in out/ (PNG for each, plus the PPM files the programs ask for).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
@@ -42,6 +44,8 @@ target/release/examples/figure2 out/stone-rust.png
 if [ -e out/mni.vlb ]; then
   echo "== mni (Rust)"
   target/release/examples/mni out/mni.vlb out/mni.png
+  echo "== twisted_brain (Rust, the paper's Figure 6(b))"
+  target/release/examples/twisted_brain out/mni.vlb out/twisted_brain.png
 fi
 echo "gallery:"
 ls -1 out/*.png

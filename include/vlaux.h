@@ -40,8 +40,9 @@ vlfloat vluTurbulence(const vlfloat *p, vlfloat size, vlint octaves, vlint seed)
    65536: VL_BADVALUE; knots NULL with count > 0: VL_NULLPOINTER; both return 0. */
 vlfloat vluSpline(vlfloat v, vlint count, const vlfloat *knots);
 
-/* Field functions for vlFunction. Each evaluates a distance field at p and assigns it with
-   vlSet(VL_ALLFIELDS, value), which writes the fields the vlFunction call named. */
+/* Field functions for vlFunction. Each of the next three evaluates a distance field at p and
+   assigns it with vlSet(VL_ALLFIELDS, value), which writes the fields the vlFunction call
+   named. */
 
 /* The paraboloid 1 - 4 |p - c|^2 about the cube centre c, 0 outside the inscribed sphere. */
 void VL_PARAB1(vlfloat *p, void *misc);
@@ -65,6 +66,31 @@ void VLU_CYLINDER(vlfloat *p, void *misc);
      static vlint pawn = 1;
      vlLoad(pawn, "pawn.vlb");  ...  vlFunction(VL_F, VLU_SWEEP, &pawn); */
 void VLU_SWEEP(vlfloat *p, void *misc);
+
+/* Constructive volume geometry (docs/cvg.md; Chen & Tucker 2000): field functions for a parent
+   object, declared after its children, that define the parent's fields point by point from its
+   children's (children counted from 1 in declaration order; a child's fields are 0 outside its
+   boundary). With o_i the opacity of child i at the point:
+     VLU_UNION         o = max_i o_i; the other fields from the child of largest opacity
+                       (the first on ties);
+     VLU_INTERSECTION  o = min_i o_i; the other fields from the child of smallest opacity
+                       (the first on ties);
+     VLU_DIFFERENCE    o = min(o_1, 1 - max_{i>=2} o_i); the other fields from child 1;
+     VLU_BLEND         o = 1 - prod_i (1 - o_i) (a smooth union); the other fields are
+                       sum_i o_i F_i / sum_i o_i (0 where every o_i is 0).
+   Each writes only the fields its vlFunction call names, e.g.
+     vlObject();
+       vlObject(); ... vlEnd();                     (child 1)
+       vlObject(); ... vlEnd();                     (child 2)
+       vlFunction(VL_ALLFIELDS, VLU_UNION, 0);
+     vlEnd();
+   With no children every field is 0. p and misc are not read. Called anywhere but inside a field
+   function (at library, scene or object scope, or from a normal or spatial function) they
+   record VL_BADSCOPE and do nothing. */
+void VLU_UNION(vlfloat *p, void *misc);
+void VLU_INTERSECTION(vlfloat *p, void *misc);
+void VLU_DIFFERENCE(vlfloat *p, void *misc);
+void VLU_BLEND(vlfloat *p, void *misc);
 
 #ifdef __cplusplus
 }

@@ -28,22 +28,43 @@ pub const PERLIN_PERMUTATION: [u8; 256] = [
 
 /// Permutation table for `seed`: seed 0 is Perlin's table; other seeds apply a Fisher-Yates
 /// shuffle driven by xorshift64, whose state is a splitmix64 hash of the seed.
+#[cfg(test)]
 fn permutation(seed: i32) -> [u8; 256] {
-    use std::cell::Cell;
-    // Shuffling costs ~255 divisions: keep the last table of each thread (field functions call
-    // noise with the same seed at every sample).
-    thread_local!(static LAST: Cell<Option<(i32, [u8; 256])>> = const { Cell::new(None) });
+    with_permutation(seed, |t| *t)
+}
+
+/// How many shuffled tables each thread keeps.
+const CACHED_TABLES: usize = 8;
+
+/// Runs `f` with the permutation table for `seed` (see [`shuffled`]). Shuffling costs ~255
+/// divisions, so each thread keeps the tables of its last [`CACHED_TABLES`] seeds: a texture
+/// typically calls noise with a few seeds in turn at every sample (granite: four), and a
+/// one-table cache would reshuffle at every call.
+fn with_permutation<R>(seed: i32, f: impl FnOnce(&[u8; 256]) -> R) -> R {
+    use std::cell::RefCell;
+    type Tables = Vec<(i32, Box<[u8; 256]>)>;
+    thread_local!(static TABLES: RefCell<Tables> = const { RefCell::new(Vec::new()) });
     if seed == 0 {
-        return PERLIN_PERMUTATION;
+        return f(&PERLIN_PERMUTATION);
     }
-    if let Some((s, table)) = LAST.get() {
-        if s == seed {
-            return table;
+    TABLES.with(|tables| {
+        let mut tables = tables.borrow_mut();
+        let i = match tables.iter().position(|(s, _)| *s == seed) {
+            Some(i) => i,
+            None => {
+                if tables.len() == CACHED_TABLES {
+                    tables.pop();
+                }
+                tables.push((seed, Box::new(shuffled(seed))));
+                tables.len() - 1
+            }
+        };
+        // Keep the most recently used first, so the eviction above drops the least recent.
+        if i > 0 {
+            tables[..=i].rotate_right(1);
         }
-    }
-    let table = shuffled(seed);
-    LAST.set(Some((seed, table)));
-    table
+        f(&tables[0].1)
+    })
 }
 
 /// Perlin's table shuffled by a xorshift Fisher-Yates seeded from `seed` through splitmix64.
@@ -143,7 +164,7 @@ pub fn noise(p: [f32; 3], size: f32, seed: i32) -> f32 {
     if !size.is_finite() || p.iter().any(|c| !c.is_finite()) {
         return 0.0;
     }
-    noise_raw(&permutation(seed), scaled(p, size as f64)) as f32
+    with_permutation(seed, |perm| noise_raw(perm, scaled(p, size as f64)) as f32)
 }
 
 /// Perlin turbulence: the sum over `i` in `0..octaves` of `|noise(p, size * 2^i, seed)| / 2^i`.
@@ -154,14 +175,15 @@ pub fn turbulence(p: [f32; 3], size: f32, octaves: i32, seed: i32) -> f32 {
     if octaves <= 0 || !size.is_finite() || p.iter().any(|c| !c.is_finite()) {
         return 0.0;
     }
-    let perm = permutation(seed);
-    let mut sum = 0.0f64;
-    let mut scale = 1.0f64;
-    for _ in 0..octaves.min(32) {
-        sum += noise_raw(&perm, scaled(p, size as f64 * scale)).abs() as f32 as f64 / scale;
-        scale *= 2.0;
-    }
-    sum as f32
+    with_permutation(seed, |perm| {
+        let mut sum = 0.0f64;
+        let mut scale = 1.0f64;
+        for _ in 0..octaves.min(32) {
+            sum += noise_raw(perm, scaled(p, size as f64 * scale)).abs() as f32 as f64 / scale;
+            scale *= 2.0;
+        }
+        sum as f32
+    })
 }
 
 /// Catmull-Rom spline through `knots`, as in Ebert et al., "Texturing and Modeling".
@@ -296,6 +318,20 @@ mod tests {
         }
         assert_ne!(permutation(1), PERLIN_PERMUTATION);
         assert_ne!(permutation(1), permutation(2));
+    }
+
+    #[test]
+    fn cached_tables_are_the_shuffles_of_their_seeds() {
+        // More seeds than the cache holds, in an order that hits, misses and evicts.
+        let seeds: Vec<i32> = (0..3 * CACHED_TABLES as i32)
+            .map(|i| (i * 7) % (CACHED_TABLES as i32 + 3) + 1)
+            .collect();
+        for &seed in seeds.iter().chain(seeds.iter().rev()) {
+            assert_eq!(permutation(seed), shuffled(seed), "seed {seed}");
+            let p = [0.3, 1.7, -2.2];
+            let fresh = noise_raw(&shuffled(seed), scaled(p, 3.0)) as f32;
+            assert_eq!(noise(p, 3.0, seed), fresh, "seed {seed}");
+        }
     }
 
     #[test]

@@ -1,14 +1,17 @@
 //! vlaux, the auxiliary library (`vlaux.h`): camera shorthand, noise, turbulence, splines and
-//! ready-made field functions, all thin wrappers over `vlib_core::vlaux`.
+//! ready-made field functions, all thin wrappers over `vlib_core::vlaux` and `vlib_core::cvg`.
 //!
 //! These are not commands and have no scope of their own, except that the field functions call
-//! `vlSet`. Errors (NULL pointers, bad counts) are recorded for `vlError` and yield 0.
+//! `vlSet`, and the CVG operators (`VLU_UNION`, `VLU_INTERSECTION`, `VLU_DIFFERENCE`,
+//! `VLU_BLEND`) work only inside a field function (elsewhere `VL_BADSCOPE`). Errors (NULL
+//! pointers, bad counts) are recorded for `vlError` and yield 0.
 
 use crate::ffi::{boundary, null, read_floats};
 use crate::sample;
 use crate::types::{vlfloat, vlint, VLCAMERA, VL_ALLFIELDS};
 use std::os::raw::c_void;
-use vlib_core::{Error, ErrorCode, Fields};
+use vlib_core::cvg::Operator;
+use vlib_core::{Error, ErrorCode, Fields, SampleRole};
 
 /// The most knots `vluSpline` accepts.
 pub const MAX_SPLINE_KNOTS: vlint = 1 << 16;
@@ -174,4 +177,85 @@ pub unsafe extern "C" fn VLU_SWEEP(p: *mut vlfloat, misc: *mut c_void) {
         };
         crate::vlSet(VL_ALLFIELDS, v);
     }
+}
+
+/// Runs the CVG operator `op` (`docs/cvg.md`) on the current sample: it reads every child of the
+/// object being evaluated and writes the fields the running `vlFunction` call named. Outside a
+/// field function (library, scene or object scope, a normal or spatial function) it records
+/// `VL_BADSCOPE`, as `vlChildCount` and the other sample-only commands it is made of would, and
+/// changes nothing: unlike `VLU_SPHERE`, an operator has no value to become an object instruction.
+fn cvg_operator(name: &str, op: Operator) {
+    boundary((), || {
+        sample::with_current(|s| {
+            if s.role() != SampleRole::Field {
+                return Err(Error::new(
+                    ErrorCode::BadScope,
+                    format!("{name} is legal only inside a field function"),
+                ));
+            }
+            vlib_core::cvg::apply(op, s)
+        })
+        .unwrap_or_else(|| {
+            Err(Error::new(
+                ErrorCode::BadScope,
+                format!("{name} is legal only inside a field function (vlFunction)"),
+            ))
+        })
+    })
+}
+
+/// Field function: the CVG union of the children (`docs/cvg.md`): opacity max_i o_i, the other
+/// fields from the child of largest opacity. `p` and `misc` are not read.
+///
+/// Not in `vlib.h` (it is declared in `vlaux.h`):
+/// cbindgen:ignore
+///
+/// # Safety
+/// Always safe: neither pointer is dereferenced.
+#[no_mangle]
+pub unsafe extern "C" fn VLU_UNION(p: *mut vlfloat, misc: *mut c_void) {
+    let _ = (p, misc);
+    cvg_operator("VLU_UNION", Operator::Union)
+}
+
+/// Field function: the CVG intersection of the children (`docs/cvg.md`): opacity min_i o_i, the
+/// other fields from the child of smallest opacity. `p` and `misc` are not read.
+///
+/// Not in `vlib.h` (it is declared in `vlaux.h`):
+/// cbindgen:ignore
+///
+/// # Safety
+/// Always safe: neither pointer is dereferenced.
+#[no_mangle]
+pub unsafe extern "C" fn VLU_INTERSECTION(p: *mut vlfloat, misc: *mut c_void) {
+    let _ = (p, misc);
+    cvg_operator("VLU_INTERSECTION", Operator::Intersection)
+}
+
+/// Field function: the CVG difference, child 1 minus the others (`docs/cvg.md`): opacity
+/// min(o_1, 1 − max_{i≥2} o_i), the other fields from child 1. `p` and `misc` are not read.
+///
+/// Not in `vlib.h` (it is declared in `vlaux.h`):
+/// cbindgen:ignore
+///
+/// # Safety
+/// Always safe: neither pointer is dereferenced.
+#[no_mangle]
+pub unsafe extern "C" fn VLU_DIFFERENCE(p: *mut vlfloat, misc: *mut c_void) {
+    let _ = (p, misc);
+    cvg_operator("VLU_DIFFERENCE", Operator::Difference)
+}
+
+/// Field function: the CVG blend, a smooth union (`docs/cvg.md`): opacity 1 − Π_i (1 − o_i),
+/// the other fields the opacity-weighted mean of the children's. `p` and `misc` are not read.
+///
+/// Not in `vlib.h` (it is declared in `vlaux.h`):
+/// cbindgen:ignore
+///
+/// # Safety
+/// Always safe: neither pointer is dereferenced.
+#[no_mangle]
+pub unsafe extern "C" fn VLU_BLEND(p: *mut vlfloat, misc: *mut c_void) {
+    let _ = (p, misc);
+    cvg_operator("VLU_BLEND", Operator::Blend)
 }

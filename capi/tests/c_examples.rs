@@ -6,7 +6,9 @@
 //!
 //! `text.c` and `chess.c` load datasets from their working directory: before they run, the
 //! `word_png` and `profiles` examples draw them and `vlconvert` converts them there (see
-//! [`prepare`]), and they render small images (their optional `argv[1]` is the width).
+//! [`prepare`]). They and the other examples that take an optional `argv[1]` width (`cvg.c`,
+//! `textures.c`, `smoke.c`, `deform.c`, `metaballs.c`: [`SMALL_WIDTHS`]) render small images
+//! here.
 
 mod common;
 
@@ -92,9 +94,30 @@ fn tool(name: &str, args: &[&str], cwd: &Path) {
     );
 }
 
+/// The widths at which the tests render the examples without datasets that take a width.
+const SMALL_WIDTHS: [(&str, usize); 5] = [
+    ("examples/c/cvg.c", 200),
+    ("examples/c/textures.c", SMALL),
+    ("examples/c/smoke.c", 120),
+    ("examples/c/deform.c", SMALL),
+    ("examples/c/metaballs.c", SMALL),
+];
+
+/// The width at which the tests render example `source`.
+fn small_width(source: &str) -> usize {
+    SMALL_WIDTHS
+        .iter()
+        .find(|(s, _)| *s == source)
+        .map(|(_, w)| *w)
+        .unwrap_or_else(|| panic!("{source} is not in SMALL_WIDTHS"))
+}
+
 /// Makes the datasets the C program `source` loads, in `cwd`, as examples/gallery.sh does;
 /// returns the arguments to run it with.
 fn prepare(source: &str, cwd: &Path) -> Vec<String> {
+    if SMALL_WIDTHS.iter().any(|(s, _)| *s == source) {
+        return vec![small_width(source).to_string()];
+    }
     let name = Path::new(source).file_stem().and_then(|n| n.to_str());
     match name {
         Some("text") => {
@@ -172,8 +195,9 @@ fn every_c_program_compiles_and_runs() {
         .chain(c_files("capi/tests/c"))
         .collect();
     assert!(
-        files.len() >= 6,
-        "expected figure2.c, figure5.c, text.c, chess.c, misuse.c and sweep.c, found {files:?}"
+        files.len() >= 11,
+        "expected figure2.c, figure5.c, text.c, chess.c, cvg.c, textures.c, smoke.c, deform.c, \
+         misuse.c, sweep.c and cvg.c (the test), found {files:?}"
     );
     for f in files {
         build_and_run(&f);
@@ -370,6 +394,14 @@ fn sweep_program_passes() {
     assert_eq!((img.width, img.height), (24, 24));
 }
 
+/// The CVG program checks VLU_UNION … VLU_BLEND node by node against docs/cvg.md, and their
+/// scope errors, itself (exit status).
+#[test]
+fn cvg_program_passes() {
+    let (_dir, stdout) = build_and_run("capi/tests/c/cvg.c");
+    assert!(stdout.contains("0 failure(s)"), "{stdout}");
+}
+
 /// Fraction of pixels differing from the top-left corner's colour, and the luminance of those.
 fn foreground(img: &Ppm) -> (f64, Vec<f64>) {
     let bg = img.pixel(0, 0);
@@ -442,5 +474,144 @@ fn chess_renders_a_board_with_pieces() {
         "dark pixels {:.1} %, bright pixels {:.1} %: where are the pieces?",
         100.0 * dark,
         100.0 * bright
+    );
+}
+
+/// Runs example `source` at its small width and returns its image `png`, after checking it
+/// reported no error and has `width × height(width)` pixels.
+fn run_example(source: &str, png: &str, height: fn(usize) -> usize) -> (TempDir, Ppm) {
+    let (dir, stdout) = build_and_run(source);
+    assert!(
+        !stdout.contains("vlError"),
+        "{source} reported errors:\n{stdout}"
+    );
+    let path = dir.path().join(png);
+    let w = small_width(source);
+    assert_eq!(common::png_size(&path), (w as u32, height(w) as u32));
+    let img = read_png(&path);
+    (dir, img)
+}
+
+/// Fraction of the pixels of columns `x0 .. x1` differing from the top-left corner's colour.
+fn coverage_of_columns(img: &Ppm, x0: usize, x1: usize) -> f64 {
+    let bg = img.pixel(0, 0);
+    let n = (x0..x1)
+        .flat_map(|x| (0..img.height).map(move |y| (x, y)))
+        .filter(|&(x, y)| differs(img.pixel(x, y), bg))
+        .count();
+    n as f64 / ((x1 - x0) * img.height) as f64
+}
+
+/// cvg.c writes cvg.png (4:1): four panels, union, intersection, difference and blend of an
+/// orange and a blue sphere. Each panel holds a shape, and the colours follow the attribute
+/// rules: the union shows both children's colours, the difference only child 1's (orange).
+#[test]
+fn cvg_example_renders_four_combinations() {
+    let (_dir, img) = run_example("examples/c/cvg.c", "cvg.png", |w| w / 4);
+    let q = img.width / 4;
+    let orange = |p: [u8; 3]| p[0] as i32 > p[2] as i32 + 60;
+    let blue = |p: [u8; 3]| p[2] as i32 > p[0] as i32 + 60;
+    let mut counts = Vec::new();
+    for (i, name) in ["union", "intersection", "difference", "blend"]
+        .iter()
+        .enumerate()
+    {
+        let coverage = coverage_of_columns(&img, i * q, (i + 1) * q);
+        // Measured at 200 × 50: 22 %, 7 %, 18 %, 26 %.
+        assert!(
+            (0.03..=0.6).contains(&coverage),
+            "the {name} panel covers {:.1} % of its quarter",
+            100.0 * coverage
+        );
+        let pixels: Vec<[u8; 3]> = (i * q..(i + 1) * q)
+            .flat_map(|x| (0..img.height).map(move |y| (x, y)))
+            .map(|(x, y)| img.pixel(x, y))
+            .collect();
+        let o = pixels.iter().filter(|p| orange(**p)).count();
+        let b = pixels.iter().filter(|p| blue(**p)).count();
+        counts.push((o, b));
+    }
+    let [union, _, difference, _] = counts[..] else {
+        unreachable!()
+    };
+    // Measured: 184 orange and 252 blue pixels in the union, 383 and 0 in the difference.
+    assert!(
+        union.0 > 20 && union.1 > 20,
+        "the union shows both colours (orange, blue pixels: {union:?})"
+    );
+    assert!(
+        difference.0 > 50 && difference.1 == 0,
+        "the difference takes child 1's orange everywhere (orange, blue pixels: {difference:?})"
+    );
+}
+
+/// textures.c writes textures.png (16:10): six textured objects on a floor.
+#[test]
+fn textures_example_renders_textured_objects() {
+    let (_dir, img) = run_example("examples/c/textures.c", "textures.png", |w| w * 5 / 8);
+    let (coverage, lum) = foreground(&img);
+    // Measured: 54 % at 160 × 100 (the floor fills much of the lower half).
+    assert!(
+        (0.3..=0.95).contains(&coverage),
+        "the objects and floor cover {:.1} % of the frame",
+        100.0 * coverage
+    );
+    // White marble, dark slate, wood and granite: a wide range (measured deviation 0.14).
+    let sd = std_dev(&lum);
+    assert!(sd > 0.08, "luminance deviation {sd:.4}: looks flat");
+}
+
+/// smoke.c writes smoke.png (3:4): a chimney and, above it, a plume of grey smoke.
+#[test]
+fn smoke_example_renders_a_plume() {
+    let (_dir, img) = run_example("examples/c/smoke.c", "smoke.png", |w| w * 4 / 3);
+    let (coverage, _) = foreground(&img);
+    // Measured: 15 % at 120 × 160.
+    assert!(
+        (0.05..=0.6).contains(&coverage),
+        "chimney and smoke cover {:.1} % of the frame",
+        100.0 * coverage
+    );
+    // The smoke: pixels in the upper half lighter than the dark blue background, and grey
+    // (their red about their blue, unlike the background and the bricks).
+    let bg = img.pixel(0, 0);
+    let smoke = (0..img.width * img.height / 2)
+        .map(|i| img.pixel(i % img.width, i / img.width))
+        .filter(|p| luminance(*p) > luminance(bg) + 0.1 && (p[0] as i32 - p[2] as i32).abs() < 40)
+        .count() as f64
+        / (img.width * img.height / 2) as f64;
+    // Measured: 11 %.
+    assert!(
+        smoke > 0.05,
+        "smoke covers {:.1} % of the upper half",
+        100.0 * smoke
+    );
+}
+
+/// deform.c writes deform.png (2:1): four deformed objects across the frame.
+#[test]
+fn deform_example_renders_four_objects() {
+    let (_dir, img) = run_example("examples/c/deform.c", "deform.png", |w| w / 2);
+    let (coverage, lum) = foreground(&img);
+    // Measured: 28 % at 160 × 80, 19 to 39 % in each quarter.
+    assert!(
+        (0.1..=0.6).contains(&coverage),
+        "the objects cover {:.1} % of the frame",
+        100.0 * coverage
+    );
+    let q = img.width / 4;
+    for i in 0..4 {
+        let c = coverage_of_columns(&img, i * q, (i + 1) * q);
+        assert!(
+            c > 0.05,
+            "quarter {i} of the frame is nearly empty ({:.1} %)",
+            100.0 * c
+        );
+    }
+    // Measured: 0.165.
+    let sd = std_dev(&lum);
+    assert!(
+        sd > 0.05,
+        "luminance deviation {sd:.4}: the stripes are missing"
     );
 }

@@ -55,7 +55,7 @@ const COMMANDS: [&str; 44] = [
 ];
 
 /// The functions of vlaux.h.
-const VLAUX: [&str; 8] = [
+const VLAUX: [&str; 12] = [
     "vluCamera",
     "vluNoise",
     "vluTurbulence",
@@ -64,6 +64,10 @@ const VLAUX: [&str; 8] = [
     "VLU_SPHERE",
     "VLU_CYLINDER",
     "VLU_SWEEP",
+    "VLU_UNION",
+    "VLU_INTERSECTION",
+    "VLU_DIFFERENCE",
+    "VLU_BLEND",
 ];
 
 #[test]
