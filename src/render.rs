@@ -94,6 +94,9 @@ struct CObj {
     surfaces: Vec<(usize, f32)>,
     /// Per field: the program up to its last instruction that may write it.
     prefixes: [usize; FIELD_COUNT],
+    /// Per field: its value where that last instruction is a constant `vlSet` (the field is
+    /// then that constant inside the boundary, folded once instead of run per evaluation).
+    constants: [Option<f32>; FIELD_COUNT],
     cast_shadows: bool,
     receive_shadows: bool,
     cast_reflections: bool,
@@ -132,11 +135,20 @@ impl CObj {
         let to_object = to_world.inverse();
         let r = &o.state;
         let o_prefix = prefix_for(&o.program, Fields::O);
-        let prefixes = std::array::from_fn(|i| prefix_for(&o.program, Fields::from_index(i)));
+        let prefixes: [usize; FIELD_COUNT] =
+            std::array::from_fn(|i| prefix_for(&o.program, Fields::from_index(i)));
+        let constants =
+            std::array::from_fn(
+                |i| match prefixes[i].checked_sub(1).map(|k| &o.program[k]) {
+                    Some(Instr::Set { value, .. }) => Some(*value),
+                    _ => None,
+                },
+            );
         CObj {
             render_type: r.render_type,
             surfaces: r.surfaces.clone(),
             prefixes,
+            constants,
             cast_shadows: r.toggle(Feature::CastShadows),
             receive_shadows: r.toggle(Feature::ReceiveShadows),
             cast_reflections: r.toggle(Feature::CastReflections),
@@ -213,6 +225,9 @@ impl CObj {
         let p = self.to_object.transform_point3(w);
         if !self.inside(p) {
             return 0.0;
+        }
+        if let Some(v) = self.constants[field] {
+            return v as f64;
         }
         let mut s = Sample::with_env(p.as_vec3().to_array(), w.to_array(), &self.env);
         run(&self.program[..self.prefixes[field]], &mut s);

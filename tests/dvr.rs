@@ -353,3 +353,39 @@ fn instructions_after_the_last_opacity_write_run_only_where_opacity_is_positive(
         "lazy {lazy} eager {eager}"
     );
 }
+
+#[test]
+fn a_field_last_set_to_a_constant_is_folded_for_normals() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    // F is a constant, set after a colour function: normals (central differences of F) must
+    // not run that function again — the counts with and without a light are equal.
+    let count = |lit: bool| {
+        let calls = Arc::new(AtomicUsize::new(0));
+        let c = calls.clone();
+        let mut vl = Library::new();
+        vl.scene().unwrap();
+        vl.ambient(1.0, 1.0, 1.0, 0.5).unwrap();
+        if lit {
+            vl.directional_light([0.0, -1.0, 1.0], [1.0; 3], 1.0)
+                .unwrap();
+        }
+        vl.step_size(0.05, 0.5).unwrap();
+        vl.object().unwrap();
+        vl.function(Fields::O | Fields::COLORS, move |s| {
+            c.fetch_add(1, Ordering::Relaxed);
+            let _ = s.set(Fields::O | Fields::COLORS, 0.5);
+        })
+        .unwrap();
+        vl.set(Fields::F, 0.5).unwrap();
+        vl.set(Fields::KA | Fields::KD, 1.0).unwrap();
+        vl.end().unwrap();
+        let img = preview(&vl, 6, 6);
+        (calls.load(Ordering::Relaxed), img)
+    };
+    let (dark, _) = count(false);
+    let (lit, img) = count(true);
+    assert!(dark > 100);
+    assert_eq!(lit, dark, "normal estimation re-ran the colour function");
+    assert!(img.pixels.iter().all(|p| p[0].is_finite()));
+}
