@@ -1,17 +1,20 @@
-//! The discrete ray tracer (direct volume rendering).
+//! The discrete ray tracer: DVR, DSR and MIP, shadows, reflection and refraction.
 //!
 //! A finished [`SceneDesc`] is compiled once into an immutable [`Compiled`] scene: each object's
-//! world-to-object matrix, boundary box, step and opacity exponent, normal neighbourhood and the
-//! prefix of its program that determines the geometry field. Rays are then traced over image
-//! tiles in parallel (rayon); every pixel is computed independently in a fixed order, so the bytes
-//! of an image do not depend on the number of threads.
+//! world-to-object matrix, boundary box, step and opacity exponent, normal neighbourhood, the
+//! prefix of its program that determines each field, its empty-space grid, and the scene's
+//! [`Plan`] of the effects it can show (see `docs/render-plan.md`). Rays are then traced over
+//! image tiles in parallel (rayon); every pixel is computed independently in a fixed order, so
+//! the bytes of an image do not depend on the number of threads.
 //!
 //! Along a ray, each object's box is clipped exactly; its interval is cut into segments of the
 //! step size, the last one shorter, and each segment is represented by the sample at its midpoint
 //! with opacity `α = 1 − (1 − o)^(ℓ / reference)` for its true length ℓ. For constant media the
 //! product of the transmittances is therefore exactly the Beer–Lambert value `(1 − o)^(L/ref)`
-//! for any step. Samples of overlapping objects are merged in order of depth. Compositing is
-//! front to back with early termination once the transmittance falls below [`T_MIN`].
+//! for any step. Samples of overlapping objects are merged in order of depth, together with the
+//! surface hits of DSR objects and the layers of MIP objects. Compositing is front to back with
+//! early termination once the transmittance falls below [`T_MIN`]. Shadow rays use the same
+//! segments; mirror and refracted rays start at surface hits.
 
 use crate::dataset::{Dataset, Filter};
 use crate::error::{Error, ErrorCode, Result};
