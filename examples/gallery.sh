@@ -3,7 +3,8 @@
 # the chess profiles drawn by Rust examples, converted with vlconvert; the MNI brain when
 # ../shared/data holds it), compiles every C example with the documented build line, runs every
 # example (the C ones at their default sizes: figure2, figure5, text, chess, cvg, textures,
-# smoke, deform; the Rust ones figure2, and mni and twisted_brain when the brain is there), and
+# smoke, deform, metaballs, reflectance, invisible, refraction, bump; the Rust ones figure2,
+# and mni, twisted_brain and mip_brain when the brain is there), and
 # leaves the images in out/ (PNG for each, plus the PPM files the programs ask for).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -46,6 +47,8 @@ if [ -e out/mni.vlb ]; then
   target/release/examples/mni out/mni.vlb out/mni.png
   echo "== twisted_brain (Rust, the paper's Figure 6(b))"
   target/release/examples/twisted_brain out/mni.vlb out/twisted_brain.png
+  echo "== mip_brain (Rust, maximum intensity projection)"
+  target/release/examples/mip_brain out/mni.vlb out/mip_brain.png
 fi
 echo "gallery:"
 ls -1 out/*.png
