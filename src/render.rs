@@ -761,10 +761,12 @@ impl Compiled {
 
     /// The maximum-intensity layer of a MIP object: the sample of greatest opacity along the
     /// interval (the first on ties), shown as `o·(r, g, b)`; returns (t, o, colour).
-    fn mip_layer(&self, obj: &CObj, c: &Cursor, origin: DVec3, dir: DVec3) -> Option<Layer> {
+    fn mip_layer(&self, obj: &CObj, c: &mut Cursor, origin: DVec3, dir: DVec3) -> Option<Layer> {
         let mut best: Option<(f64, f64)> = None;
-        for k in 0..c.n {
-            let mid = c.mid(k);
+        // Empty blocks hold no sample above 0: the walk passes over them exactly as for DVR.
+        let grid = obj.skip.as_deref();
+        while let Some(mid) = c.peek(grid) {
+            c.k += 1;
             let mut s = obj.sample_at(origin + mid * dir);
             run(&obj.program[..obj.o_prefix], &mut s);
             let o = s.value(0) as f64;
@@ -808,13 +810,13 @@ impl Compiled {
                 continue;
             }
             if let Some((t0, t1)) = obj.clip(origin, dir) {
-                let c = Cursor::new(self, obj, i, origin, dir, t0, t1);
+                let mut c = Cursor::new(self, obj, i, origin, dir, t0, t1);
                 match obj.render_type {
                     RenderType::Dvr => cursors.push(c),
                     RenderType::Dsr => {
                         layers.extend(self.surface_hits(obj, &c, origin, dir, ray, true))
                     }
-                    RenderType::Mip => layers.extend(self.mip_layer(obj, &c, origin, dir)),
+                    RenderType::Mip => layers.extend(self.mip_layer(obj, &mut c, origin, dir)),
                 }
             }
         }

@@ -304,3 +304,40 @@ fn mni_brain_renders_identically_with_and_without_skipping() {
     let hit = a.chunks(3).filter(|p| p[0] > 20).count() as f64 / (96.0 * 96.0);
     assert!((0.3..0.7).contains(&hit), "coverage {hit}");
 }
+
+#[test]
+fn mip_with_skipping_is_identical_to_mip_without() {
+    let render = |skip_empty: bool| {
+        let mut vl = Library::new();
+        vl.add_dataset(7, blobs()).unwrap();
+        vl.mapping(1, MappingType::Ramp, 2, 1, &[0.3, 0.0, 0.9, 0.9])
+            .unwrap();
+        vl.scene().unwrap();
+        vl.set_optimise(Optimise {
+            skip_empty,
+            early_termination: true,
+        })
+        .unwrap();
+        vl.camera(&Camera {
+            eye: [0.0, 30.0, -80.0],
+            at: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            fov: 45.0,
+        })
+        .unwrap();
+        vl.render_type(vlib::RenderType::Mip).unwrap();
+        vl.step_size(0.7, 1.0).unwrap();
+        vl.object().unwrap();
+        vl.translate(-0.5, -0.5, -0.5).unwrap();
+        vl.scale(39.0, 35.0, 31.0).unwrap();
+        vl.dataset(Fields::F, 7).unwrap();
+        vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+        vl.set(Fields::COLORS, 1.0).unwrap();
+        vl.end().unwrap();
+        vl.render_preview(48, 36, 48.0 / 36.0).unwrap().to_rgb8()
+    };
+    let (a, b) = (render(true), render(false));
+    assert!(a == b);
+    let lit = a.iter().filter(|&&v| v > 20).count();
+    assert!(lit > 100, "the blobs show ({lit} channels)");
+}
