@@ -400,7 +400,14 @@ impl Dataset {
         let io =
             |e: std::io::Error| Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()));
         let mut f = std::fs::File::open(path).map_err(io)?;
-        let len = f.metadata().map_err(io)?.len();
+        let meta = f.metadata().map_err(io)?;
+        if meta.is_dir() {
+            return Err(Error::new(
+                ErrorCode::IoError,
+                format!("{}: is a directory", path.display()),
+            ));
+        }
+        let len = meta.len();
         let named = |e: Error| bad(e.code, format!("{}: {}", path.display(), e.message));
         let mut head = [0u8; HEADER_LEN];
         let got = (len as usize).min(HEADER_LEN);
@@ -686,7 +693,7 @@ struct Header {
 impl Header {
     /// Checks that the file length is exactly header + voxels.
     fn check_len(&self, len: u64) -> Result<()> {
-        let voxels = self.dims.iter().map(|&d| d as u64).product::<u64>();
+        let voxels = voxel_count(self.dims).unwrap_or(u64::MAX);
         let need = voxels
             .checked_mul(self.bytes as u64)
             .and_then(|v| v.checked_add(HEADER_LEN as u64));
@@ -706,6 +713,12 @@ impl Header {
             )),
         }
     }
+}
+
+/// nx·ny·nz, or `None` when the product overflows.
+fn voxel_count(dims: [usize; 3]) -> Option<u64> {
+    dims.iter()
+        .try_fold(1u64, |acc, &d| acc.checked_mul(d as u64))
 }
 
 /// Checks the magic number as far as `bytes` reach (a file shorter than the magic is judged on
@@ -737,8 +750,7 @@ fn parse_header(h: &[u8]) -> Result<Header> {
             format!("dimensions {dims:?} contain 0"),
         ));
     }
-    let voxels = dims.iter().map(|&d| d as u64).product::<u64>();
-    if voxels > MAX_VOXELS {
+    if voxel_count(dims).is_none_or(|v| v > MAX_VOXELS) {
         return Err(bad(
             ErrorCode::BadDimensions,
             format!("dimensions {dims:?} exceed {MAX_VOXELS} voxels"),

@@ -29,8 +29,9 @@ pub const MAX_RECURSION: i32 = 64;
 pub const MAX_SURFACES: usize = 64;
 /// The deepest nesting of objects.
 pub const MAX_DEPTH: usize = 64;
-/// The most nodes one voxelization may have (2³⁰: 4 GiB of field values while it runs).
-pub const MAX_VOLUME_NODES: u64 = 1 << 30;
+/// The most nodes one voxelization may have (2²⁷: it holds ten f32 fields per node while it
+/// runs, 5 GiB at this size).
+pub const MAX_VOLUME_NODES: u64 = 1 << 27;
 
 /// What a successful `vlEnd` closed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -289,7 +290,10 @@ impl Library {
                 );
             }
         }
-        let total = nodes.iter().map(|&n| n as u64).product::<u64>();
+        let total = nodes
+            .iter()
+            .try_fold(1u64, |acc, &n| acc.checked_mul(n as u64))
+            .unwrap_or(u64::MAX);
         if total > MAX_VOLUME_NODES {
             return err(
                 ErrorCode::NoMemory,

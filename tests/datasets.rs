@@ -341,3 +341,43 @@ fn mip_with_skipping_is_identical_to_mip_without() {
     let lit = a.iter().filter(|&&v| v > 20).count();
     assert!(lit > 100, "the blobs show ({lit} channels)");
 }
+
+#[test]
+fn sizes_whose_product_overflows_are_refused_before_allocating() {
+    use vlib::ErrorCode;
+    // A header of 2^22 × 2^22 × 2^22 voxels: the count overflows 64 bits.
+    let mut v = b"VLB1".to_vec();
+    for _ in 0..3 {
+        v.extend_from_slice(&(1u32 << 22).to_le_bytes());
+    }
+    v.extend_from_slice(&1u32.to_le_bytes());
+    v.extend_from_slice(&0f32.to_le_bytes());
+    v.extend_from_slice(&1f32.to_le_bytes());
+    assert_eq!(
+        Dataset::from_vlb_bytes(&v).unwrap_err().code,
+        ErrorCode::BadDimensions
+    );
+    // The same for a voxelization request, and a directory is not a dataset.
+    let mut vl = Library::new();
+    assert_eq!(
+        vl.load(1, std::env::temp_dir()).unwrap_err().code,
+        ErrorCode::IoError
+    );
+    vl.scene().unwrap();
+    let n = 1 << 22;
+    let e = vl
+        .volume("/tmp/x", Fields::O, [0.0; 3], [1.0; 3], [n, n, n], 1)
+        .unwrap_err();
+    assert_eq!(e.code, ErrorCode::NoMemory);
+    let e = vl
+        .volume(
+            "/tmp/x",
+            Fields::O,
+            [0.0; 3],
+            [1.0; 3],
+            [1024, 1024, 129],
+            1,
+        )
+        .unwrap_err();
+    assert_eq!(e.code, ErrorCode::NoMemory, "2^27 nodes at most");
+}
