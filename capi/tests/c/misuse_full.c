@@ -349,6 +349,7 @@ int main(void)
     write_vlb("magic.vlb", "VLB2", 2, 1, 1, 1, 0.0f, 255.0f, 2);
     write_vlb("zero.vlb", "VLB1", 2, 0, 1, 1, 0.0f, 255.0f, 0);
     write_vlb("absurd.vlb", "VLB1", 100000, 100000, 100000, 1, 0.0f, 255.0f, 8); /* 10^15 */
+    write_vlb("wraps.vlb", "VLB1", 4194304, 4194304, 4194304, 1, 0.0f, 255.0f, 0); /* 2^66 */
     write_vlb("width3.vlb", "VLB1", 2, 1, 1, 3, 0.0f, 255.0f, 6);
     write_vlb("width0.vlb", "VLB1", 2, 1, 1, 0, 0.0f, 255.0f, 0);
     write_vlb("aisb.vlb", "VLB1", 2, 1, 1, 1, 7.0f, 7.0f, 2);
@@ -410,6 +411,8 @@ int main(void)
     expect("vlLoad: a zero dimension", VL_BADDIMENSIONS);
     vlLoad(1, "absurd.vlb");
     expect("vlLoad: 10^15 voxels", VL_BADDIMENSIONS);
+    vlLoad(1, "wraps.vlb");
+    expect("vlLoad: 2^66 voxels (wraps to 0 in 64 bits)", VL_BADDIMENSIONS);
     vlLoad(1, "width3.vlb");
     expect("vlLoad: voxel width 3", VL_BADVOXELWIDTH);
     vlLoad(1, "width0.vlb");
@@ -590,7 +593,9 @@ int main(void)
     vlVolume("never", VL_O, 0, nan, 0, 1, 1, 1, 2, 2, 2, 1);
     expect("vlVolume with a NaN corner", VL_BADVALUE);
     vlVolume("never", VL_O, 0, 0, 0, 1, 1, 1, 2048, 2048, 2048, 1);
-    expect("vlVolume 2048^3 nodes (above 2^30)", VL_NOMEMORY);
+    expect("vlVolume 2048^3 nodes (too many to hold)", VL_NOMEMORY);
+    vlVolume("never", VL_O, 0, 0, 0, 1, 1, 1, 4194304, 4194304, 4194304, 1);
+    expect("vlVolume 2^66 nodes (wraps to 0 in 64 bits)", VL_NOMEMORY);
     vlPointLight(0.0, 0.0, 0.0, 7, WHITE, 1.0);
     expect("vlPointLight attenuation 7", VL_BADENUM);
     vlPointLight(nan, 0.0, 0.0, VL_INVERSE, WHITE, 1.0);
