@@ -586,7 +586,10 @@ fn vlb_bytes(input: &mut Input) -> Vec<u8> {
     v.extend_from_slice(&(if kind == 3 { 3 } else { width }).to_le_bytes());
     v.extend_from_slice(&a.to_le_bytes());
     v.extend_from_slice(&(if kind == 4 { a } else { b }).to_le_bytes());
-    let body = dims.iter().map(|&d| d as usize).product::<usize>().min(64) * width as usize;
+    let voxels = dims
+        .iter()
+        .fold(1u64, |acc, &d| acc.saturating_mul(d as u64));
+    let body = voxels.min(64) as usize * width as usize;
     v.extend((0..body).map(|i| input.u8().wrapping_add(i as u8)));
     match kind {
         5 => {
