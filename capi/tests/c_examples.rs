@@ -175,24 +175,12 @@ fn read_png(path: &Path) -> Ppm {
     Ppm { width, height, rgb }
 }
 
-fn c_files(dir: &str) -> Vec<String> {
-    let mut files: Vec<String> = std::fs::read_dir(common::workspace_root().join(dir))
-        .unwrap_or_else(|e| panic!("read {dir}: {e}"))
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".c"))
-        .map(|n| format!("{dir}/{n}"))
-        .collect();
-    files.sort();
-    files
-}
-
 /// Every C file compiles and runs with exit status 0 (the examples' own checks are below).
 #[test]
 fn every_c_program_compiles_and_runs() {
-    let files: Vec<String> = c_files("examples/c")
+    let files: Vec<String> = common::c_files("examples/c")
         .into_iter()
-        .chain(c_files("capi/tests/c"))
+        .chain(common::c_files("capi/tests/c"))
         .collect();
     assert!(
         files.len() >= 11,

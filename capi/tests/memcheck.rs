@@ -40,18 +40,6 @@ fn valgrind_available() -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
-fn c_files(dir: &str) -> Vec<String> {
-    let mut files: Vec<String> = std::fs::read_dir(common::workspace_root().join(dir))
-        .unwrap_or_else(|e| panic!("read {dir}: {e}"))
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".c"))
-        .map(|n| format!("{dir}/{n}"))
-        .collect();
-    files.sort();
-    files
-}
-
 fn compile(source: &str, out_dir: &Path) -> PathBuf {
     let exe = out_dir.join(
         Path::new(source)
@@ -216,9 +204,9 @@ fn every_c_program_is_clean_under_valgrind() {
         return;
     }
     common::ensure_libraries();
-    let files: Vec<String> = c_files("examples/c")
+    let files: Vec<String> = common::c_files("examples/c")
         .into_iter()
-        .chain(c_files("capi/tests/c"))
+        .chain(common::c_files("capi/tests/c"))
         .collect();
     assert!(files.len() >= 7, "{files:?}");
     // The slowest first, so that two workers finish together.

@@ -202,3 +202,16 @@ pub fn png_size(path: &Path) -> (u32, u32) {
     let h = u32::from_be_bytes(data[20..24].try_into().unwrap());
     (w, h)
 }
+
+/// The C files of `dir` (relative to the workspace root), as `dir/name.c`, sorted.
+pub fn c_files(dir: &str) -> Vec<String> {
+    let mut files: Vec<String> = std::fs::read_dir(workspace_root().join(dir))
+        .unwrap_or_else(|e| panic!("read {dir}: {e}"))
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".c"))
+        .map(|n| format!("{dir}/{n}"))
+        .collect();
+    files.sort();
+    files
+}
