@@ -41,27 +41,7 @@ fn valgrind_available() -> bool {
 }
 
 fn compile(source: &str, out_dir: &Path) -> PathBuf {
-    let exe = out_dir.join(
-        Path::new(source)
-            .file_stem()
-            .expect("file name")
-            .to_string_lossy()
-            .into_owned(),
-    );
-    let out = Command::new("cc")
-        .args(["-std=gnu89", "-g", source, "-Iinclude"])
-        .arg(format!("-L{}", common::profile_dir_arg().display()))
-        .args(["-lvlib", "-lm", "-o"])
-        .arg(&exe)
-        .current_dir(common::workspace_root())
-        .output()
-        .expect("run cc");
-    assert!(
-        out.status.success(),
-        "cc {source} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    exe
+    common::compile_c(source, out_dir, &["-g"])
 }
 
 /// Runs a tool from `target/<profile>/` in `cwd`.

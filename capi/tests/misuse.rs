@@ -13,35 +13,7 @@ use std::process::Command;
 
 /// Compiles `source` (relative to the workspace root) with warnings as errors into `out_dir`.
 fn compile(source: &str, out_dir: &Path) -> PathBuf {
-    common::ensure_libraries();
-    let exe = out_dir.join(
-        Path::new(source)
-            .file_stem()
-            .expect("file name")
-            .to_string_lossy()
-            .into_owned(),
-    );
-    let out = Command::new("cc")
-        .args([
-            "-std=gnu89",
-            "-Wall",
-            "-Wextra",
-            "-Werror",
-            source,
-            "-Iinclude",
-        ])
-        .arg(format!("-L{}", common::profile_dir_arg().display()))
-        .args(["-lvlib", "-lm", "-o"])
-        .arg(&exe)
-        .current_dir(common::workspace_root())
-        .output()
-        .expect("run cc");
-    assert!(
-        out.status.success(),
-        "cc {source} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    exe
+    common::compile_c(source, out_dir, &["-Wall", "-Wextra", "-Werror"])
 }
 
 #[test]

@@ -215,3 +215,32 @@ pub fn c_files(dir: &str) -> Vec<String> {
     files.sort();
     files
 }
+
+/// Compiles `source` (relative to the workspace root) into `out_dir` with the documented line,
+/// `cc -std=gnu89 <flags> source -Iinclude -Ltarget/<profile> -lvlib -lm`, and returns the
+/// executable; fails the test with cc's messages if it does not compile.
+pub fn compile_c(source: &str, out_dir: &Path, flags: &[&str]) -> PathBuf {
+    ensure_libraries();
+    let name = Path::new(source)
+        .file_stem()
+        .expect("file name")
+        .to_string_lossy()
+        .into_owned();
+    let exe = out_dir.join(name);
+    let out = Command::new("cc")
+        .arg("-std=gnu89")
+        .args(flags)
+        .args([source, "-Iinclude"])
+        .arg(format!("-L{}", profile_dir_arg().display()))
+        .args(["-lvlib", "-lm", "-o"])
+        .arg(&exe)
+        .current_dir(workspace_root())
+        .output()
+        .expect("run cc");
+    assert!(
+        out.status.success(),
+        "cc {source} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    exe
+}
