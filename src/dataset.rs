@@ -532,27 +532,47 @@ impl Dataset {
 
     /// Trilinear interpolation, specialised for speed: f32 index arithmetic (its rounding,
     /// below 2⁻¹⁶ of a voxel for grids under 512 nodes a side, is far below anything visible),
-    /// i32 conversions, strided loads from one bounds-checked window.
+    /// i32 conversions, and the cell's nodes read as four x-pairs (one bounds check each).
     #[inline]
     pub(crate) fn trilinear(&self, p: [f32; 3]) -> f32 {
         let [nx, ny, _] = self.dims;
         let ([x0, y0, z0], [fx, fy, fz]) = self.cell32(p);
         let base = x0 + nx * (y0 + ny * z0);
         let (sx, sy, sz) = (self.strides[0], self.strides[1], self.strides[2]);
-        let Some(w) = self.values.get(base..=base + sx + sy + sz) else {
-            return 0.0; // unreachable: the cell lies inside the grid
-        };
         let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
-        let (c00, c10) = (lerp(w[0], w[sx], fx), lerp(w[sy], w[sy + sx], fx));
-        let (c01, c11) = (
-            lerp(w[sz], w[sz + sx], fx),
-            lerp(w[sz + sy], w[sz + sy + sx], fx),
-        );
+        let v = &self.values;
+        let (c00, c10, c01, c11) = if sx == 1 {
+            // Four rows of two nodes along x.
+            let pair = |o: usize| -> [f32; 2] {
+                v.get(o..o + 2)
+                    .and_then(|r| r.try_into().ok())
+                    .unwrap_or([0.0; 2]) // unreachable: the cell lies inside the grid
+            };
+            let (r00, r10) = (pair(base), pair(base + sy));
+            let (r01, r11) = (pair(base + sz), pair(base + sz + sy));
+            (
+                lerp(r00[0], r00[1], fx),
+                lerp(r10[0], r10[1], fx),
+                lerp(r01[0], r01[1], fx),
+                lerp(r11[0], r11[1], fx),
+            )
+        } else {
+            let Some(w) = v.get(base..=base + sx + sy + sz) else {
+                return 0.0; // unreachable: the cell lies inside the grid
+            };
+            (
+                lerp(w[0], w[sx], fx),
+                lerp(w[sy], w[sy + sx], fx),
+                lerp(w[sz], w[sz + sx], fx),
+                lerp(w[sz + sy], w[sz + sy + sx], fx),
+            )
+        };
         lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz).clamp(0.0, 1.0)
     }
 
     /// The trilinear gradient where all the nodes it reads are interior (central differences
-    /// everywhere): the same value as the generic path, with strided loads.
+    /// everywhere): the same value as the generic path, with the 4×4×4 neighbourhood of the cell
+    /// read as its twelve x-rows that are needed (one bounds check each).
     #[inline]
     fn trilinear_gradient_interior(&self, p: [f32; 3]) -> Option<[f64; 3]> {
         let [nx, ny, nz] = self.dims;
@@ -563,23 +583,26 @@ impl Dataset {
         if x0 == 0 || y0 == 0 || z0 == 0 || x0 + 2 >= nx || y0 + 2 >= ny || z0 + 2 >= nz {
             return None;
         }
-        let (sx, sy, sz) = (1usize, nx, nx * ny);
-        // One window from node (x0−1, y0−1, z0−1) to (x0+2, y0+2, z0+2): one bounds check.
+        // Row (j, k) holds nodes x0 − 1 … x0 + 2 at y0 − 1 + j, z0 − 1 + k; the corner rows of
+        // the neighbourhood are never read.
         let lo = (x0 - 1) + nx * ((y0 - 1) + ny * (z0 - 1));
-        let w = self.values.get(lo..=lo + 3 * (sx + sy + sz))?;
-        let base = sx + sy + sz;
-        // The 8 corners of the cell, as window offsets.
+        let row = |j: usize, k: usize| -> Option<[f32; 4]> {
+            let o = lo + nx * (j + ny * k);
+            self.values.get(o..o + 4)?.try_into().ok()
+        };
+        let (r10, r20) = (row(1, 0)?, row(2, 0)?);
+        let (r01, r11, r21, r31) = (row(0, 1)?, row(1, 1)?, row(2, 1)?, row(3, 1)?);
+        let (r02, r12, r22, r32) = (row(0, 2)?, row(1, 2)?, row(2, 2)?, row(3, 2)?);
+        let (r13, r23) = (row(1, 3)?, row(2, 3)?);
+        // Per corner (j, k) of the cell (j, k in {1, 2}): its row, the rows below and above it
+        // in y, and the rows below and above it in z.
         let corners = [
-            base,
-            base + sx,
-            base + sy,
-            base + sy + sx,
-            base + sz,
-            base + sz + sx,
-            base + sz + sy,
-            base + sz + sy + sx,
+            (&r11, &r01, &r21, &r10, &r12),
+            (&r21, &r11, &r31, &r20, &r22),
+            (&r12, &r02, &r22, &r11, &r13),
+            (&r22, &r12, &r32, &r21, &r23),
         ];
-        // Trilinear weights of the corners.
+        // Trilinear weights of the cell's corners, in the order x fastest.
         let (gx, gy, gz) = (1.0 - fx, 1.0 - fy, 1.0 - fz);
         let weights = [
             gx * gy * gz,
@@ -592,11 +615,13 @@ impl Dataset {
             fx * fy * fz,
         ];
         let mut g = [0f32; 3];
-        for (c, wt) in corners.iter().zip(weights) {
+        for (c, wt) in weights.into_iter().enumerate() {
+            let i = 1 + (c & 1);
+            let (r, ym, yp, zm, zp) = corners[c >> 1];
             // Central differences (per grid step) at the corner, along x, y and z.
-            g[0] += wt * (w[c + sx] - w[c - sx]);
-            g[1] += wt * (w[c + sy] - w[c - sy]);
-            g[2] += wt * (w[c + sz] - w[c - sz]);
+            g[0] += wt * (r[i + 1] - r[i - 1]);
+            g[1] += wt * (yp[i] - ym[i]);
+            g[2] += wt * (zp[i] - zm[i]);
         }
         Some([
             0.5 * g[0] as f64 * self.last[0],

@@ -31,6 +31,7 @@
 pub mod cvg;
 pub mod dataset;
 pub mod error;
+mod kernel;
 pub mod library;
 pub mod mapping;
 pub mod output;

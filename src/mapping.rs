@@ -128,15 +128,29 @@ impl Mapping {
     /// so Φ_r(1) = 1 when a_n < 1; and Φ_r(0) = 0 (every case of the paper excludes v = 0 except the
     /// last segment when a_1 = 0 — see `docs/compat.md`).
     pub fn eval(&self, v: f32, j: usize) -> f32 {
-        debug_assert!(j < self.outputs);
+        let (v, k) = self.locate(v);
+        self.eval_at(v, k, j)
+    }
+
+    /// The clamped input (NaN → 0) and its segment: k = the number of a_i strictly below it,
+    /// so a_k < v ≤ a_{k+1} in 1-based terms. Shared by all outputs of one input.
+    #[inline]
+    pub fn locate(&self, v: f32) -> (f32, usize) {
         let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-        let n = self.a.len();
-        // k = number of a_i strictly less than v; then a_k < v ≤ a_{k+1} in 1-based terms.
-        let k = if n <= 16 {
+        let k = if self.a.len() <= 16 {
             self.a.iter().take_while(|&&a| a < v).count()
         } else {
             self.a.partition_point(|&a| a < v)
         };
+        (v, k)
+    }
+
+    /// Φ(v, j) for an input already placed by [`Mapping::locate`]: `eval(v, j)` is
+    /// `eval_at(locate(v), j)`, so several outputs of one input share the search.
+    #[inline]
+    pub fn eval_at(&self, v: f32, k: usize, j: usize) -> f32 {
+        debug_assert!(j < self.outputs);
+        let n = self.a.len();
         match self.kind {
             MappingType::Lookup => {
                 if k == 0 || k == n {
@@ -167,6 +181,21 @@ impl Mapping {
                 (b0 + (v as f64 - a0) * self.slopes[k * self.outputs + j]) as f32
             }
         }
+    }
+
+    /// The largest input z such that Φ(v, j) = 0 for every v in [0, z] (NaN counts as 0), found
+    /// among 0 and the breakpoints with the exact [`Mapping::range`]; `None` if Φ(0, j) ≠ 0.
+    /// A sample whose input is at most z needs no evaluation: its output is 0.
+    pub fn zero_below(&self, j: usize) -> Option<f32> {
+        let mut z = None;
+        for c in std::iter::once(0.0).chain(self.a.iter().copied()) {
+            if self.range(0.0, c, j).1 <= 0.0 {
+                z = Some(c);
+            } else {
+                break;
+            }
+        }
+        z
     }
 }
 

@@ -18,6 +18,7 @@
 
 use crate::dataset::{Dataset, Filter};
 use crate::error::{Error, ErrorCode, Result};
+use crate::kernel::Lean;
 use crate::program::{prefix_for, run, Instr, NormalFn, Sample, SampleEnv, SampleRole};
 use crate::scene::{Light, ObjectDesc, SceneDesc, Settings};
 use crate::skip::{SkipGrid, Walk};
@@ -88,6 +89,12 @@ struct CObj {
     /// Where the geometry field is a dataset's value (its last writer is `vlDataset`), normals
     /// come from that dataset's interpolated grid gradients.
     f_dataset: Option<(Arc<Dataset>, Filter)>,
+    /// The linear part of object → world for gradients: ∇_world F = Aᵀ ∇_object F, A the linear
+    /// part of world → object.
+    grad_to_world: glam::DMat3,
+    /// The program compiled for the lean kernel, where it reads only constants, datasets and
+    /// transfer functions (and the kernel is not switched off).
+    lean: Option<Lean>,
     env: SampleEnv,
     /// Blocks where opacity is provably 0.
     skip: Option<Arc<SkipGrid>>,
@@ -110,7 +117,11 @@ struct CObj {
 }
 
 impl CObj {
-    fn new(o: &ObjectDesc, datasets: &Arc<crate::program::Datasets>) -> CObj {
+    fn new(
+        o: &ObjectDesc,
+        datasets: &Arc<crate::program::Datasets>,
+        optimise: crate::scene::Optimise,
+    ) -> CObj {
         let to_world = o.matrix();
         let b = crate::scene::v3(o.boundary);
         let box_min = DVec3::splat(0.5) - b * 0.5;
@@ -167,6 +178,12 @@ impl CObj {
                 .clone(),
             o_prefix,
             f_dataset,
+            grad_to_world: glam::DMat3::from_mat4(to_object).transpose(),
+            lean: if optimise.lean_kernel {
+                Lean::new(&o.program, o_prefix)
+            } else {
+                None
+            },
             env: SampleEnv {
                 datasets: datasets.clone(),
                 filter: Filter::new(r.interpolation, r.cubic),
@@ -210,6 +227,19 @@ impl CObj {
 
     fn inside(&self, p: DVec3) -> bool {
         p.cmpge(self.box_min).all() && p.cmple(self.box_max).all()
+    }
+
+    /// The opacity at world point `w` (inside the boundary), by the lean kernel where it applies.
+    #[inline]
+    fn opacity_at(&self, w: DVec3) -> f64 {
+        if let Some(lean) = &self.lean {
+            let p = self.to_object.transform_point3(w).as_vec3().to_array();
+            let mut f = [0.0f32; FIELD_COUNT];
+            return lean.opacity(p, &mut f) as f64;
+        }
+        let mut s = self.sample_at(w);
+        run(&self.program[..self.o_prefix], &mut s);
+        s.value(0) as f64
     }
 
     fn sample_at(&self, w: DVec3) -> Sample<'_> {
@@ -262,8 +292,7 @@ impl CObj {
         if let Some((data, filter)) = &self.f_dataset {
             let g = data.gradient(p, *filter);
             let g = DVec3::from_array(g);
-            // ∇_world F = Aᵀ ∇_object F, A the linear part of world → object.
-            let gw = glam::DMat3::from_mat4(self.to_object).transpose() * g;
+            let gw = self.grad_to_world * g;
             let zero = g.abs().max_element() <= ZERO_GRADIENT;
             return (gw, zero);
         }
@@ -279,16 +308,22 @@ impl CObj {
         (grad, diff.abs().max_element() <= ZERO_GRADIENT)
     }
 
+    /// The normal from the gradient alone: −∇F at `w` (object point `p`), flipped towards the
+    /// viewer if asked; `None` where the gradient vanishes.
+    #[inline]
+    fn gradient_normal(&self, w: DVec3, view: DVec3, p: [f32; 3], field: usize) -> Option<DVec3> {
+        let (grad, zero) = self.field_gradient(w, p, field);
+        let n = if zero { None } else { (-grad).try_normalize() };
+        match n {
+            Some(v) if self.flip_normals && v.dot(view) < 0.0 => Some(-v),
+            n => n,
+        }
+    }
+
     /// The normal at `w`: −∇F by world-space central differences, then flipped towards the viewer
     /// if asked, then the normal functions in order. `None` where the gradient vanishes.
     fn normal(&self, w: DVec3, view: DVec3, s: &mut Sample<'_>, field: usize) -> Option<DVec3> {
-        let (grad, zero) = self.field_gradient(w, s.position(), field);
-        let mut n = if zero { None } else { (-grad).try_normalize() };
-        if let Some(v) = n {
-            if self.flip_normals && v.dot(view) < 0.0 {
-                n = Some(-v);
-            }
-        }
+        let n = self.gradient_normal(w, view, s.position(), field);
         if self.normals.is_empty() {
             return n;
         }
@@ -439,7 +474,7 @@ impl Compiled {
         let objects: Vec<CObj> = desc
             .objects
             .iter()
-            .map(|o| CObj::new(o, &desc.datasets))
+            .map(|o| CObj::new(o, &desc.datasets, desc.settings.optimise))
             .collect();
         let plan = Plan {
             shadows: !desc.lights.is_empty()
@@ -484,6 +519,9 @@ impl Compiled {
 
     /// Shades one DVR sample: returns (α, colour) or `None` where the opacity is 0.
     fn shade(&self, obj: &CObj, w: DVec3, dir: DVec3, len: f64) -> Option<(f64, DVec3)> {
+        if let Some(lean) = &obj.lean {
+            return self.shade_lean(obj, lean, w, dir, len);
+        }
         let mut s = obj.sample_at(w);
         run(&obj.program[..obj.o_prefix], &mut s);
         let o = s.value(0) as f64;
@@ -499,6 +537,38 @@ impl Compiled {
         Some((alpha, self.illuminate(obj, w, dir, &mut s, 9)))
     }
 
+    /// [`Compiled::shade`] by the lean kernel: the same fields, bit for bit, so the same colour.
+    #[inline]
+    fn shade_lean(
+        &self,
+        obj: &CObj,
+        lean: &Lean,
+        w: DVec3,
+        dir: DVec3,
+        len: f64,
+    ) -> Option<(f64, DVec3)> {
+        let p = obj.to_object.transform_point3(w).as_vec3().to_array();
+        let mut f = [0.0f32; FIELD_COUNT];
+        let o = lean.opacity(p, &mut f) as f64;
+        if o <= 0.0 {
+            return None;
+        }
+        lean.rest(p, &mut f);
+        let alpha = if o >= 1.0 {
+            1.0
+        } else {
+            1.0 - transmit(1.0 - o, len * obj.inv_ref)
+        };
+        let colour = if obj.normals.is_empty() {
+            self.illuminate_with(obj, w, dir, &f, || obj.gradient_normal(w, -dir, p, 9))
+        } else {
+            let mut s = Sample::with_env(p, w.to_array(), &obj.env);
+            s.fields = f;
+            self.illuminate(obj, w, dir, &mut s, 9)
+        };
+        Some((alpha, colour))
+    }
+
     /// The illumination model at a sample whose fields are computed, with normals from the
     /// gradient of field `normal_field`:
     /// `ka·I_amb·C + Σ att·I·L·T·(kd·C·max(N·L, 0) + ks·(R·V)^e)`, T the transmittance towards
@@ -512,6 +582,20 @@ impl Compiled {
         normal_field: usize,
     ) -> DVec3 {
         let f = s.values();
+        self.illuminate_with(obj, w, dir, &f, || obj.normal(w, -dir, s, normal_field))
+    }
+
+    /// The illumination model for fields `f`; `normal` computes the normal, only if a light
+    /// needs it.
+    #[inline]
+    fn illuminate_with(
+        &self,
+        obj: &CObj,
+        w: DVec3,
+        dir: DVec3,
+        f: &[f32; FIELD_COUNT],
+        normal: impl FnOnce() -> Option<DVec3>,
+    ) -> DVec3 {
         let c = DVec3::new(f[1] as f64, f[2] as f64, f[3] as f64);
         let (ka, kd, ks) = (f[4] as f64, f[5] as f64, f[6] as f64);
         let e = f[7] as f64 * MAX_SPECULAR as f64;
@@ -519,7 +603,7 @@ impl Compiled {
         let mut col = ka * amb * c;
         if !self.lights.is_empty() && (kd > 0.0 || ks > 0.0) {
             let view = -dir;
-            let n = obj.normal(w, view, s, normal_field);
+            let n = normal();
             let shadowed = self.plan.shadows && obj.receive_shadows;
             for light in &self.lights {
                 let (l, att, rad, dist) = match *light {
@@ -608,9 +692,7 @@ impl Compiled {
                 if len <= 0.0 {
                     continue;
                 }
-                let mut s = obj.sample_at(w + mid * l);
-                run(&obj.program[..obj.o_prefix], &mut s);
-                let o = s.value(0) as f64;
+                let o = obj.opacity_at(w + mid * l);
                 if o > 0.0 {
                     t_total *= if o >= 1.0 {
                         0.0
@@ -767,9 +849,7 @@ impl Compiled {
         let grid = obj.skip.as_deref();
         while let Some(mid) = c.peek(grid) {
             c.k += 1;
-            let mut s = obj.sample_at(origin + mid * dir);
-            run(&obj.program[..obj.o_prefix], &mut s);
-            let o = s.value(0) as f64;
+            let o = obj.opacity_at(origin + mid * dir);
             if o > 0.0 && best.is_none_or(|(_, b)| o > b) {
                 best = Some((mid, o));
                 if o >= 1.0 {
@@ -819,6 +899,17 @@ impl Compiled {
                     RenderType::Mip => layers.extend(self.mip_layer(obj, &mut c, origin, dir)),
                 }
             }
+        }
+        let background = if ray.background {
+            crate::scene::v3(self.settings.background)
+        } else {
+            DVec3::ZERO
+        };
+        if layers.is_empty() && cursors.len() == 1 {
+            // One volume along the ray and nothing else: its own tight loop.
+            let mut c = cursors.pop().expect("one cursor");
+            let (col, t) = self.march_one(&mut c, origin, dir);
+            return col + t * background;
         }
         layers.sort_by(|a, b| a.t.total_cmp(&b.t));
         let mut layers = layers.into_iter().peekable();
@@ -880,12 +971,35 @@ impl Compiled {
                 }
             }
         }
-        let background = if ray.background {
-            crate::scene::v3(self.settings.background)
-        } else {
-            DVec3::ZERO
-        };
         col + t * background
+    }
+
+    /// The front-to-back composite of one DVR object's samples along a ray (the general loop of
+    /// [`Compiled::trace_ray`] with a single cursor and no layers, in the same order and
+    /// arithmetic); returns the colour and the remaining transmittance.
+    fn march_one(&self, c: &mut Cursor, origin: DVec3, dir: DVec3) -> (DVec3, f64) {
+        let obj = &self.objects[c.object];
+        let grid = obj.skip.as_deref();
+        let early = self.settings.optimise.early_termination;
+        let mut col = DVec3::ZERO;
+        let mut t = 1.0f64;
+        while let Some(mid) = c.peek(grid) {
+            let (a, b) = c.segment(c.k);
+            c.k += 1;
+            let len = b - a;
+            if len <= 0.0 {
+                continue;
+            }
+            if let Some((alpha, colour)) = self.shade(obj, origin + mid * dir, dir, len) {
+                col += t * alpha * colour;
+                t *= 1.0 - alpha;
+                if early && t < T_MIN {
+                    t = 0.0;
+                    break;
+                }
+            }
+        }
+        (col, t)
     }
 }
 
@@ -899,6 +1013,9 @@ struct Cursor {
     k: u64,
     n: u64,
     walk: Option<Walk>,
+    /// Samples before this ray parameter lie in the occupied block the walk last reported:
+    /// they are taken without consulting the walk.
+    occupied_until: f64,
 }
 
 impl Cursor {
@@ -935,6 +1052,7 @@ impl Cursor {
             k: 0,
             n,
             walk,
+            occupied_until: f64::NEG_INFINITY,
         }
     }
 
@@ -963,11 +1081,18 @@ impl Cursor {
                 return None;
             }
             let mid = self.mid(self.k);
+            if mid < self.occupied_until {
+                return Some(mid);
+            }
             let (Some(walk), Some(grid)) = (self.walk.as_mut(), grid) else {
                 return Some(mid);
             };
-            let Some(exit) = walk.skip_until(grid, mid) else {
-                return Some(mid);
+            let exit = match walk.skip_until(grid, mid) {
+                Err(until) => {
+                    self.occupied_until = until;
+                    return Some(mid);
+                }
+                Ok(exit) => exit,
             };
             // Skip every segment whose midpoint is before `exit`.
             let guess = ((exit - self.t0) / self.step - 0.5).ceil();

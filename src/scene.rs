@@ -184,13 +184,16 @@ pub struct Settings {
 }
 
 /// Speed-ups that never change a pixel (beyond what early termination documents), switchable
-/// so that benchmarks can show what each is worth. Both are on by default.
+/// so that benchmarks can show what each is worth. All are on by default.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Optimise {
     /// Skip blocks where opacity is provably 0.
     pub skip_empty: bool,
     /// Stop rays whose transmittance falls below `render::T_MIN`.
     pub early_termination: bool,
+    /// Evaluate programs of constants, datasets and transfer functions with the lean kernel
+    /// (the same values, bit for bit, computed faster; see `docs/performance.md`).
+    pub lean_kernel: bool,
 }
 
 impl Default for Optimise {
@@ -198,6 +201,7 @@ impl Default for Optimise {
         Optimise {
             skip_empty: true,
             early_termination: true,
+            lean_kernel: true,
         }
     }
 }

@@ -318,6 +318,36 @@ pub(crate) struct Walk {
 }
 
 impl Walk {
+    /// Moves the walk to parameter `t0` (a leap): the block there and the parameters at which
+    /// it is left, as [`SkipGrid::walk_from`] computes them (steps and deltas do not change
+    /// along a ray), in place.
+    fn relocate(&mut self, grid: &SkipGrid, t0: f64, forced: [Option<i64>; 3]) {
+        let p = self.o + t0 * self.d;
+        for axis in 0..3 {
+            let c = match forced[axis] {
+                Some(c) => c,
+                None => {
+                    let rel = (p[axis] - grid.origin[axis]) / grid.cell[axis];
+                    rel.floor().clamp(0.0, (grid.dims[axis] - 1) as f64) as i64
+                }
+            };
+            if c < 0 || c >= grid.dims[axis] as i64 {
+                self.done = true;
+                return;
+            }
+            self.cell[axis] = c;
+            let size = grid.cell[axis];
+            let d = self.d[axis];
+            if d > 0.0 {
+                let boundary = grid.origin[axis] + (c + 1) as f64 * size;
+                self.t_max[axis] = t0 + (boundary - p[axis]) / d;
+            } else if d < 0.0 {
+                let boundary = grid.origin[axis] + c as f64 * size;
+                self.t_max[axis] = t0 + (boundary - p[axis]) / d;
+            }
+        }
+    }
+
     /// The ray parameter at which the current block is left.
     #[inline]
     fn exit(&self) -> f64 {
@@ -341,30 +371,34 @@ impl Walk {
         }
     }
 
-    /// If the sample at parameter `t` lies in an empty block, the parameter at which that block
-    /// (and the empty blocks right after it) is left; `None` if the sample must be taken.
+    /// If the sample at parameter `t` lies in an empty block, `Ok` with the parameter at which
+    /// that block (and the empty blocks right after it) is left; else `Err` with the parameter
+    /// up to which samples stay in the same occupied block (and must all be taken).
     /// Calls must come with non-decreasing `t`.
     #[inline]
-    pub(crate) fn skip_until(&mut self, grid: &SkipGrid, t: f64) -> Option<f64> {
+    pub(crate) fn skip_until(&mut self, grid: &SkipGrid, t: f64) -> Result<f64, f64> {
         while !self.done && t >= self.exit() {
             self.advance(grid);
         }
-        if self.done || grid.distance(self.cell) == 0 {
-            return None;
+        if self.done {
+            return Err(f64::INFINITY);
+        }
+        if grid.distance(self.cell) == 0 {
+            return Err(self.exit());
         }
         // Leave this and every following empty block at once.
         loop {
             let r = grid.distance(self.cell) as i64;
             if r == 0 {
                 // The entry of this occupied block is where the empty run ended.
-                return Some(self.entry);
+                return Ok(self.entry);
             }
             if r == 1 {
                 let exit = self.exit();
                 self.advance(grid);
                 self.entry = exit;
                 if self.done {
-                    return Some(exit);
+                    return Ok(exit);
                 }
                 continue;
             }
@@ -395,7 +429,7 @@ impl Walk {
                 self.advance(grid);
                 self.entry = exit;
                 if self.done {
-                    return Some(exit);
+                    return Ok(exit);
                 }
                 continue;
             }
@@ -406,11 +440,10 @@ impl Walk {
             } else {
                 self.cell[axis_exit] - r
             });
-            let entry = t_exit;
-            *self = grid.walk_from(self.o, self.d, t_exit, Some(forced));
-            self.entry = entry;
+            self.relocate(grid, t_exit, forced);
+            self.entry = t_exit;
             if self.done {
-                return Some(t_exit);
+                return Ok(t_exit);
             }
         }
     }

@@ -87,6 +87,7 @@ fn empty_space_skipping_never_changes_a_pixel() {
     let off = Optimise {
         skip_empty: false,
         early_termination: true,
+        ..Optimise::default()
     };
     for (interp, cubic) in [
         (Interpolation::Nearest, (0.0, 0.5)),
@@ -124,6 +125,7 @@ fn early_termination_changes_pixels_by_less_than_its_threshold() {
         Optimise {
             skip_empty: true,
             early_termination: false,
+            ..Optimise::default()
         },
         1.0,
     );
@@ -251,7 +253,7 @@ fn mni_brain_renders_identically_with_and_without_skipping() {
     let d = Dataset::load(&vlb).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
     let dims = d.dims();
-    let render = |skip: bool| {
+    let render = |skip: bool, lean_kernel: bool| {
         let mut vl = Library::new();
         vl.add_dataset(1, d.clone()).unwrap();
         let op: Vec<f32> = [
@@ -269,6 +271,7 @@ fn mni_brain_renders_identically_with_and_without_skipping() {
         vl.set_optimise(Optimise {
             skip_empty: skip,
             early_termination: true,
+            lean_kernel,
         })
         .unwrap();
         let c = [98.0, 116.0, 94.0];
@@ -298,8 +301,12 @@ fn mni_brain_renders_identically_with_and_without_skipping() {
         vl.end().unwrap();
         vl.render_preview(96, 96, 1.0).unwrap().to_rgb8()
     };
-    let (a, b) = (render(true), render(false));
+    let (a, b) = (render(true, true), render(false, true));
     assert!(a == b, "skipping changed the MNI image");
+    assert!(
+        a == render(true, false),
+        "the lean kernel changed the MNI image"
+    );
     // The brain covers a good part of the frame (the VTK image: about 47 % of rays hit it).
     let hit = a.chunks(3).filter(|p| p[0] > 20).count() as f64 / (96.0 * 96.0);
     assert!((0.3..0.7).contains(&hit), "coverage {hit}");
@@ -316,6 +323,7 @@ fn mip_with_skipping_is_identical_to_mip_without() {
         vl.set_optimise(Optimise {
             skip_empty,
             early_termination: true,
+            ..Optimise::default()
         })
         .unwrap();
         vl.camera(&Camera {
@@ -380,4 +388,98 @@ fn sizes_whose_product_overflows_are_refused_before_allocating() {
         )
         .unwrap_err();
     assert_eq!(e.code, ErrorCode::NoMemory, "2^27 nodes at most");
+}
+
+/// The lean kernel (programs of constants, datasets and transfer functions evaluated without the
+/// general interpreter) computes the same fields bit for bit, so every image is identical with
+/// it and without it: DVR with colour tables and shadows through two overlapping objects (the
+/// general compositing loop), one object alone (the single-volume loop), and MIP.
+#[test]
+fn lean_kernel_changes_no_pixel() {
+    let render = |lean_kernel: bool, two: bool, mip: bool| {
+        let mut vl = Library::new();
+        vl.add_dataset(7, blobs()).unwrap();
+        vl.mapping(1, MappingType::Ramp, 2, 1, &[0.3, 0.0, 0.9, 0.9])
+            .unwrap();
+        vl.mapping(
+            2,
+            MappingType::Ramp,
+            3,
+            3,
+            &[0.1, 0.9, 0.2, 0.1, 0.5, 0.3, 0.8, 0.2, 0.9, 0.6, 0.6, 1.0],
+        )
+        .unwrap();
+        vl.scene().unwrap();
+        vl.set_optimise(Optimise {
+            lean_kernel,
+            ..Optimise::default()
+        })
+        .unwrap();
+        vl.camera(&Camera {
+            eye: [10.0, 30.0, -80.0],
+            at: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            fov: 45.0,
+        })
+        .unwrap();
+        vl.ambient(1.0, 1.0, 1.0, 0.3).unwrap();
+        vl.point_light(
+            [-40.0, 60.0, -40.0],
+            vlib::Attenuation::None,
+            [1.0, 0.9, 0.8],
+            1.0,
+        )
+        .unwrap();
+        if mip {
+            vl.render_type(vlib::RenderType::Mip).unwrap();
+        } else {
+            vl.toggle(vlib::Feature::CastShadows, true).unwrap();
+            vl.toggle(vlib::Feature::ReceiveShadows, true).unwrap();
+        }
+        vl.step_size(0.7, 1.0).unwrap();
+        let count = if two { 2 } else { 1 };
+        for i in 0..count {
+            vl.object().unwrap();
+            vl.translate(-0.5 + 0.3 * i as f32, -0.5, -0.5).unwrap();
+            vl.scale(39.0, 35.0, 31.0).unwrap();
+            vl.dataset(Fields::F, 7).unwrap();
+            vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+            vl.map(Fields::R, Fields::F, 2, 1).unwrap();
+            vl.map(Fields::G, Fields::F, 2, 2).unwrap();
+            vl.map(Fields::B, Fields::F, 2, 3).unwrap();
+            vl.set(Fields::KA, 0.3).unwrap();
+            vl.set(Fields::KD, 0.6).unwrap();
+            vl.set(Fields::KS, 0.4).unwrap();
+            vl.set(Fields::N, vlib::types::specular_to_field(12.0))
+                .unwrap();
+            vl.end().unwrap();
+        }
+        vl.render_preview(64, 64, 1.0).unwrap().to_rgb8()
+    };
+    for (two, mip) in [(false, false), (true, false), (false, true)] {
+        let a = render(true, two, mip);
+        if !mip {
+            let plan = {
+                let mut vl = Library::new();
+                vl.scene().unwrap();
+                vl.toggle(vlib::Feature::CastShadows, true).unwrap();
+                vl.toggle(vlib::Feature::ReceiveShadows, true).unwrap();
+                vl.point_light([0.0; 3], vlib::Attenuation::None, [1.0; 3], 1.0)
+                    .unwrap();
+                vl.object().unwrap();
+                vl.set(Fields::O, 0.5).unwrap();
+                vl.end().unwrap();
+                vl.render_plan().unwrap()
+            };
+            assert!(plan.shadows, "the toggles switch shadows on");
+        }
+        assert!(
+            a.iter().any(|&v| v > 30),
+            "the scene (two: {two}, mip: {mip}) shows something"
+        );
+        assert!(
+            a == render(false, two, mip),
+            "the lean kernel changed the image (two: {two}, mip: {mip})"
+        );
+    }
 }
