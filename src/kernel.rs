@@ -254,7 +254,20 @@ impl Lean {
     /// Runs the rest of the program after [`Lean::opacity`] returned a positive opacity.
     #[inline]
     pub(crate) fn rest(&self, p: [f32; 3], fields: &mut [f32; FIELD_COUNT]) {
-        apply(&self.rest, p, fields);
+        match self.rest.as_slice() {
+            // The usual rest, one colour table of the field that gave opacity.
+            [Op::Map {
+                source,
+                mapping,
+                outputs,
+            }] => {
+                let (v, k) = mapping.locate(fields[*source]);
+                for &(mask, j) in outputs {
+                    write(fields, mask, mapping.eval_at(v, k, j));
+                }
+            }
+            rest => apply(rest, p, fields),
+        }
     }
 }
 

@@ -1003,6 +1003,17 @@ impl Compiled {
     }
 }
 
+/// `k as f64`, through i64 where that is exact (x86-64 has no direct u64 → f64 conversion,
+/// and segment indices never come near 2⁶³).
+#[inline]
+fn u64_to_f64(k: u64) -> f64 {
+    if k <= i64::MAX as u64 {
+        k as i64 as f64
+    } else {
+        k as f64
+    }
+}
+
 /// One object's segments along a ray: segment k spans [t0 + k·step, t0 + (k + 1)·step], the last
 /// one ending at t1; its sample is at its midpoint.
 struct Cursor {
@@ -1058,11 +1069,11 @@ impl Cursor {
 
     #[inline]
     fn segment(&self, k: u64) -> (f64, f64) {
-        let a = self.t0 + k as f64 * self.step;
+        let a = self.t0 + u64_to_f64(k) * self.step;
         let b = if k + 1 >= self.n {
             self.t1
         } else {
-            (self.t0 + (k + 1) as f64 * self.step).min(self.t1)
+            (self.t0 + u64_to_f64(k + 1) * self.step).min(self.t1)
         };
         (a, b)
     }
@@ -1096,7 +1107,7 @@ impl Cursor {
             };
             // Skip every segment whose midpoint is before `exit`.
             let guess = ((exit - self.t0) / self.step - 0.5).ceil();
-            let mut k = if guess.is_finite() && guess > self.k as f64 {
+            let mut k = if guess.is_finite() && guess > u64_to_f64(self.k) {
                 (guess as u64).min(self.n)
             } else {
                 self.k + 1
