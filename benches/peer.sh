@@ -9,7 +9,8 @@
 # `python3 ../shared/bench/vtk_dvr.py` (VTK's median frame of the same scene), then prints each
 # vlib time and its ratio to VTK's. Absolute times drift between machines and runs: only the
 # ratios of one run mean anything. The images: target/bench-work/out/vtk_mni*.png and
-# target/bench-work/out/vlib_mni*.png.
+# target/bench-work/out/vlib_mni*.png, and both main frames side by side (VTK left, vlib right)
+# in docs/performance-mni.png.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
@@ -19,7 +20,7 @@ mkdir -p "$work/out"
 sweep=0
 [ "${1:-}" = "--sweep" ] && sweep=1
 
-python3 -c "import vtk, nibabel" 2>/dev/null || pip install -q vtk nibabel
+python3 -c "import vtk, nibabel, PIL" 2>/dev/null || pip install -q vtk nibabel pillow
 
 export VLIB_BENCH_DIR="$work"
 [ -e "$work/data/mni152_t1.json" ] || python3 "$shared/prepare_data.py" >/dev/null
@@ -35,26 +36,101 @@ echo "== VTK (vtkFixedPointVolumeRayCastMapper), $(nproc) threads"
 python3 "$shared/vtk_dvr.py" --only $configs | tail -n $(( $(echo $configs | wc -w) + 1 ))
 
 echo "== vlib (criterion)"
-cargo bench --bench mni -- "$filter" 2>&1 | grep -E "first frame|time:" || true
+cargo bench --bench mni -- "$filter" 2>&1 | tee "$work/out/vlib_bench.txt" | grep -E "first frame|time:" || true
 cargo build --release --example mni -q
 target/release/examples/mni target/bench-data/mni.vlb "$work/out/vlib_mni.png" 0.5 >/dev/null
+# The converged reference both images are measured against: step 0.125 voxel, Catmull–Rom,
+# adaptive 2×2 super-sampling (about a minute or two).
+ref="$work/out/reference_mni.png"
+[ -e "$ref" ] || target/release/examples/mni target/bench-data/mni.vlb "$ref" 0.125 --cubic --ss=2 >/dev/null
+python3 - "$work/out/vtk_mni.png" "$work/out/vlib_mni.png" "$root/docs/performance-mni.png" <<'PY'
+import sys
+from PIL import Image
+a, b = (Image.open(p).convert("RGB") for p in sys.argv[1:3])
+h = max(a.height, b.height)
+out = Image.new("RGB", (a.width + b.width + 8, h), (255, 255, 255))
+out.paste(a, (0, 0))
+out.paste(b, (a.width + 8, 0))
+out.save(sys.argv[3], optimize=True)
+print(f"side by side (VTK left, vlib right): {sys.argv[3]}")
+PY
+python3 - "$work/out/vtk_mni.png" "$work/out/vlib_mni.png" "$ref" "$work/out/errors.json" <<'PY'
+import json, sys
+import numpy as np
+from PIL import Image
+vtk, vlib, ref = (np.asarray(Image.open(p).convert("RGB"), dtype=float) for p in sys.argv[1:4])
+def rms(a, b):
+    return float(np.sqrt(np.mean((a - b) ** 2)))
+err = {"vtk": rms(vtk, ref), "vlib": rms(vlib, ref)}
+json.dump(err, open(sys.argv[4], "w"))
+print(f"RMS difference from the converged reference (8-bit levels): VTK {err['vtk']:.2f}, vlib {err['vlib']:.2f}")
+PY
 
-python3 - "$work/out/vtk_results.json" "$root/target/criterion" "$sweep" "$root/docs/performance.md" "$(nproc)" <<'PY'
-import json, os, platform, sys
+python3 - "$work/out/vtk_results.json" "$root/target/criterion" "$sweep" "$root/docs/performance.md" "$(nproc)" "$work/out/vlib_bench.txt" "$work/out/errors.json" <<'PY'
+import json, os, platform, re, sys
+errors = json.load(open(sys.argv[7]))
 vtk = {r["name"]: r for r in json.load(open(sys.argv[1]))["results"]}
 crit, sweep, doc, cpus = sys.argv[2], sys.argv[3] == "1", sys.argv[4], sys.argv[5]
+m = re.search(r"first frame.*?: ([0-9.]+) s", open(sys.argv[6]).read())
+vlib_first = float(m.group(1)) * 1e3 if m else None
+
+def cpu_model():
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+def write_block(text, name, block):
+    begin, end = f"<!-- {name}:begin -->", f"<!-- {name}:end -->"
+    block = f"{begin}\n{block}\n{end}"
+    if begin in text and end in text:
+        a, b = text.index(begin), text.index(end) + len(end)
+        return text[:a] + block + text[b:]
+    return text + "\n" + block + "\n"
+
+machine = f"{cpu_model()}, {cpus} cores, {platform.system()} {platform.release()}"
 
 def vlib_ms(group, name):
     p = os.path.join(crit, group, name, "new", "estimates.json")
     return json.load(open(p))["median"]["point_estimate"] / 1e6 if os.path.exists(p) else None
 
 main = vtk["main"]["median_s"] * 1e3
-print(f"\nVTK main (shaded, sd 0.5): median {main:.1f} ms, first frame {vtk['main']['first_frame_s']*1e3:.1f} ms")
+vtk_first = vtk["main"]["first_frame_s"] * 1e3
+print(f"\nVTK main (shaded, sd 0.5): median {main:.1f} ms, first frame {vtk_first:.1f} ms")
 print(f"{'vlib variant (sd 0.5)':34} {'median ms':>10} {'vlib/VTK':>9}")
-for name in ["shaded", "shaded_no_skipping", "shaded_no_early_termination", "shaded_neither", "unshaded"]:
+main_rows = [f"| VTK `vtkFixedPointVolumeRayCastMapper` | {main:.0f} ms (first frame {vtk_first:.0f} ms) | — |"]
+labels = {
+    "shaded": "vlib, skipping + early termination + lean kernel",
+    "shaded_no_skipping": "vlib, no empty-space skipping",
+    "shaded_no_early_termination": "vlib, no early termination",
+    "shaded_neither": "vlib, neither skipping nor early termination",
+    "shaded_no_lean_kernel": "vlib, general interpreter instead of the lean kernel",
+    "unshaded": "vlib, unshaded (against VTK shaded)",
+}
+for name, label in labels.items():
     ms = vlib_ms("mni_512_sd0.5", name)
     if ms is not None:
         print(f"{name:34} {ms:10.1f} {ms/main:9.2f}")
+        first = f" (first frame {vlib_first:.0f} ms)" if name == "shaded" and vlib_first else ""
+        main_rows.append(f"| {label} | {ms:.0f} ms{first} | {ms/main:.2f} |")
+text = open(doc).read() if os.path.exists(doc) else ""
+main_table = "\n".join([
+    f"Measured by `bash benches/peer.sh` on {machine}.",
+    "",
+    "| renderer, MNI brain, 512², shaded, sample distance 0.5 | median frame | vlib / VTK |",
+    "|---|---|---|",
+    *main_rows,
+    "",
+    "RMS difference of each main image from a converged vlib reference (step 0.125 voxel, "
+    "Catmull–Rom, adaptive 2×2 super-sampling), in 8-bit levels: "
+    f"VTK {errors['vtk']:.2f}, vlib {errors['vlib']:.2f}. The images side by side (VTK left, vlib "
+    "right): `performance-mni.png`.",
+])
+text = write_block(text, "peer-main", main_table)
+open(doc, "w").write(text)
 if not sweep:
     sys.exit(0)
 rows = []
@@ -75,15 +151,7 @@ table = "\n".join([
     *rows,
 ])
 print("\n" + table)
-begin, end = "<!-- peer:begin -->", "<!-- peer:end -->"
-text = open(doc).read() if os.path.exists(doc) else ""
-machine = f"{platform.processor() or platform.machine()}, {cpus} cores, {platform.system()} {platform.release()}"
-block = f"{begin}\nMeasured by `bash benches/peer.sh --sweep` on {machine}.\n\n{table}\n{end}"
-if begin in text and end in text:
-    a, b = text.index(begin), text.index(end) + len(end)
-    text = text[:a] + block + text[b:]
-else:
-    text += "\n" + block + "\n"
+text = write_block(text, "peer", f"Measured by `bash benches/peer.sh --sweep` on {machine}.\n\n{table}")
 open(doc, "w").write(text)
 print(f"updated {doc}")
 PY

@@ -3,8 +3,13 @@
 //!
 //! ```text
 //! target/release/vlconvert nifti ../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz out/mni.vlb
-//! cargo run --release --example mni -- out/mni.vlb out/mni.png [step] [--unshaded] [--size=N]
+//! cargo run --release --example mni -- out/mni.vlb out/mni.png [step] [--unshaded] [--size=N] \
+//!     [--cubic] [--ss=N]
 //! ```
+//!
+//! `--cubic` samples the dataset with the Catmull–Rom filter instead of trilinear, `--ss=N` turns
+//! on adaptive N×N super-sampling: with a small step they make the converged reference that
+//! `benches/peer.sh` measures both renderers against.
 
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
@@ -12,17 +17,30 @@ mod mni_scene;
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    let all: Vec<String> = std::env::args().skip(1).collect();
+    // Positional arguments first (vlb, png, step), flags anywhere.
+    let args: Vec<String> = all
+        .iter()
+        .filter(|a| !a.starts_with("--"))
+        .cloned()
+        .collect();
     let vlb = args.first().map(String::as_str).unwrap_or("out/mni.vlb");
     let png = args.get(1).map(String::as_str).unwrap_or("out/mni.png");
     let step: f32 = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(0.5);
-    let shaded = !args.iter().any(|a| a == "--unshaded");
-    let size: i32 = args
+    let shaded = !all.iter().any(|a| a == "--unshaded");
+    let size: i32 = all
         .iter()
         .find_map(|a| a.strip_prefix("--size="))
         .map(str::parse)
         .transpose()?
         .unwrap_or(512);
+    let cubic = all.iter().any(|a| a == "--cubic");
+    let ss: i32 = all
+        .iter()
+        .find_map(|a| a.strip_prefix("--ss="))
+        .map(str::parse)
+        .transpose()?
+        .unwrap_or(1);
     let start = Instant::now();
     let mut vl = vlib::Library::new();
     vl.load(mni_scene::BRAIN, vlb)?;
@@ -31,7 +49,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     mni_scene::mappings(&mut vl)?;
     vl.scene()?;
     vl.image(png, 1.0, size, size)?;
-    mni_scene::build(&mut vl, dims, step, shaded)?;
+    vl.super_sample(ss)?;
+    let filter = if cubic {
+        vlib::Interpolation::Tricubic
+    } else {
+        vlib::Interpolation::Trilinear
+    };
+    mni_scene::build_with(&mut vl, dims, step, shaded, filter)?;
     vl.end()?;
     println!(
         "wrote {png} in {:.3} s (load {loaded:.3} s, then precomputation and render)",

@@ -74,7 +74,8 @@ fn chessboard(dist: &mut [u8], dims: [usize; 3]) {
 const MAX_BLOCKS: usize = 1 << 24;
 
 /// The (min, max) of dataset `d` under `filter` over the object-space box [lo, hi].
-fn dataset_range(d: &Dataset, filter: Filter, lo: DVec3, hi: DVec3) -> (f32, f32) {
+/// `overshoot` is the filter's [`overshoot`].
+fn dataset_range(d: &Dataset, filter: Filter, overshoot: f64, lo: DVec3, hi: DVec3) -> (f32, f32) {
     let bricks = d.bricks(filter);
     let dims = d.dims();
     let idx = |x: f64, axis: usize| -> usize {
@@ -98,15 +99,25 @@ fn dataset_range(d: &Dataset, filter: Filter, lo: DVec3, hi: DVec3) -> (f32, f32
             }
         }
     }
-    if let Filter::Cubic { b, c } = filter {
+    if let Filter::Cubic { .. } = filter {
         // Negative lobes can overshoot the node range by (P − 1)·(max − min).
-        let s = bc_abs_sum(b as f64, c as f64);
-        let p = (s * s * s + 1.0) / 2.0;
-        let spread = (mx - mn) as f64 * (p - 1.0);
+        let spread = (mx - mn) as f64 * overshoot;
         mn = (mn as f64 - spread).max(0.0) as f32;
         mx = (mx as f64 + spread).min(1.0) as f32;
     }
     (mn, mx)
+}
+
+/// P − 1 for a filter (0 for nearest and trilinear): how far, in multiples of the node range,
+/// an interpolated value can overshoot it. Computed once per grid (it samples the kernel).
+fn overshoot(filter: Filter) -> f64 {
+    match filter {
+        Filter::Cubic { b, c } => {
+            let s = bc_abs_sum(b as f64, c as f64);
+            (s * s * s + 1.0) / 2.0 - 1.0
+        }
+        _ => 0.0,
+    }
 }
 
 impl SkipGrid {
@@ -171,10 +182,10 @@ impl SkipGrid {
         // The opacity interval depends on the block only through the datasets' ranges there, and
         // blocks share few distinct ranges: evaluate the interval program once per distinct set.
         let mut memo: std::collections::HashMap<Vec<(u32, u32)>, bool> = Default::default();
-        let data: Vec<(&Dataset, Filter)> = prefix
+        let data: Vec<(&Dataset, Filter, f64)> = prefix
             .iter()
             .filter_map(|i| match i {
-                Instr::Dataset { data, filter, .. } => Some((&**data, *filter)),
+                Instr::Dataset { data, filter, .. } => Some((&**data, *filter, overshoot(*filter))),
                 _ => None,
             })
             .collect();
@@ -185,8 +196,8 @@ impl SkipGrid {
                     let lo = origin + DVec3::new(i as f64, j as f64, k as f64) * cell;
                     let hi = lo + cell;
                     key.clear();
-                    key.extend(data.iter().map(|(d, f)| {
-                        let (a, b) = dataset_range(d, *f, lo, hi);
+                    key.extend(data.iter().map(|(d, f, over)| {
+                        let (a, b) = dataset_range(d, *f, *over, lo, hi);
                         (a.to_bits(), b.to_bits())
                     }));
                     let e = match memo.get(&key) {

@@ -52,6 +52,18 @@ pub fn build(
     step: f32,
     shaded: bool,
 ) -> Result<(), vlib::Error> {
+    build_with(vl, dims, step, shaded, vlib::Interpolation::Trilinear)
+}
+
+/// [`build`] with another interpolation filter for the dataset (a reference image uses the
+/// cubic filter; the peer scene is trilinear, as VTK's).
+pub fn build_with(
+    vl: &mut Library,
+    dims: [usize; 3],
+    step: f32,
+    shaded: bool,
+    interpolation: vlib::Interpolation,
+) -> Result<(), vlib::Error> {
     let ext = dims.map(|n| (n - 1) as f32);
     let centre = ext.map(|e| e / 2.0);
     vl.camera(&Camera {
@@ -65,7 +77,7 @@ pub fn build(
     // VTK's headlight: a white light travelling along the view direction.
     vl.directional_light([0.0, -1.0, 0.0], [1.0, 1.0, 1.0], 1.0)?;
     vl.step_size(step, 1.0)?;
-    vl.interpolation(vlib::Interpolation::Trilinear)?;
+    vl.interpolation(interpolation)?;
     vl.object()?;
     vl.flip(vlib::types::axes::X)?;
     vl.scale(ext[0], ext[1], ext[2])?;
