@@ -216,21 +216,34 @@ impl Lean {
     }
 
     /// Runs the opacity part at object point `p` on fresh registers; returns the opacity, or 0
-    /// as soon as the zero test proves it (the registers are then incomplete).
+    /// as soon as the zero test proves it (the registers are then incomplete or untouched).
     #[inline]
     pub(crate) fn opacity(&self, p: [f32; 3], fields: &mut [f32; FIELD_COUNT]) -> f32 {
-        *fields = self.start;
         let Some((last, head)) = self.opacity.split_last() else {
+            *fields = self.start;
             return 0.0;
         };
         match head {
-            // The usual head, one trilinear dataset read: without the operation loop.
+            // The usual head, one trilinear dataset read: without the operation loop, and
+            // without touching the registers when the zero test fails on the value itself.
             [Op::Data {
                 mask,
                 data,
                 filter: Filter::Trilinear,
-            }] => write(fields, *mask, data.trilinear(p)),
-            _ => apply(head, p, fields),
+            }] => {
+                let v = clamp_field(data.trilinear(p));
+                if let Some((source, z)) = self.zero {
+                    if mask & (1 << source) != 0 && v <= z {
+                        return 0.0;
+                    }
+                }
+                *fields = self.start;
+                write(fields, *mask, v);
+            }
+            _ => {
+                *fields = self.start;
+                apply(head, p, fields);
+            }
         }
         if let Some((source, z)) = self.zero {
             if fields[source] <= z {

@@ -31,6 +31,10 @@ pub(crate) struct SkipGrid {
 /// The largest leap, in blocks.
 const MAX_LEAP: u8 = 16;
 
+/// Empty runs whose chessboard distance is at most this are crossed block by block (a DDA
+/// step is cheaper than relocating the walk after a leap over so few blocks).
+const STEP_BELOW: i64 = 4;
+
 /// The chessboard (L∞) distance transform of `dist` in place: on entry 0 for occupied blocks
 /// and `MAX_LEAP` for empty ones; on exit each empty block holds min(distance, MAX_LEAP).
 /// Separable: d(x) = min over y of max(|x − y|, d_prev(y)) along each axis in turn.
@@ -404,7 +408,7 @@ impl Walk {
                 // The entry of this occupied block is where the empty run ended.
                 return Ok(self.entry);
             }
-            if r == 1 {
+            if r <= STEP_BELOW {
                 let exit = self.exit();
                 self.advance(grid);
                 self.entry = exit;
