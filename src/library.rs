@@ -482,10 +482,12 @@ impl Library {
         Ok(())
     }
 
-    /// Files an in-memory dataset under `id` (the Rust counterpart of `vlLoad`).
-    pub fn add_dataset(&mut self, id: i32, dataset: Dataset) -> Result<()> {
+    /// Files an in-memory dataset under `id` (the Rust counterpart of `vlLoad`). An
+    /// `Arc<Dataset>` is shared, not copied: several libraries (or ids) can hold one dataset,
+    /// and its caches (brick ranges) are computed once for all of them.
+    pub fn add_dataset(&mut self, id: i32, dataset: impl Into<Arc<Dataset>>) -> Result<()> {
         self.check(Command::Load)?;
-        self.datasets.insert(id, Arc::new(dataset));
+        self.datasets.insert(id, dataset.into());
         Ok(())
     }
 
