@@ -10,46 +10,12 @@
 //! The dataset is converted from `../shared/data/…nii.gz` with `vlconvert` on first use
 //! (into `target/bench-data/mni.vlb`), or taken from `$VLIB_MNI_VLB`.
 
-#[path = "../examples/common/mni_scene.rs"]
-mod mni_scene;
+mod common;
 
+use common::{mni_dataset as dataset, mni_scene as scene};
 use criterion::{criterion_group, criterion_main, Criterion};
-use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use vlib::scene::Optimise;
-use vlib::Library;
-
-fn dataset() -> PathBuf {
-    if let Some(p) = std::env::var_os("VLIB_MNI_VLB") {
-        return p.into();
-    }
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let out = root.join("target/bench-data/mni.vlb");
-    if !out.exists() {
-        std::fs::create_dir_all(out.parent().unwrap()).unwrap();
-        let nii = root.join("../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz");
-        let st = std::process::Command::new(env!("CARGO_BIN_EXE_vlconvert"))
-            .arg("nifti")
-            .arg(&nii)
-            .arg(&out)
-            .status()
-            .expect("run vlconvert");
-        assert!(st.success(), "vlconvert failed on {}", nii.display());
-    }
-    out
-}
-
-/// A library with the brain loaded and the scene open, ready to render.
-fn scene(vlb: &PathBuf, step: f32, shaded: bool, optimise: Optimise) -> Library {
-    let mut vl = Library::new();
-    vl.load(mni_scene::BRAIN, vlb).unwrap();
-    let dims = vl.dataset_of(mni_scene::BRAIN).unwrap().dims();
-    mni_scene::mappings(&mut vl).unwrap();
-    vl.scene().unwrap();
-    vl.set_optimise(optimise).unwrap();
-    mni_scene::build(&mut vl, dims, step, shaded).unwrap();
-    vl
-}
 
 fn bench(c: &mut Criterion) {
     let vlb = dataset();
@@ -65,13 +31,14 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("mni_512_sd0.5");
     g.sample_size(10).measurement_time(Duration::from_secs(8));
     let variants = [
-        ("shaded", true, true, true),
-        ("shaded_no_skipping", true, false, true),
-        ("shaded_no_early_termination", true, true, false),
-        ("shaded_neither", true, false, false),
-        ("unshaded", false, true, true),
+        ("shaded", true, true, true, true),
+        ("shaded_no_skipping", true, false, true, true),
+        ("shaded_no_early_termination", true, true, false, true),
+        ("shaded_neither", true, false, false, true),
+        ("shaded_no_lean_kernel", true, true, true, false),
+        ("unshaded", false, true, true, true),
     ];
-    for (name, shaded, skip_empty, early_termination) in variants {
+    for (name, shaded, skip_empty, early_termination, lean_kernel) in variants {
         let vl = scene(
             &vlb,
             0.5,
@@ -79,6 +46,7 @@ fn bench(c: &mut Criterion) {
             Optimise {
                 skip_empty,
                 early_termination,
+                lean_kernel,
             },
         );
         g.bench_function(name, |b| {

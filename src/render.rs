@@ -661,8 +661,9 @@ impl Compiled {
 
     /// The transmittance from `w` along unit direction `l` up to distance `dist` through the
     /// objects that cast shadows (each sampled on its own step grid, exactly like primary rays,
-    /// empty-space skipping included). A shadow ray starts just off the point so a medium does
-    /// not shadow its own sample.
+    /// empty-space skipping included). A medium does not shadow its own sample: the shadow
+    /// ray's first segment ends its own step away; a surface does not shadow the point it
+    /// holds: crossings within 10⁻³ of a step of the point are not counted.
     fn transmittance(&self, w: DVec3, l: DVec3, dist: f64) -> f64 {
         let mut t_total = 1.0f64;
         for obj in self.objects.iter().filter(|o| o.cast_shadows) {
@@ -675,9 +676,15 @@ impl Compiled {
             }
             let mut c = Cursor::new(self, obj, 0, w, l, t0, t1);
             if obj.render_type == RenderType::Dsr {
-                // A surface object shadows by the opacity of the surfaces the ray crosses.
+                // A surface object shadows by the opacity of the surfaces the ray crosses. A
+                // point on a surface lies within 10⁻⁶ of a step of it, on either side: crossings
+                // that close to the start are the surface the point is on, which must not
+                // shadow itself (secondary rays start the same distance off their surface).
+                let eps = obj.step * 1e-3;
                 for hit in self.surface_hits(obj, &c, w, l, Ray::PRIMARY, false) {
-                    t_total *= 1.0 - hit.alpha;
+                    if hit.t > eps {
+                        t_total *= 1.0 - hit.alpha;
+                    }
                 }
                 if t_total < T_MIN {
                     return 0.0;

@@ -233,3 +233,51 @@ fn a_mirror_reflects_a_marker_where_angle_in_equals_angle_out() {
         "marker at ({gx:.2}, {gy:.2}), expected ({ex:.2}, {ey:.2})"
     );
 }
+
+/// A surface does not shadow the points it holds: a DSR sphere that casts and receives shadows,
+/// lit from the eye, looks exactly as with shadows off (nothing lies between its front and the
+/// light), for several steps (the bisection leaves each hit on either side of the surface).
+#[test]
+fn dsr_surface_does_not_shadow_itself() {
+    let render = |shadows: bool, step: f32| {
+        let mut vl = Library::new();
+        vl.scene().unwrap();
+        vl.camera(&Camera {
+            eye: [0.0, 0.0, -200.0],
+            at: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            fov: 20.0,
+        })
+        .unwrap();
+        vl.point_light([0.0, 0.0, -200.0], vlib::Attenuation::None, [1.0; 3], 1.0)
+            .unwrap();
+        vl.render_type(RenderType::Dsr).unwrap();
+        vl.surface(Fields::F, 0.5).unwrap();
+        vl.step_size(step, 1.0).unwrap();
+        vl.toggle(Feature::CastShadows, shadows).unwrap();
+        vl.toggle(Feature::ReceiveShadows, shadows).unwrap();
+        vl.object().unwrap();
+        vl.translate(-0.5, -0.5, -0.5).unwrap();
+        vl.scale(100.0, 100.0, 100.0).unwrap();
+        vl.function(Fields::F, |s| {
+            let v = vlib::vlaux::sphere(s.position());
+            s.set(Fields::F, v).ok();
+        })
+        .unwrap();
+        vl.set(Fields::O, 1.0).unwrap();
+        vl.set(Fields::COLORS, 1.0).unwrap();
+        vl.set(Fields::KD, 1.0).unwrap();
+        vl.end().unwrap();
+        vl.render_preview(33, 33, 1.0).unwrap().to_rgb8()
+    };
+    for step in [0.37, 1.0, 3.0] {
+        let lit = render(false, step);
+        // The centre faces the light: fully lit (kd · C · N·L = 1).
+        assert_eq!(lit[3 * (16 * 33 + 16)], 255, "step {step}");
+        assert_eq!(
+            lit,
+            render(true, step),
+            "step {step}: the surface shadows itself"
+        );
+    }
+}

@@ -1,0 +1,80 @@
+//! What the benchmarks share: the MNI brain's dataset and scene (used by `mni.rs` and by the
+//! thread-scaling group of `scenes.rs`), and a timer for in-process ratios.
+//!
+//! A directory module, so that cargo does not take it for a benchmark target of its own.
+
+#![allow(dead_code)]
+
+#[path = "../../examples/common/mni_scene.rs"]
+pub mod mni_scene;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use vlib::scene::Optimise;
+use vlib::Library;
+
+/// The converted MNI template: `$VLIB_MNI_VLB`, or `target/bench-data/mni.vlb`, made on first
+/// use with `vlconvert` from `../shared/data/…nii.gz`. An error when neither the file nor the
+/// NIfTI source is there, or when the conversion fails.
+pub fn try_mni_dataset() -> Result<PathBuf, String> {
+    if let Some(p) = std::env::var_os("VLIB_MNI_VLB") {
+        return Ok(p.into());
+    }
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let out = root.join("target/bench-data/mni.vlb");
+    if out.exists() {
+        return Ok(out);
+    }
+    let nii = root.join("../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz");
+    if !nii.exists() {
+        return Err(format!("no {} and no $VLIB_MNI_VLB", nii.display()));
+    }
+    std::fs::create_dir_all(out.parent().unwrap()).map_err(|e| e.to_string())?;
+    let st = std::process::Command::new(env!("CARGO_BIN_EXE_vlconvert"))
+        .arg("nifti")
+        .arg(&nii)
+        .arg(&out)
+        .status()
+        .map_err(|e| format!("run vlconvert: {e}"))?;
+    if !st.success() {
+        return Err(format!("vlconvert failed on {}", nii.display()));
+    }
+    Ok(out)
+}
+
+/// [`try_mni_dataset`], panicking when it fails.
+pub fn mni_dataset() -> PathBuf {
+    try_mni_dataset().unwrap_or_else(|e| panic!("MNI dataset: {e}"))
+}
+
+/// A library with the brain loaded and the scene open, ready to render: the VTK peer scene
+/// with sample distance `step` voxels, shaded or not.
+pub fn mni_scene(vlb: &Path, step: f32, shaded: bool, optimise: Optimise) -> Library {
+    let mut vl = Library::new();
+    vl.load(mni_scene::BRAIN, vlb).unwrap();
+    let dims = vl.dataset_of(mni_scene::BRAIN).unwrap().dims();
+    mni_scene::mappings(&mut vl).unwrap();
+    vl.scene().unwrap();
+    vl.set_optimise(optimise).unwrap();
+    mni_scene::build(&mut vl, dims, step, shaded).unwrap();
+    vl
+}
+
+/// The time `f` takes, in seconds.
+pub fn seconds(f: impl FnOnce()) -> f64 {
+    let start = Instant::now();
+    f();
+    start.elapsed().as_secs_f64()
+}
+
+/// The median of some timings (the mean of the middle two for an even count).
+pub fn median(mut t: Vec<f64>) -> f64 {
+    assert!(!t.is_empty(), "median of no timings");
+    t.sort_by(f64::total_cmp);
+    let n = t.len();
+    if n % 2 == 1 {
+        t[n / 2]
+    } else {
+        0.5 * (t[n / 2 - 1] + t[n / 2])
+    }
+}
