@@ -187,8 +187,9 @@ impl Lean {
             }
         }
         // Trailing constants (`vlSet` after everything else, as for ka, kd, ks and the specular
-        // exponent of a scanned volume) are written at the start instead, when no other
-        // operation reads or writes their fields: the result is the same, at no cost per sample.
+        // exponent of a scanned volume) are written at the start instead, when no dataset or
+        // map reads or writes their fields: the result is the same, at no cost per sample.
+        // Earlier constants for those fields are overwritten by them, so they are dropped.
         let mut start = [0.0f32; FIELD_COUNT];
         while let Some(Op::Set { mask, value }) = rest.last() {
             let (mask, value) = (*mask, *value);
@@ -196,7 +197,8 @@ impl Lean {
                 .iter()
                 .chain(&rest[..rest.len() - 1])
                 .any(|op| match op {
-                    Op::Set { mask: m, .. } | Op::Data { mask: m, .. } => m & mask != 0,
+                    Op::Set { .. } => false,
+                    Op::Data { mask: m, .. } => m & mask != 0,
                     Op::Map {
                         source, outputs, ..
                     } => mask & (1 << *source) != 0 || outputs.iter().any(|&(m, _)| m & mask != 0),
@@ -206,6 +208,14 @@ impl Lean {
             }
             write(&mut start, mask, value);
             rest.pop();
+            for ops in [&mut opacity, &mut rest] {
+                for op in ops.iter_mut() {
+                    if let Op::Set { mask: m, .. } = op {
+                        *m &= !mask;
+                    }
+                }
+                ops.retain(|op| !matches!(op, Op::Set { mask: 0, .. }));
+            }
         }
         Some(Lean {
             opacity,
@@ -353,6 +363,17 @@ mod tests {
             ],
             // Opacity constant: no zero test.
             vec![set(Fields::O, 0.4), ds(Fields::R)],
+            // Constants set twice (the unshaded scanned volume: ka 0.2, then ka 1), one of them
+            // early and for several fields.
+            vec![
+                set(Fields::KA | Fields::KD, 0.7),
+                ds(Fields::F),
+                map(Fields::O, 9, &o, 0),
+                map(Fields::R, 9, &c, 0),
+                set(Fields::KA, 0.2),
+                set(Fields::KS, 0.5),
+                set(Fields::KA, 1.0),
+            ],
             // Nothing writes opacity.
             vec![ds(Fields::F)],
         ]
@@ -402,6 +423,22 @@ mod tests {
         // Lookup: 0 up to a_1 = 0.3.
         let lean = Lean::new(&progs[3], 3).unwrap();
         assert_eq!(lean.zero, Some((9, 0.3)));
+    }
+
+    #[test]
+    fn constants_overwritten_later_are_folded() {
+        let progs = programs();
+        let lean = Lean::new(&progs[5], 3).unwrap();
+        // ka = 1 and ks = 0.5 start the registers; the early set keeps only kd, the ka = 0.2
+        // between is gone, and the rest is the colour map alone.
+        assert_eq!(lean.start[4], 1.0);
+        assert_eq!(lean.start[6], 0.5);
+        assert_eq!(lean.start[5], 0.0);
+        assert!(
+            matches!(lean.opacity[0], Op::Set { mask, value } if mask == 1 << 5 && value == 0.7)
+        );
+        assert_eq!(lean.rest.len(), 1);
+        assert!(matches!(lean.rest[0], Op::Map { .. }));
     }
 
     #[test]
