@@ -492,42 +492,11 @@ impl Dataset {
     /// of summation, so the same value bit for bit. `None` near the faces.
     #[inline]
     fn cubic_interior(&self, u: [f64; 3], b: f64, c: f64) -> Option<f64> {
-        let d = self.dims;
-        let mut i0 = [0usize; 3];
-        let mut w = [[0.0f64; 4]; 3];
-        for axis in 0..3 {
-            let f = u[axis].floor();
-            // Taps f − 1 … f + 2 must all be nodes.
-            if f < 1.0 || f + 2.0 > (d[axis] - 1) as f64 {
-                return None;
-            }
-            i0[axis] = f as usize - 1;
-            let t = u[axis] - f;
-            for (m, wm) in w[axis].iter_mut().enumerate() {
-                *wm = bc_kernel(t - (m as f64 - 1.0), b, c);
-            }
-        }
-        let [wx, wy, wz] = w;
-        let (nx, ny) = (d[0], d[1]);
-        let mut sum = 0.0;
-        for (kz, &wzk) in wz.iter().enumerate() {
-            if wzk == 0.0 {
-                continue;
-            }
-            for (ky, &wyk) in wy.iter().enumerate() {
-                if wyk == 0.0 {
-                    continue;
-                }
-                let o = i0[0] + nx * ((i0[1] + ky) + ny * (i0[2] + kz));
-                let r: [f32; 4] = self.values.get(o..o + 4)?.try_into().ok()?;
-                let mut row = 0.0;
-                for (&wxk, v) in wx.iter().zip(r) {
-                    row += wxk * v as f64;
-                }
-                sum += wzk * wyk * row;
-            }
-        }
-        Some(sum)
+        let (i0, w) = self.cubic_taps(u, b, c, None)?;
+        self.cubic_sum(i0, w, |o| {
+            let r: [f32; 4] = self.values.get(o..o + 4)?.try_into().ok()?;
+            Some(r.map(f64::from))
+        })
     }
 
     /// The BC-spline filter of the node derivatives along `axis` where every tap lies inside
@@ -537,14 +506,40 @@ impl Dataset {
     /// elsewhere.
     #[inline]
     fn cubic_derivative_interior(&self, u: [f64; 3], b: f64, c: f64, axis: usize) -> Option<f64> {
-        let d = self.dims;
+        let (i0, w) = self.cubic_taps(u, b, c, Some(axis))?;
+        let [nx, ny, _] = self.dims;
+        let stride = [1, nx, nx * ny][axis];
+        let row = |o: usize| -> Option<[f32; 4]> { self.values.get(o..o + 4)?.try_into().ok() };
+        self.cubic_sum(i0, w, |o| {
+            // The taps' neighbours below and above along `axis`.
+            let (lo, hi) = if axis == 0 {
+                let r: [f32; 6] = self.values.get(o - 1..o + 5)?.try_into().ok()?;
+                ([r[0], r[1], r[2], r[3]], [r[2], r[3], r[4], r[5]])
+            } else {
+                (row(o - stride)?, row(o + stride)?)
+            };
+            Some(std::array::from_fn(|k| (hi[k] as f64 - lo[k] as f64) / 2.0))
+        })
+    }
+
+    /// The first tap and the four weights per axis of the BC-spline filter at continuous index
+    /// `u`, as [`Dataset::filter`] computes them; `None` unless every tap is a node and, along
+    /// `derivative_axis`, so are the taps' neighbours.
+    #[inline]
+    fn cubic_taps(
+        &self,
+        u: [f64; 3],
+        b: f64,
+        c: f64,
+        derivative_axis: Option<usize>,
+    ) -> Option<([usize; 3], [[f64; 4]; 3])> {
         let mut i0 = [0usize; 3];
         let mut w = [[0.0f64; 4]; 3];
         for a in 0..3 {
             let f = u[a].floor();
-            // Taps f − 1 … f + 2; along `axis` their neighbours f − 2 … f + 3 too.
-            let margin = if a == axis { 1.0 } else { 0.0 };
-            if f < 1.0 + margin || f + 2.0 + margin > (d[a] - 1) as f64 {
+            // Taps f − 1 … f + 2; along the derivative's axis their neighbours f − 2 … f + 3.
+            let margin = if derivative_axis == Some(a) { 1.0 } else { 0.0 };
+            if f < 1.0 + margin || f + 2.0 + margin > (self.dims[a] - 1) as f64 {
                 return None;
             }
             i0[a] = f as usize - 1;
@@ -553,10 +548,19 @@ impl Dataset {
                 *wm = bc_kernel(t - (m as f64 - 1.0), b, c);
             }
         }
-        let [wx, wy, wz] = w;
-        let (nx, ny) = (d[0], d[1]);
-        let stride = [1, nx, nx * ny][axis];
-        let row = |o: usize| -> Option<[f32; 4]> { self.values.get(o..o + 4)?.try_into().ok() };
+        Some((i0, w))
+    }
+
+    /// Σ_z Σ_y w_z·w_y·Σ_x w_x·v, in the generic filter's order (zero y and z weights skipped),
+    /// where `row(o)` gives the four values of the x-row starting at node offset `o`.
+    #[inline]
+    fn cubic_sum(
+        &self,
+        i0: [usize; 3],
+        [wx, wy, wz]: [[f64; 4]; 3],
+        row: impl Fn(usize) -> Option<[f64; 4]>,
+    ) -> Option<f64> {
+        let [nx, ny, _] = self.dims;
         let mut sum = 0.0;
         for (kz, &wzk) in wz.iter().enumerate() {
             if wzk == 0.0 {
@@ -566,17 +570,10 @@ impl Dataset {
                 if wyk == 0.0 {
                     continue;
                 }
-                let o = i0[0] + nx * ((i0[1] + ky) + ny * (i0[2] + kz));
-                // The taps' neighbours below and above along `axis`.
-                let (lo, hi) = if axis == 0 {
-                    let r: [f32; 6] = self.values.get(o - 1..o + 5)?.try_into().ok()?;
-                    ([r[0], r[1], r[2], r[3]], [r[2], r[3], r[4], r[5]])
-                } else {
-                    (row(o - stride)?, row(o + stride)?)
-                };
+                let r = row(i0[0] + nx * ((i0[1] + ky) + ny * (i0[2] + kz)))?;
                 let mut acc = 0.0;
-                for ((&wxk, h), l) in wx.iter().zip(hi).zip(lo) {
-                    acc += wxk * ((h as f64 - l as f64) / 2.0);
+                for (&wxk, v) in wx.iter().zip(r) {
+                    acc += wxk * v;
                 }
                 sum += wzk * wyk * acc;
             }
