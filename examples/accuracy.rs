@@ -558,39 +558,13 @@ fn sphere_error(img: &Image, exact: &Image) -> SphereErr {
 // ---------------------------------------------------------------------------------------------
 
 /// The MNI scene of `examples/common/mni_scene.rs` (camera, light, transfer functions, shading)
-/// with every control open: `mni_scene::build_with` chooses only the interpolation type, and the
-/// sweep also sets the cubic B and C, so the object is built here with the same commands (keep
-/// the two in step).
+/// with every control of `cfg` in force.
 fn mni_scene(vl: &mut Library, dims: [usize; 3], cfg: Cfg) -> vlib::Result<()> {
     mni_scene::mappings(vl)?;
     vl.scene()?;
-    let ext = dims.map(|n| (n - 1) as f32);
-    let centre = ext.map(|e| e / 2.0);
-    vl.camera(&Camera {
-        eye: [centre[0], centre[1] + 360.0, centre[2]],
-        at: centre,
-        up: [0.0, 0.0, 1.0],
-        fov: 30.0,
-    })?;
-    vl.background(0.0, 0.0, 0.0)?;
-    vl.ambient(1.0, 1.0, 1.0, 1.0)?;
-    vl.directional_light([0.0, -1.0, 0.0], [1.0, 1.0, 1.0], 1.0)?;
+    mni_scene::view(vl, dims)?;
     cfg.apply(vl, 1.0)?;
-    vl.object()?;
-    vl.flip(vlib::types::axes::X)?;
-    vl.scale(ext[0], ext[1], ext[2])?;
-    vl.dataset(Fields::F, mni_scene::BRAIN)?;
-    // Mapping ids 1 (opacity) and 2 (colour) of `mni_scene::mappings`.
-    vl.map(Fields::O, Fields::F, 1, 1)?;
-    vl.map(Fields::R, Fields::F, 2, 1)?;
-    vl.map(Fields::G, Fields::F, 2, 2)?;
-    vl.map(Fields::B, Fields::F, 2, 3)?;
-    vl.set(Fields::KA, 0.2)?;
-    vl.set(Fields::KD, 0.7)?;
-    vl.set(Fields::KS, 0.3)?;
-    vl.set(Fields::N, vlib::types::specular_to_field(10.0))?;
-    vl.end()?;
-    Ok(())
+    mni_scene::object(vl, dims, true)
 }
 
 /// The brain, loaded once and shared by every scene.

@@ -30,7 +30,7 @@ mod mni_scene;
 
 use std::f64::consts::FRAC_PI_2;
 use std::time::Instant;
-use vlib::{Camera, Fields, Library, Sample};
+use vlib::{Camera, Library, Sample};
 
 /// The paper's severity: a quarter turn over the height of the box.
 const TWIST: f64 = FRAC_PI_2;
@@ -75,15 +75,7 @@ fn build(vl: &mut Library, dims: [usize; 3], step: f32) -> Result<(), vlib::Erro
         let q = twist(s.position(), ext);
         let _ = s.set_position(q);
     })?;
-    vl.dataset(Fields::F, mni_scene::BRAIN)?;
-    vl.map(Fields::O, Fields::F, 1, 1)?;
-    vl.map(Fields::R, Fields::F, 2, 1)?;
-    vl.map(Fields::G, Fields::F, 2, 2)?;
-    vl.map(Fields::B, Fields::F, 2, 3)?;
-    vl.set(Fields::KA, 0.2)?;
-    vl.set(Fields::KD, 0.7)?;
-    vl.set(Fields::KS, 0.3)?;
-    vl.set(Fields::N, vlib::types::specular_to_field(10.0))?;
+    mni_scene::fields(vl, true)?;
     vl.end()?;
     Ok(())
 }

@@ -64,6 +64,14 @@ pub fn build_with(
     shaded: bool,
     interpolation: vlib::Interpolation,
 ) -> Result<(), vlib::Error> {
+    view(vl, dims)?;
+    vl.step_size(step, 1.0)?;
+    vl.interpolation(interpolation)?;
+    object(vl, dims, shaded)
+}
+
+/// The camera, background and lights of the peer scene (VTK's view of the brain).
+pub fn view(vl: &mut Library, dims: [usize; 3]) -> Result<(), vlib::Error> {
     let ext = dims.map(|n| (n - 1) as f32);
     let centre = ext.map(|e| e / 2.0);
     vl.camera(&Camera {
@@ -75,12 +83,23 @@ pub fn build_with(
     vl.background(0.0, 0.0, 0.0)?;
     vl.ambient(1.0, 1.0, 1.0, 1.0)?;
     // VTK's headlight: a white light travelling along the view direction.
-    vl.directional_light([0.0, -1.0, 0.0], [1.0, 1.0, 1.0], 1.0)?;
-    vl.step_size(step, 1.0)?;
-    vl.interpolation(interpolation)?;
+    vl.directional_light([0.0, -1.0, 0.0], [1.0, 1.0, 1.0], 1.0)
+}
+
+/// The brain object, with the step, filter and other object state in force.
+pub fn object(vl: &mut Library, dims: [usize; 3], shaded: bool) -> Result<(), vlib::Error> {
+    let ext = dims.map(|n| (n - 1) as f32);
     vl.object()?;
     vl.flip(vlib::types::axes::X)?;
     vl.scale(ext[0], ext[1], ext[2])?;
+    fields(vl, shaded)?;
+    vl.end()?;
+    Ok(())
+}
+
+/// The brain's field program inside an open object: F from the dataset, opacity and colour
+/// through the peer transfer functions, and the shading constants.
+pub fn fields(vl: &mut Library, shaded: bool) -> Result<(), vlib::Error> {
     vl.dataset(Fields::F, BRAIN)?;
     vl.map(Fields::O, Fields::F, OPACITY, 1)?;
     vl.map(Fields::R, Fields::F, COLOUR, 1)?;
@@ -95,7 +114,6 @@ pub fn build_with(
         // Unshaded, VTK shows the classified colour: ambient 1.
         vl.set(Fields::KA, 1.0)?;
     }
-    vl.end()?;
     let _ = Attenuation::None;
     Ok(())
 }
