@@ -229,32 +229,61 @@ impl Lean {
     /// as soon as the zero test proves it (the registers are then incomplete or untouched).
     #[inline]
     pub(crate) fn opacity(&self, p: [f32; 3], fields: &mut [f32; FIELD_COUNT]) -> f32 {
+        if let Some((data, z)) = self.value_head() {
+            let v = clamp_field(data.trilinear(p));
+            if v <= z {
+                return 0.0;
+            }
+            return self.opacity_from_value(v, p, fields);
+        }
         let Some((last, head)) = self.opacity.split_last() else {
             *fields = self.start;
             return 0.0;
         };
-        match head {
-            // The usual head, one trilinear dataset read: without the operation loop, and
-            // without touching the registers when the zero test fails on the value itself.
-            [Op::Data {
-                mask,
-                data,
-                filter: Filter::Trilinear,
-            }] => {
-                let v = clamp_field(data.trilinear(p));
-                if let Some((source, z)) = self.zero {
-                    if mask & (1 << source) != 0 && v <= z {
-                        return 0.0;
-                    }
-                }
-                *fields = self.start;
-                write(fields, *mask, v);
-            }
-            _ => {
-                *fields = self.start;
-                apply(head, p, fields);
-            }
+        *fields = self.start;
+        apply(head, p, fields);
+        self.finish_opacity(last, p, fields)
+    }
+
+    /// The usual head of a scanned volume's program: the opacity part starts with one
+    /// trilinear read of a dataset whose value the zero test examines. Then the dataset and the
+    /// test's bound z: a sample whose value (clamped, as written) is at most z has opacity 0,
+    /// and [`Lean::opacity_from_value`] finishes the others.
+    #[inline]
+    pub(crate) fn value_head(&self) -> Option<(&Dataset, f32)> {
+        match (self.opacity.as_slice(), self.zero) {
+            (
+                [Op::Data {
+                    mask,
+                    data,
+                    filter: Filter::Trilinear,
+                }, _],
+                Some((source, z)),
+            ) if mask & (1 << source) != 0 => Some((data, z)),
+            _ => None,
         }
+    }
+
+    /// [`Lean::opacity`] for a program with a [`Lean::value_head`], given the clamped value
+    /// `v` of its dataset at `p` (above the zero test's bound).
+    #[inline]
+    pub(crate) fn opacity_from_value(
+        &self,
+        v: f32,
+        p: [f32; 3],
+        fields: &mut [f32; FIELD_COUNT],
+    ) -> f32 {
+        let [Op::Data { mask, .. }, last] = self.opacity.as_slice() else {
+            unreachable!("opacity_from_value needs a value head")
+        };
+        *fields = self.start;
+        write(fields, *mask, v);
+        self.finish_opacity(last, p, fields)
+    }
+
+    /// The zero test on the registers, then the last opacity operation.
+    #[inline]
+    fn finish_opacity(&self, last: &Op, p: [f32; 3], fields: &mut [f32; FIELD_COUNT]) -> f32 {
         if let Some((source, z)) = self.zero {
             if fields[source] <= z {
                 return 0.0;

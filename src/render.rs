@@ -986,6 +986,13 @@ impl Compiled {
     /// arithmetic); returns the colour and the remaining transmittance.
     fn march_one(&self, c: &mut Cursor, origin: DVec3, dir: DVec3) -> (DVec3, f64) {
         let obj = &self.objects[c.object];
+        if let Some(lean) = &obj.lean {
+            if let Some((data, z)) = lean.value_head() {
+                if obj.normals.is_empty() {
+                    return self.march_batched(obj, lean, data, z, c, origin, dir);
+                }
+            }
+        }
         let grid = obj.skip.as_deref();
         let early = self.settings.optimise.early_termination;
         let mut col = DVec3::ZERO;
@@ -1003,6 +1010,83 @@ impl Compiled {
                 if early && t < T_MIN {
                     t = 0.0;
                     break;
+                }
+            }
+        }
+        (col, t)
+    }
+
+    /// [`Compiled::march_one`] for a lean program with a value head (a scanned volume): the
+    /// samples of a run the cursor knows to be in one occupied block (or all of them, without
+    /// skipping) are read in batches (positions and dataset values first, independent of each
+    /// other, so their memory reads overlap), then shaded and composited one by one in order,
+    /// exactly as the sample-by-sample loop does.
+    #[allow(clippy::too_many_arguments)]
+    fn march_batched(
+        &self,
+        obj: &CObj,
+        lean: &Lean,
+        data: &Dataset,
+        z: f32,
+        c: &mut Cursor,
+        origin: DVec3,
+        dir: DVec3,
+    ) -> (DVec3, f64) {
+        const BATCH: usize = 8;
+        let grid = obj.skip.as_deref();
+        let early = self.settings.optimise.early_termination;
+        let unbounded = c.walk.is_none() || grid.is_none();
+        let mut col = DVec3::ZERO;
+        let mut t = 1.0f64;
+        let mut mids = [0.0f64; BATCH];
+        let mut ps = [[0.0f32; 3]; BATCH];
+        let mut vs = [0.0f32; BATCH];
+        let mut f = [0.0f32; FIELD_COUNT];
+        while let Some(first) = c.peek(grid) {
+            // The run: the sample peek chose and those after it in the same occupied block.
+            mids[0] = first;
+            let mut m = 1;
+            while m < BATCH && c.k + (m as u64) < c.n {
+                let mid = c.mid(c.k + m as u64);
+                if !(unbounded || mid < c.occupied_until) {
+                    break;
+                }
+                mids[m] = mid;
+                m += 1;
+            }
+            for i in 0..m {
+                let p = obj
+                    .to_object
+                    .transform_point3(origin + mids[i] * dir)
+                    .as_vec3()
+                    .to_array();
+                ps[i] = p;
+                vs[i] = crate::program::clamp_field(data.trilinear(p));
+            }
+            for i in 0..m {
+                let (a, b) = c.segment(c.k);
+                c.k += 1;
+                let len = b - a;
+                if len <= 0.0 || vs[i] <= z {
+                    continue;
+                }
+                let (p, w) = (ps[i], origin + mids[i] * dir);
+                let o = lean.opacity_from_value(vs[i], p, &mut f) as f64;
+                if o <= 0.0 {
+                    continue;
+                }
+                lean.rest(p, &mut f);
+                let alpha = if o >= 1.0 {
+                    1.0
+                } else {
+                    1.0 - transmit(1.0 - o, len * obj.inv_ref)
+                };
+                let colour =
+                    self.illuminate_with(obj, w, dir, &f, || obj.gradient_normal(w, -dir, p, 9));
+                col += t * alpha * colour;
+                t *= 1.0 - alpha;
+                if early && t < T_MIN {
+                    return (col, 0.0);
                 }
             }
         }
