@@ -13,37 +13,8 @@
 mod common;
 
 use common::{Ppm, TempDir};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
-
-/// Compiles `source` (relative to the workspace root) into `out_dir`; returns the executable.
-fn compile(source: &Path, out_dir: &Path) -> PathBuf {
-    common::ensure_libraries();
-    let name = source
-        .file_stem()
-        .expect("file name")
-        .to_string_lossy()
-        .into_owned();
-    let exe = out_dir.join(&name);
-    let profile = common::profile_dir_arg();
-    let out = Command::new("cc")
-        .arg("-std=gnu89")
-        .arg(source)
-        .arg("-Iinclude")
-        .arg(format!("-L{}", profile.display()))
-        .args(["-lvlib", "-lm", "-o"])
-        .arg(&exe)
-        .current_dir(common::workspace_root())
-        .output()
-        .expect("run cc");
-    assert!(
-        out.status.success(),
-        "cc -std=gnu89 {} failed:\n{}",
-        source.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    exe
-}
 
 /// Runs `exe` with `cwd` as working directory; returns its standard output.
 fn run(exe: &Path, cwd: &Path, args: &[String]) -> String {
@@ -68,7 +39,7 @@ fn run(exe: &Path, cwd: &Path, args: &[String]) -> String {
 /// returns (directory, stdout).
 fn build_and_run(source: &str) -> (TempDir, String) {
     let bin = TempDir::new("bin");
-    let exe = compile(Path::new(source), bin.path());
+    let exe = common::compile_c(source, bin.path(), &[]);
     let cwd = TempDir::new("run");
     let args = prepare(source, cwd.path());
     let stdout = run(&exe, cwd.path(), &args);
@@ -77,22 +48,6 @@ fn build_and_run(source: &str) -> (TempDir, String) {
 
 /// The width at which the tests render text.c and chess.c.
 const SMALL: usize = 160;
-
-/// Runs a tool from `target/<profile>/` (`vlconvert`, `examples/word_png`, …) in `cwd`.
-fn tool(name: &str, args: &[&str], cwd: &Path) {
-    let exe = common::ensure_tools().join(name);
-    let out = Command::new(&exe)
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .unwrap_or_else(|e| panic!("run {}: {e}", exe.display()));
-    assert!(
-        out.status.success(),
-        "{name} {args:?} failed:\n{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
 
 /// The widths at which the tests render the examples without datasets that take a width.
 const SMALL_WIDTHS: [(&str, usize); 5] = [
@@ -118,30 +73,11 @@ fn prepare(source: &str, cwd: &Path) -> Vec<String> {
     if SMALL_WIDTHS.iter().any(|(s, _)| *s == source) {
         return vec![small_width(source).to_string()];
     }
-    let name = Path::new(source).file_stem().and_then(|n| n.to_str());
-    match name {
-        Some("text") => {
-            tool("examples/word_png", &["word.png"], cwd);
-            tool("vlconvert", &["image", "word.png", "word.vlb"], cwd);
-        }
-        Some("chess") => {
-            tool("examples/profiles", &["."], cwd);
-            for piece in [
-                "pawn",
-                "rook",
-                "knight",
-                "knight_head",
-                "bishop",
-                "queen",
-                "king",
-            ] {
-                let (png, vlb) = (format!("{piece}.png"), format!("{piece}.vlb"));
-                tool("vlconvert", &["image", &png, &vlb], cwd);
-            }
-        }
-        _ => return Vec::new(),
+    if common::make_inputs(source, cwd) {
+        vec![SMALL.to_string()]
+    } else {
+        Vec::new()
     }
-    vec![SMALL.to_string()]
 }
 
 /// A PNG's pixels, decoded by `vlconvert image` (colour: one 8-bit .vlb per channel, rows
@@ -150,7 +86,7 @@ fn read_png(path: &Path) -> Ppm {
     let dir = path.parent().expect("directory");
     let stem = path.file_stem().and_then(|n| n.to_str()).expect("name");
     let vlb = format!("{stem}-decoded.vlb");
-    tool(
+    common::tool(
         "vlconvert",
         &["image", path.to_str().expect("utf-8 path"), &vlb],
         dir,

@@ -45,46 +45,12 @@ fn compile(source: &str, out_dir: &Path) -> PathBuf {
     common::compile_c(source, out_dir, &["-g"])
 }
 
-/// Runs a tool from `target/<profile>/` in `cwd`.
-fn tool(name: &str, args: &[&str], cwd: &Path) {
-    let exe = common::ensure_tools().join(name);
-    let out = Command::new(&exe)
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .unwrap_or_else(|e| panic!("run {}: {e}", exe.display()));
-    assert!(
-        out.status.success(),
-        "{name} {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
 /// Makes the datasets `source` loads in `cwd` (as c_examples.rs does); returns its arguments.
 fn prepare(source: &str, cwd: &Path) -> Vec<String> {
-    match Path::new(source).file_stem().and_then(|n| n.to_str()) {
-        Some("text") => {
-            tool("examples/word_png", &["word.png"], cwd);
-            tool("vlconvert", &["image", "word.png", "word.vlb"], cwd);
-        }
-        Some("chess") => {
-            tool("examples/profiles", &["."], cwd);
-            for piece in [
-                "pawn",
-                "rook",
-                "knight",
-                "knight_head",
-                "bishop",
-                "queen",
-                "king",
-            ] {
-                let (png, vlb) = (format!("{piece}.png"), format!("{piece}.vlb"));
-                tool("vlconvert", &["image", &png, &vlb], cwd);
-            }
-        }
-        // Its argument is the directory for its images, not a width.
-        Some("hard_cases") => return vec![".".to_string()],
-        _ => {}
+    common::make_inputs(source, cwd);
+    // Its argument is the directory for its images, not a width.
+    if source.ends_with("hard_cases.c") {
+        return vec![".".to_string()];
     }
     // Every example with an optional width argument renders small.
     let text = std::fs::read_to_string(common::workspace_root().join(source)).unwrap_or_default();

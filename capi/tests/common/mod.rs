@@ -244,3 +244,49 @@ pub fn compile_c(source: &str, out_dir: &Path, flags: &[&str]) -> PathBuf {
     );
     exe
 }
+
+/// Runs a tool from `target/<profile>/` (`vlconvert`, `examples/word_png`, …) in `cwd`; fails
+/// the test with its output if it fails.
+pub fn tool(name: &str, args: &[&str], cwd: &Path) {
+    let exe = ensure_tools().join(name);
+    let out = Command::new(&exe)
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .unwrap_or_else(|e| panic!("run {}: {e}", exe.display()));
+    assert!(
+        out.status.success(),
+        "{name} {args:?} failed:\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Makes in `cwd` the datasets the C program `source` loads, as examples/gallery.sh does:
+/// the word for text.c, the piece profiles for chess.c. Returns whether `source` needed any.
+pub fn make_inputs(source: &str, cwd: &Path) -> bool {
+    match Path::new(source).file_stem().and_then(|n| n.to_str()) {
+        Some("text") => {
+            tool("examples/word_png", &["word.png"], cwd);
+            tool("vlconvert", &["image", "word.png", "word.vlb"], cwd);
+            true
+        }
+        Some("chess") => {
+            tool("examples/profiles", &["."], cwd);
+            for piece in [
+                "pawn",
+                "rook",
+                "knight",
+                "knight_head",
+                "bishop",
+                "queen",
+                "king",
+            ] {
+                let (png, vlb) = (format!("{piece}.png"), format!("{piece}.vlb"));
+                tool("vlconvert", &["image", &png, &vlb], cwd);
+            }
+            true
+        }
+        _ => false,
+    }
+}
