@@ -240,13 +240,6 @@ impl SkipGrid {
 
     /// Starts a walk along the object-space ray `o + t·d` at parameter `t0`.
     pub(crate) fn walk(&self, o: DVec3, d: DVec3, t0: f64) -> Walk {
-        self.walk_from(o, d, t0, None)
-    }
-
-    /// A walk starting at `t0`; `forced` sets the block index on the axes where the ray is
-    /// known to have just crossed into a block (so rounding cannot put it back).
-    fn walk_from(&self, o: DVec3, d: DVec3, t0: f64, forced: Option<[Option<i64>; 3]>) -> Walk {
-        let p = o + t0 * d;
         let mut w = Walk {
             o,
             d,
@@ -258,31 +251,16 @@ impl SkipGrid {
             entry: t0,
         };
         for axis in 0..3 {
-            let c = match forced.and_then(|f| f[axis]) {
-                Some(c) => c,
-                None => {
-                    let rel = (p[axis] - self.origin[axis]) / self.cell[axis];
-                    rel.floor().clamp(0.0, (self.dims[axis] - 1) as f64) as i64
-                }
-            };
-            if c < 0 || c >= self.dims[axis] as i64 {
-                w.done = true;
-                return w;
-            }
-            w.cell[axis] = c;
             let size = self.cell[axis];
             if d[axis] > 0.0 {
-                let boundary = self.origin[axis] + (c + 1) as f64 * size;
                 w.step[axis] = 1;
-                w.t_max[axis] = t0 + (boundary - p[axis]) / d[axis];
                 w.t_delta[axis] = size / d[axis];
             } else if d[axis] < 0.0 {
-                let boundary = self.origin[axis] + c as f64 * size;
                 w.step[axis] = -1;
-                w.t_max[axis] = t0 + (boundary - p[axis]) / d[axis];
                 w.t_delta[axis] = -size / d[axis];
             }
         }
+        w.relocate(self, t0, [None; 3]);
         w
     }
 }
@@ -333,9 +311,10 @@ pub(crate) struct Walk {
 }
 
 impl Walk {
-    /// Moves the walk to parameter `t0` (a leap): the block there and the parameters at which
-    /// it is left, as [`SkipGrid::walk_from`] computes them (steps and deltas do not change
-    /// along a ray), in place.
+    /// Moves the walk to parameter `t0` (its start, or a leap): the block there and the
+    /// parameters at which it is left (steps and deltas do not change along a ray). `forced`
+    /// sets the block index on the axes where the ray is known to have just crossed into a
+    /// block (so rounding cannot put it back).
     fn relocate(&mut self, grid: &SkipGrid, t0: f64, forced: [Option<i64>; 3]) {
         let p = self.o + t0 * self.d;
         for axis in 0..3 {
