@@ -229,6 +229,17 @@ impl CObj {
         p.cmpge(self.box_min).all() && p.cmple(self.box_max).all()
     }
 
+    /// The transmittance of a segment `len` long of medium with opacity `o` per reference
+    /// length: `(1 − o)^(len / reference)`, 0 for an opaque medium.
+    #[inline]
+    fn segment_transmittance(&self, o: f64, len: f64) -> f64 {
+        if o >= 1.0 {
+            0.0
+        } else {
+            transmit(1.0 - o, len * self.inv_ref)
+        }
+    }
+
     /// The opacity at world point `w` (inside the boundary), by the lean kernel where it applies.
     #[inline]
     fn opacity_at(&self, w: DVec3) -> f64 {
@@ -529,11 +540,7 @@ impl Compiled {
             return None;
         }
         run(&obj.program[obj.o_prefix..], &mut s);
-        let alpha = if o >= 1.0 {
-            1.0
-        } else {
-            1.0 - transmit(1.0 - o, len * obj.inv_ref)
-        };
+        let alpha = 1.0 - obj.segment_transmittance(o, len);
         Some((alpha, self.illuminate(obj, w, dir, &mut s, 9)))
     }
 
@@ -553,20 +560,34 @@ impl Compiled {
         if o <= 0.0 {
             return None;
         }
-        lean.rest(p, &mut f);
-        let alpha = if o >= 1.0 {
-            1.0
-        } else {
-            1.0 - transmit(1.0 - o, len * obj.inv_ref)
-        };
+        Some(self.finish_lean(obj, lean, o, p, w, dir, len, &mut f))
+    }
+
+    /// The rest of a lean sample whose opacity `o` is above 0 (registers `f` filled by the
+    /// opacity part): its other fields, α for a segment `len` long, and its colour.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn finish_lean(
+        &self,
+        obj: &CObj,
+        lean: &Lean,
+        o: f64,
+        p: [f32; 3],
+        w: DVec3,
+        dir: DVec3,
+        len: f64,
+        f: &mut [f32; FIELD_COUNT],
+    ) -> (f64, DVec3) {
+        lean.rest(p, f);
+        let alpha = 1.0 - obj.segment_transmittance(o, len);
         let colour = if obj.normals.is_empty() {
-            self.illuminate_with(obj, w, dir, &f, || obj.gradient_normal(w, -dir, p, 9))
+            self.illuminate_with(obj, w, dir, f, || obj.gradient_normal(w, -dir, p, 9))
         } else {
             let mut s = Sample::with_env(p, w.to_array(), &obj.env);
-            s.fields = f;
+            s.fields = *f;
             self.illuminate(obj, w, dir, &mut s, 9)
         };
-        Some((alpha, colour))
+        (alpha, colour)
     }
 
     /// The illumination model at a sample whose fields are computed, with normals from the
@@ -701,11 +722,7 @@ impl Compiled {
                 }
                 let o = obj.opacity_at(w + mid * l);
                 if o > 0.0 {
-                    t_total *= if o >= 1.0 {
-                        0.0
-                    } else {
-                        transmit(1.0 - o, len * obj.inv_ref)
-                    };
+                    t_total *= obj.segment_transmittance(o, len);
                     if t_total < T_MIN {
                         return 0.0;
                     }
@@ -1075,14 +1092,7 @@ impl Compiled {
                 if o <= 0.0 {
                     continue;
                 }
-                lean.rest(p, &mut f);
-                let alpha = if o >= 1.0 {
-                    1.0
-                } else {
-                    1.0 - transmit(1.0 - o, len * obj.inv_ref)
-                };
-                let colour =
-                    self.illuminate_with(obj, w, dir, &f, || obj.gradient_normal(w, -dir, p, 9));
+                let (alpha, colour) = self.finish_lean(obj, lean, o, p, w, dir, len, &mut f);
                 col += t * alpha * colour;
                 t *= 1.0 - alpha;
                 if early && t < T_MIN {
@@ -1091,17 +1101,6 @@ impl Compiled {
             }
         }
         (col, t)
-    }
-}
-
-/// `k as f64`, through i64 where that is exact (x86-64 has no direct u64 → f64 conversion,
-/// and segment indices never come near 2⁶³).
-#[inline]
-fn u64_to_f64(k: u64) -> f64 {
-    if k <= i64::MAX as u64 {
-        k as i64 as f64
-    } else {
-        k as f64
     }
 }
 
@@ -1160,11 +1159,11 @@ impl Cursor {
 
     #[inline]
     fn segment(&self, k: u64) -> (f64, f64) {
-        let a = self.t0 + u64_to_f64(k) * self.step;
+        let a = self.t0 + k as f64 * self.step;
         let b = if k + 1 >= self.n {
             self.t1
         } else {
-            (self.t0 + u64_to_f64(k + 1) * self.step).min(self.t1)
+            (self.t0 + (k + 1) as f64 * self.step).min(self.t1)
         };
         (a, b)
     }
@@ -1198,7 +1197,7 @@ impl Cursor {
             };
             // Skip every segment whose midpoint is before `exit`.
             let guess = ((exit - self.t0) / self.step - 0.5).ceil();
-            let mut k = if guess.is_finite() && guess > u64_to_f64(self.k) {
+            let mut k = if guess.is_finite() && guess > self.k as f64 {
                 (guess as u64).min(self.n)
             } else {
                 self.k + 1
