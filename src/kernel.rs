@@ -126,14 +126,23 @@ fn apply(ops: &[Op], p: [f32; 3], fields: &mut [f32; FIELD_COUNT]) {
                 source,
                 mapping,
                 outputs,
-            } => {
-                let (v, k) = mapping.locate(fields[*source]);
-                // In order: a later output of the group may overwrite an earlier one's field.
-                for &(mask, j) in outputs {
-                    write(fields, mask, mapping.eval_at(v, k, j));
-                }
-            }
+            } => map_outputs(fields, *source, mapping, outputs),
         }
+    }
+}
+
+/// A group of outputs of one transfer function of field `source`: the input's segment located
+/// once, the outputs written in order (a later one may overwrite an earlier one's field).
+#[inline]
+fn map_outputs(
+    fields: &mut [f32; FIELD_COUNT],
+    source: usize,
+    mapping: &Mapping,
+    outputs: &[(u16, usize)],
+) {
+    let (v, k) = mapping.locate(fields[source]);
+    for &(mask, j) in outputs {
+        write(fields, mask, mapping.eval_at(v, k, j));
     }
 }
 
@@ -290,14 +299,12 @@ impl Lean {
             }
         }
         match last {
+            // The usual last operation, the opacity table: without the operation loop.
             Op::Map {
                 source,
                 mapping,
                 outputs,
-            } if outputs.len() == 1 => {
-                let (mask, j) = outputs[0];
-                write(fields, mask, mapping.eval(fields[*source], j));
-            }
+            } => map_outputs(fields, *source, mapping, outputs),
             _ => apply(std::slice::from_ref(last), p, fields),
         }
         fields[0]
@@ -307,17 +314,12 @@ impl Lean {
     #[inline]
     pub(crate) fn rest(&self, p: [f32; 3], fields: &mut [f32; FIELD_COUNT]) {
         match self.rest.as_slice() {
-            // The usual rest, one colour table of the field that gave opacity.
+            // The usual rest, one colour table: without the operation loop.
             [Op::Map {
                 source,
                 mapping,
                 outputs,
-            }] => {
-                let (v, k) = mapping.locate(fields[*source]);
-                for &(mask, j) in outputs {
-                    write(fields, mask, mapping.eval_at(v, k, j));
-                }
-            }
+            }] => map_outputs(fields, *source, mapping, outputs),
             rest => apply(rest, p, fields),
         }
     }
