@@ -387,58 +387,55 @@ impl Walk {
                 // The entry of this occupied block is where the empty run ended.
                 return Ok(self.entry);
             }
-            if r <= STEP_BELOW {
-                let exit = self.exit();
-                self.advance(grid);
-                self.entry = exit;
-                if self.done {
-                    return Ok(exit);
-                }
-                continue;
-            }
-            // Every block within r − 1 of this one is empty: leave that cube in one step.
-            let mut t_exit = f64::INFINITY;
-            let mut axis_exit = 0;
-            for axis in 0..3 {
-                let (lo, hi) = (self.cell[axis] - (r - 1), self.cell[axis] + r);
-                let t = match self.step[axis] {
-                    1 => {
-                        (grid.origin[axis] + hi as f64 * grid.cell[axis] - self.o[axis])
-                            / self.d[axis]
+            if r > STEP_BELOW {
+                if let Some(t_exit) = self.leap(grid, r) {
+                    if self.done {
+                        return Ok(t_exit);
                     }
-                    -1 => {
-                        (grid.origin[axis] + lo as f64 * grid.cell[axis] - self.o[axis])
-                            / self.d[axis]
-                    }
-                    _ => f64::INFINITY,
-                };
-                if t < t_exit {
-                    t_exit = t;
-                    axis_exit = axis;
+                    continue;
                 }
             }
-            if !t_exit.is_finite() || t_exit <= self.entry {
-                // No progress possible by leaping (degenerate direction): step instead.
-                let exit = self.exit();
-                self.advance(grid);
-                self.entry = exit;
-                if self.done {
-                    return Ok(exit);
-                }
-                continue;
-            }
-            // The block just outside the cube on the axis the ray leaves it by.
-            let mut forced = [None; 3];
-            forced[axis_exit] = Some(if self.step[axis_exit] == 1 {
-                self.cell[axis_exit] + r
-            } else {
-                self.cell[axis_exit] - r
-            });
-            self.relocate(grid, t_exit, forced);
-            self.entry = t_exit;
+            // A short empty run, or no progress possible by leaping (a degenerate direction):
+            // one block on.
+            let exit = self.exit();
+            self.advance(grid);
+            self.entry = exit;
             if self.done {
-                return Ok(t_exit);
+                return Ok(exit);
             }
         }
+    }
+
+    /// Leaves in one step the cube of blocks within `r − 1` of the current one (all empty) and
+    /// returns the parameter at which it did; `None` (and nothing moved) when the ray cannot
+    /// leave it forwards.
+    fn leap(&mut self, grid: &SkipGrid, r: i64) -> Option<f64> {
+        let mut t_exit = f64::INFINITY;
+        let mut axis_exit = 0;
+        for axis in 0..3 {
+            let (lo, hi) = (self.cell[axis] - (r - 1), self.cell[axis] + r);
+            let t = match self.step[axis] {
+                1 => {
+                    (grid.origin[axis] + hi as f64 * grid.cell[axis] - self.o[axis]) / self.d[axis]
+                }
+                -1 => {
+                    (grid.origin[axis] + lo as f64 * grid.cell[axis] - self.o[axis]) / self.d[axis]
+                }
+                _ => f64::INFINITY,
+            };
+            if t < t_exit {
+                t_exit = t;
+                axis_exit = axis;
+            }
+        }
+        if !t_exit.is_finite() || t_exit <= self.entry {
+            return None;
+        }
+        // The block just outside the cube on the axis the ray leaves it by.
+        let mut forced = [None; 3];
+        forced[axis_exit] = Some(self.cell[axis_exit] + self.step[axis_exit] * r);
+        self.relocate(grid, t_exit, forced);
+        self.entry = t_exit;
+        Some(t_exit)
     }
 }
