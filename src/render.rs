@@ -714,9 +714,7 @@ impl Compiled {
             }
             let grid = obj.skip.as_deref();
             while let Some(mid) = c.peek(grid) {
-                let (a, b) = c.segment(c.k);
-                c.k += 1;
-                let len = b - a;
+                let len = c.take();
                 if len <= 0.0 {
                     continue;
                 }
@@ -981,9 +979,7 @@ impl Compiled {
             }
             let Some((ci, mid)) = best else { break };
             let c = &mut cursors[ci];
-            let (a, b) = c.segment(c.k);
-            c.k += 1;
-            let len = b - a;
+            let len = c.take();
             if len <= 0.0 {
                 continue;
             }
@@ -1015,9 +1011,7 @@ impl Compiled {
         let mut col = DVec3::ZERO;
         let mut t = 1.0f64;
         while let Some(mid) = c.peek(grid) {
-            let (a, b) = c.segment(c.k);
-            c.k += 1;
-            let len = b - a;
+            let len = c.take();
             if len <= 0.0 {
                 continue;
             }
@@ -1081,9 +1075,7 @@ impl Compiled {
                 vs[i] = crate::program::clamp_field(data.trilinear(p));
             }
             for i in 0..m {
-                let (a, b) = c.segment(c.k);
-                c.k += 1;
-                let len = b - a;
+                let len = c.take();
                 if len <= 0.0 || vs[i] <= z {
                     continue;
                 }
@@ -1166,6 +1158,14 @@ impl Cursor {
             (self.t0 + (k + 1) as f64 * self.step).min(self.t1)
         };
         (a, b)
+    }
+
+    /// The length of the next segment, which is then passed.
+    #[inline]
+    fn take(&mut self) -> f64 {
+        let (a, b) = self.segment(self.k);
+        self.k += 1;
+        b - a
     }
 
     #[inline]
