@@ -150,6 +150,56 @@ impl Bricks {
     }
 }
 
+/// One separable pass of the brick ranges: over grids `min_in`, `max_in` of extents `ext`
+/// (x fastest), the smallest of `min_in` and largest of `max_in` along `axis` over each of
+/// `blocks` spans `span(block, ext[axis])`. Returns the two reduced grids and their extents
+/// (`ext` with `blocks` along `axis`).
+fn reduce_axis(
+    min_in: &[f32],
+    max_in: &[f32],
+    ext: [usize; 3],
+    axis: usize,
+    blocks: usize,
+    span: impl Fn(usize, usize) -> (usize, usize),
+) -> (Vec<f32>, Vec<f32>, [usize; 3]) {
+    let mut out = ext;
+    out[axis] = blocks;
+    let stride = [1, ext[0], ext[0] * ext[1]];
+    let n = out[0] * out[1] * out[2];
+    let (mut min, mut max) = (vec![0f32; n], vec![0f32; n]);
+    let mut o = 0;
+    for k in 0..out[2] {
+        for j in 0..out[1] {
+            for i in 0..out[0] {
+                let mut at = [i, j, k];
+                let (lo, hi) = span(at[axis], ext[axis]);
+                at[axis] = 0;
+                let base = at[0] + stride[1] * at[1] + stride[2] * at[2];
+                let s = stride[axis];
+                let (a, b) = (base + lo * s, base + hi * s);
+                let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+                let (lows, highs) = (&min_in[a..=b], &max_in[a..=b]);
+                let mut q = 0;
+                while q < lows.len() && q < highs.len() {
+                    // Plain comparisons: the values are never NaN, and f32::min/max's NaN
+                    // handling costs several instructions per value.
+                    if lows[q] < mn {
+                        mn = lows[q];
+                    }
+                    if highs[q] > mx {
+                        mx = highs[q];
+                    }
+                    q += s;
+                }
+                min[o] = mn;
+                max[o] = mx;
+                o += 1;
+            }
+        }
+    }
+    (min, max, out)
+}
+
 /// A loaded dataset: dimensions, raw voxels, normalisation and the normalised node values.
 #[derive(Clone, Debug)]
 pub struct Dataset {
@@ -263,73 +313,9 @@ impl Dataset {
             (lo, hi)
         };
         // Separable: min/max along x per brick column, then along y, then along z.
-        let (nx, ny, nz) = (d[0], d[1], d[2]);
-        let (bx, by, bz) = (counts[0], counts[1], counts[2]);
-        let mut min_x = vec![0f32; bx * ny * nz];
-        let mut max_x = vec![0f32; bx * ny * nz];
-        for z in 0..nz {
-            for y in 0..ny {
-                let row = &self.values[nx * (y + ny * z)..nx * (y + ny * z + 1)];
-                for b in 0..bx {
-                    let (lo, hi) = span(b, nx);
-                    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
-                    for &v in &row[lo..=hi] {
-                        // Plain comparisons: the values are never NaN, and f32::min/max's NaN
-                        // handling costs several instructions per value.
-                        if v < mn {
-                            mn = v;
-                        }
-                        if v > mx {
-                            mx = v;
-                        }
-                    }
-                    min_x[b + bx * (y + ny * z)] = mn;
-                    max_x[b + bx * (y + ny * z)] = mx;
-                }
-            }
-        }
-        let mut min_y = vec![0f32; bx * by * nz];
-        let mut max_y = vec![0f32; bx * by * nz];
-        for z in 0..nz {
-            for b in 0..by {
-                let (lo, hi) = span(b, ny);
-                for x in 0..bx {
-                    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
-                    for y in lo..=hi {
-                        let i = x + bx * (y + ny * z);
-                        if min_x[i] < mn {
-                            mn = min_x[i];
-                        }
-                        if max_x[i] > mx {
-                            mx = max_x[i];
-                        }
-                    }
-                    min_y[x + bx * (b + by * z)] = mn;
-                    max_y[x + bx * (b + by * z)] = mx;
-                }
-            }
-        }
-        let mut min = vec![0f32; bx * by * bz];
-        let mut max = vec![0f32; bx * by * bz];
-        for b in 0..bz {
-            let (lo, hi) = span(b, nz);
-            for y in 0..by {
-                for x in 0..bx {
-                    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
-                    for z in lo..=hi {
-                        let i = x + bx * (y + by * z);
-                        if min_y[i] < mn {
-                            mn = min_y[i];
-                        }
-                        if max_y[i] > mx {
-                            mx = max_y[i];
-                        }
-                    }
-                    min[x + bx * (y + by * b)] = mn;
-                    max[x + bx * (y + by * b)] = mx;
-                }
-            }
-        }
+        let (min, max, ext) = reduce_axis(&self.values, &self.values, d, 0, counts[0], span);
+        let (min, max, ext) = reduce_axis(&min, &max, ext, 1, counts[1], span);
+        let (min, max, _) = reduce_axis(&min, &max, ext, 2, counts[2], span);
         Bricks {
             dims: counts,
             min,
