@@ -990,6 +990,47 @@ mod tests {
     }
 
     #[test]
+    fn brick_ranges_are_the_extremes_of_their_padded_spans() {
+        for (dims, seed) in [([13, 9, 11], 5), ([2, 17, 6], 6), ([9, 1, 5], 7)] {
+            // Unclamped values (a = 0, b = 255), so that the extremes differ between spans.
+            let mut rng = Lcg(seed);
+            let raw = (0..dims.iter().product())
+                .map(|_| (rng.next() * 256.0) as u8)
+                .collect();
+            let d = Dataset::new(dims, Voxels::U8(raw), 0.0, 255.0).unwrap();
+            for (filter, pad) in [
+                (Filter::Trilinear, 1),
+                (Filter::Cubic { b: 0.0, c: 0.5 }, 2),
+            ] {
+                let b = d.bricks(filter);
+                for (bk, bj, bi) in (0..b.dims[2]).flat_map(|k| {
+                    (0..b.dims[1]).flat_map(move |j| (0..b.dims[0]).map(move |i| (k, j, i)))
+                }) {
+                    // By brute force: every node within `pad` of the brick's node span.
+                    let span = |b: usize, n: usize| {
+                        (
+                            (b * BRICK).saturating_sub(pad),
+                            (b * BRICK + BRICK + pad).min(n - 1),
+                        )
+                    };
+                    let ((x0, x1), (y0, y1), (z0, z1)) =
+                        (span(bi, dims[0]), span(bj, dims[1]), span(bk, dims[2]));
+                    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+                    for z in z0..=z1 {
+                        for y in y0..=y1 {
+                            for x in x0..=x1 {
+                                mn = mn.min(d.node(x, y, z));
+                                mx = mx.max(d.node(x, y, z));
+                            }
+                        }
+                    }
+                    assert_eq!(b.get(bi, bj, bk), (mn, mx), "{dims:?} brick {bi} {bj} {bk}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn nearest_and_cardinal_cubics_pass_through_nodes() {
         let d = random_u8([5, 4, 6], 3);
         let [nx, ny, nz] = d.dims();
