@@ -585,39 +585,33 @@ impl Brain {
 /// The MNI dataset: `$VLIB_MNI_VLB`, or `target/bench-data/mni.vlb`, converted from the NIfTI
 /// file in `../shared/data` with `vlconvert` (built first if needed) when missing.
 fn mni_dataset() -> Res<PathBuf> {
-    if let Some(p) = std::env::var_os("VLIB_MNI_VLB") {
-        return Ok(p.into());
-    }
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let out = root.join("target/bench-data/mni.vlb");
-    if out.exists() {
-        return Ok(out);
-    }
-    let nii = root.join("../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz");
-    if !nii.exists() {
-        return Err(format!("the MNI dataset is missing: {}", nii.display()).into());
-    }
-    let exe = root.join("target/release/vlconvert");
-    if !exe.exists() {
-        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-        let st = std::process::Command::new(cargo)
-            .args(["build", "--release", "--bin", "vlconvert"])
-            .current_dir(&root)
-            .status()?;
-        if !st.success() {
-            return Err("cargo build --bin vlconvert failed".into());
+    let path = mni_scene::dataset_path(|nii, vlb| {
+        let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+        let exe = root.join("target/release/vlconvert");
+        if !exe.exists() {
+            let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+            let st = std::process::Command::new(cargo)
+                .args(["build", "--release", "--bin", "vlconvert"])
+                .current_dir(&root)
+                .status()
+                .map_err(|e| format!("run cargo: {e}"))?;
+            if !st.success() {
+                return Err("cargo build --bin vlconvert failed".into());
+            }
         }
-    }
-    std::fs::create_dir_all(out.parent().expect("has a parent"))?;
-    let st = std::process::Command::new(&exe)
-        .arg("nifti")
-        .arg(&nii)
-        .arg(&out)
-        .status()?;
-    if !st.success() {
-        return Err(format!("vlconvert failed on {}", nii.display()).into());
-    }
-    Ok(out)
+        let st = std::process::Command::new(&exe)
+            .arg("nifti")
+            .arg(nii)
+            .arg(vlb)
+            .status()
+            .map_err(|e| format!("run vlconvert: {e}"))?;
+        if st.success() {
+            Ok(())
+        } else {
+            Err(format!("vlconvert failed on {}", nii.display()))
+        }
+    })?;
+    Ok(path)
 }
 
 /// The hypertexture: a ball whose geometry field is a sphere's distance field displaced by

@@ -17,29 +17,19 @@ use vlib::Library;
 /// use with `vlconvert` from `../shared/data/…nii.gz`. An error when neither the file nor the
 /// NIfTI source is there, or when the conversion fails.
 pub fn try_mni_dataset() -> Result<PathBuf, String> {
-    if let Some(p) = std::env::var_os("VLIB_MNI_VLB") {
-        return Ok(p.into());
-    }
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let out = root.join("target/bench-data/mni.vlb");
-    if out.exists() {
-        return Ok(out);
-    }
-    let nii = root.join("../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz");
-    if !nii.exists() {
-        return Err(format!("no {} and no $VLIB_MNI_VLB", nii.display()));
-    }
-    std::fs::create_dir_all(out.parent().unwrap()).map_err(|e| e.to_string())?;
-    let st = std::process::Command::new(env!("CARGO_BIN_EXE_vlconvert"))
-        .arg("nifti")
-        .arg(&nii)
-        .arg(&out)
-        .status()
-        .map_err(|e| format!("run vlconvert: {e}"))?;
-    if !st.success() {
-        return Err(format!("vlconvert failed on {}", nii.display()));
-    }
-    Ok(out)
+    mni_scene::dataset_path(|nii, vlb| {
+        let st = std::process::Command::new(env!("CARGO_BIN_EXE_vlconvert"))
+            .arg("nifti")
+            .arg(nii)
+            .arg(vlb)
+            .status()
+            .map_err(|e| format!("run vlconvert: {e}"))?;
+        if st.success() {
+            Ok(())
+        } else {
+            Err(format!("vlconvert failed on {}", nii.display()))
+        }
+    })
 }
 
 /// [`try_mni_dataset`], panicking when it fails.

@@ -8,7 +8,31 @@
 
 #![allow(dead_code)]
 
+use std::path::{Path, PathBuf};
 use vlib::{Attenuation, Camera, Fields, Library, MappingType};
+
+/// The converted MNI template: `$VLIB_MNI_VLB`, or `target/bench-data/mni.vlb`, made on first
+/// use from `../shared/data/…nii.gz` by `convert(nii, vlb)` (which runs `vlconvert nifti`).
+pub fn dataset_path(
+    convert: impl FnOnce(&Path, &Path) -> Result<(), String>,
+) -> Result<PathBuf, String> {
+    if let Some(p) = std::env::var_os("VLIB_MNI_VLB") {
+        return Ok(p.into());
+    }
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let out = root.join("target/bench-data/mni.vlb");
+    if out.exists() {
+        return Ok(out);
+    }
+    let nii = root.join("../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz");
+    if !nii.exists() {
+        return Err(format!("no {} and no $VLIB_MNI_VLB", nii.display()));
+    }
+    let dir = out.parent().expect("has a parent");
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    convert(&nii, &out)?;
+    Ok(out)
+}
 
 /// Mapping ids used by the scene.
 const OPACITY: i32 = 1;
