@@ -258,11 +258,6 @@ impl CObj {
         Sample::with_env(p.as_vec3().to_array(), w.to_array(), &self.env)
     }
 
-    /// The geometry field at world point `w` (0 outside the boundary: fields are bounded).
-    fn geometry(&self, w: DVec3) -> f64 {
-        self.field_at(w, 9)
-    }
-
     /// Field `field` at world point `w` (0 outside the boundary: fields are bounded), running
     /// only the part of the program that can change it.
     fn field_at(&self, w: DVec3, field: usize) -> f64 {
@@ -278,11 +273,14 @@ impl CObj {
         s.value(field) as f64
     }
 
-    /// The world-space gradient of any field by central differences over the neighbourhood
-    /// (the geometry field uses [`CObj::gradient`], which knows about datasets).
+    /// The world-space gradient of field `field` at `w` (object point `p`), and whether it
+    /// vanishes: for the geometry field where it is a dataset's value, from the dataset's
+    /// interpolated grid gradients; otherwise by central differences over the neighbourhood.
     fn field_gradient(&self, w: DVec3, p: [f32; 3], field: usize) -> (DVec3, bool) {
-        if field == 9 {
-            return self.gradient(w, p);
+        if let (9, Some((data, filter))) = (field, &self.f_dataset) {
+            let g = DVec3::from_array(data.gradient(p, *filter));
+            let zero = g.abs().max_element() <= ZERO_GRADIENT;
+            return (self.grad_to_world * g, zero);
         }
         let mut diff = DVec3::ZERO;
         let mut grad = DVec3::ZERO;
@@ -290,29 +288,6 @@ impl CObj {
             let mut e = DVec3::ZERO;
             e[i] = self.delta[i];
             let d = self.field_at(w + e, field) - self.field_at(w - e, field);
-            diff[i] = d;
-            grad[i] = d / (2.0 * self.delta[i]);
-        }
-        (grad, diff.abs().max_element() <= ZERO_GRADIENT)
-    }
-
-    /// The world-space gradient of F: from the dataset's grid gradients where F is a dataset's
-    /// value, else by central differences over the neighbourhood. Also returns whether it
-    /// vanishes.
-    fn gradient(&self, w: DVec3, p: [f32; 3]) -> (DVec3, bool) {
-        if let Some((data, filter)) = &self.f_dataset {
-            let g = data.gradient(p, *filter);
-            let g = DVec3::from_array(g);
-            let gw = self.grad_to_world * g;
-            let zero = g.abs().max_element() <= ZERO_GRADIENT;
-            return (gw, zero);
-        }
-        let mut diff = DVec3::ZERO;
-        let mut grad = DVec3::ZERO;
-        for i in 0..3 {
-            let mut e = DVec3::ZERO;
-            e[i] = self.delta[i];
-            let d = self.geometry(w + e) - self.geometry(w - e);
             diff[i] = d;
             grad[i] = d / (2.0 * self.delta[i]);
         }
