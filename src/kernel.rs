@@ -133,7 +133,7 @@ fn apply(ops: &[Op], p: [f32; 3], fields: &mut [f32; FIELD_COUNT]) {
 
 /// A group of outputs of one transfer function of field `source`: the input's segment located
 /// once, the outputs written in order (a later one may overwrite an earlier one's field).
-#[inline]
+#[inline(always)]
 fn map_outputs(
     fields: &mut [f32; FIELD_COUNT],
     source: usize,
@@ -141,6 +141,17 @@ fn map_outputs(
     outputs: &[(u16, usize)],
 ) {
     let (v, k) = mapping.locate(fields[source]);
+    if let Some(seg) = mapping.ramp_segment(v, k) {
+        // The usual case, a ramp inside its rows: `eval_at`'s formula without its case
+        // analysis.
+        let dv = v as f64 - seg[0];
+        for &(mask, j) in outputs {
+            if let (Some(&b), Some(&slope)) = (seg.get(1 + 2 * j), seg.get(2 + 2 * j)) {
+                write(fields, mask, (b + dv * slope) as f32);
+            }
+        }
+        return;
+    }
     for &(mask, j) in outputs {
         write(fields, mask, mapping.eval_at(v, k, j));
     }

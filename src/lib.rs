@@ -34,6 +34,7 @@ pub mod error;
 mod kernel;
 pub mod library;
 pub mod mapping;
+mod num;
 pub mod output;
 pub mod program;
 pub mod render;

@@ -23,8 +23,10 @@ pub struct Mapping {
     /// Row-major outputs: b[i * outputs + j] = b_{i+1, j+1}.
     b: Vec<f32>,
     outputs: usize,
-    /// Per row i ≥ 1 and output j: (b_{i+1} − b_i)/(a_{i+1} − a_i), for the ramp.
-    slopes: Vec<f64>,
+    /// The ramp's segments between rows, `1 + 2·outputs` numbers each: segment i (from row i
+    /// to row i + 1, counted from 0) is a_i, then per output j: b_{i,j} and the slope
+    /// (b_{i+1,j} − b_{i,j})/(a_{i+1} − a_i), all as f64.
+    segments: Vec<f64>,
 }
 
 impl Mapping {
@@ -83,11 +85,13 @@ impl Mapping {
             a.push(row[0]);
             b.extend_from_slice(&row[1..]);
         }
-        let mut slopes = vec![0.0f64; n * k];
+        let mut segments = Vec::with_capacity((n - 1) * (1 + 2 * k));
         for i in 1..n {
+            segments.push(a[i - 1] as f64);
             for j in 0..k {
-                let db = b[i * k + j] as f64 - b[(i - 1) * k + j] as f64;
-                slopes[i * k + j] = db / (a[i] as f64 - a[i - 1] as f64);
+                let (b0, b1) = (b[(i - 1) * k + j] as f64, b[i * k + j] as f64);
+                segments.push(b0);
+                segments.push((b1 - b0) / (a[i] as f64 - a[i - 1] as f64));
             }
         }
         Ok(Mapping {
@@ -95,7 +99,7 @@ impl Mapping {
             a,
             b,
             outputs: k,
-            slopes,
+            segments,
         })
     }
 
@@ -176,10 +180,29 @@ impl Mapping {
                     }
                     return (bn + (v as f64 - an) * (1.0 - bn) / (1.0 - an)) as f32;
                 }
-                let a0 = self.a[k - 1] as f64;
-                let b0 = self.b(k - 1, j) as f64;
-                (b0 + (v as f64 - a0) * self.slopes[k * self.outputs + j]) as f32
+                let seg = self.segment(k - 1);
+                (seg[1 + 2 * j] + (v as f64 - seg[0]) * seg[2 + 2 * j]) as f32
             }
+        }
+    }
+
+    /// Segment `i` of the ramp: a_i, then (b_{i,j}, slope) per output j.
+    #[inline]
+    fn segment(&self, i: usize) -> &[f64] {
+        let stride = 1 + 2 * self.outputs;
+        &self.segments[i * stride..(i + 1) * stride]
+    }
+
+    /// For a ramp and an input located by [`Mapping::locate`] strictly between its first and
+    /// last rows (0 < k < n, v > 0), where Φ_r is linear: the segment's (a, [b, slope] per
+    /// output), so that `eval_at(v, k, j)` is `(b + (v − a)·slope) as f32` with `b, slope` at
+    /// `1 + 2j, 2 + 2j`. `None` elsewhere.
+    #[inline]
+    pub fn ramp_segment(&self, v: f32, k: usize) -> Option<&[f64]> {
+        if self.kind == MappingType::Ramp && k > 0 && k < self.a.len() && v > 0.0 {
+            Some(self.segment(k - 1))
+        } else {
+            None
         }
     }
 
@@ -267,6 +290,44 @@ mod tests {
         assert_eq!(m.eval(0.0011, 0), 0.3);
         assert_eq!(m.eval(1.0, 0), 0.3);
         assert_eq!(m.outputs(), 1);
+    }
+
+    /// Inside its rows a ramp is the segment's line, computed in f64 (an independent
+    /// evaluation from the table itself), and `ramp_segment` offers exactly those inputs, with
+    /// the numbers the kernel's fast path combines into the same value.
+    #[test]
+    fn ramp_segments_are_the_lines_between_rows() {
+        let table = [
+            0.1, 0.0, 1.0, 0.5, //
+            0.4, 0.8, 0.2, 0.5, //
+            0.5, 0.3, 0.9, 0.1, //
+            0.9, 1.0, 0.0, 0.7,
+        ];
+        let m = Mapping::new(MappingType::Ramp, 4, 3, &table).unwrap();
+        let row = |i: usize| &table[4 * i..4 * i + 4];
+        for s in 0..=1000 {
+            let v = s as f32 / 1000.0;
+            let (v, k) = m.locate(v);
+            let seg = m.ramp_segment(v, k);
+            assert_eq!(seg.is_some(), k > 0 && k < 4 && v > 0.0, "v = {v}");
+            let Some(seg) = seg else { continue };
+            let (r0, r1) = (row(k - 1), row(k));
+            for j in 0..3 {
+                let t = (v as f64 - r0[0] as f64) / (r1[0] as f64 - r0[0] as f64);
+                let line = r0[j + 1] as f64 + t * (r1[j + 1] as f64 - r0[j + 1] as f64);
+                let y = m.eval(v, j);
+                // The f64 line and the table's slope form differ by a few f64 ulps before the
+                // f32 rounding: at most one f32 ulp apart.
+                assert!(
+                    (y as f64 - line).abs() <= 1.2e-7,
+                    "v = {v}, j = {j}: {y} vs {line}"
+                );
+                let fast = (seg[1 + 2 * j] + (v as f64 - seg[0]) * seg[2 + 2 * j]) as f32;
+                assert_eq!(fast.to_bits(), y.to_bits(), "v = {v}, j = {j}");
+            }
+        }
+        let lookup = lookup(&[0.2, 0.5, 0.6, 0.9], 2, 1);
+        assert!(lookup.ramp_segment(0.5, 1).is_none());
     }
 
     #[test]

@@ -1025,21 +1025,36 @@ impl Compiled {
         let mut col = DVec3::ZERO;
         let mut t = 1.0f64;
         let mut mids = [0.0f64; BATCH];
+        let mut lens = [0.0f64; BATCH];
         let mut ps = [[0.0f32; 3]; BATCH];
         let mut vs = [0.0f32; BATCH];
         let mut f = [0.0f32; FIELD_COUNT];
-        while let Some(first) = c.peek(grid) {
+        while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
-            mids[0] = first;
-            let mut m = 1;
+            // Segment k is [t0 + k·step, t0 + (k + 1)·step] (the last one ending at t1), so
+            // each segment's end is the next one's start: one product per sample, the same
+            // numbers as `Cursor::segment`. (f64 counts are exact below 2⁵³ segments.)
+            let mut kf = c.k as f64;
+            let mut a = c.t0 + kf * c.step;
+            let mut m = 0;
             while m < BATCH && c.k + (m as u64) < c.n {
-                let mid = c.mid(c.k + m as u64);
-                if !(unbounded || mid < c.occupied_until) {
+                kf += 1.0;
+                let next = c.t0 + kf * c.step;
+                let b = if c.k + m as u64 + 1 >= c.n {
+                    c.t1
+                } else {
+                    next.min(c.t1)
+                };
+                let mid = 0.5 * (a + b);
+                if m > 0 && !(unbounded || mid < c.occupied_until) {
                     break;
                 }
                 mids[m] = mid;
+                lens[m] = b - a;
+                a = next;
                 m += 1;
             }
+            c.k += m as u64;
             for i in 0..m {
                 let p = obj
                     .to_object
@@ -1050,7 +1065,7 @@ impl Compiled {
                 vs[i] = crate::program::clamp_field(data.trilinear(p));
             }
             for i in 0..m {
-                let len = c.take();
+                let len = lens[i];
                 if len <= 0.0 || vs[i] <= z {
                     continue;
                 }
@@ -1098,7 +1113,7 @@ impl Cursor {
         t0: f64,
         t1: f64,
     ) -> Cursor {
-        let n = ((t1 - t0) / obj.step).ceil().max(1.0);
+        let n = crate::num::ceil((t1 - t0) / obj.step).max(1.0);
         let n = if n.is_finite() && n < u64::MAX as f64 {
             n as u64
         } else {
@@ -1171,7 +1186,7 @@ impl Cursor {
                 Ok(exit) => exit,
             };
             // Skip every segment whose midpoint is before `exit`.
-            let guess = ((exit - self.t0) / self.step - 0.5).ceil();
+            let guess = crate::num::ceil((exit - self.t0) / self.step - 0.5);
             let mut k = if guess.is_finite() && guess > self.k as f64 {
                 (guess as u64).min(self.n)
             } else {

@@ -322,7 +322,7 @@ impl Walk {
                 Some(c) => c,
                 None => {
                     let rel = (p[axis] - grid.origin[axis]) / grid.cell[axis];
-                    rel.floor().clamp(0.0, (grid.dims[axis] - 1) as f64) as i64
+                    crate::num::floor(rel).clamp(0.0, (grid.dims[axis] - 1) as f64) as i64
                 }
             };
             if c < 0 || c >= grid.dims[axis] as i64 {
