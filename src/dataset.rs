@@ -215,6 +215,8 @@ pub struct Dataset {
     last: [f64; 3],
     /// n − 1 per axis, as f32.
     last32: [f32; 3],
+    /// The last cell's first node per axis, max(n − 2, 0), as i32 (saturated).
+    top32: [i32; 3],
     /// Node strides (1, nx, nx·ny), 0 along axes of one node.
     strides: [usize; 3],
 }
@@ -281,6 +283,7 @@ impl Dataset {
             bricks: Default::default(),
             last: dims.map(|n| (n - 1) as f64),
             last32: dims.map(|n| (n - 1) as f32),
+            top32: dims.map(|n| i32::try_from(n.saturating_sub(2)).unwrap_or(i32::MAX)),
             strides: [
                 usize::from(dims[0] > 1),
                 if dims[1] > 1 { dims[0] } else { 0 },
@@ -615,8 +618,9 @@ impl Dataset {
         for axis in 0..3 {
             let last = self.last32[axis];
             // max/min in this order map NaN to 0; for n = 1, last = 0 and the cell is (0, 0).
+            // u ≥ 0, so its truncation is its floor and at least 0.
             let u = (p[axis] * last).max(0.0).min(last);
-            let c = (u as i32).min(self.dims[axis] as i32 - 2).max(0);
+            let c = (u as i32).min(self.top32[axis]);
             i[axis] = c as usize;
             f[axis] = u - c as f32;
         }

@@ -1036,11 +1036,13 @@ impl Compiled {
             // numbers as `Cursor::segment`. (f64 counts are exact below 2⁵³ segments.)
             let mut kf = c.k as f64;
             let mut a = c.t0 + kf * c.step;
+            let left = (c.n - c.k).min(BATCH as u64) as usize; // c.k < c.n after peek
+            let last = c.k + left as u64 == c.n; // the run may reach the last segment
             let mut m = 0;
-            while m < BATCH && c.k + (m as u64) < c.n {
+            while m < left {
                 kf += 1.0;
                 let next = c.t0 + kf * c.step;
-                let b = if c.k + m as u64 + 1 >= c.n {
+                let b = if last && m + 1 == left {
                     c.t1
                 } else {
                     next.min(c.t1)
@@ -1062,7 +1064,7 @@ impl Compiled {
                     .as_vec3()
                     .to_array();
                 ps[i] = p;
-                vs[i] = crate::program::clamp_field(data.trilinear(p));
+                vs[i] = data.trilinear(p); // in [0, 1], as a field value
             }
             for i in 0..m {
                 let len = lens[i];
