@@ -504,11 +504,18 @@ impl Compiled {
     }
 
     /// Shades one DVR sample: returns (α, colour) or `None` where the opacity is 0.
-    fn shade(&self, obj: &CObj, w: DVec3, dir: DVec3, len: f64) -> Option<(f64, DVec3)> {
+    fn shade(
+        &self,
+        obj: &CObj,
+        w: DVec3,
+        p: [f32; 3],
+        dir: DVec3,
+        len: f64,
+    ) -> Option<(f64, DVec3)> {
         if let Some(lean) = &obj.lean {
-            return self.shade_lean(obj, lean, w, dir, len);
+            return self.shade_lean(obj, lean, w, p, dir, len);
         }
-        let mut s = obj.sample_at(w);
+        let mut s = Sample::with_env(p, w.to_array(), &obj.env);
         run(&obj.program[..obj.o_prefix], &mut s);
         let o = s.value(0) as f64;
         if o <= 0.0 {
@@ -526,10 +533,10 @@ impl Compiled {
         obj: &CObj,
         lean: &Lean,
         w: DVec3,
+        p: [f32; 3],
         dir: DVec3,
         len: f64,
     ) -> Option<(f64, DVec3)> {
-        let p = obj.to_object.transform_point3(w).as_vec3().to_array();
         let mut f = [0.0f32; FIELD_COUNT];
         let o = lean.opacity(p, &mut f) as f64;
         if o <= 0.0 {
@@ -959,7 +966,9 @@ impl Compiled {
                 continue;
             }
             let obj = &self.objects[c.object];
-            if let Some((alpha, colour)) = self.shade(obj, origin + mid * dir, dir, len) {
+            if let Some((alpha, colour)) =
+                self.shade(obj, origin + mid * dir, c.object_point(mid), dir, len)
+            {
                 if composite(alpha, colour, &mut col, &mut t) {
                     t = 0.0;
                     break;
@@ -990,7 +999,9 @@ impl Compiled {
             if len <= 0.0 {
                 continue;
             }
-            if let Some((alpha, colour)) = self.shade(obj, origin + mid * dir, dir, len) {
+            if let Some((alpha, colour)) =
+                self.shade(obj, origin + mid * dir, c.object_point(mid), dir, len)
+            {
                 col += t * alpha * colour;
                 t *= 1.0 - alpha;
                 if early && t < T_MIN {
@@ -1029,6 +1040,8 @@ impl Compiled {
         let mut ps = [[0.0f32; 3]; BATCH];
         let mut vs = [0.0f32; BATCH];
         let mut f = [0.0f32; FIELD_COUNT];
+        // The object-space ray in registers: `Cursor::object_point` without the loads.
+        let (ro, rd) = (c.o, c.d);
         while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
             // Segment k is [t0 + k·step, t0 + (k + 1)·step] (the last one ending at t1), so
@@ -1058,11 +1071,7 @@ impl Compiled {
             }
             c.k += m as u64;
             for i in 0..m {
-                let p = obj
-                    .to_object
-                    .transform_point3(origin + mids[i] * dir)
-                    .as_vec3()
-                    .to_array();
+                let p = (ro + mids[i] * rd).as_vec3().to_array();
                 ps[i] = p;
                 vs[i] = data.trilinear(p); // in [0, 1], as a field value
             }
@@ -1098,6 +1107,10 @@ struct Cursor {
     k: u64,
     n: u64,
     walk: Option<Walk>,
+    /// The ray in the object's coordinates: the object point of ray parameter t is
+    /// `o + t·d`.
+    o: DVec3,
+    d: DVec3,
     /// Samples before this ray parameter lie in the occupied block the walk last reported:
     /// they are taken without consulting the walk.
     occupied_until: f64,
@@ -1121,12 +1134,10 @@ impl Cursor {
         } else {
             u64::MAX
         };
+        let o = obj.to_object.transform_point3(origin);
+        let d = obj.to_object.transform_vector3(dir);
         let walk = match (&obj.skip, scene.settings.optimise.skip_empty) {
-            (Some(grid), true) => {
-                let o = obj.to_object.transform_point3(origin);
-                let d = obj.to_object.transform_vector3(dir);
-                Some(grid.walk(o, d, t0))
-            }
+            (Some(grid), true) => Some(grid.walk(o, d, t0)),
             _ => None,
         };
         Cursor {
@@ -1137,8 +1148,16 @@ impl Cursor {
             k: 0,
             n,
             walk,
+            o,
+            d,
             occupied_until: f64::NEG_INFINITY,
         }
+    }
+
+    /// The object point (f32, as samples see it) of ray parameter `t`.
+    #[inline]
+    fn object_point(&self, t: f64) -> [f32; 3] {
+        (self.o + t * self.d).as_vec3().to_array()
     }
 
     #[inline]
