@@ -200,6 +200,24 @@ fn reduce_axis(
     (min, max, out)
 }
 
+/// The central differences (x, y, z, per grid step) at the eight nodes of the cell a trilinear
+/// gradient last read, x fastest, for [`Dataset::gradient_cached`]; `lo` is the first node of
+/// the 4×4×4 neighbourhood they were read from (`usize::MAX`: none yet). Valid for one dataset.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CellGradients {
+    lo: usize,
+    diffs: [[f32; 3]; 8],
+}
+
+impl Default for CellGradients {
+    fn default() -> CellGradients {
+        CellGradients {
+            lo: usize::MAX,
+            diffs: [[0.0; 3]; 8],
+        }
+    }
+}
+
 /// A loaded dataset: dimensions, raw voxels, normalisation and the normalised node values.
 #[derive(Clone, Debug)]
 pub struct Dataset {
@@ -574,8 +592,21 @@ impl Dataset {
     /// node gradients interpolated with `filter`.
     #[inline]
     pub fn gradient(&self, p: [f32; 3], filter: Filter) -> [f64; 3] {
+        self.gradient_cached(p, filter, &mut CellGradients::default())
+    }
+
+    /// [`Dataset::gradient`], reusing the node differences of `cache` when `p` lies in the
+    /// cell they were read for (consecutive samples of a ray often do), and leaving those of
+    /// `p`'s cell there. The same value, bit for bit.
+    #[inline]
+    pub(crate) fn gradient_cached(
+        &self,
+        p: [f32; 3],
+        filter: Filter,
+        cache: &mut CellGradients,
+    ) -> [f64; 3] {
         if filter == Filter::Trilinear {
-            if let Some(g) = self.trilinear_gradient_interior(p) {
+            if let Some(g) = self.trilinear_gradient_interior(p, cache) {
                 return g;
             }
         }
@@ -671,7 +702,11 @@ impl Dataset {
     /// everywhere): the same value as the generic path, with the 4×4×4 neighbourhood of the cell
     /// read as its twelve x-rows that are needed (one bounds check each).
     #[inline]
-    fn trilinear_gradient_interior(&self, p: [f32; 3]) -> Option<[f64; 3]> {
+    fn trilinear_gradient_interior(
+        &self,
+        p: [f32; 3],
+        cache: &mut CellGradients,
+    ) -> Option<[f64; 3]> {
         let [nx, ny, nz] = self.dims;
         if nx < 4 || ny < 4 || nz < 4 {
             return None;
@@ -683,22 +718,31 @@ impl Dataset {
         // Row (j, k) holds nodes x0 − 1 … x0 + 2 at y0 − 1 + j, z0 − 1 + k; the corner rows of
         // the neighbourhood are never read.
         let lo = (x0 - 1) + nx * ((y0 - 1) + ny * (z0 - 1));
-        let row = |j: usize, k: usize| -> Option<[f32; 4]> {
-            let o = lo + nx * (j + ny * k);
-            self.values.get(o..o + 4)?.try_into().ok()
-        };
-        let (r10, r20) = (row(1, 0)?, row(2, 0)?);
-        let (r01, r11, r21, r31) = (row(0, 1)?, row(1, 1)?, row(2, 1)?, row(3, 1)?);
-        let (r02, r12, r22, r32) = (row(0, 2)?, row(1, 2)?, row(2, 2)?, row(3, 2)?);
-        let (r13, r23) = (row(1, 3)?, row(2, 3)?);
-        // Per corner (j, k) of the cell (j, k in {1, 2}): its row, the rows below and above it
-        // in y, and the rows below and above it in z.
-        let corners = [
-            (&r11, &r01, &r21, &r10, &r12),
-            (&r21, &r11, &r31, &r20, &r22),
-            (&r12, &r02, &r22, &r11, &r13),
-            (&r22, &r12, &r32, &r21, &r23),
-        ];
+        if cache.lo != lo {
+            let row = |j: usize, k: usize| -> Option<[f32; 4]> {
+                let o = lo + nx * (j + ny * k);
+                self.values.get(o..o + 4)?.try_into().ok()
+            };
+            let (r10, r20) = (row(1, 0)?, row(2, 0)?);
+            let (r01, r11, r21, r31) = (row(0, 1)?, row(1, 1)?, row(2, 1)?, row(3, 1)?);
+            let (r02, r12, r22, r32) = (row(0, 2)?, row(1, 2)?, row(2, 2)?, row(3, 2)?);
+            let (r13, r23) = (row(1, 3)?, row(2, 3)?);
+            // Per corner (j, k) of the cell (j, k in {1, 2}): its row, the rows below and
+            // above it in y, and the rows below and above it in z.
+            let corners = [
+                (&r11, &r01, &r21, &r10, &r12),
+                (&r21, &r11, &r31, &r20, &r22),
+                (&r12, &r02, &r22, &r11, &r13),
+                (&r22, &r12, &r32, &r21, &r23),
+            ];
+            for (c, d) in cache.diffs.iter_mut().enumerate() {
+                let i = 1 + (c & 1);
+                let (r, ym, yp, zm, zp) = corners[c >> 1];
+                // Central differences (per grid step) at the corner, along x, y and z.
+                *d = [r[i + 1] - r[i - 1], yp[i] - ym[i], zp[i] - zm[i]];
+            }
+            cache.lo = lo;
+        }
         // Trilinear weights of the cell's corners, in the order x fastest.
         let (gx, gy, gz) = (1.0 - fx, 1.0 - fy, 1.0 - fz);
         let weights = [
@@ -712,19 +756,25 @@ impl Dataset {
             fx * fy * fz,
         ];
         let mut g = [0f32; 3];
-        for (c, wt) in weights.into_iter().enumerate() {
-            let i = 1 + (c & 1);
-            let (r, ym, yp, zm, zp) = corners[c >> 1];
-            // Central differences (per grid step) at the corner, along x, y and z.
-            g[0] += wt * (r[i + 1] - r[i - 1]);
-            g[1] += wt * (yp[i] - ym[i]);
-            g[2] += wt * (zp[i] - zm[i]);
+        for (wt, d) in weights.into_iter().zip(&cache.diffs) {
+            g[0] += wt * d[0];
+            g[1] += wt * d[1];
+            g[2] += wt * d[2];
         }
         Some([
             0.5 * g[0] as f64 * self.last[0],
             0.5 * g[1] as f64 * self.last[1],
             0.5 * g[2] as f64 * self.last[2],
         ])
+    }
+
+    /// The first node of the 4×4×4 neighbourhood of `p`'s cell (the key of [`CellGradients`]).
+    #[cfg(test)]
+    fn cell_lo(&self, p: [f32; 3]) -> usize {
+        let ([x0, y0, z0], _) = self.cell32(p);
+        let [nx, ny, _] = self.dims;
+        x0.wrapping_sub(1)
+            .wrapping_add(nx * (y0.wrapping_sub(1).wrapping_add(ny * z0.wrapping_sub(1))))
     }
 
     /// The derivative along `axis` at a node, per grid step: central inside, one-sided at faces.
@@ -1211,6 +1261,7 @@ mod tests {
     fn specialised_trilinear_paths_agree_with_the_generic_filter() {
         let d = random_u8([9, 7, 8], 8);
         let mut rng = Lcg(9);
+        let (mut cache, mut hits) = (CellGradients::default(), 0);
         for _ in 0..5000 {
             let p = [
                 (rng.next() * 1.4 - 0.2) as f32,
@@ -1225,7 +1276,14 @@ mod tests {
                 (d.trilinear(p) as f64 - generic.clamp(0.0, 1.0)).abs() < 4e-6,
                 "{p:?}"
             );
-            if let Some(g) = d.trilinear_gradient_interior(p) {
+            // The cached path gives the same bits as a fresh read, whether the cache holds the
+            // point's cell (a second point close by mostly shares it) or another one.
+            for q in [p, [p[0] + 1e-3, p[1] - 1e-3, p[2] + 1e-3]] {
+                let fresh = d.trilinear_gradient_interior(q, &mut CellGradients::default());
+                hits += usize::from(fresh.is_some() && cache.lo == d.cell_lo(q));
+                assert_eq!(d.trilinear_gradient_interior(q, &mut cache), fresh, "{q:?}");
+            }
+            if let Some(g) = d.trilinear_gradient_interior(p, &mut CellGradients::default()) {
                 for (axis, g) in g.into_iter().enumerate() {
                     let n = d.dims()[axis];
                     let want = d.filter(u, Filter::Trilinear, |i, j, k| {
@@ -1238,6 +1296,7 @@ mod tests {
                 }
             }
         }
+        assert!(hits > 500, "only {hits} cache hits tested");
         // Degenerate axes take the generic route where needed and stay constant.
         let slab = random_u8([5, 4, 1], 10);
         let a = slab.sample([0.3, 0.6, 0.0], Filter::Trilinear);

@@ -16,7 +16,7 @@
 //! early termination once the transmittance falls below [`T_MIN`]. Shadow rays use the same
 //! segments; mirror and refracted rays start at surface hits.
 
-use crate::dataset::{Dataset, Filter};
+use crate::dataset::{CellGradients, Dataset, Filter};
 use crate::error::{Error, ErrorCode, Result};
 use crate::kernel::Lean;
 use crate::program::{prefix_for, run, Instr, NormalFn, Sample, SampleEnv, SampleRole};
@@ -276,9 +276,17 @@ impl CObj {
     /// The world-space gradient of field `field` at `w` (object point `p`), and whether it
     /// vanishes: for the geometry field where it is a dataset's value, from the dataset's
     /// interpolated grid gradients; otherwise by central differences over the neighbourhood.
-    fn field_gradient(&self, w: DVec3, p: [f32; 3], field: usize) -> (DVec3, bool) {
+    /// `cache` holds the node differences of the last dataset cell read (see
+    /// [`CellGradients`]): one per object and ray, or a fresh one.
+    fn field_gradient(
+        &self,
+        w: DVec3,
+        p: [f32; 3],
+        field: usize,
+        cache: &mut CellGradients,
+    ) -> (DVec3, bool) {
         if let (9, Some((data, filter))) = (field, &self.f_dataset) {
-            let g = DVec3::from_array(data.gradient(p, *filter));
+            let g = DVec3::from_array(data.gradient_cached(p, *filter, cache));
             let zero = g.abs().max_element() <= ZERO_GRADIENT;
             return (self.grad_to_world * g, zero);
         }
@@ -297,8 +305,15 @@ impl CObj {
     /// The normal from the gradient alone: −∇F at `w` (object point `p`), flipped towards the
     /// viewer if asked; `None` where the gradient vanishes.
     #[inline]
-    fn gradient_normal(&self, w: DVec3, view: DVec3, p: [f32; 3], field: usize) -> Option<DVec3> {
-        let (grad, zero) = self.field_gradient(w, p, field);
+    fn gradient_normal(
+        &self,
+        w: DVec3,
+        view: DVec3,
+        p: [f32; 3],
+        field: usize,
+        cache: &mut CellGradients,
+    ) -> Option<DVec3> {
+        let (grad, zero) = self.field_gradient(w, p, field, cache);
         let n = if zero { None } else { (-grad).try_normalize() };
         match n {
             Some(v) if self.flip_normals && v.dot(view) < 0.0 => Some(-v),
@@ -309,7 +324,7 @@ impl CObj {
     /// The normal at `w`: −∇F by world-space central differences, then flipped towards the viewer
     /// if asked, then the normal functions in order. `None` where the gradient vanishes.
     fn normal(&self, w: DVec3, view: DVec3, s: &mut Sample<'_>, field: usize) -> Option<DVec3> {
-        let n = self.gradient_normal(w, view, s.position(), field);
+        let n = self.gradient_normal(w, view, s.position(), field, &mut CellGradients::default());
         if self.normals.is_empty() {
             return n;
         }
@@ -542,7 +557,8 @@ impl Compiled {
         if o <= 0.0 {
             return None;
         }
-        Some(self.finish_lean(obj, lean, o, p, w, dir, len, &mut f))
+        let mut cache = CellGradients::default();
+        Some(self.finish_lean(obj, lean, o, p, w, dir, len, &mut f, &mut cache))
     }
 
     /// The rest of a lean sample whose opacity `o` is above 0 (registers `f` filled by the
@@ -559,11 +575,12 @@ impl Compiled {
         dir: DVec3,
         len: f64,
         f: &mut [f32; FIELD_COUNT],
+        cache: &mut CellGradients,
     ) -> (f64, DVec3) {
         lean.rest(p, f);
         let alpha = 1.0 - obj.segment_transmittance(o, len);
         let colour = if obj.normals.is_empty() {
-            self.illuminate_with(obj, w, dir, f, || obj.gradient_normal(w, -dir, p, 9))
+            self.illuminate_with(obj, w, dir, f, || obj.gradient_normal(w, -dir, p, 9, cache))
         } else {
             let mut s = Sample::with_env(p, w.to_array(), &obj.env);
             s.fields = *f;
@@ -797,7 +814,12 @@ impl Compiled {
                         let secondary = (self.plan.reflections && obj.receive_reflections || bends)
                             && ray.depth < obj.recursion;
                         if secondary {
-                            let (g, zero) = obj.field_gradient(w, s.position(), field);
+                            let (g, zero) = obj.field_gradient(
+                                w,
+                                s.position(),
+                                field,
+                                &mut CellGradients::default(),
+                            );
                             if let Some(n) = (-g).try_normalize().filter(|_| !zero) {
                                 let eps = obj.step * 1e-3;
                                 if self.plan.reflections && obj.receive_reflections {
@@ -1042,6 +1064,8 @@ impl Compiled {
         let mut f = [0.0f32; FIELD_COUNT];
         // The object-space ray in registers: `Cursor::object_point` without the loads.
         let (ro, rd) = (c.o, c.d);
+        // Consecutive shaded samples often share a cell: its node differences are read once.
+        let mut cache = CellGradients::default();
         while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
             // Segment k is [t0 + k·step, t0 + (k + 1)·step] (the last one ending at t1), so
@@ -1085,7 +1109,8 @@ impl Compiled {
                 if o <= 0.0 {
                     continue;
                 }
-                let (alpha, colour) = self.finish_lean(obj, lean, o, p, w, dir, len, &mut f);
+                let (alpha, colour) =
+                    self.finish_lean(obj, lean, o, p, w, dir, len, &mut f, &mut cache);
                 col += t * alpha * colour;
                 t *= 1.0 - alpha;
                 if early && t < T_MIN {
