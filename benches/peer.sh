@@ -2,6 +2,7 @@
 # vlib against VTK's CPU ray caster on the MNI brain, back to back on this machine.
 #
 #   bash benches/peer.sh            # the main scene: shaded, sample distance 0.5
+#   PEER_ROUNDS=5 bash benches/peer.sh   # more interleaved VTK/vlib rounds (default 3)
 #   bash benches/peer.sh --sweep    # every sample distance of the sweep, shaded and unshaded,
 #                                   # and the table written to docs/performance.md
 #
@@ -37,6 +38,22 @@ python3 "$shared/vtk_dvr.py" --only $configs | tail -n $(( $(echo $configs | wc 
 
 echo "== vlib (criterion)"
 cargo bench --bench mni -- "$filter" 2>&1 | tee "$work/out/vlib_bench.txt" | grep -E "first frame|time:" || true
+# The machine's speed drifts between minutes (a shared host): the main comparison is repeated
+# in interleaved rounds, VTK then vlib, and the ratio of each round is reported.
+rounds=${PEER_ROUNDS:-3}
+echo "== $rounds interleaved rounds: VTK main, then vlib shaded (sd 0.5)"
+: > "$work/out/rounds.txt"
+est="$root/target/criterion/mni_512_sd0.5/shaded/new/estimates.json"
+cp "$est" "$work/out/shaded_estimates.json" # the tables report the full run above
+for r in $(seq "$rounds"); do
+  vt=$(python3 "$shared/vtk_dvr.py" --only main --json "$work/out/vtk_round.json" | awk '$1 == "main" {print $7}')
+  cargo bench --bench mni -- 'mni_512_sd0.5/shaded$' > "$work/out/vlib_round.txt" 2>&1
+  vl=$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["median"]["point_estimate"] / 1e9)' "$est")
+  echo "$vt $vl" >> "$work/out/rounds.txt"
+  echo "round $r: VTK ${vt} s, vlib ${vl} s"
+done
+cp "$work/out/shaded_estimates.json" "$est"
+
 cargo build --release --example mni -q
 target/release/examples/mni target/bench-data/mni.vlb "$work/out/vlib_mni.png" 0.5 >/dev/null
 # The converged reference both images are measured against: step 0.125 voxel, Catmull–Rom,
@@ -66,9 +83,10 @@ json.dump(err, open(sys.argv[4], "w"))
 print(f"RMS difference from the converged reference (8-bit levels): VTK {err['vtk']:.2f}, vlib {err['vlib']:.2f}")
 PY
 
-python3 - "$work/out/vtk_results.json" "$root/target/criterion" "$sweep" "$root/docs/performance.md" "$(nproc)" "$work/out/vlib_bench.txt" "$work/out/errors.json" <<'PY'
-import json, os, platform, re, sys
+python3 - "$work/out/vtk_results.json" "$root/target/criterion" "$sweep" "$root/docs/performance.md" "$(nproc)" "$work/out/vlib_bench.txt" "$work/out/errors.json" "$work/out/rounds.txt" <<'PY'
+import json, os, platform, re, statistics, sys
 errors = json.load(open(sys.argv[7]))
+rounds = [tuple(map(float, line.split())) for line in open(sys.argv[8]) if line.strip()]
 vtk = {r["name"]: r for r in json.load(open(sys.argv[1]))["results"]}
 crit, sweep, doc, cpus = sys.argv[2], sys.argv[3] == "1", sys.argv[4], sys.argv[5]
 m = re.search(r"first frame.*?: ([0-9.]+) s", open(sys.argv[6]).read())
@@ -116,6 +134,17 @@ for name, label in labels.items():
         print(f"{name:34} {ms:10.1f} {ms/main:9.2f}")
         first = f" (first frame {vlib_first:.0f} ms)" if name == "shaded" and vlib_first else ""
         main_rows.append(f"| {label} | {ms:.0f} ms{first} | {ms/main:.2f} |")
+round_ratios = [v / t for t, v in rounds]
+if round_ratios:
+    print("vlib/VTK in the interleaved rounds: "
+          + ", ".join(f"{r:.2f}" for r in round_ratios)
+          + f" (median {statistics.median(round_ratios):.2f})")
+rounds_line = (
+    f"Interleaved rounds (VTK main, then vlib shaded, {len(rounds)} times): "
+    + "; ".join(f"{t * 1e3:.0f} ms against {v * 1e3:.0f} ms, {v / t:.2f}" for t, v in rounds)
+    + f". Median vlib / VTK: {statistics.median(round_ratios):.2f}."
+    if rounds else ""
+)
 text = open(doc).read() if os.path.exists(doc) else ""
 main_table = "\n".join([
     f"Measured by `bash benches/peer.sh` on {machine}.",
@@ -124,6 +153,7 @@ main_table = "\n".join([
     "|---|---|---|",
     *main_rows,
     "",
+    *([rounds_line, ""] if rounds_line else []),
     "RMS difference of each main image from a converged vlib reference (step 0.125 voxel, "
     "Catmull–Rom, adaptive 2×2 super-sampling), in 8-bit levels: "
     f"VTK {errors['vtk']:.2f}, vlib {errors['vlib']:.2f}. The images side by side (VTK left, vlib "
