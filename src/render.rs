@@ -904,6 +904,28 @@ impl Compiled {
     /// MIP objects their maximum-intensity layer, all composited front to back in depth order.
     /// At a refracting surface the rest of the ray continues along the refracted direction.
     fn trace_ray(&self, origin: DVec3, dir: DVec3, ray: Ray) -> DVec3 {
+        let background = if ray.background {
+            crate::scene::v3(self.settings.background)
+        } else {
+            DVec3::ZERO
+        };
+        if let [obj] = self.objects.as_slice() {
+            // A scene of one volume (the usual scanned-data case): what the general path below
+            // does for it, without building its lists.
+            let seen = if ray.mirror {
+                obj.cast_reflections
+            } else {
+                obj.visible
+            };
+            if seen && obj.render_type == RenderType::Dvr {
+                let Some((t0, t1)) = obj.clip(origin, dir) else {
+                    return background;
+                };
+                let mut c = Cursor::new(self, obj, 0, origin, dir, t0, t1);
+                let (col, t) = self.march_one(&mut c, origin, dir);
+                return col + t * background;
+            }
+        }
         let mut cursors: Vec<Cursor> = Vec::new();
         let mut layers: Vec<Layer> = Vec::new();
         for (i, obj) in self.objects.iter().enumerate() {
@@ -926,11 +948,6 @@ impl Compiled {
                 }
             }
         }
-        let background = if ray.background {
-            crate::scene::v3(self.settings.background)
-        } else {
-            DVec3::ZERO
-        };
         if layers.is_empty() && cursors.len() == 1 {
             // One volume along the ray and nothing else: its own tight loop.
             let mut c = cursors.pop().expect("one cursor");
