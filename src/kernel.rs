@@ -144,11 +144,10 @@ fn map_outputs(
     if let Some(seg) = mapping.ramp_segment(v, k) {
         // The usual case, a ramp inside its rows: `eval_at`'s formula without its case
         // analysis.
+        // (j < outputs: `vlMap` refuses any other output column.)
         let dv = v as f64 - seg[0];
         for &(mask, j) in outputs {
-            if let (Some(&b), Some(&slope)) = (seg.get(1 + 2 * j), seg.get(2 + 2 * j)) {
-                write(fields, mask, (b + dv * slope) as f32);
-            }
+            write(fields, mask, (seg[1 + 2 * j] + dv * seg[2 + 2 * j]) as f32);
         }
         return;
     }

@@ -3,8 +3,7 @@
 //! On the x86-64 baseline (SSE2) `f64::floor` and `f64::ceil` are calls into libm; the block
 //! walk rounds several times per leap, so it uses these inline forms instead. They return
 //! exactly what `floor` and `ceil` return for every finite input and for ±∞ and NaN, except
-//! that a zero result is always +0.0 (callers convert to integers, where the sign of zero does
-//! not matter).
+//! perhaps the sign of a zero result (callers convert to integers, where it does not matter).
 
 /// 2⁵²: every f64 of at least this magnitude is an integer.
 const INTEGRAL: f64 = 4_503_599_627_370_496.0;
