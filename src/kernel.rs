@@ -15,7 +15,7 @@
 //!   output there ([`Mapping::locate`], [`Mapping::eval_at`]).
 
 use crate::dataset::{Dataset, Filter};
-use crate::mapping::Mapping;
+use crate::mapping::{segment_value, Mapping};
 use crate::program::{clamp_field, Instr};
 use crate::types::{Fields, FIELD_COUNT};
 use std::sync::Arc;
@@ -147,7 +147,7 @@ fn map_outputs(
         // (j < outputs: `vlMap` refuses any other output column.)
         let dv = v as f64 - seg[0];
         for &(mask, j) in outputs {
-            write(fields, mask, (seg[1 + 2 * j] + dv * seg[2 + 2 * j]) as f32);
+            write(fields, mask, segment_value(seg, dv, j));
         }
         return;
     }

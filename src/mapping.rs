@@ -29,6 +29,13 @@ pub struct Mapping {
     segments: Vec<f64>,
 }
 
+/// Output `j` of a ramp segment (see [`Mapping::ramp_segment`]) at `dv` past its start:
+/// `b + dv·slope`, rounded to f32.
+#[inline]
+pub(crate) fn segment_value(seg: &[f64], dv: f64, j: usize) -> f32 {
+    (seg[1 + 2 * j] + dv * seg[2 + 2 * j]) as f32
+}
+
 impl Mapping {
     /// Validates a table of `points` rows `(a, b_1, …, b_outputs)`: every value finite and in
     /// [0, 1], the a strictly increasing, and the table exactly `points * (outputs + 1)` long.
@@ -181,7 +188,7 @@ impl Mapping {
                     return (bn + (v as f64 - an) * (1.0 - bn) / (1.0 - an)) as f32;
                 }
                 let seg = self.segment(k - 1);
-                (seg[1 + 2 * j] + (v as f64 - seg[0]) * seg[2 + 2 * j]) as f32
+                segment_value(seg, v as f64 - seg[0], j)
             }
         }
     }
@@ -194,9 +201,8 @@ impl Mapping {
     }
 
     /// For a ramp and an input located by [`Mapping::locate`] strictly between its first and
-    /// last rows (0 < k < n, v > 0), where Φ_r is linear: the segment's (a, [b, slope] per
-    /// output), so that `eval_at(v, k, j)` is `(b + (v − a)·slope) as f32` with `b, slope` at
-    /// `1 + 2j, 2 + 2j`. `None` elsewhere.
+    /// last rows (0 < k < n, v > 0), where Φ_r is linear: the segment (a, then [b, slope] per
+    /// output), so that `eval_at(v, k, j)` is `segment_value(seg, v − a, j)`. `None` elsewhere.
     #[inline]
     pub fn ramp_segment(&self, v: f32, k: usize) -> Option<&[f64]> {
         if self.kind == MappingType::Ramp && k > 0 && k < self.a.len() && v > 0.0 {
@@ -322,7 +328,7 @@ mod tests {
                     (y as f64 - line).abs() <= 1.2e-7,
                     "v = {v}, j = {j}: {y} vs {line}"
                 );
-                let fast = (seg[1 + 2 * j] + (v as f64 - seg[0]) * seg[2 + 2 * j]) as f32;
+                let fast = segment_value(seg, v as f64 - seg[0], j);
                 assert_eq!(fast.to_bits(), y.to_bits(), "v = {v}, j = {j}");
             }
         }
