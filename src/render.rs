@@ -1085,22 +1085,17 @@ impl Compiled {
         let mut cache = CellGradients::default();
         while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
-            // Segment k is [t0 + k·step, t0 + (k + 1)·step] (the last one ending at t1), so
-            // each segment's end is the next one's start: one product per sample, the same
-            // numbers as `Cursor::segment`. (f64 counts are exact below 2⁵³ segments.)
+            // Each segment's end is the next one's start: one boundary per sample, the same
+            // numbers as `Cursor::segment`.
             let mut kf = c.k as f64;
-            let mut a = c.t0 + kf * c.step;
+            let mut a = c.boundary(kf);
             let left = (c.n - c.k).min(BATCH as u64) as usize; // c.k < c.n after peek
             let last = c.k + left as u64 == c.n; // the run may reach the last segment
             let mut m = 0;
             while m < left {
                 kf += 1.0;
-                let next = c.t0 + kf * c.step;
-                let b = if last && m + 1 == left {
-                    c.t1
-                } else {
-                    next.min(c.t1)
-                };
+                let next = c.boundary(kf);
+                let b = c.end(next, last && m + 1 == left);
                 let mid = 0.5 * (a + b);
                 if m > 0 && !(unbounded || mid < c.occupied_until) {
                     break;
@@ -1112,7 +1107,7 @@ impl Compiled {
             }
             c.k += m as u64;
             for i in 0..m {
-                let p = (ro + mids[i] * rd).as_vec3().to_array();
+                let p = ray_point(ro, rd, mids[i]);
                 ps[i] = p;
                 vs[i] = data.trilinear(p); // in [0, 1], as a field value
             }
@@ -1196,21 +1191,33 @@ impl Cursor {
         }
     }
 
-    /// The object point (f32, as samples see it) of ray parameter `t`.
+    /// The object point of ray parameter `t`.
     #[inline]
     fn object_point(&self, t: f64) -> [f32; 3] {
-        (self.o + t * self.d).as_vec3().to_array()
+        ray_point(self.o, self.d, t)
+    }
+
+    /// Segment boundary number `k` (a count, exact in f64 below 2⁵³): `t0 + k·step`.
+    #[inline]
+    fn boundary(&self, k: f64) -> f64 {
+        self.t0 + k * self.step
+    }
+
+    /// The end of a segment whose next boundary is `next`: t1 for the last segment, else the
+    /// boundary (never past t1).
+    #[inline]
+    fn end(&self, next: f64, last: bool) -> f64 {
+        if last {
+            self.t1
+        } else {
+            next.min(self.t1)
+        }
     }
 
     #[inline]
     fn segment(&self, k: u64) -> (f64, f64) {
-        let a = self.t0 + k as f64 * self.step;
-        let b = if k + 1 >= self.n {
-            self.t1
-        } else {
-            (self.t0 + (k + 1) as f64 * self.step).min(self.t1)
-        };
-        (a, b)
+        let a = self.boundary(k as f64);
+        (a, self.end(self.boundary((k + 1) as f64), k + 1 >= self.n))
     }
 
     /// The length of the next segment, which is then passed.
@@ -1264,6 +1271,13 @@ impl Cursor {
             self.k = k;
         }
     }
+}
+
+/// The object point (f32, as samples see it) of parameter `t` on the object-space ray
+/// `o + t·d`.
+#[inline]
+fn ray_point(o: DVec3, d: DVec3, t: f64) -> [f32; 3] {
+    (o + t * d).as_vec3().to_array()
 }
 
 /// The primary-ray generator of one image.
