@@ -958,6 +958,11 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             (self.0 >> 11) as f64 / (1u64 << 53) as f64
         }
+
+        /// A point of [−0.2, 1.2]³: the unit box and a margin around it, where reads clamp.
+        fn point_around_box(&mut self) -> [f32; 3] {
+            std::array::from_fn(|_| (self.next() * 1.4 - 0.2) as f32)
+        }
     }
 
     /// A 16-bit dataset whose raw values are the integer linear function 1000 + 7i + 300j + 20k
@@ -1263,11 +1268,7 @@ mod tests {
         let mut rng = Lcg(9);
         let (mut cache, mut hits) = (CellGradients::default(), 0);
         for _ in 0..5000 {
-            let p = [
-                (rng.next() * 1.4 - 0.2) as f32,
-                (rng.next() * 1.4 - 0.2) as f32,
-                (rng.next() * 1.4 - 0.2) as f32,
-            ];
+            let p = rng.point_around_box();
             let u = [d.index(p[0], 0), d.index(p[1], 1), d.index(p[2], 2)];
             let generic = d.filter(u, Filter::Trilinear, |i, j, k| d.node(i, j, k) as f64);
             // f32 index arithmetic: the weights are off by at most an ulp of the index (n < 16
@@ -1310,11 +1311,7 @@ mod tests {
         let (mut interior, mut derivative) = (0, 0);
         for (b, c) in [(0.0, 0.5), (1.0, 0.0), (1.0 / 3.0, 1.0 / 3.0)] {
             for _ in 0..3000 {
-                let p = [
-                    (rng.next() * 1.4 - 0.2) as f32,
-                    (rng.next() * 1.4 - 0.2) as f32,
-                    (rng.next() * 1.4 - 0.2) as f32,
-                ];
+                let p = rng.point_around_box();
                 let u = [d.index(p[0], 0), d.index(p[1], 1), d.index(p[2], 2)];
                 let f = Filter::Cubic { b, c };
                 let generic = d.filter(u, f, |i, j, k| d.node(i, j, k) as f64);
