@@ -202,10 +202,28 @@ impl CObj {
         }
     }
 
-    /// The parameter interval [t0, t1] (t ≥ 0) where the ray lies inside the boundary box.
-    fn clip(&self, origin: DVec3, dir: DVec3) -> Option<(f64, f64)> {
-        let o = self.to_object.transform_point3(origin);
-        let d = self.to_object.transform_vector3(dir);
+    /// The world ray `origin + t·dir` in the object's coordinates, `o + t·d` (the same t).
+    #[inline]
+    fn object_ray(&self, origin: DVec3, dir: DVec3) -> (DVec3, DVec3) {
+        (
+            self.to_object.transform_point3(origin),
+            self.to_object.transform_vector3(dir),
+        )
+    }
+
+    /// Whether a ray of this kind sees the object (mirror rays: `cast_reflections`).
+    #[inline]
+    fn seen_by(&self, ray: Ray) -> bool {
+        if ray.mirror {
+            self.cast_reflections
+        } else {
+            self.visible
+        }
+    }
+
+    /// The parameter interval [t0, t1] (t ≥ 0) where the object-space ray `o + t·d` lies
+    /// inside the boundary box.
+    fn clip(&self, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
         let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
         for i in 0..3 {
             if d[i] == 0.0 {
@@ -687,14 +705,15 @@ impl Compiled {
     fn transmittance(&self, w: DVec3, l: DVec3, dist: f64) -> f64 {
         let mut t_total = 1.0f64;
         for obj in self.objects.iter().filter(|o| o.cast_shadows) {
-            let Some((t0, t1)) = obj.clip(w, l) else {
+            let (o, d) = obj.object_ray(w, l);
+            let Some((t0, t1)) = obj.clip(o, d) else {
                 continue;
             };
             let t1 = t1.min(dist);
             if t1 <= t0 {
                 continue;
             }
-            let mut c = Cursor::new(self, obj, 0, w, l, t0, t1);
+            let mut c = Cursor::new(self, obj, 0, (o, d), t0, t1);
             if obj.render_type == RenderType::Dsr {
                 // A surface object shadows by the opacity of the surfaces the ray crosses. A
                 // point on a surface lies within 10⁻⁶ of a step of it, on either side: crossings
@@ -912,16 +931,12 @@ impl Compiled {
         if let [obj] = self.objects.as_slice() {
             // A scene of one volume (the usual scanned-data case): what the general path below
             // does for it, without building its lists.
-            let seen = if ray.mirror {
-                obj.cast_reflections
-            } else {
-                obj.visible
-            };
-            if seen && obj.render_type == RenderType::Dvr {
-                let Some((t0, t1)) = obj.clip(origin, dir) else {
+            if obj.seen_by(ray) && obj.render_type == RenderType::Dvr {
+                let (o, d) = obj.object_ray(origin, dir);
+                let Some((t0, t1)) = obj.clip(o, d) else {
                     return background;
                 };
-                let mut c = Cursor::new(self, obj, 0, origin, dir, t0, t1);
+                let mut c = Cursor::new(self, obj, 0, (o, d), t0, t1);
                 let (col, t) = self.march_one(&mut c, origin, dir);
                 return col + t * background;
             }
@@ -929,16 +944,12 @@ impl Compiled {
         let mut cursors: Vec<Cursor> = Vec::new();
         let mut layers: Vec<Layer> = Vec::new();
         for (i, obj) in self.objects.iter().enumerate() {
-            let seen = if ray.mirror {
-                obj.cast_reflections
-            } else {
-                obj.visible
-            };
-            if !seen {
+            if !obj.seen_by(ray) {
                 continue;
             }
-            if let Some((t0, t1)) = obj.clip(origin, dir) {
-                let mut c = Cursor::new(self, obj, i, origin, dir, t0, t1);
+            let (o, d) = obj.object_ray(origin, dir);
+            if let Some((t0, t1)) = obj.clip(o, d) {
+                let mut c = Cursor::new(self, obj, i, (o, d), t0, t1);
                 match obj.render_type {
                     RenderType::Dvr => cursors.push(c),
                     RenderType::Dsr => {
@@ -1154,14 +1165,14 @@ struct Cursor {
 }
 
 impl Cursor {
-    /// The segments of object `obj` (number `index`) over [t0, t1] of the ray, with a block walk
-    /// when empty-space skipping is on.
+    /// The segments of object `obj` (number `index`) over [t0, t1] of a ray, given in the
+    /// object's coordinates ([`CObj::object_ray`]), with a block walk when empty-space skipping
+    /// is on.
     fn new(
         scene: &Compiled,
         obj: &CObj,
         index: usize,
-        origin: DVec3,
-        dir: DVec3,
+        (o, d): (DVec3, DVec3),
         t0: f64,
         t1: f64,
     ) -> Cursor {
@@ -1171,8 +1182,6 @@ impl Cursor {
         } else {
             u64::MAX
         };
-        let o = obj.to_object.transform_point3(origin);
-        let d = obj.to_object.transform_vector3(dir);
         let walk = match (&obj.skip, scene.settings.optimise.skip_empty) {
             (Some(grid), true) => Some(grid.walk(o, d, t0)),
             _ => None,
