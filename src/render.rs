@@ -440,10 +440,31 @@ fn transmit(t: f64, e: f64) -> f64 {
 /// repeated squaring, which is exact to rounding and much cheaper than `powf`.
 #[inline]
 fn spec_pow(x: f64, e: f64) -> f64 {
-    if e.fract() == 0.0 && (0.0..=MAX_SPECULAR as f64).contains(&e) {
-        x.powi(e as i32)
+    // `e as u32` saturates (NaN to 0), so the round trip holds exactly for integers in range;
+    // no libm call (`fract` is one) on this per-sample path.
+    let k = e as u32;
+    if k as f64 == e && k <= MAX_SPECULAR as u32 {
+        powi(x, k)
     } else {
         x.powf(e)
+    }
+}
+
+/// `x^k` by binary exponentiation: the products of compiler-rt's and libgcc's `__powidf2`
+/// (what `f64::powi` calls for an exponent unknown at compile time), in the same order, so the
+/// same bits, without the call.
+#[inline]
+fn powi(mut x: f64, mut k: u32) -> f64 {
+    let mut r = 1.0;
+    loop {
+        if k & 1 != 0 {
+            r *= x;
+        }
+        k >>= 1;
+        if k == 0 {
+            return r;
+        }
+        x *= x;
     }
 }
 
@@ -1494,5 +1515,39 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The inlined binary exponentiation gives `f64::powi`'s bits (the library routine it
+    /// replaces), for every exponent the specular term can take and a spread of bases; the
+    /// exponent test takes exactly the integers in range and sends the rest to `powf`.
+    #[test]
+    fn powi_is_the_library_powi() {
+        let mut x = 1e-3f64;
+        while x < 1.0 {
+            for k in 0..=MAX_SPECULAR as u32 {
+                let (ours, lib) = (powi(x, k), x.powi(std::hint::black_box(k as i32)));
+                assert_eq!(ours.to_bits(), lib.to_bits(), "{x}^{k}");
+                assert_eq!(spec_pow(x, k as f64).to_bits(), lib.to_bits(), "{x}^{k}");
+            }
+            x = x * 1.37 + 1e-4;
+        }
+        for e in [
+            -1.0,
+            0.5,
+            10.25,
+            MAX_SPECULAR as f64 + 1.0,
+            1e30,
+            f64::INFINITY,
+        ] {
+            assert_eq!(
+                spec_pow(0.7, e).to_bits(),
+                0.7f64.powf(e).to_bits(),
+                "0.7^{e}"
+            );
+        }
+        assert_eq!(
+            spec_pow(0.7, f64::NAN).to_bits(),
+            0.7f64.powf(f64::NAN).to_bits()
+        );
     }
 }
