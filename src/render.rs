@@ -98,6 +98,9 @@ struct CObj {
     env: SampleEnv,
     /// Blocks where opacity is provably 0.
     skip: Option<Arc<SkipGrid>>,
+    /// For a lean program with a value head, under empty-space skipping: the cells of its
+    /// dataset whose samples can pass the zero test (see [`crate::dataset::CellMask`]).
+    cells: Option<Arc<crate::dataset::CellMask>>,
     /// The rendering algorithm the object captured.
     render_type: RenderType,
     /// Iso-surfaces (field index, threshold) for DSR.
@@ -149,6 +152,11 @@ impl CObj {
         let to_object = to_world.inverse();
         let r = &o.state;
         let o_prefix = prefix_for(&o.program, Fields::O);
+        let lean = if optimise.lean_kernel {
+            Lean::new(&o.program, o_prefix)
+        } else {
+            None
+        };
         let prefixes: [usize; FIELD_COUNT] =
             std::array::from_fn(|i| prefix_for(&o.program, Fields::from_index(i)));
         let constants =
@@ -179,11 +187,12 @@ impl CObj {
             o_prefix,
             f_dataset,
             grad_to_world: glam::DMat3::from_mat4(to_object).transpose(),
-            lean: if optimise.lean_kernel {
-                Lean::new(&o.program, o_prefix)
-            } else {
-                None
-            },
+            cells: lean
+                .as_ref()
+                .and_then(Lean::value_head)
+                .filter(|_| optimise.skip_empty)
+                .map(|(data, z)| data.cells_above(z)),
+            lean,
             env: SampleEnv {
                 datasets: datasets.clone(),
                 filter: Filter::new(r.interpolation, r.cubic),
@@ -1104,6 +1113,7 @@ impl Compiled {
         let grid = obj.skip.as_deref();
         let early = self.settings.optimise.early_termination;
         let unbounded = c.walk.is_none() || grid.is_none();
+        let cells = obj.cells.as_deref();
         let mut col = DVec3::ZERO;
         let mut t = 1.0f64;
         let mut mids = [0.0f64; BATCH];
@@ -1141,7 +1151,12 @@ impl Compiled {
             for i in 0..m {
                 let p = ray_point(ro, rd, mids[i]);
                 ps[i] = p;
-                vs[i] = data.trilinear(p); // in [0, 1], as a field value
+                // In [0, 1], as a field value; 0 (at most z) where the cell cannot pass the
+                // zero test below.
+                vs[i] = match cells {
+                    Some(cells) => data.trilinear_masked(p, cells),
+                    None => data.trilinear(p),
+                };
             }
             for i in 0..m {
                 let len = lens[i];
