@@ -229,20 +229,22 @@ impl CellMask {
     }
 }
 
-/// The central differences (x, y, z, per grid step) at the eight nodes of the cell a trilinear
-/// gradient last read, x fastest, for [`Dataset::gradient_cached`]; `lo` is the first node of
+/// The central differences (per grid step) at the eight nodes of the cell a trilinear
+/// gradient last read, per axis (x, y, z) and corner (x fastest), for
+/// [`Dataset::gradient_cached`]; `lo` is the first node of
 /// the 4×4×4 neighbourhood they were read from (`usize::MAX`: none yet). Valid for one dataset.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct CellGradients {
     lo: usize,
-    diffs: [[f32; 3]; 8],
+    /// Per axis, the eight corners' differences along it.
+    diffs: [[f32; 8]; 3],
 }
 
 impl Default for CellGradients {
     fn default() -> CellGradients {
         CellGradients {
             lo: usize::MAX,
-            diffs: [[0.0; 3]; 8],
+            diffs: [[0.0; 8]; 3],
         }
     }
 }
@@ -831,19 +833,24 @@ impl Dataset {
             let (r01, r11, r21, r31) = (row(0, 1)?, row(1, 1)?, row(2, 1)?, row(3, 1)?);
             let (r02, r12, r22, r32) = (row(0, 2)?, row(1, 2)?, row(2, 2)?, row(3, 2)?);
             let (r13, r23) = (row(1, 3)?, row(2, 3)?);
-            // Per corner (j, k) of the cell (j, k in {1, 2}): its row, the rows below and
-            // above it in y, and the rows below and above it in z.
+            // Per corner row (j, k) of the cell (j, k in {1, 2}, y fastest): its row, the rows
+            // below and above it in y, and the rows below and above it in z. Each gives two
+            // corners (x nodes 1 and 2 of the row) their central differences (per grid
+            // step) along x, y and z.
             let corners = [
-                (&r11, &r01, &r21, &r10, &r12),
-                (&r21, &r11, &r31, &r20, &r22),
-                (&r12, &r02, &r22, &r11, &r13),
-                (&r22, &r12, &r32, &r21, &r23),
+                (r11, r01, r21, r10, r12),
+                (r21, r11, r31, r20, r22),
+                (r12, r02, r22, r11, r13),
+                (r22, r12, r32, r21, r23),
             ];
-            for (c, d) in cache.diffs.iter_mut().enumerate() {
-                let i = 1 + (c & 1);
-                let (r, ym, yp, zm, zp) = corners[c >> 1];
-                // Central differences (per grid step) at the corner, along x, y and z.
-                *d = [r[i + 1] - r[i - 1], yp[i] - ym[i], zp[i] - zm[i]];
+            let [dx, dy, dz] = &mut cache.diffs;
+            for (c, (r, ym, yp, zm, zp)) in corners.into_iter().enumerate() {
+                for i in 1..3 {
+                    let corner = 2 * c + i - 1;
+                    dx[corner] = r[i + 1] - r[i - 1];
+                    dy[corner] = yp[i] - ym[i];
+                    dz[corner] = zp[i] - zm[i];
+                }
             }
             cache.lo = lo;
         }
@@ -860,10 +867,10 @@ impl Dataset {
             fx * fy * fz,
         ];
         let mut g = [0f32; 3];
-        for (wt, d) in weights.into_iter().zip(&cache.diffs) {
-            g[0] += wt * d[0];
-            g[1] += wt * d[1];
-            g[2] += wt * d[2];
+        for (g, d) in g.iter_mut().zip(&cache.diffs) {
+            for (wt, d) in weights.into_iter().zip(d) {
+                *g += wt * d;
+            }
         }
         Some([
             0.5 * g[0] as f64 * self.last[0],
