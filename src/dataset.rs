@@ -268,6 +268,9 @@ pub struct Dataset {
     last32: [f32; 3],
     /// The last cell's first node per axis, max(n − 2, 0), as i32 (saturated).
     top32: [i32; 3],
+    /// For [`Dataset::cell32`] in SSE lanes: (n − 1, max(n − 2, 0)) per axis as f32 (a fourth
+    /// lane of 0), when every n is at most 2²⁴ (so they are exact); else `None`.
+    lanes: Option<([f32; 4], [f32; 4])>,
     /// Node strides (1, nx, nx·ny), 0 along axes of one node.
     strides: [usize; 3],
 }
@@ -336,6 +339,12 @@ impl Dataset {
             last: dims.map(|n| (n - 1) as f64),
             last32: dims.map(|n| (n - 1) as f32),
             top32: dims.map(|n| i32::try_from(n.saturating_sub(2)).unwrap_or(i32::MAX)),
+            lanes: dims.iter().all(|&n| n <= 1 << 24).then(|| {
+                let lane = |f: &dyn Fn(usize) -> usize| {
+                    [f(dims[0]) as f32, f(dims[1]) as f32, f(dims[2]) as f32, 0.0]
+                };
+                (lane(&|n| n - 1), lane(&|n| n.saturating_sub(2)))
+            }),
             strides: [
                 usize::from(dims[0] > 1),
                 if dims[1] > 1 { dims[0] } else { 0 },
@@ -734,6 +743,31 @@ impl Dataset {
     /// the second per axis (for an axis of one node: (0, 0)).
     #[inline]
     fn cell32(&self, p: [f32; 3]) -> ([usize; 3], [f32; 3]) {
+        // The three axes in SSE lanes: the same operations, so the same numbers (a zero weight
+        // may come out +0 where the scalar path gives −0). max(u, 0) (`maxps`) gives 0 for NaN
+        // as `f32::max` does; u ≤ n − 1 ≤ 2²⁴ converts exactly; and truncating min(u, n − 2)
+        // is min(truncation, n − 2), n − 2 being an integer.
+        #[cfg(target_arch = "x86_64")]
+        if let Some((last, top)) = self.lanes {
+            use wide::{f32x4, i32x4};
+            let last = f32x4::new(last);
+            let u = (f32x4::new([p[0], p[1], p[2], 0.0]) * last)
+                .fast_max(f32x4::ZERO)
+                .fast_min(last);
+            let c: i32x4 = u.fast_min(f32x4::new(top)).fast_trunc_int();
+            let f = (u - c.round_float()).to_array();
+            let c = c.to_array();
+            return (
+                [c[0] as usize, c[1] as usize, c[2] as usize],
+                [f[0], f[1], f[2]],
+            );
+        }
+        self.cell32_scalar(p)
+    }
+
+    /// [`Dataset::cell32`] axis by axis.
+    #[inline]
+    fn cell32_scalar(&self, p: [f32; 3]) -> ([usize; 3], [f32; 3]) {
         let mut i = [0usize; 3];
         let mut f = [0f32; 3];
         for axis in 0..3 {
@@ -1523,5 +1557,65 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The cell in SSE lanes is the cell axis by axis: inside, on and outside the box, at NaN
+    /// and infinities, on grids with axes of one and two nodes.
+    #[test]
+    fn cells_in_lanes_are_the_cells_axis_by_axis() {
+        let mut rng = Lcg(11);
+        let specials = [
+            0.0,
+            -0.0,
+            1.0,
+            0.5,
+            1.0 - f32::EPSILON,
+            1e-30,
+            -1e-30,
+            2.0,
+            -3.0,
+            1e30,
+            -1e30,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::MIN_POSITIVE,
+        ];
+        for dims in [
+            [9, 7, 8],
+            [1, 6, 5],
+            [2, 2, 2],
+            [197, 233, 189],
+            [1, 1, 1],
+            [3, 1, 2],
+        ] {
+            let n = dims.iter().product::<usize>();
+            let d = Dataset::new(dims, Voxels::U8(vec![0; n]), 0.0, 1.0).unwrap();
+            assert!(d.lanes.is_some(), "{dims:?} is small enough for lanes");
+            let mut points: Vec<[f32; 3]> = (0..3000).map(|_| rng.point_around_box()).collect();
+            for &a in &specials {
+                for &b in &specials {
+                    points.push([a, b, 0.3]);
+                    points.push([0.7, a, b]);
+                }
+            }
+            for p in points {
+                let ((i, f), (j, g)) = (d.cell32(p), d.cell32_scalar(p));
+                assert_eq!(i, j, "{dims:?} {p:?}");
+                // Equal as numbers: `maxps` makes max(−0, 0) = +0 where `f32::max` keeps −0,
+                // a zero weight's sign that no lerp result depends on.
+                assert_eq!(f, g, "{dims:?} {p:?}");
+                assert!(f.iter().all(|w| w.is_finite() && (0.0..=1.0).contains(w)));
+            }
+        }
+        // An axis longer than 2²⁴ nodes is not exact in f32 lanes: such a grid goes axis by
+        // axis.
+        let long = Dataset::new(
+            [1, 1, (1 << 24) + 2],
+            Voxels::U8(vec![0; (1 << 24) + 2]),
+            0.0,
+            1.0,
+        );
+        assert!(long.unwrap().lanes.is_none());
     }
 }
