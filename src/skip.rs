@@ -348,6 +348,14 @@ impl Walk {
         self.t_max[0].min(self.t_max[1]).min(self.t_max[2])
     }
 
+    /// `t >= self.exit()`, without the NaN-aware minimum: t is at or past the block's exit if
+    /// it is at or past the exit along some axis (comparisons with NaN are false, and
+    /// `f64::min` ignores NaN, so the two agree there too).
+    #[inline]
+    fn left_before(&self, t: f64) -> bool {
+        self.t_max[0] <= t || self.t_max[1] <= t || self.t_max[2] <= t
+    }
+
     fn advance(&mut self, grid: &SkipGrid) {
         let axis = if self.t_max[0] <= self.t_max[1] && self.t_max[0] <= self.t_max[2] {
             0
@@ -371,7 +379,7 @@ impl Walk {
     /// Calls must come with non-decreasing `t`.
     #[inline]
     pub(crate) fn skip_until(&mut self, grid: &SkipGrid, t: f64) -> Result<f64, f64> {
-        while !self.done && t >= self.exit() {
+        while !self.done && self.left_before(t) {
             self.advance(grid);
         }
         if self.done {
