@@ -5,7 +5,7 @@
 //! It computes exactly what [`crate::program::run`] computes, bit for bit (the same dataset
 //! filters, the same [`Mapping`] arithmetic, the same clamping of written values), without the
 //! generality a field function needs: no [`crate::program::Sample`] per point, no instruction
-//! dispatch over function calls. Two rewrites make it cheaper, both exact:
+//! dispatch over function calls. These rewrites make it cheaper, all exact:
 //!
 //! - **The zero test.** When opacity is last written by a transfer function that is 0 on an
 //!   interval [0, z] of its input ([`Mapping::zero_below`]), a sample whose input is at most z
@@ -13,6 +13,8 @@
 //! - **Fused outputs.** Consecutive `vlMap`s of one source through one transfer function (the
 //!   r, g, b columns of a colour table) locate the input's segment once and evaluate every
 //!   output there ([`Mapping::locate`], [`Mapping::eval_at`]).
+//! - **Direct form.** A scanned volume's usual program (a dataset, its opacity table, its
+//!   colour table, constants) stores each value in its field directly ([`Direct`]).
 
 use crate::dataset::{Dataset, Filter};
 use crate::mapping::{segment_value, Mapping};
@@ -49,6 +51,80 @@ pub(crate) struct Lean {
     /// The registers a sample starts from: 0, except the fields of the program's trailing
     /// constants (see [`Lean::new`]).
     start: [f32; FIELD_COUNT],
+    /// The same program in direct form, when it has the usual shape (see [`Direct`]).
+    direct: Option<Direct>,
+}
+
+/// A value-head program ([`Lean::value_head`]) of the usual shape, in direct form: the dataset
+/// writes the fields of `data_mask` (the zero test's source among them), one transfer function
+/// of the source writes o alone, and at most one more (the colour table) writes single fields
+/// from the same source. Each value is then stored in its field, without the operation loop,
+/// the masks' bit loops or a second zero test: the same numbers as the operations.
+struct Direct {
+    data_mask: u16,
+    source: usize,
+    opacity: (Arc<Mapping>, usize),
+    /// The colour table and its (field, output column) pairs, in order.
+    colour: Option<(Arc<Mapping>, FieldOutputs)>,
+}
+
+/// (field, output column) pairs of a transfer function, in order.
+type FieldOutputs = Vec<(usize, usize)>;
+
+impl Direct {
+    /// The direct form of a value-head program's operations, if they have its shape.
+    fn new(opacity: &[Op], zero: Option<(usize, f32)>, rest: &[Op]) -> Option<Direct> {
+        let (source, _) = zero?;
+        let [Op::Data {
+            mask: data_mask, ..
+        }, Op::Map {
+            source: s,
+            mapping,
+            outputs,
+        }] = opacity
+        else {
+            return None;
+        };
+        // o alone, from the source, which is not o (so the colour table reads it unchanged).
+        let [(o_mask, o_col)] = outputs.as_slice() else {
+            return None;
+        };
+        if *s != source || source == 0 || *o_mask != 1 || data_mask & (1 << source) == 0 {
+            return None;
+        }
+        let single = |m: u16| (m.count_ones() == 1).then(|| m.trailing_zeros() as usize);
+        let colour = match rest {
+            [] => None,
+            [Op::Map {
+                source: s,
+                mapping,
+                outputs,
+            }] if *s == source => Some((
+                mapping.clone(),
+                outputs
+                    .iter()
+                    .map(|&(m, j)| Some((single(m)?, j)))
+                    .collect::<Option<Vec<_>>>()?,
+            )),
+            _ => return None,
+        };
+        Some(Direct {
+            data_mask: *data_mask,
+            source,
+            opacity: (mapping.clone(), *o_col),
+            colour,
+        })
+    }
+}
+
+/// Output `j` of `mapping` at `x`, clamped as a field value: [`map_outputs`] for one output.
+#[inline(always)]
+fn map_value(mapping: &Mapping, x: f32, j: usize) -> f32 {
+    let (v, k) = mapping.locate(x);
+    clamp_field(match mapping.ramp_segment(v, k) {
+        Some(seg) => segment_value(seg, v as f64 - seg[0], j),
+        None => mapping.eval_at(v, k, j),
+    })
 }
 
 #[inline]
@@ -236,11 +312,13 @@ impl Lean {
                 ops.retain(|op| !matches!(op, Op::Set { mask: 0, .. }));
             }
         }
+        let direct = Direct::new(&opacity, zero, &rest);
         Some(Lean {
             opacity,
             zero,
             rest,
             start,
+            direct,
         })
     }
 
@@ -292,6 +370,13 @@ impl Lean {
         p: [f32; 3],
         fields: &mut [f32; FIELD_COUNT],
     ) -> f32 {
+        if let Some(d) = &self.direct {
+            *fields = self.start;
+            write(fields, d.data_mask, v);
+            let o = map_value(&d.opacity.0, fields[d.source], d.opacity.1);
+            fields[0] = o;
+            return o;
+        }
         let [Op::Data { mask, .. }, last] = self.opacity.as_slice() else {
             unreachable!("opacity_from_value needs a value head")
         };
@@ -323,6 +408,22 @@ impl Lean {
     /// Runs the rest of the program after [`Lean::opacity`] returned a positive opacity.
     #[inline]
     pub(crate) fn rest(&self, p: [f32; 3], fields: &mut [f32; FIELD_COUNT]) {
+        if let Some(d) = &self.direct {
+            if let Some((mapping, outputs)) = &d.colour {
+                let (v, k) = mapping.locate(fields[d.source]);
+                if let Some(seg) = mapping.ramp_segment(v, k) {
+                    let dv = v as f64 - seg[0];
+                    for &(field, j) in outputs {
+                        fields[field] = clamp_field(segment_value(seg, dv, j));
+                    }
+                } else {
+                    for &(field, j) in outputs {
+                        fields[field] = clamp_field(mapping.eval_at(v, k, j));
+                    }
+                }
+            }
+            return;
+        }
         match self.rest.as_slice() {
             // The usual rest, one colour table: without the operation loop.
             [Op::Map {
@@ -417,6 +518,8 @@ mod tests {
             ],
             // Nothing writes opacity.
             vec![ds(Fields::F)],
+            // The scanned volume without a colour table (direct form, opacity alone).
+            vec![ds(Fields::F), map(Fields::O, 9, &o, 0), set(Fields::R, 0.5)],
         ]
     }
 
@@ -480,6 +583,33 @@ mod tests {
         );
         assert_eq!(lean.rest.len(), 1);
         assert!(matches!(lean.rest[0], Op::Map { .. }));
+    }
+
+    /// The direct form is taken by the usual shape only (the interpreter comparison above then
+    /// checks its numbers): program 0 (o and colour tables of F) and its opacity part alone,
+    /// not those where o shares its table's group, a map overwrites its source, or a constant
+    /// precedes the dataset; nor when a colour output writes two fields at once.
+    #[test]
+    fn direct_form_applies_to_the_usual_shape_only() {
+        let progs = programs();
+        let direct = |prog: &[Instr]| {
+            let lean = Lean::new(prog, crate::program::prefix_for(prog, Fields::O)).unwrap();
+            lean.direct
+                .map(|d| d.colour.map_or(0, |(_, outputs)| outputs.len()))
+        };
+        assert_eq!(direct(&progs[0]), Some(3));
+        assert_eq!(direct(&progs[0][..2]), Some(0));
+        for n in [1, 2, 3, 4, 5, 6] {
+            assert_eq!(direct(&progs[n]), None, "program {n}");
+        }
+        let mut two_fields = progs[0].clone();
+        two_fields[2] = Instr::Map {
+            targets: Fields::R | Fields::G,
+            source: 9,
+            mapping: ramp(&[0.1, 0.3, 0.2, 0.1, 0.6, 0.9, 0.5, 0.4], 3),
+            output: 0,
+        };
+        assert_eq!(direct(&two_fields), None);
     }
 
     #[test]
