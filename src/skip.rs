@@ -23,6 +23,8 @@ pub(crate) struct SkipGrid {
     origin: DVec3,
     /// Object-space size of a block.
     cell: DVec3,
+    /// Its reciprocal per axis.
+    inv_cell: DVec3,
     /// Per block: 0 if it may hold opacity, else the chessboard distance (in blocks, capped at
     /// [`MAX_LEAP`]) to the nearest such block: every block within `dist − 1` of it is empty.
     dist: Vec<u8>,
@@ -229,6 +231,7 @@ impl SkipGrid {
             dims,
             origin,
             cell,
+            inv_cell: cell.recip(),
             dist,
         })
     }
@@ -243,6 +246,7 @@ impl SkipGrid {
         let mut w = Walk {
             o,
             d,
+            inv_d: d.recip(),
             cell: [0; 3],
             step: [0; 3],
             t_max: [f64::INFINITY; 3],
@@ -300,6 +304,10 @@ fn opacity_range(prefix: &[Instr], data_ranges: &[(f32, f32)]) -> (f32, f32) {
 pub(crate) struct Walk {
     o: DVec3,
     d: DVec3,
+    /// 1/d per axis (unused where d is 0): the walk's divisions by d are multiplications
+    /// (a division's latency is several multiplications'; the results differ by rounding only,
+    /// which the bricks' one-node margin already covers, see `Dataset::bricks`).
+    inv_d: DVec3,
     cell: [i64; 3],
     step: [i64; 3],
     t_max: [f64; 3],
@@ -321,7 +329,7 @@ impl Walk {
             let c = match forced[axis] {
                 Some(c) => c,
                 None => {
-                    let rel = (p[axis] - grid.origin[axis]) / grid.cell[axis];
+                    let rel = (p[axis] - grid.origin[axis]) * grid.inv_cell[axis];
                     crate::num::floor(rel).clamp(0.0, (grid.dims[axis] - 1) as f64) as i64
                 }
             };
@@ -332,12 +340,13 @@ impl Walk {
             self.cell[axis] = c;
             let size = grid.cell[axis];
             let d = self.d[axis];
+            let inv = self.inv_d[axis];
             if d > 0.0 {
                 let boundary = grid.origin[axis] + (c + 1) as f64 * size;
-                self.t_max[axis] = t0 + (boundary - p[axis]) / d;
+                self.t_max[axis] = t0 + (boundary - p[axis]) * inv;
             } else if d < 0.0 {
                 let boundary = grid.origin[axis] + c as f64 * size;
-                self.t_max[axis] = t0 + (boundary - p[axis]) / d;
+                self.t_max[axis] = t0 + (boundary - p[axis]) * inv;
             }
         }
     }
@@ -424,10 +433,12 @@ impl Walk {
             let (lo, hi) = (self.cell[axis] - (r - 1), self.cell[axis] + r);
             let t = match self.step[axis] {
                 1 => {
-                    (grid.origin[axis] + hi as f64 * grid.cell[axis] - self.o[axis]) / self.d[axis]
+                    (grid.origin[axis] + hi as f64 * grid.cell[axis] - self.o[axis])
+                        * self.inv_d[axis]
                 }
                 -1 => {
-                    (grid.origin[axis] + lo as f64 * grid.cell[axis] - self.o[axis]) / self.d[axis]
+                    (grid.origin[axis] + lo as f64 * grid.cell[axis] - self.o[axis])
+                        * self.inv_d[axis]
                 }
                 _ => f64::INFINITY,
             };
