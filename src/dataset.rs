@@ -268,9 +268,9 @@ pub struct Dataset {
     last32: [f32; 3],
     /// The last cell's first node per axis, max(n − 2, 0), as i32 (saturated).
     top32: [i32; 3],
-    /// For [`Dataset::cell32`] in SSE lanes: (n − 1, max(n − 2, 0)) per axis as f32 (a fourth
-    /// lane of 0), when every n is at most 2²⁴ (so they are exact); else `None`.
-    lanes: Option<([f32; 4], [f32; 4])>,
+    /// For [`Dataset::cell32`] in SSE lanes: (n − 1, max(n − 2, 0), n − 2) per axis as f32 (a
+    /// fourth lane of 0, 0, 1), when every n is at most 2²⁴ (so they are exact); else `None`.
+    lanes: Option<[[f32; 4]; 3]>,
     /// Node strides (1, nx, nx·ny), 0 along axes of one node.
     strides: [usize; 3],
 }
@@ -340,10 +340,13 @@ impl Dataset {
             last32: dims.map(|n| (n - 1) as f32),
             top32: dims.map(|n| i32::try_from(n.saturating_sub(2)).unwrap_or(i32::MAX)),
             lanes: dims.iter().all(|&n| n <= 1 << 24).then(|| {
-                let lane = |f: &dyn Fn(usize) -> usize| {
-                    [f(dims[0]) as f32, f(dims[1]) as f32, f(dims[2]) as f32, 0.0]
-                };
-                (lane(&|n| n - 1), lane(&|n| n.saturating_sub(2)))
+                let lane =
+                    |f: &dyn Fn(usize) -> f32, w: f32| [f(dims[0]), f(dims[1]), f(dims[2]), w];
+                [
+                    lane(&|n| (n - 1) as f32, 0.0),
+                    lane(&|n| n.saturating_sub(2) as f32, 0.0),
+                    lane(&|n| n as f32 - 2.0, 1.0),
+                ]
             }),
             strides: [
                 usize::from(dims[0] > 1),
@@ -743,26 +746,61 @@ impl Dataset {
     /// the second per axis (for an axis of one node: (0, 0)).
     #[inline]
     fn cell32(&self, p: [f32; 3]) -> ([usize; 3], [f32; 3]) {
-        // The three axes in SSE lanes: the same operations, so the same numbers (a zero weight
-        // may come out +0 where the scalar path gives −0). max(u, 0) (`maxps`) gives 0 for NaN
-        // as `f32::max` does; u ≤ n − 1 ≤ 2²⁴ converts exactly; and truncating min(u, n − 2)
-        // is min(truncation, n − 2), n − 2 being an integer.
         #[cfg(target_arch = "x86_64")]
-        if let Some((last, top)) = self.lanes {
-            use wide::{f32x4, i32x4};
-            let last = f32x4::new(last);
-            let u = (f32x4::new([p[0], p[1], p[2], 0.0]) * last)
-                .fast_max(f32x4::ZERO)
-                .fast_min(last);
-            let c: i32x4 = u.fast_min(f32x4::new(top)).fast_trunc_int();
-            let f = (u - c.round_float()).to_array();
-            let c = c.to_array();
-            return (
-                [c[0] as usize, c[1] as usize, c[2] as usize],
-                [f[0], f[1], f[2]],
-            );
+        if let Some(lanes) = &self.lanes {
+            return Self::cell_in_lanes(p, lanes).0;
         }
         self.cell32_scalar(p)
+    }
+
+    /// [`Dataset::cell32`] where the cell's 4×4×4 neighbourhood lies inside the grid (its first
+    /// node at least 1 and its last at most n − 1 along every axis: 1 ≤ c ≤ n − 3); else
+    /// `None`.
+    #[inline]
+    fn interior_cell32(&self, p: [f32; 3]) -> Option<([usize; 3], [f32; 3])> {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(lanes) = &self.lanes {
+            let (cell, interior) = Self::cell_in_lanes(p, lanes);
+            return interior.then_some(cell);
+        }
+        let [nx, ny, nz] = self.dims;
+        let ([x0, y0, z0], f) = self.cell32_scalar(p);
+        let inside = |c: usize, n: usize| c >= 1 && c + 3 <= n;
+        (inside(x0, nx) && inside(y0, ny) && inside(z0, nz)).then_some(([x0, y0, z0], f))
+    }
+
+    /// The three axes in SSE lanes: the same operations as [`Dataset::cell32_scalar`], so the
+    /// same numbers (a zero weight may come out +0 where the scalar path gives −0). max(u, 0)
+    /// (`maxps`) gives 0 for NaN as `f32::max` does; u ≤ n − 1 ≤ 2²⁴ converts exactly; and
+    /// truncating min(u, n − 2) is min(truncation, n − 2), n − 2 being an integer. Also whether
+    /// the cell is interior: its first node c = trunc(cu), cu = min(u, n − 2) ≥ 0, has
+    /// 1 ≤ c ≤ n − 3 exactly when 1 ≤ cu < n − 2.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn cell_in_lanes(
+        p: [f32; 3],
+        [last, top, inner]: &[[f32; 4]; 3],
+    ) -> (([usize; 3], [f32; 3]), bool) {
+        use wide::{f32x4, i32x4};
+        let last = f32x4::new(*last);
+        let u = (f32x4::new([p[0], p[1], p[2], 0.0]) * last)
+            .fast_max(f32x4::ZERO)
+            .fast_min(last);
+        let cu = u.fast_min(f32x4::new(*top));
+        let interior = (cu.simd_ge(f32x4::new([1.0, 1.0, 1.0, 0.0]))
+            & cu.simd_lt(f32x4::new(*inner)))
+        .to_bitmask()
+            == 0b1111;
+        let c: i32x4 = cu.fast_trunc_int();
+        let f = (u - c.round_float()).to_array();
+        let c = c.to_array();
+        (
+            (
+                [c[0] as usize, c[1] as usize, c[2] as usize],
+                [f[0], f[1], f[2]],
+            ),
+            interior,
+        )
     }
 
     /// [`Dataset::cell32`] axis by axis.
@@ -847,14 +885,8 @@ impl Dataset {
         p: [f32; 3],
         cache: &mut CellGradients,
     ) -> Option<[f64; 3]> {
-        let [nx, ny, nz] = self.dims;
-        if nx < 4 || ny < 4 || nz < 4 {
-            return None;
-        }
-        let ([x0, y0, z0], [fx, fy, fz]) = self.cell32(p);
-        if x0 == 0 || y0 == 0 || z0 == 0 || x0 + 2 >= nx || y0 + 2 >= ny || z0 + 2 >= nz {
-            return None;
-        }
+        let [nx, ny, _] = self.dims;
+        let ([x0, y0, z0], [fx, fy, fz]) = self.interior_cell32(p)?;
         // Row (j, k) holds nodes x0 − 1 … x0 + 2 at y0 − 1 + j, z0 − 1 + k; the corner rows of
         // the neighbourhood are never read.
         let lo = (x0 - 1) + nx * ((y0 - 1) + ny * (z0 - 1));
@@ -1559,8 +1591,9 @@ mod tests {
         }
     }
 
-    /// The cell in SSE lanes is the cell axis by axis: inside, on and outside the box, at NaN
-    /// and infinities, on grids with axes of one and two nodes.
+    /// The cell in SSE lanes is the cell axis by axis, and its interior test the test on the
+    /// cell's indices: inside, on and outside the box, at NaN and infinities, on grids with axes
+    /// of one to four nodes.
     #[test]
     fn cells_in_lanes_are_the_cells_axis_by_axis() {
         let mut rng = Lcg(11);
@@ -1601,6 +1634,13 @@ mod tests {
             }
             for p in points {
                 let ((i, f), (j, g)) = (d.cell32(p), d.cell32_scalar(p));
+                // Interior: the neighbourhood x0 − 1 … x0 + 2 (and so on) inside the grid.
+                let inside = (0..3).all(|a| j[a] >= 1 && j[a] + 2 < dims[a]);
+                assert_eq!(
+                    d.interior_cell32(p).map(|c| c.0),
+                    inside.then_some(j),
+                    "{p:?}"
+                );
                 assert_eq!(i, j, "{dims:?} {p:?}");
                 // Equal as numbers: `maxps` makes max(−0, 0) = +0 where `f32::max` keeps −0,
                 // a zero weight's sign that no lerp result depends on.
