@@ -1148,21 +1148,24 @@ impl Compiled {
                 m += 1;
             }
             c.k += m as u64;
+            // The samples that pass the zero test (and have a length), as bits in order: the
+            // loop below visits only those, without a branch per sample.
+            let mut pass = 0u32;
             for i in 0..m {
                 let p = ray_point(ro, rd, mids[i]);
                 ps[i] = p;
                 // In [0, 1], as a field value; 0 (at most z) where the cell cannot pass the
-                // zero test below.
+                // zero test.
                 vs[i] = match cells {
                     Some(cells) => data.trilinear_masked(p, cells),
                     None => data.trilinear(p),
                 };
+                pass |= u32::from(!(lens[i] <= 0.0 || vs[i] <= z)) << i;
             }
-            for i in 0..m {
+            while pass != 0 {
+                let i = pass.trailing_zeros() as usize;
+                pass &= pass - 1;
                 let len = lens[i];
-                if len <= 0.0 || vs[i] <= z {
-                    continue;
-                }
                 let (p, w) = (ps[i], origin + mids[i] * dir);
                 let o = lean.opacity_from_value(vs[i], p, &mut f) as f64;
                 if o <= 0.0 {
