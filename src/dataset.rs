@@ -204,7 +204,8 @@ fn reduce_axis(
 /// it in a [`CellMask`]: far above the rounding of the three nested f32 lerps of
 /// [`Dataset::trilinear`] (each within 3·2⁻²⁴ of the exact value for values in [0, 1], so at
 /// most about 5.4·10⁻⁷ above the largest node in all), and below the spacing of 16-bit values
-/// (1/65535), so it never marks a cell that could not reach z in exact arithmetic either.
+/// (1/65535), so the only cells kept needlessly are those whose largest node lies within it
+/// below z.
 const CELL_MASK_MARGIN: f32 = 1.0 / (1 << 18) as f32;
 
 /// Which trilinear cells of a dataset may interpolate to a value above a bound z: bit c (c the

@@ -98,8 +98,9 @@ struct CObj {
     env: SampleEnv,
     /// Blocks where opacity is provably 0.
     skip: Option<Arc<SkipGrid>>,
-    /// For a lean program with a value head, under empty-space skipping: the cells of its
-    /// dataset whose samples can pass the zero test (see [`crate::dataset::CellMask`]).
+    /// For a lean program with a value head rendered by the batched march, under empty-space
+    /// skipping: the cells of its dataset whose samples can pass the zero test (see
+    /// [`crate::dataset::CellMask`]).
     cells: Option<Arc<crate::dataset::CellMask>>,
     /// The rendering algorithm the object captured.
     render_type: RenderType,
@@ -187,10 +188,14 @@ impl CObj {
             o_prefix,
             f_dataset,
             grad_to_world: glam::DMat3::from_mat4(to_object).transpose(),
+            // Only the batched march reads the mask: direct volume rendering of a value-head
+            // program without normal functions (see `Compiled::march_one`).
             cells: lean
                 .as_ref()
                 .and_then(Lean::value_head)
-                .filter(|_| optimise.skip_empty)
+                .filter(|_| {
+                    optimise.skip_empty && r.render_type == RenderType::Dvr && o.normals.is_empty()
+                })
                 .map(|(data, z)| data.cells_above(z)),
             lean,
             env: SampleEnv {
