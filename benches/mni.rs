@@ -30,15 +30,33 @@ fn bench(c: &mut Criterion) {
 
     let mut g = c.benchmark_group("mni_512_sd0.5");
     g.sample_size(10).measurement_time(Duration::from_secs(8));
+    // VTK's termination threshold: its fixed-point remaining opacity below 0xff of 0x7fff.
+    let vtk_termination = 255.0 / 32767.0;
+    let t_min = vlib::render::T_MIN;
     let variants = [
-        ("shaded", true, true, true, true),
-        ("shaded_no_skipping", true, false, true, true),
-        ("shaded_no_early_termination", true, true, false, true),
-        ("shaded_neither", true, false, false, true),
-        ("shaded_no_lean_kernel", true, true, true, false),
-        ("unshaded", false, true, true, true),
+        ("shaded", true, true, true, true, t_min),
+        ("shaded_no_skipping", true, false, true, true, t_min),
+        (
+            "shaded_no_early_termination",
+            true,
+            true,
+            false,
+            true,
+            t_min,
+        ),
+        ("shaded_neither", true, false, false, true, t_min),
+        ("shaded_no_lean_kernel", true, true, true, false, t_min),
+        (
+            "shaded_vtk_termination",
+            true,
+            true,
+            true,
+            true,
+            vtk_termination,
+        ),
+        ("unshaded", false, true, true, true, t_min),
     ];
-    for (name, shaded, skip_empty, early_termination, lean_kernel) in variants {
+    for (name, shaded, skip_empty, early_termination, lean_kernel, termination) in variants {
         let vl = scene(
             &vlb,
             0.5,
@@ -46,6 +64,7 @@ fn bench(c: &mut Criterion) {
             Optimise {
                 skip_empty,
                 early_termination,
+                termination,
                 lean_kernel,
             },
         );

@@ -4,12 +4,13 @@
 //! ```text
 //! target/release/vlconvert nifti ../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz out/mni.vlb
 //! cargo run --release --example mni -- out/mni.vlb out/mni.png [step] [--unshaded] [--size=N] \
-//!     [--cubic] [--ss=N]
+//!     [--cubic] [--ss=N] [--termination=T]
 //! ```
 //!
 //! `--cubic` samples the dataset with the Catmull–Rom filter instead of trilinear, `--ss=N` turns
 //! on adaptive N×N super-sampling: with a small step they make the converged reference that
-//! `benches/peer.sh` measures both renderers against.
+//! `benches/peer.sh` measures both renderers against. `--termination=T` stops rays at
+//! transmittance T instead of 1/512 (`Optimise::termination`; VTK's is 255/32767).
 
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
@@ -41,6 +42,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .map(str::parse)
         .transpose()?
         .unwrap_or(1);
+    let termination: f64 = all
+        .iter()
+        .find_map(|a| a.strip_prefix("--termination="))
+        .map(str::parse)
+        .transpose()?
+        .unwrap_or(vlib::render::T_MIN);
     let start = Instant::now();
     let mut vl = vlib::Library::new();
     vl.load(mni_scene::BRAIN, vlb)?;
@@ -48,6 +55,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dims = vl.dataset_of(mni_scene::BRAIN).expect("loaded").dims();
     mni_scene::mappings(&mut vl)?;
     vl.scene()?;
+    vl.set_optimise(vlib::scene::Optimise {
+        termination,
+        ..vlib::scene::Optimise::default()
+    })?;
     vl.image(png, 1.0, size, size)?;
     vl.super_sample(ss)?;
     let filter = if cubic {

@@ -805,13 +805,21 @@ impl Library {
     }
 
     /// Switches the pixel-preserving speed-ups (empty-space skipping, early ray termination)
-    /// on or off, for benchmarks; at library or scene scope like the other settings. Not a
-    /// command of the C API.
+    /// on or off, for benchmarks, and sets early termination's threshold; at library or scene
+    /// scope like the other settings. A threshold outside [0, 1) (NaN included) is refused
+    /// with `BadValue` and nothing changes. Not a command of the C API.
     pub fn set_optimise(&mut self, optimise: crate::scene::Optimise) -> Result<()> {
         if !matches!(self.scope(), Scope::Library | Scope::Scene) {
             return err(
                 ErrorCode::BadScope,
                 "set_optimise: library or scene scope only",
+            );
+        }
+        let t = optimise.termination;
+        if !(0.0..1.0).contains(&t) {
+            return err(
+                ErrorCode::BadValue,
+                format!("set_optimise: termination {t} (a transmittance in [0, 1))"),
             );
         }
         self.settings_mut().optimise = optimise;

@@ -13,7 +13,8 @@
 //! product of the transmittances is therefore exactly the Beer–Lambert value `(1 − o)^(L/ref)`
 //! for any step. Samples of overlapping objects are merged in order of depth, together with the
 //! surface hits of DSR objects and the layers of MIP objects. Compositing is front to back with
-//! early termination once the transmittance falls below [`T_MIN`]. Shadow rays use the same
+//! early termination once the transmittance falls below `Optimise::termination` (default
+//! [`T_MIN`]). Shadow rays use the same
 //! segments; mirror and refracted rays start at surface hits.
 
 use crate::dataset::{CellGradients, Dataset, Filter};
@@ -27,8 +28,9 @@ use glam::{DMat4, DVec3};
 use rayon::prelude::*;
 use std::sync::Arc;
 
-/// Rays stop once their transmittance falls below this: what remains can change an 8-bit pixel
-/// by at most 1/512 < 1/510 (half a grey level of an 8-bit image).
+/// The default of `Optimise::termination`: rays stop once their transmittance falls below
+/// this, so what remains can change an 8-bit pixel by at most 1/512 < 1/510 (half a grey level
+/// of an 8-bit image).
 pub const T_MIN: f64 = 1.0 / 512.0;
 
 /// Super-sampling refines a pixel when a colour channel differs from a 4-neighbour's by more
@@ -760,7 +762,7 @@ impl Compiled {
                         t_total *= 1.0 - hit.alpha;
                     }
                 }
-                if t_total < T_MIN {
+                if t_total < self.settings.optimise.termination {
                     return 0.0;
                 }
                 continue;
@@ -774,7 +776,7 @@ impl Compiled {
                 let o = obj.opacity_at(w + mid * l);
                 if o > 0.0 {
                     t_total *= obj.segment_transmittance(o, len);
-                    if t_total < T_MIN {
+                    if t_total < self.settings.optimise.termination {
                         return 0.0;
                     }
                 }
@@ -1003,12 +1005,13 @@ impl Compiled {
         layers.sort_by(|a, b| a.t.total_cmp(&b.t));
         let mut layers = layers.into_iter().peekable();
         let early = self.settings.optimise.early_termination;
+        let t_min = self.settings.optimise.termination;
         let mut col = DVec3::ZERO;
         let mut t = 1.0f64;
         let composite = |alpha: f64, colour: DVec3, col: &mut DVec3, t: &mut f64| {
             *col += *t * alpha * colour;
             *t *= 1.0 - alpha;
-            early && *t < T_MIN
+            early && *t < t_min
         };
         'march: loop {
             // The next segment in depth order (ties: object order).
@@ -1077,6 +1080,7 @@ impl Compiled {
         }
         let grid = obj.skip.as_deref();
         let early = self.settings.optimise.early_termination;
+        let t_min = self.settings.optimise.termination;
         let mut col = DVec3::ZERO;
         let mut t = 1.0f64;
         while let Some(mid) = c.peek(grid) {
@@ -1089,7 +1093,7 @@ impl Compiled {
             {
                 col += t * alpha * colour;
                 t *= 1.0 - alpha;
-                if early && t < T_MIN {
+                if early && t < t_min {
                     t = 0.0;
                     break;
                 }
@@ -1117,6 +1121,7 @@ impl Compiled {
         const BATCH: usize = 8;
         let grid = obj.skip.as_deref();
         let early = self.settings.optimise.early_termination;
+        let t_min = self.settings.optimise.termination;
         let unbounded = c.walk.is_none() || grid.is_none();
         let cells = obj.cells.as_deref();
         let mut col = DVec3::ZERO;
@@ -1180,7 +1185,7 @@ impl Compiled {
                     self.finish_lean(obj, lean, o, p, w, dir, len, &mut f, &mut cache);
                 col += t * alpha * colour;
                 t *= 1.0 - alpha;
-                if early && t < T_MIN {
+                if early && t < t_min {
                     return (col, 0.0);
                 }
             }

@@ -185,12 +185,17 @@ pub struct Settings {
 
 /// Speed-ups that never change a pixel (beyond what early termination documents), switchable
 /// so that benchmarks can show what each is worth. All are on by default.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Optimise {
     /// Skip blocks where opacity is provably 0.
     pub skip_empty: bool,
-    /// Stop rays whose transmittance falls below `render::T_MIN`.
+    /// Stop rays whose transmittance falls below `termination`.
     pub early_termination: bool,
+    /// The transmittance below which early termination stops a ray (primary and shadow rays):
+    /// what the rest of the ray could still add to a pixel is at most this fraction of the
+    /// light behind it. Default `render::T_MIN` = 1/512 (under half an 8-bit level); VTK's
+    /// CPU ray caster stops at 255/32767 ≈ 1/128. In [0, 1); `set_optimise` refuses others.
+    pub termination: f64,
     /// Evaluate programs of constants, datasets and transfer functions with the lean kernel
     /// (the same values, bit for bit, computed faster; see `docs/performance.md`).
     pub lean_kernel: bool,
@@ -201,6 +206,7 @@ impl Default for Optimise {
         Optimise {
             skip_empty: true,
             early_termination: true,
+            termination: crate::render::T_MIN,
             lean_kernel: true,
         }
     }

@@ -133,6 +133,58 @@ fn early_termination_changes_pixels_by_less_than_its_threshold() {
     for (a, b) in on.iter().zip(&off) {
         assert!(a.abs_diff(*b) <= 1);
     }
+    // A threshold set by `Optimise::termination` bounds it the same way: at 1/32 what a ray
+    // leaves out is below 255/32 ≈ 8 levels (plus one of rounding), and more than the default
+    // threshold allows does change;
+    // at 0 no ray stops early and the image is the one without early termination.
+    let at = |termination: f64| {
+        blob_scene(
+            Interpolation::Trilinear,
+            (0.0, 0.5),
+            Optimise {
+                termination,
+                ..Optimise::default()
+            },
+            1.0,
+        )
+    };
+    let coarse = at(1.0 / 32.0);
+    let worst = coarse
+        .iter()
+        .zip(&off)
+        .map(|(a, b)| a.abs_diff(*b))
+        .max()
+        .unwrap();
+    assert!((2..=9).contains(&worst), "largest change {worst}");
+    assert!(at(0.0) == off, "termination 0 stopped a ray early");
+    assert!(at(vlib::render::T_MIN) == on, "the default is T_MIN");
+}
+
+#[test]
+fn termination_thresholds_outside_zero_to_one_are_refused() {
+    let mut vl = Library::new();
+    for t in [-0.1, 1.0, 2.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let before = vl.fingerprint();
+        let e = vl
+            .set_optimise(Optimise {
+                termination: t,
+                ..Optimise::default()
+            })
+            .unwrap_err();
+        assert_eq!(e.code, vlib::ErrorCode::BadValue, "{t}");
+        assert_eq!(
+            vl.fingerprint(),
+            before,
+            "{t}: a refused call changed the state"
+        );
+    }
+    for t in [0.0, 1e-9, 0.5, 1.0 - f64::EPSILON] {
+        vl.set_optimise(Optimise {
+            termination: t,
+            ..Optimise::default()
+        })
+        .unwrap();
+    }
 }
 
 #[test]
@@ -272,6 +324,7 @@ fn mni_brain_renders_identically_with_and_without_skipping() {
             skip_empty: skip,
             early_termination: true,
             lean_kernel,
+            ..Optimise::default()
         })
         .unwrap();
         let c = [98.0, 116.0, 94.0];
