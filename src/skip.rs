@@ -4,12 +4,12 @@
 //! `vlMap` and `vlSet` instructions), the part of its program that determines opacity is
 //! evaluated over *intervals*, once per block of the object: each dataset contributes the range
 //! of node values its filter can read anywhere in the block ([`Dataset::bricks`]), each mapping
-//! the exact range of Φ over its input interval ([`Mapping::range`]), each constant itself, and
-//! each field function the whole [0, 1] (nothing is known of it). A block whose opacity interval
-//! is [0, 0] is *empty*: every sample in it has o = 0 and contributes nothing. Rays walk the
-//! block grid (a 3D DDA) and skip the segments whose sample points lie in empty blocks; the
-//! remaining samples are exactly the ones that would have been taken, so skipping never changes
-//! a pixel.
+//! the exact range of Φ over its input interval ([`crate::mapping::Mapping::range`]), each
+//! constant itself, and each field function the whole [0, 1] (nothing is known of it). A block
+//! whose opacity interval is [0, 0] is *empty*: every sample in it has o = 0 and contributes
+//! nothing. Rays walk the block grid (a 3D DDA) and skip the segments whose sample points lie in
+//! empty blocks; the remaining samples are exactly the ones that would have been taken, so
+//! skipping never changes a pixel.
 
 use crate::dataset::{bc_abs_sum, Dataset, Filter, BRICK};
 use crate::program::Instr;
