@@ -120,11 +120,35 @@ impl Direct {
 /// Output `j` of `mapping` at `x`, clamped as a field value: [`map_outputs`] for one output.
 #[inline(always)]
 fn map_value(mapping: &Mapping, x: f32, j: usize) -> f32 {
+    let mut out = 0.0;
+    map_each(mapping, x, &[((), j)], |(), v| out = v);
+    clamp_field(out)
+}
+
+/// The outputs of `mapping` at input `x`, each an (anything, output column) pair: the input's
+/// segment located once, then `put` called with each pair's first member and its value, in
+/// order (unclamped).
+#[inline(always)]
+fn map_each<T: Copy>(
+    mapping: &Mapping,
+    x: f32,
+    outputs: &[(T, usize)],
+    mut put: impl FnMut(T, f32),
+) {
     let (v, k) = mapping.locate(x);
-    clamp_field(match mapping.ramp_segment(v, k) {
-        Some(seg) => segment_value(seg, v as f64 - seg[0], j),
-        None => mapping.eval_at(v, k, j),
-    })
+    if let Some(seg) = mapping.ramp_segment(v, k) {
+        // The usual case, a ramp inside its rows: `eval_at`'s formula without its case
+        // analysis.
+        // (j < outputs: `vlMap` refuses any other output column.)
+        let dv = v as f64 - seg[0];
+        for &(t, j) in outputs {
+            put(t, segment_value(seg, dv, j));
+        }
+        return;
+    }
+    for &(t, j) in outputs {
+        put(t, mapping.eval_at(v, k, j));
+    }
 }
 
 #[inline]
@@ -216,20 +240,8 @@ fn map_outputs(
     mapping: &Mapping,
     outputs: &[(u16, usize)],
 ) {
-    let (v, k) = mapping.locate(fields[source]);
-    if let Some(seg) = mapping.ramp_segment(v, k) {
-        // The usual case, a ramp inside its rows: `eval_at`'s formula without its case
-        // analysis.
-        // (j < outputs: `vlMap` refuses any other output column.)
-        let dv = v as f64 - seg[0];
-        for &(mask, j) in outputs {
-            write(fields, mask, segment_value(seg, dv, j));
-        }
-        return;
-    }
-    for &(mask, j) in outputs {
-        write(fields, mask, mapping.eval_at(v, k, j));
-    }
+    let x = fields[source];
+    map_each(mapping, x, outputs, |mask, v| write(fields, mask, v));
 }
 
 impl Lean {
@@ -410,17 +422,10 @@ impl Lean {
     pub(crate) fn rest(&self, p: [f32; 3], fields: &mut [f32; FIELD_COUNT]) {
         if let Some(d) = &self.direct {
             if let Some((mapping, outputs)) = &d.colour {
-                let (v, k) = mapping.locate(fields[d.source]);
-                if let Some(seg) = mapping.ramp_segment(v, k) {
-                    let dv = v as f64 - seg[0];
-                    for &(field, j) in outputs {
-                        fields[field] = clamp_field(segment_value(seg, dv, j));
-                    }
-                } else {
-                    for &(field, j) in outputs {
-                        fields[field] = clamp_field(mapping.eval_at(v, k, j));
-                    }
-                }
+                let x = fields[d.source];
+                map_each(mapping, x, outputs, |field, v| {
+                    fields[field] = clamp_field(v)
+                });
             }
             return;
         }
