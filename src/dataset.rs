@@ -887,10 +887,10 @@ impl Dataset {
         cache: &mut CellGradients,
     ) -> Option<[f64; 3]> {
         let [nx, ny, _] = self.dims;
-        let ([x0, y0, z0], [fx, fy, fz]) = self.interior_cell32(p)?;
+        let (cell, [fx, fy, fz]) = self.interior_cell32(p)?;
         // Row (j, k) holds nodes x0 − 1 … x0 + 2 at y0 − 1 + j, z0 − 1 + k; the corner rows of
         // the neighbourhood are never read.
-        let lo = (x0 - 1) + nx * ((y0 - 1) + ny * (z0 - 1));
+        let lo = self.neighbourhood_lo(cell);
         if cache.lo != lo {
             let row = |j: usize, k: usize| -> Option<[f32; 4]> {
                 let o = lo + nx * (j + ny * k);
@@ -946,13 +946,12 @@ impl Dataset {
         ])
     }
 
-    /// The first node of the 4×4×4 neighbourhood of `p`'s cell (the key of [`CellGradients`]).
-    #[cfg(test)]
-    fn cell_lo(&self, p: [f32; 3]) -> usize {
-        let ([x0, y0, z0], _) = self.cell32(p);
+    /// The first node of the 4×4×4 neighbourhood of an interior cell (first node at least 1
+    /// along every axis; see [`Dataset::interior_cell32`]): the key of [`CellGradients`].
+    #[inline]
+    fn neighbourhood_lo(&self, [x0, y0, z0]: [usize; 3]) -> usize {
         let [nx, ny, _] = self.dims;
-        x0.wrapping_sub(1)
-            .wrapping_add(nx * (y0.wrapping_sub(1).wrapping_add(ny * z0.wrapping_sub(1))))
+        (x0 - 1) + nx * ((y0 - 1) + ny * (z0 - 1))
     }
 
     /// The derivative along `axis` at a node, per grid step: central inside, one-sided at faces.
@@ -1459,7 +1458,8 @@ mod tests {
             // point's cell (a second point close by mostly shares it) or another one.
             for q in [p, [p[0] + 1e-3, p[1] - 1e-3, p[2] + 1e-3]] {
                 let fresh = d.trilinear_gradient_interior(q, &mut CellGradients::default());
-                hits += usize::from(fresh.is_some() && cache.lo == d.cell_lo(q));
+                let lo = d.interior_cell32(q).map(|(c, _)| d.neighbourhood_lo(c));
+                hits += usize::from(fresh.is_some() && Some(cache.lo) == lo);
                 assert_eq!(d.trilinear_gradient_interior(q, &mut cache), fresh, "{q:?}");
             }
             if let Some(g) = d.trilinear_gradient_interior(p, &mut CellGradients::default()) {
