@@ -1004,14 +1004,13 @@ impl Compiled {
         }
         layers.sort_by(|a, b| a.t.total_cmp(&b.t));
         let mut layers = layers.into_iter().peekable();
-        let early = self.settings.optimise.early_termination;
-        let t_min = self.settings.optimise.termination;
+        let stop = self.settings.optimise.stop_below();
         let mut col = DVec3::ZERO;
         let mut t = 1.0f64;
         let composite = |alpha: f64, colour: DVec3, col: &mut DVec3, t: &mut f64| {
             *col += *t * alpha * colour;
             *t *= 1.0 - alpha;
-            early && *t < t_min
+            *t < stop
         };
         'march: loop {
             // The next segment in depth order (ties: object order).
@@ -1079,8 +1078,7 @@ impl Compiled {
             }
         }
         let grid = obj.skip.as_deref();
-        let early = self.settings.optimise.early_termination;
-        let t_min = self.settings.optimise.termination;
+        let stop = self.settings.optimise.stop_below();
         let mut col = DVec3::ZERO;
         let mut t = 1.0f64;
         while let Some(mid) = c.peek(grid) {
@@ -1093,7 +1091,7 @@ impl Compiled {
             {
                 col += t * alpha * colour;
                 t *= 1.0 - alpha;
-                if early && t < t_min {
+                if t < stop {
                     t = 0.0;
                     break;
                 }
@@ -1120,8 +1118,7 @@ impl Compiled {
     ) -> (DVec3, f64) {
         const BATCH: usize = 8;
         let grid = obj.skip.as_deref();
-        let early = self.settings.optimise.early_termination;
-        let t_min = self.settings.optimise.termination;
+        let stop = self.settings.optimise.stop_below();
         let unbounded = c.walk.is_none() || grid.is_none();
         let cells = obj.cells.as_deref();
         let mut col = DVec3::ZERO;
@@ -1185,7 +1182,7 @@ impl Compiled {
                     self.finish_lean(obj, lean, o, p, w, dir, len, &mut f, &mut cache);
                 col += t * alpha * colour;
                 t *= 1.0 - alpha;
-                if early && t < t_min {
+                if t < stop {
                     return (col, 0.0);
                 }
             }

@@ -201,6 +201,18 @@ pub struct Optimise {
     pub lean_kernel: bool,
 }
 
+impl Optimise {
+    /// The transmittance below which a primary ray stops: `termination` with early termination
+    /// on, −∞ (never) with it off.
+    pub(crate) fn stop_below(&self) -> f64 {
+        if self.early_termination {
+            self.termination
+        } else {
+            f64::NEG_INFINITY
+        }
+    }
+}
+
 impl Default for Optimise {
     fn default() -> Optimise {
         Optimise {
