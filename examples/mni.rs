@@ -17,6 +17,12 @@ mod mni_scene;
 
 use std::time::Instant;
 
+/// The value of the flag `name` (`--name=`) among `all`, parsed, or `default` without it.
+fn flag<T: std::str::FromStr>(all: &[String], name: &str, default: T) -> Result<T, T::Err> {
+    let value = all.iter().find_map(|a| a.strip_prefix(name));
+    Ok(value.map(str::parse).transpose()?.unwrap_or(default))
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let all: Vec<String> = std::env::args().skip(1).collect();
     // Positional arguments first (vlb, png, step), flags anywhere.
@@ -29,25 +35,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let png = args.get(1).map(String::as_str).unwrap_or("out/mni.png");
     let step: f32 = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(0.5);
     let shaded = !all.iter().any(|a| a == "--unshaded");
-    let size: i32 = all
-        .iter()
-        .find_map(|a| a.strip_prefix("--size="))
-        .map(str::parse)
-        .transpose()?
-        .unwrap_or(512);
+    let size: i32 = flag(&all, "--size=", 512)?;
     let cubic = all.iter().any(|a| a == "--cubic");
-    let ss: i32 = all
-        .iter()
-        .find_map(|a| a.strip_prefix("--ss="))
-        .map(str::parse)
-        .transpose()?
-        .unwrap_or(1);
-    let termination: f64 = all
-        .iter()
-        .find_map(|a| a.strip_prefix("--termination="))
-        .map(str::parse)
-        .transpose()?
-        .unwrap_or(vlib::render::T_MIN);
+    let ss: i32 = flag(&all, "--ss=", 1)?;
+    let termination: f64 = flag(&all, "--termination=", vlib::render::T_MIN)?;
     let start = Instant::now();
     let mut vl = vlib::Library::new();
     vl.load(mni_scene::BRAIN, vlb)?;
