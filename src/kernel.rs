@@ -56,12 +56,11 @@ pub(crate) struct Lean {
 }
 
 /// A value-head program ([`Lean::value_head`]) of the usual shape, in direct form: the dataset
-/// writes the fields of `data_mask` (the zero test's source among them), one transfer function
-/// of the source writes o alone, and at most one more (the colour table) writes single fields
-/// from the same source. Each value is then stored in its field, without the operation loop,
-/// the masks' bit loops or a second zero test: the same numbers as the operations.
+/// writes its fields (the zero test's source among them), one transfer function of the source
+/// writes o alone, and at most one more (the colour table) writes single fields from the same
+/// source. Each table value is then stored in its field, without the operation loop, the
+/// masks' bit loops or a second zero test: the same numbers as the operations.
 struct Direct {
-    data_mask: u16,
     source: usize,
     opacity: (Arc<Mapping>, usize),
     /// The colour table and its (field, output column) pairs, in order.
@@ -109,7 +108,6 @@ impl Direct {
             _ => return None,
         };
         Some(Direct {
-            data_mask: *data_mask,
             source,
             opacity: (mapping.clone(), *o_col),
             colour,
@@ -382,18 +380,16 @@ impl Lean {
         p: [f32; 3],
         fields: &mut [f32; FIELD_COUNT],
     ) -> f32 {
-        if let Some(d) = &self.direct {
-            *fields = self.start;
-            write(fields, d.data_mask, v);
-            let o = map_value(&d.opacity.0, fields[d.source], d.opacity.1);
-            fields[0] = o;
-            return o;
-        }
         let [Op::Data { mask, .. }, last] = self.opacity.as_slice() else {
             unreachable!("opacity_from_value needs a value head")
         };
         *fields = self.start;
         write(fields, *mask, v);
+        if let Some(d) = &self.direct {
+            let o = map_value(&d.opacity.0, fields[d.source], d.opacity.1);
+            fields[0] = o;
+            return o;
+        }
         self.finish_opacity(last, p, fields)
     }
 
