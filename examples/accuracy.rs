@@ -178,13 +178,10 @@ impl Cfg {
         if let Some(d) = self.nbhd {
             vl.neighborhood(d, d, d)?;
         }
-        if self.termination != vlib::render::T_MIN {
-            vl.set_optimise(vlib::scene::Optimise {
-                termination: self.termination,
-                ..vlib::scene::Optimise::default()
-            })?;
-        }
-        Ok(())
+        vl.set_optimise(vlib::scene::Optimise {
+            termination: self.termination,
+            ..vlib::scene::Optimise::default()
+        })
     }
 }
 
@@ -1913,10 +1910,19 @@ fn main() -> Res<()> {
 
     let doc_path = p.out_dir.join("accuracy.md");
     write_section(&doc_path, &d)?;
+    let plots = [
+        &step_plot,
+        &ss_plot,
+        &filter_plot,
+        &termination_plot,
+        &nbhd_plot,
+        &voxel_plot,
+        &combined_plot,
+    ];
     println!(
         "wrote {} and {} plots in {:.0} s",
         doc_path.display(),
-        6,
+        plots.len(),
         start.elapsed().as_secs_f64()
     );
     Ok(())
