@@ -212,7 +212,7 @@ const CELL_MASK_MARGIN: f32 = 1.0 / (1 << 18) as f32;
 /// node index of the cell's first node) is clear when all of the cell's nodes are at most
 /// z − [`CELL_MASK_MARGIN`], so every [`Dataset::trilinear`] value in the cell is at most z.
 /// A sample in such a cell is known to be at most z without reading its eight nodes (the
-/// zero test of a transfer function that is 0 up to z; see [`Dataset::trilinear_masked`]).
+/// zero test of a transfer function that is 0 up to z; see [`Dataset::trilinear8`]).
 /// One bit per node: 1/32 of the values' memory.
 #[derive(Debug)]
 pub(crate) struct CellMask {
@@ -829,19 +829,58 @@ impl Dataset {
         self.trilinear_in(p, None)
     }
 
-    /// [`Dataset::trilinear`], or 0 where `mask` knows the value is at most its bound (the
-    /// eight nodes are not read then; a mask's bound is never below 0, see
-    /// [`Dataset::cells_above`]).
+    /// [`Dataset::trilinear`] at the first `count` of eight points given by axis (`p[axis]`
+    /// holds the eight coordinates along it), or 0 where `mask` knows the value is at most its
+    /// bound (the eight nodes are not read then; a mask's bound is never below 0, see
+    /// [`Dataset::cells_above`]). The cells are found in lanes across the points, with the
+    /// operations of [`Dataset::cell_in_lanes`] lane for lane, so the same values. The other
+    /// values are 0.
     #[inline]
-    pub(crate) fn trilinear_masked(&self, p: [f32; 3], mask: &CellMask) -> f32 {
-        self.trilinear_in(p, Some(mask))
+    pub(crate) fn trilinear8(
+        &self,
+        p: &[[f32; 8]; 3],
+        count: usize,
+        mask: Option<&CellMask>,
+    ) -> [f32; 8] {
+        let mut out = [0f32; 8];
+        let count = count.min(8);
+        #[cfg(target_arch = "x86_64")]
+        if let Some([last, top, _]) = &self.lanes {
+            use wide::{f32x8, i32x8};
+            let [nx, ny, _] = self.dims;
+            let mut c = [[0i32; 8]; 3];
+            let mut f = [[0f32; 8]; 3];
+            for axis in 0..3 {
+                let l = f32x8::splat(last[axis]);
+                let u = (f32x8::new(p[axis]) * l).fast_max(f32x8::ZERO).fast_min(l);
+                let cu: i32x8 = u.fast_min(f32x8::splat(top[axis])).fast_trunc_int();
+                f[axis] = (u - cu.round_float()).to_array();
+                c[axis] = cu.to_array();
+            }
+            for (i, out) in out.iter_mut().enumerate().take(count) {
+                let [x0, y0, z0] = [c[0][i], c[1][i], c[2][i]].map(|c| c as usize);
+                let base = x0 + nx * (y0 + ny * z0);
+                *out = self.trilinear_cell(base, [f[0][i], f[1][i], f[2][i]], mask);
+            }
+            return out;
+        }
+        for (i, out) in out.iter_mut().enumerate().take(count) {
+            *out = self.trilinear_in([p[0][i], p[1][i], p[2][i]], mask);
+        }
+        out
     }
 
     #[inline(always)]
     fn trilinear_in(&self, p: [f32; 3], mask: Option<&CellMask>) -> f32 {
         let [nx, ny, _] = self.dims;
-        let ([x0, y0, z0], [fx, fy, fz]) = self.cell32(p);
-        let base = x0 + nx * (y0 + ny * z0);
+        let ([x0, y0, z0], f) = self.cell32(p);
+        self.trilinear_cell(x0 + nx * (y0 + ny * z0), f, mask)
+    }
+
+    /// The trilinear value in the cell whose first node is `base`, at weights `f` of its
+    /// second nodes; 0 where `mask` proves the cell below its bound.
+    #[inline(always)]
+    fn trilinear_cell(&self, base: usize, [fx, fy, fz]: [f32; 3], mask: Option<&CellMask>) -> f32 {
         if mask.is_some_and(|m| !m.may_reach(base)) {
             return 0.0;
         }
@@ -1579,13 +1618,17 @@ mod tests {
                         "{dims:?} z {z}: {kept} / {dropped}"
                     );
                 }
-                for _ in 0..2000 {
-                    let p = rng.point_around_box();
-                    let (plain, masked) = (d.trilinear(p), d.trilinear_masked(p, &mask));
-                    if plain > z {
-                        assert_eq!(plain.to_bits(), masked.to_bits(), "{dims:?} {p:?}");
-                    } else {
-                        assert!(masked == plain || masked == 0.0, "{dims:?} {p:?}");
+                for _ in 0..250 {
+                    let ps: [[f32; 3]; 8] = std::array::from_fn(|_| rng.point_around_box());
+                    let by_axis = std::array::from_fn(|axis| ps.map(|p| p[axis]));
+                    let masked = d.trilinear8(&by_axis, 8, Some(&mask));
+                    for (p, masked) in ps.into_iter().zip(masked) {
+                        let plain = d.trilinear(p);
+                        if plain > z {
+                            assert_eq!(plain.to_bits(), masked.to_bits(), "{dims:?} {p:?}");
+                        } else {
+                            assert!(masked == plain || masked == 0.0, "{dims:?} {p:?}");
+                        }
                     }
                 }
             }
@@ -1650,13 +1693,71 @@ mod tests {
             }
         }
         // An axis longer than 2²⁴ nodes is not exact in f32 lanes: such a grid goes axis by
-        // axis.
+        // axis, in `trilinear8` too.
+        let n = (1 << 24) + 2;
         let long = Dataset::new(
-            [1, 1, (1 << 24) + 2],
-            Voxels::U8(vec![0; (1 << 24) + 2]),
+            [1, 1, n],
+            Voxels::U8((0..n).map(|i| (i * 37 % 256) as u8).collect()),
             0.0,
+            255.0,
+        )
+        .unwrap();
+        assert!(long.lanes.is_none());
+        trilinear8_is_trilinear(&long, &mut rng, &specials);
+    }
+
+    /// [`Dataset::trilinear8`] at the first `count` points, for every count, against
+    /// [`Dataset::trilinear`] point by point: the same bits, and 0 past the count.
+    fn trilinear8_is_trilinear(d: &Dataset, rng: &mut Lcg, specials: &[f32]) {
+        let mut points: Vec<[f32; 3]> = (0..400).map(|_| rng.point_around_box()).collect();
+        for &a in specials {
+            points.push([a, 0.4, 0.3]);
+            points.push([0.7, a, 0.2]);
+            points.push([0.1, 0.6, a]);
+        }
+        for (batch, chunk) in points.chunks(8).enumerate() {
+            let mut ps = [[0.5f32; 3]; 8];
+            ps[..chunk.len()].copy_from_slice(chunk);
+            let by_axis = std::array::from_fn(|axis| ps.map(|p| p[axis]));
+            let count = batch % 9;
+            let got = d.trilinear8(&by_axis, count, None);
+            for (i, (p, got)) in ps.iter().zip(got).enumerate() {
+                let want = if i < count { d.trilinear(*p) } else { 0.0 };
+                assert_eq!(got.to_bits(), want.to_bits(), "{:?} {p:?} lane {i}", d.dims);
+            }
+        }
+    }
+
+    /// The values of eight points in lanes are the values point by point, on grids with axes
+    /// of one to four nodes and the MNI grid's, inside and outside the box, at NaN and
+    /// infinities.
+    #[test]
+    fn values_in_lanes_are_the_values_point_by_point() {
+        let mut rng = Lcg(12);
+        let specials = [
+            0.0,
+            -0.0,
             1.0,
-        );
-        assert!(long.unwrap().lanes.is_none());
+            1.0 - f32::EPSILON,
+            -3.0,
+            1e30,
+            f32::INFINITY,
+            f32::NAN,
+        ];
+        for (seed, dims) in [
+            [9, 7, 8],
+            [1, 6, 5],
+            [2, 2, 2],
+            [197, 233, 189],
+            [3, 1, 2],
+            [1, 1, 1],
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let d = random_u8(dims, 20 + seed as u64);
+            assert!(d.lanes.is_some());
+            trilinear8_is_trilinear(&d, &mut rng, &specials);
+        }
     }
 }

@@ -1116,64 +1116,34 @@ impl Compiled {
         origin: DVec3,
         dir: DVec3,
     ) -> (DVec3, f64) {
-        const BATCH: usize = 8;
         let grid = obj.skip.as_deref();
         let stop = self.settings.optimise.stop_below();
         let unbounded = c.walk.is_none() || grid.is_none();
         let cells = obj.cells.as_deref();
         let mut col = DVec3::ZERO;
         let mut t = 1.0f64;
-        let mut mids = [0.0f64; BATCH];
-        let mut lens = [0.0f64; BATCH];
-        let mut ps = [[0.0f32; 3]; BATCH];
-        let mut vs = [0.0f32; BATCH];
         let mut f = [0.0f32; FIELD_COUNT];
         // The object-space ray in registers: `Cursor::object_point` without the loads.
-        let (ro, rd) = (c.o, c.d);
+        let (ro, rd) = (c.o.to_array(), c.d.to_array());
         // Consecutive shaded samples often share a cell: its node differences are read once.
         let mut cache = CellGradients::default();
         while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
-            // Each segment's end is the next one's start: one boundary per sample, the same
-            // numbers as `Cursor::segment`.
-            let mut kf = c.k as f64;
-            let mut a = c.boundary(kf);
-            let left = (c.n - c.k).min(BATCH as u64) as usize; // c.k < c.n after peek
-            let last = c.k + left as u64 == c.n; // the run may reach the last segment
-            let mut m = 0;
-            while m < left {
-                kf += 1.0;
-                let next = c.boundary(kf);
-                let b = c.end(next, last && m + 1 == left);
-                let mid = 0.5 * (a + b);
-                if m > 0 && !(unbounded || mid < c.occupied_until) {
-                    break;
-                }
-                mids[m] = mid;
-                lens[m] = b - a;
-                a = next;
-                m += 1;
-            }
+            let (m, mids, lens) = c.run(unbounded);
             c.k += m as u64;
+            // Their object points by axis, and their values (the cells in lanes across them).
+            let ps: [[f32; 8]; 3] =
+                std::array::from_fn(|axis| mids.map(|t| (ro[axis] + t * rd[axis]) as f32));
+            // In [0, 1], as field values; 0 (at most z) where the cell cannot pass the zero test.
+            let vs = data.trilinear8(&ps, m, cells);
             // The samples that pass the zero test (and have a length), as bits in order: the
             // loop below visits only those, without a branch per sample.
-            let mut pass = 0u32;
-            for i in 0..m {
-                let p = ray_point(ro, rd, mids[i]);
-                ps[i] = p;
-                // In [0, 1], as a field value; 0 (at most z) where the cell cannot pass the
-                // zero test.
-                vs[i] = match cells {
-                    Some(cells) => data.trilinear_masked(p, cells),
-                    None => data.trilinear(p),
-                };
-                pass |= u32::from(!(lens[i] <= 0.0 || vs[i] <= z)) << i;
-            }
+            let mut pass = pass_bits(&lens, &vs, z) & ((1u32 << m) - 1);
             while pass != 0 {
                 let i = pass.trailing_zeros() as usize;
                 pass &= pass - 1;
                 let len = lens[i];
-                let (p, w) = (ps[i], origin + mids[i] * dir);
+                let (p, w) = ([ps[0][i], ps[1][i], ps[2][i]], origin + mids[i] * dir);
                 let o = lean.opacity_from_value(vs[i], p, &mut f) as f64;
                 if o <= 0.0 {
                     continue;
@@ -1289,6 +1259,59 @@ impl Cursor {
         0.5 * (a + b)
     }
 
+    /// The run of samples from the next one (there is one: `k < n`): up to eight segments,
+    /// all in the occupied block the walk last reported unless `unbounded`; their number, and
+    /// their midpoints and lengths (those past the number are meaningless). Each segment's end
+    /// is the next one's start: one boundary per sample, the same numbers as
+    /// [`Cursor::segment`]. In lanes across the segments while their boundary numbers are exact
+    /// in f64 (below 2⁵³), so that k + j + 1 is one rounding-free addition.
+    #[inline]
+    fn run(&self, unbounded: bool) -> (usize, [f64; 8], [f64; 8]) {
+        let left = (self.n - self.k).min(8) as usize; // k < n
+        let last = self.k + left as u64 == self.n; // the run may reach the last segment
+        let k = self.k as f64;
+        let (mut mids, mut lens) = ([0.0; 8], [0.0; 8]);
+        if k < (1u64 << 53) as f64 - 16.0 {
+            let next: [f64; 8] = std::array::from_fn(|j| self.boundary(k + (j + 1) as f64));
+            let a: [f64; 8] = std::array::from_fn(|j| {
+                if j == 0 {
+                    self.boundary(k)
+                } else {
+                    next[j - 1]
+                }
+            });
+            let mut b = next.map(|x| x.min(self.t1));
+            if last {
+                b[left - 1] = self.t1;
+            }
+            mids = std::array::from_fn(|j| 0.5 * (a[j] + b[j]));
+            lens = std::array::from_fn(|j| b[j] - a[j]);
+        } else {
+            let mut a = self.boundary(k);
+            let mut kf = k;
+            for j in 0..left {
+                kf += 1.0;
+                let next = self.boundary(kf);
+                let b = self.end(next, last && j + 1 == left);
+                mids[j] = 0.5 * (a + b);
+                lens[j] = b - a;
+                a = next;
+            }
+        }
+        // The first sample is in the block (peek chose it); the run ends at the first other
+        // one that is not.
+        let m = if unbounded {
+            left
+        } else {
+            (1..left)
+                .find(|&j| {
+                    mids[j].partial_cmp(&self.occupied_until) != Some(std::cmp::Ordering::Less)
+                })
+                .unwrap_or(left)
+        };
+        (m, mids, lens)
+    }
+
     /// The midpoint of the next segment that must be sampled, passing over segments whose
     /// samples lie in empty blocks.
     fn peek(&mut self, grid: Option<&SkipGrid>) -> Option<f64> {
@@ -1326,6 +1349,22 @@ impl Cursor {
             self.k = k;
         }
     }
+}
+
+/// Bit i set where sample i of a run has a length and passes the zero test:
+/// `!(lens[i] <= 0 || vs[i] <= z)` (a NaN fails neither comparison), in lanes.
+#[inline]
+fn pass_bits(lens: &[f64; 8], vs: &[f32; 8], z: f32) -> u32 {
+    use wide::{f32x8, f64x4};
+    let short = |l: &[f64]| {
+        f64x4::new([l[0], l[1], l[2], l[3]])
+            .simd_le(f64x4::ZERO)
+            .to_bitmask()
+    };
+    let fail = short(&lens[..4])
+        | short(&lens[4..]) << 4
+        | f32x8::new(*vs).simd_le(f32x8::splat(z)).to_bitmask();
+    !fail & 0xff
 }
 
 /// The object point (f32, as samples see it) of parameter `t` on the object-space ray
@@ -1574,5 +1613,106 @@ mod tests {
             spec_pow(0.7, f64::NAN).to_bits(),
             0.7f64.powf(f64::NAN).to_bits()
         );
+    }
+
+    /// A cursor over [t0, t1] in steps of `step`, with no walk.
+    fn cursor(t0: f64, t1: f64, step: f64, n: u64, k: u64, occupied_until: f64) -> Cursor {
+        Cursor {
+            object: 0,
+            t0,
+            t1,
+            step,
+            k,
+            n,
+            walk: None,
+            o: DVec3::ZERO,
+            d: DVec3::X,
+            occupied_until,
+        }
+    }
+
+    /// A run in lanes has the segments of the sample-by-sample cursor, bit for bit, ends
+    /// at the first sample past the occupied block, and never passes the last segment: near the
+    /// start, the end and 2⁵³ (where the boundary numbers stop being exact and the run goes
+    /// sample by sample), for uneven steps and ends.
+    #[test]
+    fn runs_are_the_cursors_segments() {
+        let big = (1u64 << 53) as f64;
+        let cases = [
+            (0.25, 9.9, 0.5, None),
+            (-3.0, 4.0, 0.1, None),
+            (1e-3, 1.0, 1.0 / 3.0, None),
+            (0.0, 2.0, 0.7, None),
+            (0.0, big * 0.5, 0.5, Some(1u64 << 53)),
+            (5.0, 5.0 + 1e-9, 1e-15, Some(1u64 << 53)),
+        ];
+        let mut checked = 0;
+        for (t0, t1, step, n_cap) in cases {
+            let n = n_cap.unwrap_or(((t1 - t0) / step).ceil() as u64).max(1);
+            let starts: Vec<u64> = (0..n.min(12))
+                .chain(n.saturating_sub(12)..n)
+                .chain(
+                    [(1 << 53) - 20, (1 << 53) - 17, (1 << 53) - 9]
+                        .into_iter()
+                        .filter(|&k| k < n),
+                )
+                .collect();
+            for k in starts {
+                for occupied in [
+                    f64::NEG_INFINITY,
+                    f64::INFINITY,
+                    t0 + (k as f64 + 3.2) * step,
+                ] {
+                    for unbounded in [false, true] {
+                        let c = cursor(t0, t1, step, n, k, occupied);
+                        let (m, mids, lens) = c.run(unbounded);
+                        let left = (n - k).min(8) as usize;
+                        assert!(m >= 1 && m <= left, "{k} of {n}: {m}");
+                        for j in 0..m {
+                            let (a, b) = c.segment(k + j as u64);
+                            assert_eq!(mids[j].to_bits(), c.mid(k + j as u64).to_bits());
+                            assert_eq!(lens[j].to_bits(), (b - a).to_bits(), "{k}+{j} of {n}");
+                            assert!(j == 0 || unbounded || mids[j] < occupied);
+                        }
+                        // The run stops only at the block's end or its eight samples.
+                        if m < left {
+                            let mid = c.mid(k + m as u64);
+                            assert!(
+                                !unbounded
+                                    && mid.partial_cmp(&occupied) != Some(std::cmp::Ordering::Less)
+                            );
+                        }
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 300, "{checked}");
+    }
+
+    /// The pass bits in lanes are the comparisons sample by sample, NaN included.
+    #[test]
+    fn pass_bits_are_the_comparisons() {
+        let lens = [0.5, 0.0, -1.0, f64::NAN, 1e-300, f64::INFINITY, 2.0, -0.0];
+        let values = [
+            0.0,
+            0.3,
+            f32::from_bits(0.3f32.to_bits() + 1),
+            f32::NAN,
+            1.0,
+            -0.0,
+            f32::from_bits(0.3f32.to_bits() - 1),
+            f32::INFINITY,
+        ];
+        for z in [0.0, 0.3, -1.0, 1.0, f32::NAN] {
+            for rot in 0..8 {
+                let mut vs = values;
+                vs.rotate_left(rot);
+                let want = (0..8).fold(0u32, |bits, i| {
+                    bits | u32::from(!(lens[i] <= 0.0 || vs[i] <= z)) << i
+                });
+                assert_eq!(pass_bits(&lens, &vs, z), want, "z {z} rotation {rot}");
+            }
+        }
     }
 }
