@@ -231,21 +231,21 @@ impl CellMask {
 }
 
 /// The central differences (per grid step) at the eight nodes of the cell a trilinear
-/// gradient last read, per axis (x, y, z) and corner (x fastest), for
+/// gradient last read, per corner (x fastest) and axis (x, y, z), for
 /// [`Dataset::gradient_cached`]; `lo` is the first node of
 /// the 4×4×4 neighbourhood they were read from (`usize::MAX`: none yet). Valid for one dataset.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct CellGradients {
     lo: usize,
-    /// Per axis, the eight corners' differences along it.
-    diffs: [[f32; 8]; 3],
+    /// Per corner, its differences along x, y and z, and a 0 (one SSE register).
+    diffs: [[f32; 4]; 8],
 }
 
 impl Default for CellGradients {
     fn default() -> CellGradients {
         CellGradients {
             lo: usize::MAX,
-            diffs: [[0.0; 8]; 3],
+            diffs: [[0.0; 4]; 8],
         }
     }
 }
@@ -933,7 +933,7 @@ impl Dataset {
         if cache.lo != lo {
             let row = |j: usize, k: usize| -> Option<[f32; 4]> {
                 let o = lo + nx * (j + ny * k);
-                self.values.get(o..o + 4)?.try_into().ok()
+                self.values.get(o..)?.first_chunk().copied()
             };
             let (r10, r20) = (row(1, 0)?, row(2, 0)?);
             let (r01, r11, r21, r31) = (row(0, 1)?, row(1, 1)?, row(2, 1)?, row(3, 1)?);
@@ -949,14 +949,16 @@ impl Dataset {
                 (r12, r02, r22, r11, r13),
                 (r22, r12, r32, r21, r23),
             ];
-            let [dx, dy, dz] = &mut cache.diffs;
+            // Row by row in lanes: x nodes 2, 3 minus nodes 0, 1 are the x differences of the
+            // row's two corners; the y and z differences are in lanes 1 and 2 of the row
+            // differences.
+            use wide::f32x4;
             for (c, (r, ym, yp, zm, zp)) in corners.into_iter().enumerate() {
-                for i in 1..3 {
-                    let corner = 2 * c + i - 1;
-                    dx[corner] = r[i + 1] - r[i - 1];
-                    dy[corner] = yp[i] - ym[i];
-                    dz[corner] = zp[i] - zm[i];
-                }
+                let dx = (f32x4::new([r[2], r[3], 0.0, 0.0]) - f32x4::new(r)).to_array();
+                let dy = (f32x4::new(yp) - f32x4::new(ym)).to_array();
+                let dz = (f32x4::new(zp) - f32x4::new(zm)).to_array();
+                cache.diffs[2 * c] = [dx[0], dy[1], dz[1], 0.0];
+                cache.diffs[2 * c + 1] = [dx[1], dy[2], dz[2], 0.0];
             }
             cache.lo = lo;
         }
@@ -972,12 +974,13 @@ impl Dataset {
             gx * fy * fz,
             fx * fy * fz,
         ];
-        let mut g = [0f32; 3];
-        for (g, d) in g.iter_mut().zip(&cache.diffs) {
-            for (wt, d) in weights.into_iter().zip(d) {
-                *g += wt * d;
-            }
+        // The three axes in the lanes of one register, each summed corner by corner in order
+        // (as a scalar loop would).
+        let mut g = wide::f32x4::ZERO;
+        for (wt, d) in weights.into_iter().zip(cache.diffs) {
+            g += wide::f32x4::splat(wt) * wide::f32x4::new(d);
         }
+        let g = g.to_array();
         Some([
             0.5 * g[0] as f64 * self.last[0],
             0.5 * g[1] as f64 * self.last[1],
