@@ -15,6 +15,10 @@
 //!   output there ([`Mapping::locate`], [`Mapping::eval_at`]).
 //! - **Direct form.** A scanned volume's usual program (a dataset, its opacity table, its
 //!   colour table, constants) stores each value in its field directly ([`Direct`]).
+//! - **Direct shading.** When that colour table writes exactly r, g and b and nothing writes
+//!   ka, kd, ks or the specular exponent, a sample's shading inputs are its opacity and colour
+//!   from the two tables and four constants known in advance ([`DirectShading`],
+//!   [`Lean::opacity_colour`]): the batched march then uses no registers at all.
 
 use crate::dataset::{Dataset, Filter};
 use crate::mapping::{segment_value, Mapping};
@@ -53,6 +57,8 @@ pub(crate) struct Lean {
     start: [f32; FIELD_COUNT],
     /// The same program in direct form, when it has the usual shape (see [`Direct`]).
     direct: Option<Direct>,
+    /// Its shading inputs, when they are that simple (see [`DirectShading`]).
+    shading: Option<DirectShading>,
 }
 
 /// A value-head program ([`Lean::value_head`]) of the usual shape, in direct form: the dataset
@@ -67,8 +73,46 @@ struct Direct {
     colour: Option<(Arc<Mapping>, FieldOutputs)>,
 }
 
+/// A sample's shading inputs in a direct-form program whose colour table writes r, g and b
+/// (fields 1 to 3, each once) and which leaves ka, kd, ks and the specular exponent (fields 4
+/// to 7) at the constants the registers start from: the colour is then three columns of the
+/// colour table at the dataset's value, and the rest is known before any sample.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DirectShading {
+    /// The colour table's columns of r, g and b.
+    rgb: [usize; 3],
+    /// Fields 4 to 7 (ka, kd, ks, the specular exponent as a field value), as f64.
+    pub(crate) coefficients: [f64; 4],
+}
+
 /// (field, output column) pairs of a transfer function, in order.
 type FieldOutputs = Vec<(usize, usize)>;
+
+impl DirectShading {
+    /// The shading inputs of `direct` (whose dataset operation heads `opacity`), when its
+    /// colour table writes exactly r, g and b and nothing writes fields 4 to 7.
+    fn new(direct: &Direct, opacity: &[Op], start: &[f32; FIELD_COUNT]) -> Option<DirectShading> {
+        let [Op::Data { mask, .. }, ..] = opacity else {
+            return None;
+        };
+        let (_, outputs) = direct.colour.as_ref()?;
+        let mut rgb = [usize::MAX; 3];
+        for &(field, column) in outputs {
+            let slot = rgb.get_mut(field.checked_sub(1)?)?;
+            if *slot != usize::MAX {
+                return None; // a field written twice: the later column wins, keep it general
+            }
+            *slot = column;
+        }
+        if rgb.contains(&usize::MAX) || mask & 0b1111_0000 != 0 {
+            return None;
+        }
+        Some(DirectShading {
+            rgb,
+            coefficients: [start[4], start[5], start[6], start[7]].map(|v| v as f64),
+        })
+    }
+}
 
 impl Direct {
     /// The direct form of a value-head program's operations, if they have its shape.
@@ -323,12 +367,16 @@ impl Lean {
             }
         }
         let direct = Direct::new(&opacity, zero, &rest);
+        let shading = direct
+            .as_ref()
+            .and_then(|d| DirectShading::new(d, &opacity, &start));
         Some(Lean {
             opacity,
             zero,
             rest,
             start,
             direct,
+            shading,
         })
     }
 
@@ -411,6 +459,35 @@ impl Lean {
             _ => apply(std::slice::from_ref(last), p, fields),
         }
         fields[0]
+    }
+
+    /// The program's shading inputs when they are [`DirectShading`]'s.
+    #[inline]
+    pub(crate) fn direct_shading(&self) -> Option<&DirectShading> {
+        self.shading.as_ref()
+    }
+
+    /// For a program with [`DirectShading`], the opacity and the colour (r, g, b) of a sample
+    /// whose dataset value is `v`: the fields 0 to 3 that [`Lean::opacity_from_value`] and
+    /// [`Lean::rest`] leave, bit for bit; the colour only where the opacity is above 0.
+    #[inline]
+    pub(crate) fn opacity_colour(&self, v: f32) -> (f32, Option<[f32; 3]>) {
+        let (Some(d), Some(shading)) = (&self.direct, &self.shading) else {
+            unreachable!("opacity_colour needs direct shading")
+        };
+        // The dataset writes the clamped value into the source field, which both tables read.
+        let x = clamp_field(v);
+        let o = map_value(&d.opacity.0, x, d.opacity.1);
+        if o <= 0.0 {
+            return (o, None);
+        }
+        let Some((mapping, _)) = &d.colour else {
+            unreachable!("direct shading has a colour table")
+        };
+        let mut rgb = [0f32; 3];
+        let outputs = [0, 1, 2].map(|i| (i, shading.rgb[i]));
+        map_each(mapping, x, &outputs, |i, v| rgb[i] = clamp_field(v));
+        (o, Some(rgb))
     }
 
     /// Runs the rest of the program after [`Lean::opacity`] returned a positive opacity.
@@ -611,6 +688,74 @@ mod tests {
             output: 0,
         };
         assert_eq!(direct(&two_fields), None);
+    }
+
+    /// Direct shading is taken where the colour table writes exactly r, g and b and nothing
+    /// writes ka, kd, ks or the exponent; its opacity and colour are then the registers'
+    /// fields 0 to 3, bit for bit, and its coefficients the constants of fields 4 to 7.
+    #[test]
+    fn direct_shading_is_the_registers() {
+        let progs = programs();
+        let lean =
+            |prog: &[Instr]| Lean::new(prog, crate::program::prefix_for(prog, Fields::O)).unwrap();
+        let usual = lean(&progs[0]);
+        let shading = usual.direct_shading().expect("the usual program");
+        assert_eq!(shading.coefficients, [0.2f32 as f64, 0.0, 0.0, 0.0]);
+        let mut values: Vec<f32> = (0..=400).map(|i| i as f32 / 400.0).collect();
+        values.extend([-1.0, 2.0, -0.0, f32::NAN, f32::INFINITY, 0.1, 0.2, 0.5, 0.6]);
+        let mut coloured = 0;
+        for v in values {
+            let mut f = [0.0; FIELD_COUNT];
+            let o = usual.opacity_from_value(v, [0.5; 3], &mut f);
+            let (o2, rgb) = usual.opacity_colour(v);
+            assert_eq!(o.to_bits(), o2.to_bits(), "{v}");
+            assert_eq!(rgb.is_some(), o > 0.0, "{v}");
+            if let Some(rgb) = rgb {
+                usual.rest([0.5; 3], &mut f);
+                assert_eq!(rgb.map(f32::to_bits), [f[1], f[2], f[3]].map(f32::to_bits));
+                assert_eq!(
+                    shading.coefficients,
+                    [f[4], f[5], f[6], f[7]].map(|v| v as f64)
+                );
+                coloured += 1;
+            }
+        }
+        assert!(coloured > 200, "{coloured}");
+        // Not taken: no colour table; ka, kd, ks or the exponent written by the dataset or
+        // the colour table; a colour field missing or written twice; the general shapes.
+        let c = ramp(&[0.1, 0.3, 0.2, 0.1, 0.6, 0.9, 0.5, 0.4], 3);
+        let map = |targets, output| Instr::Map {
+            targets,
+            source: 9,
+            mapping: c.clone(),
+            output,
+        };
+        let mut data_kd = progs[0].clone();
+        let Instr::Dataset { fields, .. } = &mut data_kd[0] else {
+            unreachable!()
+        };
+        *fields = Fields::F | Fields::KD;
+        let mut colour_kd = progs[0].clone();
+        colour_kd[4] = map(Fields::KD, 2);
+        let mut no_blue = progs[0].clone();
+        no_blue.remove(4);
+        let mut red_twice = progs[0].clone();
+        red_twice[3] = map(Fields::R, 1);
+        for (name, prog) in [
+            ("opacity alone", progs[0][..2].to_vec()),
+            ("data writes kd", data_kd),
+            ("colour writes kd", colour_kd),
+            ("no blue", no_blue),
+            ("red twice", red_twice),
+        ] {
+            assert!(lean(&prog).direct_shading().is_none(), "{name}");
+        }
+        for (n, prog) in progs.iter().enumerate().skip(1) {
+            let o_prefix = crate::program::prefix_for(prog, Fields::O);
+            if let Some(l) = Lean::new(prog, o_prefix) {
+                assert!(l.direct_shading().is_none(), "program {n}");
+            }
+        }
     }
 
     #[test]

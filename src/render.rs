@@ -672,8 +672,23 @@ impl Compiled {
         normal: impl FnOnce() -> Option<DVec3>,
     ) -> DVec3 {
         let c = DVec3::new(f[1] as f64, f[2] as f64, f[3] as f64);
-        let (ka, kd, ks) = (f[4] as f64, f[5] as f64, f[6] as f64);
-        let e = f[7] as f64 * MAX_SPECULAR as f64;
+        let k = [f[4], f[5], f[6], f[7]].map(|v| v as f64);
+        self.illuminate_colour(obj, w, dir, c, k, normal)
+    }
+
+    /// The illumination model for colour `c` and the fields ka, kd, ks and the specular
+    /// exponent (as a field value); `normal` computes the normal, only if a light needs it.
+    #[inline]
+    fn illuminate_colour(
+        &self,
+        obj: &CObj,
+        w: DVec3,
+        dir: DVec3,
+        c: DVec3,
+        [ka, kd, ks, spec]: [f64; 4],
+        normal: impl FnOnce() -> Option<DVec3>,
+    ) -> DVec3 {
+        let e = spec * MAX_SPECULAR as f64;
         let amb = crate::scene::v3(self.settings.ambient);
         let mut col = ka * amb * c;
         if !self.lights.is_empty() && (kd > 0.0 || ks > 0.0) {
@@ -1127,6 +1142,7 @@ impl Compiled {
         let (ro, rd) = (c.o.to_array(), c.d.to_array());
         // Consecutive shaded samples often share a cell: its node differences are read once.
         let mut cache = CellGradients::default();
+        let shading = lean.direct_shading().filter(|_| obj.normals.is_empty());
         while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
             let (m, mids, lens) = c.run(unbounded);
@@ -1144,12 +1160,26 @@ impl Compiled {
                 pass &= pass - 1;
                 let len = lens[i];
                 let (p, w) = ([ps[0][i], ps[1][i], ps[2][i]], origin + mids[i] * dir);
-                let o = lean.opacity_from_value(vs[i], p, &mut f) as f64;
-                if o <= 0.0 {
-                    continue;
-                }
-                let (alpha, colour) =
-                    self.finish_lean(obj, lean, o, p, w, dir, len, &mut f, &mut cache);
+                let (alpha, colour) = if let Some(shading) = shading {
+                    // The usual program: opacity and colour straight from the tables, the
+                    // other coefficients known (the same numbers as the registers').
+                    let (o, Some(rgb)) = lean.opacity_colour(vs[i]) else {
+                        continue;
+                    };
+                    let alpha = 1.0 - obj.segment_transmittance(o as f64, len);
+                    let c = DVec3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64);
+                    let colour =
+                        self.illuminate_colour(obj, w, dir, c, shading.coefficients, || {
+                            obj.gradient_normal(w, -dir, p, 9, &mut cache)
+                        });
+                    (alpha, colour)
+                } else {
+                    let o = lean.opacity_from_value(vs[i], p, &mut f) as f64;
+                    if o <= 0.0 {
+                        continue;
+                    }
+                    self.finish_lean(obj, lean, o, p, w, dir, len, &mut f, &mut cache)
+                };
                 col += t * alpha * colour;
                 t *= 1.0 - alpha;
                 if t < stop {
