@@ -452,17 +452,40 @@ fn transmit(t: f64, e: f64) -> f64 {
     }
 }
 
-/// `x^e` for the specular term: integer exponents (the usual case: `VLSPECULAR(20)`) by
-/// repeated squaring, which is exact to rounding and much cheaper than `powf`.
-#[inline]
-fn spec_pow(x: f64, e: f64) -> f64 {
-    // `e as u32` saturates (NaN to 0), so the round trip holds exactly for integers in range;
-    // no libm call (`fract` is one) on this per-sample path.
-    let k = e as u32;
-    if k as f64 == e && k <= MAX_SPECULAR as u32 {
-        powi(x, k)
-    } else {
-        x.powf(e)
+/// A specular exponent e, examined once (per object or sample) for the specular term's `x^e`:
+/// integer exponents (the usual case: `VLSPECULAR(20)`) by repeated squaring, which is exact to
+/// rounding and much cheaper than `powf`.
+#[derive(Clone, Copy, Debug)]
+struct Specular {
+    e: f64,
+    integer: Option<u32>,
+}
+
+impl Specular {
+    /// The exponent of a specular-exponent field value.
+    #[inline]
+    fn of_field(value: f64) -> Specular {
+        Specular::new(value * MAX_SPECULAR as f64)
+    }
+
+    #[inline]
+    fn new(e: f64) -> Specular {
+        // `e as u32` saturates (NaN to 0), so the round trip holds exactly for integers in
+        // range; no libm call (`fract` is one) on this per-sample path.
+        let k = e as u32;
+        Specular {
+            e,
+            integer: (k as f64 == e && k <= MAX_SPECULAR as u32).then_some(k),
+        }
+    }
+
+    /// `x^e`.
+    #[inline]
+    fn pow(self, x: f64) -> f64 {
+        match self.integer {
+            Some(k) => powi(x, k),
+            None => x.powf(self.e),
+        }
     }
 }
 
@@ -519,7 +542,10 @@ pub struct Plan {
 /// A scene compiled for tracing: immutable, shared by all worker threads.
 pub struct Compiled {
     objects: Vec<CObj>,
-    lights: Vec<Light>,
+    /// The lights, each with its radiance in f64.
+    lights: Vec<(Light, DVec3)>,
+    /// The ambient light's radiance in f64.
+    ambient: DVec3,
     settings: Settings,
     plan: Plan,
 }
@@ -543,7 +569,16 @@ impl Compiled {
         };
         Compiled {
             objects,
-            lights: desc.lights.clone(),
+            lights: desc
+                .lights
+                .iter()
+                .map(|&light| {
+                    let (Light::Point { radiance, .. } | Light::Directional { radiance, .. }) =
+                        light;
+                    (light, crate::scene::v3(radiance))
+                })
+                .collect(),
+            ambient: crate::scene::v3(desc.settings.ambient),
             settings: desc.settings.clone(),
             plan,
         }
@@ -672,12 +707,14 @@ impl Compiled {
         normal: impl FnOnce() -> Option<DVec3>,
     ) -> DVec3 {
         let c = DVec3::new(f[1] as f64, f[2] as f64, f[3] as f64);
-        let k = [f[4], f[5], f[6], f[7]].map(|v| v as f64);
-        self.illuminate_colour(obj, w, dir, c, k, normal)
+        let k = [f[4], f[5], f[6]].map(|v| v as f64);
+        let e = Specular::of_field(f[7] as f64);
+        self.illuminate_colour(obj, w, dir, c, k, e, normal)
     }
 
-    /// The illumination model for colour `c` and the fields ka, kd, ks and the specular
-    /// exponent (as a field value); `normal` computes the normal, only if a light needs it.
+    /// The illumination model for colour `c`, coefficients ka, kd and ks and specular
+    /// exponent `e`; `normal` computes the normal, only if a light needs it.
+    #[allow(clippy::too_many_arguments)]
     #[inline]
     fn illuminate_colour(
         &self,
@@ -685,22 +722,21 @@ impl Compiled {
         w: DVec3,
         dir: DVec3,
         c: DVec3,
-        [ka, kd, ks, spec]: [f64; 4],
+        [ka, kd, ks]: [f64; 3],
+        e: Specular,
         normal: impl FnOnce() -> Option<DVec3>,
     ) -> DVec3 {
-        let e = spec * MAX_SPECULAR as f64;
-        let amb = crate::scene::v3(self.settings.ambient);
-        let mut col = ka * amb * c;
+        let mut col = ka * self.ambient * c;
         if !self.lights.is_empty() && (kd > 0.0 || ks > 0.0) {
             let view = -dir;
             let n = normal();
             let shadowed = self.plan.shadows && obj.receive_shadows;
-            for light in &self.lights {
-                let (l, att, rad, dist) = match *light {
+            for &(light, radiance) in &self.lights {
+                let (l, att, dist) = match light {
                     Light::Point {
                         position,
                         attenuation,
-                        radiance,
+                        ..
                     } => {
                         let to = position - w;
                         let d = to.length();
@@ -709,13 +745,11 @@ impl Compiled {
                             Attenuation::Inverse => 1.0 / d.max(1e-6),
                             Attenuation::InverseSquare => 1.0 / (d * d).max(1e-12),
                         };
-                        (to.try_normalize().unwrap_or(view), att, radiance, d)
+                        (to.try_normalize().unwrap_or(view), att, d)
                     }
-                    Light::Directional { to_light, radiance } => {
-                        (to_light, 1.0, radiance, f64::INFINITY)
-                    }
+                    Light::Directional { to_light, .. } => (to_light, 1.0, f64::INFINITY),
                 };
-                let mut rad = crate::scene::v3(rad) * att;
+                let mut rad = radiance * att;
                 if shadowed {
                     rad *= self.transmittance(w, l, dist);
                     if rad == DVec3::ZERO {
@@ -730,7 +764,7 @@ impl Compiled {
                             let r = 2.0 * ndl * n - l;
                             let rv = r.dot(view);
                             if rv > 0.0 {
-                                term += DVec3::splat(ks * spec_pow(rv, e));
+                                term += DVec3::splat(ks * e.pow(rv));
                             }
                         }
                         term
@@ -1142,7 +1176,14 @@ impl Compiled {
         let (ro, rd) = (c.o.to_array(), c.d.to_array());
         // Consecutive shaded samples often share a cell: its node differences are read once.
         let mut cache = CellGradients::default();
-        let shading = lean.direct_shading().filter(|_| obj.normals.is_empty());
+        // The usual program's coefficients and exponent, examined once per ray.
+        let shading = lean
+            .direct_shading()
+            .filter(|_| obj.normals.is_empty())
+            .map(|s| {
+                let [ka, kd, ks, spec] = s.coefficients;
+                ([ka, kd, ks], Specular::of_field(spec))
+            });
         while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
             let (m, mids, lens) = c.run(unbounded);
@@ -1160,7 +1201,7 @@ impl Compiled {
                 pass &= pass - 1;
                 let len = lens[i];
                 let (p, w) = ([ps[0][i], ps[1][i], ps[2][i]], origin + mids[i] * dir);
-                let (alpha, colour) = if let Some(shading) = shading {
+                let (alpha, colour) = if let Some((k, e)) = shading {
                     // The usual program: opacity and colour straight from the tables, the
                     // other coefficients known (the same numbers as the registers').
                     let (o, Some(rgb)) = lean.opacity_colour(vs[i]) else {
@@ -1168,10 +1209,9 @@ impl Compiled {
                     };
                     let alpha = 1.0 - obj.segment_transmittance(o as f64, len);
                     let c = DVec3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64);
-                    let colour =
-                        self.illuminate_colour(obj, w, dir, c, shading.coefficients, || {
-                            obj.gradient_normal(w, -dir, p, 9, &mut cache)
-                        });
+                    let colour = self.illuminate_colour(obj, w, dir, c, k, e, || {
+                        obj.gradient_normal(w, -dir, p, 9, &mut cache)
+                    });
                     (alpha, colour)
                 } else {
                     let o = lean.opacity_from_value(vs[i], p, &mut f) as f64;
@@ -1604,7 +1644,7 @@ mod tests {
             for e in [0.0, 1.0, 10.0, 20.5, 128.0] {
                 let want = t.powf(e);
                 assert!(
-                    (spec_pow(t, e) - want).abs() <= 1e-12 * want.max(1e-300) + 1e-300,
+                    (Specular::new(e).pow(t) - want).abs() <= 1e-12 * want.max(1e-300) + 1e-300,
                     "{t}^{e}"
                 );
             }
@@ -1621,7 +1661,11 @@ mod tests {
             for k in 0..=MAX_SPECULAR as u32 {
                 let (ours, lib) = (powi(x, k), x.powi(std::hint::black_box(k as i32)));
                 assert_eq!(ours.to_bits(), lib.to_bits(), "{x}^{k}");
-                assert_eq!(spec_pow(x, k as f64).to_bits(), lib.to_bits(), "{x}^{k}");
+                assert_eq!(
+                    Specular::new(k as f64).pow(x).to_bits(),
+                    lib.to_bits(),
+                    "{x}^{k}"
+                );
             }
             x = x * 1.37 + 1e-4;
         }
@@ -1634,13 +1678,13 @@ mod tests {
             f64::INFINITY,
         ] {
             assert_eq!(
-                spec_pow(0.7, e).to_bits(),
+                Specular::new(e).pow(0.7).to_bits(),
                 0.7f64.powf(e).to_bits(),
                 "0.7^{e}"
             );
         }
         assert_eq!(
-            spec_pow(0.7, f64::NAN).to_bits(),
+            Specular::new(f64::NAN).pow(0.7).to_bits(),
             0.7f64.powf(f64::NAN).to_bits()
         );
     }
