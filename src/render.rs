@@ -1177,6 +1177,7 @@ impl Compiled {
         // Consecutive shaded samples often share a cell: its node differences are read once.
         let mut cache = CellGradients::default();
         // The usual program's coefficients and exponent, examined once per ray.
+        let (mut mids, mut lens) = ([0.0f64; 8], [0.0f64; 8]);
         let shading = lean
             .direct_shading()
             .filter(|_| obj.normals.is_empty())
@@ -1186,7 +1187,7 @@ impl Compiled {
             });
         while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
-            let (m, mids, lens) = c.run(unbounded);
+            let m = c.run(unbounded, &mut mids, &mut lens);
             c.k += m as u64;
             // Their object points by axis, and their values (the cells in lanes across them).
             let ps: [[f32; 8]; 3] =
@@ -1336,11 +1337,10 @@ impl Cursor {
     /// [`Cursor::segment`]. In lanes across the segments while their boundary numbers are exact
     /// in f64 (below 2⁵³), so that k + j + 1 is one rounding-free addition.
     #[inline]
-    fn run(&self, unbounded: bool) -> (usize, [f64; 8], [f64; 8]) {
+    fn run(&self, unbounded: bool, mids: &mut [f64; 8], lens: &mut [f64; 8]) -> usize {
         let left = (self.n - self.k).min(8) as usize; // k < n
         let last = self.k + left as u64 == self.n; // the run may reach the last segment
         let k = self.k as f64;
-        let (mut mids, mut lens) = ([0.0; 8], [0.0; 8]);
         if k < (1u64 << 53) as f64 - 16.0 {
             let next: [f64; 8] = std::array::from_fn(|j| self.boundary(k + (j + 1) as f64));
             let a: [f64; 8] = std::array::from_fn(|j| {
@@ -1354,8 +1354,8 @@ impl Cursor {
             if last {
                 b[left - 1] = self.t1;
             }
-            mids = std::array::from_fn(|j| 0.5 * (a[j] + b[j]));
-            lens = std::array::from_fn(|j| b[j] - a[j]);
+            *mids = std::array::from_fn(|j| 0.5 * (a[j] + b[j]));
+            *lens = std::array::from_fn(|j| b[j] - a[j]);
         } else {
             let mut a = self.boundary(k);
             let mut kf = k;
@@ -1379,7 +1379,7 @@ impl Cursor {
                 })
                 .unwrap_or(left)
         };
-        (m, mids, lens)
+        m
     }
 
     /// The midpoint of the next segment that must be sampled, passing over segments whose
@@ -1739,7 +1739,8 @@ mod tests {
                 ] {
                     for unbounded in [false, true] {
                         let c = cursor(t0, t1, step, n, k, occupied);
-                        let (m, mids, lens) = c.run(unbounded);
+                        let (mut mids, mut lens) = ([0.0; 8], [0.0; 8]);
+                        let m = c.run(unbounded, &mut mids, &mut lens);
                         let left = (n - k).min(8) as usize;
                         assert!(m >= 1 && m <= left, "{k} of {n}: {m}");
                         for j in 0..m {
