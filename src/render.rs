@@ -1331,8 +1331,9 @@ impl Cursor {
     }
 
     /// The run of samples from the next one (there is one: `k < n`): up to eight segments,
-    /// all in the occupied block the walk last reported unless `unbounded`; their number, and
-    /// their midpoints and lengths (those past the number are meaningless). Each segment's end
+    /// all in the occupied block the walk last reported unless `unbounded`: returns their
+    /// number and writes their midpoints and lengths into `mids` and `lens` (the entries past
+    /// the number are meaningless, possibly left from an earlier run). Each segment's end
     /// is the next one's start: one boundary per sample, the same numbers as
     /// [`Cursor::segment`]. In lanes across the segments while their boundary numbers are exact
     /// in f64 (below 2⁵³), so that k + j + 1 is one rounding-free addition.
@@ -1370,7 +1371,7 @@ impl Cursor {
         }
         // The first sample is in the block (peek chose it); the run ends at the first other
         // one that is not.
-        let m = if unbounded {
+        if unbounded {
             left
         } else {
             (1..left)
@@ -1378,8 +1379,7 @@ impl Cursor {
                     mids[j].partial_cmp(&self.occupied_until) != Some(std::cmp::Ordering::Less)
                 })
                 .unwrap_or(left)
-        };
-        m
+        }
     }
 
     /// The midpoint of the next segment that must be sampled, passing over segments whose
