@@ -312,6 +312,7 @@ impl CObj {
     /// interpolated grid gradients; otherwise by central differences over the neighbourhood.
     /// `cache` holds the node differences of the last dataset cell read (see
     /// [`CellGradients`]): one per object and ray, or a fresh one.
+    #[inline]
     fn field_gradient(
         &self,
         w: DVec3,
@@ -324,6 +325,12 @@ impl CObj {
             let zero = g.abs().max_element() <= ZERO_GRADIENT;
             return (self.grad_to_world * g, zero);
         }
+        self.sampled_gradient(w, field)
+    }
+
+    /// [`CObj::field_gradient`] by world-space central differences of the field.
+    #[inline(never)]
+    fn sampled_gradient(&self, w: DVec3, field: usize) -> (DVec3, bool) {
         let mut diff = DVec3::ZERO;
         let mut grad = DVec3::ZERO;
         for i in 0..3 {
