@@ -365,6 +365,10 @@ impl Walk {
         self.t_max[0] <= t || self.t_max[1] <= t || self.t_max[2] <= t
     }
 
+    /// Steps into the next block, along the axis whose boundary comes first, and keeps the
+    /// parameter at which the block was left in `entry` (the smallest exit along an axis, as
+    /// [`Walk::exit`] gives it, unless an exit is NaN, which only a direction component of
+    /// magnitude below 10⁻³⁰⁸ can make: the walk then follows the comparisons).
     fn advance(&mut self, grid: &SkipGrid) {
         let axis = if self.t_max[0] <= self.t_max[1] && self.t_max[0] <= self.t_max[2] {
             0
@@ -413,12 +417,10 @@ impl Walk {
                 }
             }
             // A short empty run, or no progress possible by leaping (a degenerate direction):
-            // one block on.
-            let exit = self.exit();
+            // one block on (`advance` keeps the parameter at which the block was left).
             self.advance(grid);
-            self.entry = exit;
             if self.done {
-                return Ok(exit);
+                return Ok(self.entry);
             }
         }
     }
