@@ -25,6 +25,8 @@ pub(crate) struct SkipGrid {
     cell: DVec3,
     /// Its reciprocal per axis.
     inv_cell: DVec3,
+    /// The last block's index per axis (dims − 1), as f64.
+    last: DVec3,
     /// Per block: 0 if it may hold opacity, else the chessboard distance (in blocks, capped at
     /// [`MAX_LEAP`]) to the nearest such block: every block within `dist − 1` of it is empty.
     dist: Vec<u8>,
@@ -232,6 +234,7 @@ impl SkipGrid {
             origin,
             cell,
             inv_cell: cell.recip(),
+            last: DVec3::from_array(dims.map(|n| (n - 1) as f64)),
             dist,
         })
     }
@@ -267,6 +270,13 @@ impl SkipGrid {
         w.relocate(self, t0, [None; 3]);
         w
     }
+}
+
+/// The block holding block coordinate `rel`: floor(rel) clamped to [0, last] (`last` an
+/// integer ≥ 0), NaN to 0. Clamping first makes the truncation of `as` the floor.
+#[inline]
+fn block_index(rel: f64, last: f64) -> i64 {
+    rel.clamp(0.0, last) as i64
 }
 
 /// The interval of every field after `prefix`, given the range of each of its `vlDataset`
@@ -330,7 +340,7 @@ impl Walk {
                 Some(c) => c,
                 None => {
                     let rel = (p[axis] - grid.origin[axis]) * grid.inv_cell[axis];
-                    crate::num::floor(rel).clamp(0.0, (grid.dims[axis] - 1) as f64) as i64
+                    block_index(rel, grid.last[axis])
                 }
             };
             if c < 0 || c >= grid.dims[axis] as i64 {
@@ -458,5 +468,41 @@ impl Walk {
         self.relocate(grid, t_exit, forced);
         self.entry = t_exit;
         Some(t_exit)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The block index is the clamped floor, at block boundaries, just inside and outside the
+    /// grid, far away, at infinities and NaN.
+    #[test]
+    fn block_index_is_the_clamped_floor() {
+        for last in [0.0, 1.0, 49.0] {
+            let mut rels = vec![
+                f64::NAN,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                -0.0,
+                1e300,
+                -1e300,
+                last,
+                last + 0.5,
+                last + 1.0,
+            ];
+            for i in -300..=300 {
+                let r = i as f64 / 4.0;
+                rels.extend([r, r - 1e-12, r + 1e-12]);
+            }
+            for rel in rels {
+                let want = if rel.is_nan() {
+                    0
+                } else {
+                    rel.floor().clamp(0.0, last) as i64
+                };
+                assert_eq!(block_index(rel, last), want, "{rel} in [0, {last}]");
+            }
+        }
     }
 }
