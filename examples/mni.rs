@@ -4,13 +4,15 @@
 //! ```text
 //! target/release/vlconvert nifti ../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz out/mni.vlb
 //! cargo run --release --example mni -- out/mni.vlb out/mni.png [step] [--unshaded] [--size=N] \
-//!     [--cubic] [--ss=N] [--termination=T]
+//!     [--cubic] [--ss=N] [--termination=T] [--frames=N]
 //! ```
 //!
 //! `--cubic` samples the dataset with the Catmull–Rom filter instead of trilinear, `--ss=N` turns
 //! on adaptive N×N super-sampling: with a small step they make the converged reference that
 //! `benches/peer.sh` measures both renderers against. `--termination=T` stops rays at
 //! transmittance T instead of 1/512 (`Optimise::termination`; VTK's is 255/32767).
+//! `--frames=N` first renders N more frames of the same scene to memory and prints the fastest
+//! and the median of their times (the steady frame, without loading and precomputation).
 
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
@@ -39,6 +41,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cubic = all.iter().any(|a| a == "--cubic");
     let ss: i32 = flag(&all, "--ss=", 1)?;
     let termination: f64 = flag(&all, "--termination=", vlib::render::T_MIN)?;
+    let frames: usize = flag(&all, "--frames=", 0)?;
     let start = Instant::now();
     let mut vl = vlib::Library::new();
     vl.load(mni_scene::BRAIN, vlb)?;
@@ -58,6 +61,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         vlib::Interpolation::Trilinear
     };
     mni_scene::build_with(&mut vl, dims, step, shaded, filter)?;
+    if frames > 0 {
+        let mut times: Vec<f64> = (0..frames)
+            .map(|_| {
+                let t = Instant::now();
+                vl.render_preview(size as u32, size as u32, 1.0)
+                    .map(|_| t.elapsed())
+            })
+            .map(|t| t.map(|t| t.as_secs_f64()))
+            .collect::<Result<_, _>>()?;
+        times.sort_by(f64::total_cmp);
+        println!(
+            "{frames} frames: fastest {:.1} ms, median {:.1} ms",
+            times[0] * 1e3,
+            times[frames / 2] * 1e3
+        );
+    }
     vl.end()?;
     println!(
         "wrote {png} in {:.3} s (load {loaded:.3} s, then precomputation and render)",
