@@ -459,9 +459,9 @@ fn transmit(t: f64, e: f64) -> f64 {
     }
 }
 
-/// A specular exponent e, examined once (per object or sample) for the specular term's `x^e`:
-/// integer exponents (the usual case: `VLSPECULAR(20)`) by repeated squaring, which is exact to
-/// rounding and much cheaper than `powf`.
+/// A specular exponent e, examined once (per ray for direct shading, per sample otherwise)
+/// for the specular term's `x^e`: integer exponents (the usual case: `VLSPECULAR(20)`) by
+/// repeated squaring, which is exact to rounding and much cheaper than `powf`.
 #[derive(Clone, Copy, Debug)]
 struct Specular {
     e: f64,
@@ -1183,8 +1183,9 @@ impl Compiled {
         let (ro, rd) = (c.o.to_array(), c.d.to_array());
         // Consecutive shaded samples often share a cell: its node differences are read once.
         let mut cache = CellGradients::default();
-        // The usual program's coefficients and exponent, examined once per ray.
+        // A run's midpoints and lengths (see `Cursor::run`).
         let (mut mids, mut lens) = ([0.0f64; 8], [0.0f64; 8]);
+        // The usual program's coefficients and exponent, examined once per ray.
         let shading = lean
             .direct_shading()
             .filter(|_| obj.normals.is_empty())
