@@ -1639,8 +1639,9 @@ mod tests {
     }
 
     /// The cell in SSE lanes is the cell axis by axis, and its interior test the test on the
-    /// cell's indices: inside, on and outside the box, at NaN and infinities, on grids with axes
-    /// of one to four nodes.
+    /// cell's indices; the values of eight points in lanes (`trilinear8`) are the values point
+    /// by point: inside, on and outside the box, at NaN and infinities, on grids with axes of
+    /// one to four nodes and the MNI grid's.
     #[test]
     fn cells_in_lanes_are_the_cells_axis_by_axis() {
         let mut rng = Lcg(11);
@@ -1661,17 +1662,20 @@ mod tests {
             f32::NAN,
             f32::MIN_POSITIVE,
         ];
-        for dims in [
+        for (seed, dims) in [
             [9, 7, 8],
             [1, 6, 5],
             [2, 2, 2],
             [197, 233, 189],
             [1, 1, 1],
             [3, 1, 2],
-        ] {
-            let n = dims.iter().product::<usize>();
-            let d = Dataset::new(dims, Voxels::U8(vec![0; n]), 0.0, 1.0).unwrap();
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let d = random_u8(dims, 20 + seed as u64);
             assert!(d.lanes.is_some(), "{dims:?} is small enough for lanes");
+            trilinear8_is_trilinear(&d, &mut rng, &specials);
             let mut points: Vec<[f32; 3]> = (0..3000).map(|_| rng.point_around_box()).collect();
             for &a in &specials {
                 for &b in &specials {
@@ -1728,39 +1732,6 @@ mod tests {
                 let want = if i < count { d.trilinear(*p) } else { 0.0 };
                 assert_eq!(got.to_bits(), want.to_bits(), "{:?} {p:?} lane {i}", d.dims);
             }
-        }
-    }
-
-    /// The values of eight points in lanes are the values point by point, on grids with axes
-    /// of one to four nodes and the MNI grid's, inside and outside the box, at NaN and
-    /// infinities.
-    #[test]
-    fn values_in_lanes_are_the_values_point_by_point() {
-        let mut rng = Lcg(12);
-        let specials = [
-            0.0,
-            -0.0,
-            1.0,
-            1.0 - f32::EPSILON,
-            -3.0,
-            1e30,
-            f32::INFINITY,
-            f32::NAN,
-        ];
-        for (seed, dims) in [
-            [9, 7, 8],
-            [1, 6, 5],
-            [2, 2, 2],
-            [197, 233, 189],
-            [3, 1, 2],
-            [1, 1, 1],
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let d = random_u8(dims, 20 + seed as u64);
-            assert!(d.lanes.is_some());
-            trilinear8_is_trilinear(&d, &mut rng, &specials);
         }
     }
 }
