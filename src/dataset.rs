@@ -846,21 +846,28 @@ impl Dataset {
         let count = count.min(8);
         #[cfg(target_arch = "x86_64")]
         if let Some([last, top, _]) = &self.lanes {
-            use wide::{f32x8, i32x8};
-            let [nx, ny, _] = self.dims;
-            let mut c = [[0i32; 8]; 3];
-            let mut f = [[0f32; 8]; 3];
-            for axis in 0..3 {
-                let l = f32x8::splat(last[axis]);
-                let u = (f32x8::new(p[axis]) * l).fast_max(f32x8::ZERO).fast_min(l);
-                let cu: i32x8 = u.fast_min(f32x8::splat(top[axis])).fast_trunc_int();
-                f[axis] = (u - cu.round_float()).to_array();
-                c[axis] = cu.to_array();
+            use wide::{f32x4, f32x8, i32x4, i32x8};
+            // The cells of the points along one axis, in lanes of `$F` (`$I` for the indices).
+            macro_rules! cells {
+                ($F:ty, $I:ty, $N:literal) => {{
+                    let mut c = [[0i32; $N]; 3];
+                    let mut f = [[0f32; $N]; 3];
+                    for axis in 0..3 {
+                        let l = <$F>::splat(last[axis]);
+                        let lanes: [f32; $N] = std::array::from_fn(|i| p[axis][i]);
+                        let u = (<$F>::new(lanes) * l).fast_max(<$F>::ZERO).fast_min(l);
+                        let cu: $I = u.fast_min(<$F>::splat(top[axis])).fast_trunc_int();
+                        f[axis] = (u - cu.round_float()).to_array();
+                        c[axis] = cu.to_array();
+                    }
+                    self.values_in_cells(&c, &f, count, mask, &mut out);
+                }};
             }
-            for (i, out) in out.iter_mut().enumerate().take(count) {
-                let [x0, y0, z0] = [c[0][i], c[1][i], c[2][i]].map(|c| c as usize);
-                let base = x0 + nx * (y0 + ny * z0);
-                *out = self.trilinear_cell(base, [f[0][i], f[1][i], f[2][i]], mask);
+            // A short run (the usual one at large sample distances) needs only half the lanes.
+            if count <= 4 {
+                cells!(f32x4, i32x4, 4);
+            } else {
+                cells!(f32x8, i32x8, 8);
             }
             return out;
         }
@@ -868,6 +875,25 @@ impl Dataset {
             *out = self.trilinear_in([p[0][i], p[1][i], p[2][i]], mask);
         }
         out
+    }
+
+    /// The values at the first `count` of `N` points whose cells' first nodes `c` and
+    /// weights `f` are given by axis (see [`Dataset::trilinear8`]).
+    #[inline(always)]
+    fn values_in_cells<const N: usize>(
+        &self,
+        c: &[[i32; N]; 3],
+        f: &[[f32; N]; 3],
+        count: usize,
+        mask: Option<&CellMask>,
+        out: &mut [f32; 8],
+    ) {
+        let [nx, ny, _] = self.dims;
+        for (i, out) in out.iter_mut().enumerate().take(count.min(N)) {
+            let [x0, y0, z0] = [c[0][i], c[1][i], c[2][i]].map(|c| c as usize);
+            let base = x0 + nx * (y0 + ny * z0);
+            *out = self.trilinear_cell(base, [f[0][i], f[1][i], f[2][i]], mask);
+        }
     }
 
     #[inline(always)]

@@ -1198,8 +1198,15 @@ impl Compiled {
             let m = c.run(unbounded, &mut mids, &mut lens);
             c.k += m as u64;
             // Their object points by axis, and their values (the cells in lanes across them).
-            let ps: [[f32; 8]; 3] =
-                std::array::from_fn(|axis| mids.map(|t| (ro[axis] + t * rd[axis]) as f32));
+            // (A short run needs only the first four.)
+            let point = |axis: usize, t: f64| (ro[axis] + t * rd[axis]) as f32;
+            let ps: [[f32; 8]; 3] = if m <= 4 {
+                std::array::from_fn(|axis| {
+                    std::array::from_fn(|i| if i < 4 { point(axis, mids[i]) } else { 0.0 })
+                })
+            } else {
+                std::array::from_fn(|axis| mids.map(|t| point(axis, t)))
+            };
             // In [0, 1], as field values; 0 (at most z) where the cell cannot pass the zero test.
             let vs = data.trilinear8(&ps, m, cells);
             // The samples that pass the zero test (and have a length), as bits in order: the
