@@ -1156,11 +1156,11 @@ impl Compiled {
         (col, t)
     }
 
-    /// [`Compiled::march_one`] for a lean program with a value head (a scanned volume): the
-    /// samples of a run the cursor knows to be in one occupied block (or all of them, without
-    /// skipping) are read in batches (positions and dataset values first, independent of each
-    /// other, so their memory reads overlap), then shaded and composited one by one in order,
-    /// exactly as the sample-by-sample loop does.
+    /// [`Compiled::march_one`] for a lean program with a value head (a scanned volume) and no
+    /// normal functions: the samples of a run the cursor knows to be in one occupied block (or
+    /// all of them, without skipping) are read in batches (positions and dataset values first,
+    /// in lanes across the samples), then shaded and composited one by one in order, exactly
+    /// as the sample-by-sample loop does.
     #[allow(clippy::too_many_arguments)]
     fn march_batched(
         &self,
@@ -1186,13 +1186,10 @@ impl Compiled {
         // A run's midpoints and lengths (see `Cursor::run`).
         let (mut mids, mut lens) = ([0.0f64; 8], [0.0f64; 8]);
         // The usual program's coefficients and exponent, examined once per ray.
-        let shading = lean
-            .direct_shading()
-            .filter(|_| obj.normals.is_empty())
-            .map(|s| {
-                let [ka, kd, ks, spec] = s.coefficients;
-                ([ka, kd, ks], Specular::of_field(spec))
-            });
+        let shading = lean.direct_shading().map(|s| {
+            let [ka, kd, ks, spec] = s.coefficients;
+            ([ka, kd, ks], Specular::of_field(spec))
+        });
         while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
             let m = c.run(unbounded, &mut mids, &mut lens);
