@@ -400,7 +400,7 @@ impl Dataset {
             .for_each(|(k, slab)| {
                 let mut m = vec![0f32; nx];
                 for j in 0..=top[1] {
-                    let o = nx * (j + ny * k);
+                    let o = self.node_index([0, j, k]);
                     let row = |r: usize| &v[r..r + nx];
                     let (a, b, c, d) = (row(o), row(o + sy), row(o + sz), row(o + sy + sz));
                     for i in 0..nx {
@@ -465,7 +465,13 @@ impl Dataset {
     /// The normalised value of node (i, j, k).
     #[inline]
     pub fn node(&self, i: usize, j: usize, k: usize) -> f32 {
-        self.values[i + self.dims[0] * (j + self.dims[1] * k)]
+        self.values[self.node_index([i, j, k])]
+    }
+
+    /// The position of node (i, j, k) in the node arrays (x fastest).
+    #[inline(always)]
+    fn node_index(&self, [i, j, k]: [usize; 3]) -> usize {
+        i + self.dims[0] * (j + self.dims[1] * k)
     }
 
     /// The normalised node values, x fastest.
@@ -475,7 +481,7 @@ impl Dataset {
 
     /// The raw value of node (i, j, k) before normalisation.
     pub fn raw_node(&self, i: usize, j: usize, k: usize) -> f64 {
-        self.raw.get(i + self.dims[0] * (j + self.dims[1] * k))
+        self.raw.get(self.node_index([i, j, k]))
     }
 
     /// Parses a `.vlb` file held in memory.
@@ -670,7 +676,6 @@ impl Dataset {
         [wx, wy, wz]: [[f64; 4]; 3],
         row: impl Fn(usize) -> Option<[f64; 4]>,
     ) -> Option<f64> {
-        let [nx, ny, _] = self.dims;
         let mut sum = 0.0;
         for (kz, &wzk) in wz.iter().enumerate() {
             if wzk == 0.0 {
@@ -680,7 +685,7 @@ impl Dataset {
                 if wyk == 0.0 {
                     continue;
                 }
-                let r = row(i0[0] + nx * ((i0[1] + ky) + ny * (i0[2] + kz)))?;
+                let r = row(self.node_index([i0[0], i0[1] + ky, i0[2] + kz]))?;
                 let mut acc = 0.0;
                 for (&wxk, v) in wx.iter().zip(r) {
                     acc += wxk * v;
@@ -888,25 +893,28 @@ impl Dataset {
         mask: Option<&CellMask>,
         out: &mut [f32; 8],
     ) {
-        let [nx, ny, _] = self.dims;
         for (i, out) in out.iter_mut().enumerate().take(count.min(N)) {
-            let [x0, y0, z0] = [c[0][i], c[1][i], c[2][i]].map(|c| c as usize);
-            let base = x0 + nx * (y0 + ny * z0);
-            *out = self.trilinear_cell(base, [f[0][i], f[1][i], f[2][i]], mask);
+            let cell = [c[0][i], c[1][i], c[2][i]].map(|c| c as usize);
+            *out = self.trilinear_cell(cell, [f[0][i], f[1][i], f[2][i]], mask);
         }
     }
 
     #[inline(always)]
     fn trilinear_in(&self, p: [f32; 3], mask: Option<&CellMask>) -> f32 {
-        let [nx, ny, _] = self.dims;
-        let ([x0, y0, z0], f) = self.cell32(p);
-        self.trilinear_cell(x0 + nx * (y0 + ny * z0), f, mask)
+        let (cell, f) = self.cell32(p);
+        self.trilinear_cell(cell, f, mask)
     }
 
-    /// The trilinear value in the cell whose first node is `base`, at weights `f` of its
+    /// The trilinear value in the cell whose first node is `cell`, at weights `f` of its
     /// second nodes; 0 where `mask` proves the cell below its bound.
     #[inline(always)]
-    fn trilinear_cell(&self, base: usize, [fx, fy, fz]: [f32; 3], mask: Option<&CellMask>) -> f32 {
+    fn trilinear_cell(
+        &self,
+        cell: [usize; 3],
+        [fx, fy, fz]: [f32; 3],
+        mask: Option<&CellMask>,
+    ) -> f32 {
+        let base = self.node_index(cell);
         if mask.is_some_and(|m| !m.may_reach(base)) {
             return 0.0;
         }
@@ -951,14 +959,13 @@ impl Dataset {
         p: [f32; 3],
         cache: &mut CellGradients,
     ) -> Option<[f64; 3]> {
-        let [nx, ny, _] = self.dims;
         let (cell, [fx, fy, fz]) = self.interior_cell32(p)?;
         // Row (j, k) holds nodes x0 − 1 … x0 + 2 at y0 − 1 + j, z0 − 1 + k; the corner rows of
         // the neighbourhood are never read.
         let lo = self.neighbourhood_lo(cell);
         if cache.lo != lo {
             let row = |j: usize, k: usize| -> Option<[f32; 4]> {
-                let o = lo + nx * (j + ny * k);
+                let o = lo + self.node_index([0, j, k]);
                 self.values.get(o..)?.first_chunk().copied()
             };
             let (r10, r20) = (row(1, 0)?, row(2, 0)?);
@@ -1017,9 +1024,8 @@ impl Dataset {
     /// The first node of the 4×4×4 neighbourhood of an interior cell (first node at least 1
     /// along every axis; see [`Dataset::interior_cell32`]): the key of [`CellGradients`].
     #[inline]
-    fn neighbourhood_lo(&self, [x0, y0, z0]: [usize; 3]) -> usize {
-        let [nx, ny, _] = self.dims;
-        (x0 - 1) + nx * ((y0 - 1) + ny * (z0 - 1))
+    fn neighbourhood_lo(&self, cell: [usize; 3]) -> usize {
+        self.node_index(cell.map(|c| c - 1))
     }
 
     /// The derivative along `axis` at a node, per grid step: central inside, one-sided at faces.
