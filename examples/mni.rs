@@ -66,9 +66,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .map(|_| {
                 let t = Instant::now();
                 vl.render_preview(size as u32, size as u32, 1.0)
-                    .map(|_| t.elapsed())
+                    .map(|_| t.elapsed().as_secs_f64())
             })
-            .map(|t| t.map(|t| t.as_secs_f64()))
             .collect::<Result<_, _>>()?;
         times.sort_by(f64::total_cmp);
         println!(

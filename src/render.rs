@@ -1363,6 +1363,7 @@ impl Cursor {
                     next[j - 1]
                 }
             });
+            // `Cursor::end` lane by lane (calling it per lane costs 0.3 % of the frame).
             let mut b = next.map(|x| x.min(self.t1));
             if last {
                 b[left - 1] = self.t1;
