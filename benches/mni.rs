@@ -30,8 +30,7 @@ fn bench(c: &mut Criterion) {
 
     let mut g = c.benchmark_group("mni_512_sd0.5");
     g.sample_size(10).measurement_time(Duration::from_secs(8));
-    // VTK's termination threshold: its fixed-point remaining opacity below 0xff of 0x7fff.
-    let vtk_termination = 255.0 / 32767.0;
+    let vtk_termination = common::mni_scene::VTK_TERMINATION;
     let t_min = vlib::render::T_MIN;
     let variants = [
         ("shaded", true, true, true, true, t_min),

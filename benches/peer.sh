@@ -57,7 +57,7 @@ cp "$work/out/shaded_estimates.json" "$est"
 cargo build --release --example mni -q
 target/release/examples/mni target/bench-data/mni.vlb "$work/out/vlib_mni.png" 0.5 >/dev/null
 # The same at VTK's termination threshold (its fixed-point remaining opacity below 0xff/0x7fff;
-# the exact double of benches/mni.rs's 255.0 / 32767.0, which Python prints round-trip).
+# the exact double of mni_scene::VTK_TERMINATION, 255.0 / 32767.0, as Python prints it).
 target/release/examples/mni target/bench-data/mni.vlb "$work/out/vlib_mni_vtk_termination.png" 0.5 \
   --termination="$(python3 -c 'print(255 / 32767)')" >/dev/null
 # The converged reference both images are measured against: step 0.125 voxel, Catmull–Rom,

@@ -1161,7 +1161,7 @@ fn mni_study(p: &Params, cache: &mut Cache, start: Instant) -> Res<(Study, Brain
         (0.0, "0 (none)"),
         (1.0 / 2048.0, "1/2048"),
         (vlib::render::T_MIN, "1/512 (default)"),
-        (255.0 / 32767.0, "255/32767 (VTK)"),
+        (mni_scene::VTK_TERMINATION, "255/32767 (VTK)"),
         (1.0 / 32.0, "1/32"),
         (1.0 / 8.0, "1/8"),
     ];

@@ -41,6 +41,10 @@ const COLOUR: i32 = 2;
 /// Dataset id of the brain.
 pub const BRAIN: i32 = 1;
 
+/// The early-termination threshold of VTK's CPU ray caster (`Optimise::termination` terms): it
+/// stops a ray once its fixed-point remaining opacity falls below 0xff of 0x7fff.
+pub const VTK_TERMINATION: f64 = 255.0 / 32767.0;
+
 /// The transfer functions of `peer_settings.py` on the normalised scale (value / 255).
 pub fn mappings(vl: &mut Library) -> Result<(), vlib::Error> {
     let opacity: Vec<f32> = [
