@@ -22,7 +22,7 @@ use crate::error::{Error, ErrorCode, Result};
 use crate::kernel::Lean;
 use crate::program::{prefix_for, run, Instr, NormalFn, Sample, SampleEnv, SampleRole};
 use crate::scene::{Light, ObjectDesc, SceneDesc, Settings};
-use crate::skip::{SkipGrid, Walk};
+use crate::skip::{EntryMap, Pinhole, SkipGrid, Walk};
 use crate::types::{Attenuation, Feature, Fields, RenderType, FIELD_COUNT, MAX_SPECULAR};
 use glam::{DMat4, DVec3};
 use rayon::prelude::*;
@@ -80,6 +80,8 @@ struct CObj {
     /// the rest cannot change it, and is skipped.
     o_prefix: usize,
     to_object: DMat4,
+    /// Its inverse, object → world (for [`EntryMap`]).
+    to_world: DMat4,
     box_min: DVec3,
     box_max: DVec3,
     step: f64,
@@ -207,6 +209,7 @@ impl CObj {
             },
             program: o.program.clone(),
             to_object,
+            to_world,
             box_min,
             box_max,
             step,
@@ -806,7 +809,7 @@ impl Compiled {
             if t1 <= t0 {
                 continue;
             }
-            let mut c = Cursor::new(self, obj, 0, (o, d), t0, t1);
+            let mut c = Cursor::new(self, obj, 0, (o, d), (t0, t1), f64::NEG_INFINITY);
             if obj.render_type == RenderType::Dsr {
                 // A surface object shadows by the opacity of the surfaces the ray crosses. A
                 // point on a surface lies within 10⁻⁶ of a step of it, on either side: crossings
@@ -943,7 +946,13 @@ impl Compiled {
                                             mirror: true,
                                             background: obj.reflect_background,
                                         };
-                                        col += ks * self.trace_ray(w + eps * r, r, mirror);
+                                        col += ks
+                                            * self.trace_ray(
+                                                w + eps * r,
+                                                r,
+                                                mirror,
+                                                f64::NEG_INFINITY,
+                                            );
                                     }
                                 }
                                 if bends {
@@ -1007,15 +1016,44 @@ impl Compiled {
         })
     }
 
-    /// Traces one primary ray; returns the pixel colour.
-    fn trace(&self, origin: DVec3, dir: DVec3) -> DVec3 {
-        self.trace_ray(origin, dir, Ray::PRIMARY)
+    /// The [`EntryMap`] of an image: for a scene of one DVR volume with a skip grid (the
+    /// only case [`Compiled::trace_ray`] uses it), when the map can be built.
+    fn entry_map(&self, view: &View) -> Option<EntryMap> {
+        let [obj] = self.objects.as_slice() else {
+            return None;
+        };
+        if !(self.settings.optimise.skip_empty
+            && obj.seen_by(Ray::PRIMARY)
+            && obj.render_type == RenderType::Dvr)
+        {
+            return None;
+        }
+        let camera = Pinhole {
+            eye: view.eye,
+            forward: view.forward,
+            right: view.right,
+            up: view.up,
+            width: view.width,
+            height: view.height,
+        };
+        EntryMap::build(obj.skip.as_deref()?, obj.to_world, &camera)
+    }
+
+    /// Traces one primary ray whose pixel has the [`EntryMap`] bound `bound` (−∞ without a
+    /// map); returns the pixel colour.
+    fn trace(&self, origin: DVec3, dir: DVec3, bound: f64) -> DVec3 {
+        self.trace_ray(origin, dir, Ray::PRIMARY, bound)
     }
 
     /// Traces a ray. DVR objects contribute their samples, DSR objects their surface hits and
     /// MIP objects their maximum-intensity layer, all composited front to back in depth order.
     /// At a refracting surface the rest of the ray continues along the refracted direction.
-    fn trace_ray(&self, origin: DVec3, dir: DVec3, ray: Ray) -> DVec3 {
+    ///
+    /// `bound`: no block of the scene's one object that may hold opacity meets the ray before
+    /// this parameter (its [`EntryMap`] bound; −∞ when nothing is known): the walk starts
+    /// there, and a ray whose bound is +∞ shows the background. Only a primary ray of a scene
+    /// of one DVR volume is given a bound.
+    fn trace_ray(&self, origin: DVec3, dir: DVec3, ray: Ray, bound: f64) -> DVec3 {
         let background = if ray.background {
             crate::scene::v3(self.settings.background)
         } else {
@@ -1029,7 +1067,11 @@ impl Compiled {
                 let Some((t0, t1)) = obj.clip(o, d) else {
                     return background;
                 };
-                let mut c = Cursor::new(self, obj, 0, (o, d), t0, t1);
+                if bound >= t1 {
+                    // What the march gives when it takes no sample.
+                    return DVec3::ZERO + 1.0 * background;
+                }
+                let mut c = Cursor::new(self, obj, 0, (o, d), (t0, t1), bound);
                 let (col, t) = self.march_one(&mut c, origin, dir);
                 return col + t * background;
             }
@@ -1042,7 +1084,7 @@ impl Compiled {
             }
             let (o, d) = obj.object_ray(origin, dir);
             if let Some((t0, t1)) = obj.clip(o, d) {
-                let mut c = Cursor::new(self, obj, i, (o, d), t0, t1);
+                let mut c = Cursor::new(self, obj, i, (o, d), (t0, t1), f64::NEG_INFINITY);
                 match obj.render_type {
                     RenderType::Dvr => cursors.push(c),
                     RenderType::Dsr => {
@@ -1098,6 +1140,7 @@ impl Compiled {
                             depth: ray.depth + 1,
                             ..ray
                         },
+                        f64::NEG_INFINITY,
                     );
                     return col + t * behind;
                 }
@@ -1266,14 +1309,15 @@ struct Cursor {
 impl Cursor {
     /// The segments of object `obj` (number `index`) over [t0, t1] of a ray, given in the
     /// object's coordinates ([`CObj::object_ray`]), with a block walk when empty-space skipping
-    /// is on.
+    /// is on. `from` (< t1): every sample before it lies in an empty block (an [`EntryMap`]
+    /// bound, or −∞): with a walk, those are passed over at once and the walk starts there.
     fn new(
         scene: &Compiled,
         obj: &CObj,
         index: usize,
         (o, d): (DVec3, DVec3),
-        t0: f64,
-        t1: f64,
+        (t0, t1): (f64, f64),
+        from: f64,
     ) -> Cursor {
         let n = crate::num::ceil((t1 - t0) / obj.step).max(1.0);
         let n = if n.is_finite() && n < u64::MAX as f64 {
@@ -1281,11 +1325,12 @@ impl Cursor {
         } else {
             u64::MAX
         };
+        let start = from.max(t0);
         let walk = match (&obj.skip, scene.settings.optimise.skip_empty) {
-            (Some(grid), true) => Some(grid.walk(o, d, t0)),
+            (Some(grid), true) => Some(grid.walk(o, d, start)),
             _ => None,
         };
-        Cursor {
+        let mut c = Cursor {
             object: index,
             t0,
             t1,
@@ -1296,7 +1341,38 @@ impl Cursor {
             o,
             d,
             occupied_until: f64::NEG_INFINITY,
+        };
+        if c.walk.is_some() {
+            c.start_at(start);
         }
+        c
+    }
+
+    /// Passes over the segments whose midpoints are before `t` (none if the next one's is
+    /// not; there is a next one).
+    fn start_at(&mut self, t: f64) {
+        if self.mid(self.k) < t {
+            self.pass_before(t);
+        }
+    }
+
+    /// Passes over the next segment, whose midpoint is before `t`, and every later one whose
+    /// midpoint is before `t`.
+    #[inline]
+    fn pass_before(&mut self, t: f64) {
+        let guess = crate::num::ceil((t - self.t0) / self.step - 0.5);
+        let mut k = if guess.is_finite() && guess > self.k as f64 {
+            (guess as u64).min(self.n)
+        } else {
+            self.k + 1
+        };
+        while k > self.k + 1 && self.mid(k - 1) >= t {
+            k -= 1;
+        }
+        while k < self.n && self.mid(k) < t {
+            k += 1;
+        }
+        self.k = k;
     }
 
     /// The object point of ray parameter `t`.
@@ -1416,20 +1492,7 @@ impl Cursor {
                 }
                 Ok(exit) => exit,
             };
-            // Skip every segment whose midpoint is before `exit`.
-            let guess = crate::num::ceil((exit - self.t0) / self.step - 0.5);
-            let mut k = if guess.is_finite() && guess > self.k as f64 {
-                (guess as u64).min(self.n)
-            } else {
-                self.k + 1
-            };
-            while k > self.k + 1 && self.mid(k - 1) >= exit {
-                k -= 1;
-            }
-            while k < self.n && self.mid(k) < exit {
-                k += 1;
-            }
-            self.k = k;
+            self.pass_before(exit);
         }
     }
 }
@@ -1554,8 +1617,11 @@ fn to_f32(c: DVec3) -> [f32; 3] {
 pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> Result<Image> {
     let run = || {
         let view = View::new(&scene.settings, width, height, aspect);
+        let entry = scene.entry_map(&view);
+        let from = |x: u32, y: u32| entry.as_ref().map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
         let first = per_pixel(width, height, |x, y| {
-            to_f32(scene.trace(view.eye, view.ray(x as f64 + 0.5, y as f64 + 0.5)))
+            let dir = view.ray(x as f64 + 0.5, y as f64 + 0.5);
+            to_f32(scene.trace(view.eye, dir, from(x, y)))
         });
         let n = scene.settings.super_sample.max(1) as u32;
         if n == 1 {
@@ -1585,7 +1651,8 @@ pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> R
                 for i in 0..n {
                     let sx = x as f64 + (i as f64 + 0.5) / n as f64;
                     let sy = y as f64 + (j as f64 + 0.5) / n as f64;
-                    sum += crate::scene::v3(to_f32(scene.trace(view.eye, view.ray(sx, sy))));
+                    let c = scene.trace(view.eye, view.ray(sx, sy), from(x, y));
+                    sum += crate::scene::v3(to_f32(c));
                 }
             }
             to_f32(sum / (n * n) as f64)
@@ -1779,6 +1846,35 @@ mod tests {
     }
 
     /// The pass bits in lanes are the comparisons sample by sample, NaN included.
+    /// Starting at a parameter passes over the segments before it and stops at the first
+    /// whose midpoint is not before it (or at the end), from any start, for targets before,
+    /// on, between and beyond the midpoints.
+    #[test]
+    fn starting_stops_at_the_first_midpoint_not_before() {
+        let mut checked = 0;
+        for (t0, t1, step) in [
+            (0.25f64, 9.9, 0.5),
+            (-3.0, 4.0, 0.1),
+            (1e-3, 1.0, 1.0 / 3.0),
+        ] {
+            let n = ((t1 - t0) / step).ceil() as u64;
+            for k in 0..n {
+                let probe = cursor(t0, t1, step, n, k, f64::NEG_INFINITY);
+                let mut targets: Vec<f64> = (0..n).map(|j| probe.mid(j)).collect();
+                targets.extend(targets.clone().iter().map(|m| m + step * 0.5));
+                targets.extend([t0 - 1.0, t0, t1, t1 + 1.0, 1e300, f64::INFINITY]);
+                for t in targets {
+                    let mut c = cursor(t0, t1, step, n, k, f64::NEG_INFINITY);
+                    c.start_at(t);
+                    let want = (k..n).find(|&j| c.mid(j) >= t).unwrap_or(n);
+                    assert_eq!(c.k, want, "from {k} of {n} to {t}");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 1000, "{checked}");
+    }
+
     #[test]
     fn pass_bits_are_the_comparisons() {
         let lens = [0.5, 0.0, -1.0, f64::NAN, 1e-300, f64::INFINITY, 2.0, -0.0];

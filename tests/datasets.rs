@@ -49,6 +49,7 @@ fn blob_scene(
     cubic: (f32, f32),
     optimise: Optimise,
     boundary: f32,
+    super_sample: i32,
 ) -> Vec<u8> {
     let mut vl = Library::new();
     vl.add_dataset(7, blobs()).unwrap();
@@ -56,6 +57,7 @@ fn blob_scene(
         .unwrap();
     vl.scene().unwrap();
     vl.set_optimise(optimise).unwrap();
+    vl.super_sample(super_sample).unwrap();
     vl.camera(&Camera {
         eye: [0.0, 30.0, -80.0],
         at: [0.0, 0.0, 0.0],
@@ -95,12 +97,14 @@ fn empty_space_skipping_never_changes_a_pixel() {
         (Interpolation::Tricubic, (0.0, 0.5)),
         (Interpolation::Tricubic, (1.0, 0.0)),
     ] {
-        for boundary in [1.0, 1.3] {
-            let with = blob_scene(interp, cubic, Optimise::default(), boundary);
-            let without = blob_scene(interp, cubic, off, boundary);
+        // (Super-sampled rays start their walks at their pixel's entry bound too.)
+        for (boundary, ss) in [(1.0, 1), (1.3, 1), (1.0, 3)] {
+            let with = blob_scene(interp, cubic, Optimise::default(), boundary, ss);
+            let without = blob_scene(interp, cubic, off, boundary, ss);
             assert!(
                 with == without,
-                "{interp:?} {cubic:?} boundary {boundary}: skipping changed pixels"
+                "{interp:?} {cubic:?} boundary {boundary} super-sampling {ss}: skipping changed \
+                 pixels"
             );
             let lit = with.iter().filter(|&&v| v > 10).count();
             assert!(
@@ -118,6 +122,7 @@ fn early_termination_changes_pixels_by_less_than_its_threshold() {
         (0.0, 0.5),
         Optimise::default(),
         1.0,
+        1,
     );
     let off = blob_scene(
         Interpolation::Trilinear,
@@ -128,6 +133,7 @@ fn early_termination_changes_pixels_by_less_than_its_threshold() {
             ..Optimise::default()
         },
         1.0,
+        1,
     );
     // T_MIN = 1/512 bounds the light left out; after rounding, at most one grey level.
     for (a, b) in on.iter().zip(&off) {
@@ -146,6 +152,7 @@ fn early_termination_changes_pixels_by_less_than_its_threshold() {
                 ..Optimise::default()
             },
             1.0,
+            1,
         )
     };
     let coarse = at(1.0 / 32.0);
