@@ -367,8 +367,8 @@ impl EntryMap {
     /// around or behind the eye), a singular camera basis, or more marking than
     /// [`ENTRY_BUDGET`] allows.
     pub(crate) fn build(grid: &SkipGrid, to_world: DMat4, camera: &Pinhole) -> Option<EntryMap> {
-        let pixels = camera.width as usize * camera.height as usize;
-        Self::build_within(grid, to_world, camera, ENTRY_BUDGET * pixels)
+        let pixels = (camera.width as usize).saturating_mul(camera.height as usize);
+        Self::build_within(grid, to_world, camera, pixels.saturating_mul(ENTRY_BUDGET))
     }
 
     /// [`EntryMap::build`], giving up past `budget` marked rectangle pixels.
@@ -454,10 +454,9 @@ impl EntryMap {
                 Some(mark) => Some(mark),
             })
             .collect::<Option<Vec<Mark>>>()?;
-        let area: usize = marks
-            .iter()
-            .map(|m| (m.x.1 - m.x.0 + 1) * (m.y.1 - m.y.0 + 1))
-            .sum();
+        let area = marks.iter().fold(0usize, |sum, m| {
+            sum.saturating_add((m.x.1 - m.x.0 + 1) * (m.y.1 - m.y.0 + 1))
+        });
         if area > budget {
             return None;
         }
