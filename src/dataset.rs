@@ -225,7 +225,7 @@ type CellMasks = Vec<(u32, std::sync::Arc<CellMask>)>;
 impl CellMask {
     /// Whether the cell with first node `c` may reach the bound.
     #[inline]
-    fn may_reach(&self, c: usize) -> bool {
+    pub(crate) fn may_reach(&self, c: usize) -> bool {
         self.bits.get(c >> 6).is_none_or(|w| w >> (c & 63) & 1 != 0)
     }
 }
@@ -470,7 +470,7 @@ impl Dataset {
 
     /// The position of node (i, j, k) in the node arrays (x fastest).
     #[inline(always)]
-    fn node_index(&self, [i, j, k]: [usize; 3]) -> usize {
+    pub(crate) fn node_index(&self, [i, j, k]: [usize; 3]) -> usize {
         i + self.dims[0] * (j + self.dims[1] * k)
     }
 

@@ -1036,7 +1036,22 @@ impl Compiled {
             width: view.width,
             height: view.height,
         };
-        EntryMap::build(obj.skip.as_deref()?, obj.to_world, &camera)
+        let grid = obj.skip.as_deref()?;
+        // Where the batched march consults a cell mask, the boxes of the cells that can pass
+        // its zero test bound where rays meet opacity more tightly than the shell's blocks.
+        let passing = match (&obj.cells, obj.lean.as_ref().and_then(Lean::value_head)) {
+            (Some(mask), Some((data, _))) => grid
+                .passing_boxes(data, mask, obj.box_min, obj.box_max)
+                .map(|b| (b, data.dims())),
+            _ => None,
+        };
+        match passing {
+            Some((boxes, n)) => {
+                let cell = DVec3::from_array(n.map(|k| 1.0 / (k - 1) as f64));
+                EntryMap::of_boxes(&boxes, cell * 0.125, obj.to_world, &camera)
+            }
+            None => EntryMap::build(grid, obj.to_world, &camera),
+        }
     }
 
     /// Traces one primary ray whose pixel has the [`EntryMap`] bound `bound` (−∞ without a

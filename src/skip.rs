@@ -11,7 +11,7 @@
 //! empty blocks; the remaining samples are exactly the ones that would have been taken, so
 //! skipping never changes a pixel.
 
-use crate::dataset::{bc_abs_sum, Dataset, Filter, BRICK};
+use crate::dataset::{bc_abs_sum, CellMask, Dataset, Filter, BRICK};
 use crate::program::Instr;
 use crate::types::FIELD_COUNT;
 use glam::{DMat3, DMat4, DVec3};
@@ -35,7 +35,13 @@ pub(crate) struct SkipGrid {
     /// outside, among its 26 neighbours (by index). A ray that starts outside the grid and
     /// meets a block that may hold opacity meets a shell block first (see [`EntryMap`]).
     shell: Vec<u32>,
+    /// The boxes of the dataset's cells that can pass a zero test, by 4³ cells (see
+    /// [`SkipGrid::passing_boxes`]), made by the first render that asks.
+    passing: std::sync::OnceLock<Option<std::sync::Arc<Boxes>>>,
 }
+
+/// Object-space boxes (lowest and highest corner) an [`EntryMap`] projects.
+pub(crate) type Boxes = Vec<(DVec3, DVec3)>;
 
 /// The largest leap, in blocks.
 const MAX_LEAP: u8 = 16;
@@ -110,6 +116,90 @@ fn shell(dist: &[u8], dims: [usize; 3]) -> Vec<u32> {
         }
     }
     shell
+}
+
+/// See [`SkipGrid::passing_boxes`].
+fn passing_boxes(data: &Dataset, mask: &CellMask, box_min: DVec3, box_max: DVec3) -> Option<Boxes> {
+    let n = data.dims();
+    if n.iter().any(|&k| k < 2) {
+        return None;
+    }
+    let cells = n.map(|k| k - 1);
+    let groups = cells.map(|c| c.div_ceil(BRICK));
+    // Per group: the lowest and highest passing cell per axis, and whether all pass; in
+    // parallel over layers of groups.
+    type Group = Option<([usize; 3], [usize; 3], bool)>;
+    let layers: Vec<Vec<Group>> = (0..groups[2])
+        .into_par_iter()
+        .map(|gk| {
+            let mut layer = vec![None; groups[0] * groups[1]];
+            for gj in 0..groups[1] {
+                for gi in 0..groups[0] {
+                    let g = [gi, gj, gk];
+                    let lo = g.map(|v| v * BRICK);
+                    let hi = std::array::from_fn::<usize, 3, _>(|a| (lo[a] + BRICK).min(cells[a]));
+                    let (mut first, mut last, mut all) = ([usize::MAX; 3], [0usize; 3], true);
+                    for k in lo[2]..hi[2] {
+                        for j in lo[1]..hi[1] {
+                            for i in lo[0]..hi[0] {
+                                if mask.may_reach(data.node_index([i, j, k])) {
+                                    for (a, c) in [i, j, k].into_iter().enumerate() {
+                                        first[a] = first[a].min(c);
+                                        last[a] = last[a].max(c);
+                                    }
+                                } else {
+                                    all = false;
+                                }
+                            }
+                        }
+                    }
+                    if first[0] != usize::MAX {
+                        layer[gi + groups[0] * gj] = Some((first, last, all));
+                    }
+                }
+            }
+            layer
+        })
+        .collect();
+    let group = |g: [i64; 3]| -> Group {
+        if (0..3).all(|a| (0..groups[a] as i64).contains(&g[a])) {
+            layers[g[2] as usize][g[0] as usize + groups[0] * g[1] as usize]
+        } else {
+            None
+        }
+    };
+    let full = |g: [i64; 3]| matches!(group(g), Some((_, _, true)));
+    let mut boxes = Vec::new();
+    for gk in 0..groups[2] as i64 {
+        for gj in 0..groups[1] as i64 {
+            for gi in 0..groups[0] as i64 {
+                let Some((first, last, _)) = group([gi, gj, gk]) else {
+                    continue;
+                };
+                let enclosed = (-1..=1)
+                    .all(|c| (-1..=1).all(|b| (-1..=1).all(|a| full([gi + a, gj + b, gk + c]))));
+                if enclosed {
+                    continue;
+                }
+                let lo = DVec3::from_array(std::array::from_fn(|a| {
+                    if first[a] == 0 {
+                        box_min[a].min(0.0)
+                    } else {
+                        first[a] as f64 / cells[a] as f64
+                    }
+                }));
+                let hi = DVec3::from_array(std::array::from_fn(|a| {
+                    if last[a] + 1 == cells[a] {
+                        box_max[a].max(1.0)
+                    } else {
+                        (last[a] + 1) as f64 / cells[a] as f64
+                    }
+                }));
+                boxes.push((lo, hi));
+            }
+        }
+    }
+    Some(boxes)
 }
 
 /// The most blocks a grid may have.
@@ -272,7 +362,55 @@ impl SkipGrid {
             last: DVec3::from_array(dims.map(|n| (n - 1) as f64)),
             dist,
             shell,
+            passing: Default::default(),
         })
+    }
+
+    /// The block with linear index `index` as an object-space box.
+    fn block_box(&self, index: usize) -> (DVec3, DVec3) {
+        let c = DVec3::new(
+            (index % self.dims[0]) as f64,
+            (index / self.dims[0] % self.dims[1]) as f64,
+            (index / (self.dims[0] * self.dims[1])) as f64,
+        );
+        (
+            self.origin + c * self.cell,
+            self.origin + (c + 1.0) * self.cell,
+        )
+    }
+
+    /// The shell's blocks (see [`SkipGrid`]) as object-space boxes: a ray from an eye
+    /// outside every block that may hold opacity meets such a block first in one of them.
+    pub(crate) fn shell_boxes(&self) -> Boxes {
+        self.shell
+            .iter()
+            .map(|&i| self.block_box(i as usize))
+            .collect()
+    }
+
+    /// For the batched march of `data` with the cell mask `mask` (its cells whose samples can
+    /// pass the zero test) over the object box [box_min, box_max]: boxes that hold every
+    /// sample whose opacity is above 0, or at least the first one along any ray, computed
+    /// once per grid (the mask belongs to the grid's object).
+    ///
+    /// Per 4³ cells of the dataset, the box of those that can pass: a sample's value comes
+    /// from the cell that holds its point, so a sample whose opacity is above 0 lies in such
+    /// a box. A box whose cells touch a face of the dataset reaches to the object box there
+    /// (a sample outside the dataset takes the value of the nearest edge cell). Left out: the
+    /// groups whose cells all pass, with all 26 neighbouring groups the same: a ray that meets
+    /// opacity first in one has crossed a neighbour's box before (or starts in a region of them,
+    /// enclosed by boxes some of which are then behind the eye: no map). `None` for a
+    /// dataset with an axis of one node.
+    pub(crate) fn passing_boxes(
+        &self,
+        data: &Dataset,
+        mask: &CellMask,
+        box_min: DVec3,
+        box_max: DVec3,
+    ) -> Option<std::sync::Arc<Boxes>> {
+        self.passing
+            .get_or_init(|| passing_boxes(data, mask, box_min, box_max).map(std::sync::Arc::new))
+            .clone()
     }
 
     #[inline]
@@ -367,19 +505,33 @@ impl EntryMap {
     /// around or behind the eye), a singular camera basis, or more marking than
     /// [`ENTRY_BUDGET`] allows.
     pub(crate) fn build(grid: &SkipGrid, to_world: DMat4, camera: &Pinhole) -> Option<EntryMap> {
-        let pixels = (camera.width as usize).saturating_mul(camera.height as usize);
-        Self::build_within(grid, to_world, camera, pixels.saturating_mul(ENTRY_BUDGET))
+        Self::of_boxes(&grid.shell_boxes(), grid.cell * 0.125, to_world, camera)
     }
 
-    /// [`EntryMap::build`], giving up past `budget` marked rectangle pixels.
+    /// The map of object-space `boxes`, each grown by `margin` on every side, that hold the
+    /// first sample with opacity above 0 of any ray (the shell's blocks, or
+    /// [`SkipGrid::passing_boxes`]).
+    pub(crate) fn of_boxes(
+        boxes: &[(DVec3, DVec3)],
+        margin: DVec3,
+        to_world: DMat4,
+        camera: &Pinhole,
+    ) -> Option<EntryMap> {
+        let pixels = (camera.width as usize).saturating_mul(camera.height as usize);
+        let budget = pixels.saturating_mul(ENTRY_BUDGET);
+        Self::build_within(boxes, margin, to_world, camera, budget)
+    }
+
+    /// [`EntryMap::of_boxes`], giving up past `budget` marked rectangle pixels.
     fn build_within(
-        grid: &SkipGrid,
+        boxes: &[(DVec3, DVec3)],
+        margin: DVec3,
         to_world: DMat4,
         camera: &Pinhole,
         budget: usize,
     ) -> Option<EntryMap> {
         let (w, h) = (camera.width as usize, camera.height as usize);
-        if w == 0 || h == 0 || grid.shell.is_empty() {
+        if w == 0 || h == 0 || boxes.is_empty() {
             return None;
         }
         // Coefficients (depth, right, up) of an eye-relative vector: the rays' own basis.
@@ -390,18 +542,10 @@ impl EntryMap {
         }
         let to_view = basis.inverse();
         let unit_forward = camera.forward.normalize_or_zero();
-        let margin = grid.cell * 0.125;
         let (wf, hf) = (w as f64, h as f64);
-        // Each shell block's pixel rectangle and depth, in parallel; `None` gives up.
-        let project = |index: u32| -> Option<Option<Mark>> {
-            let index = index as usize;
-            let c = DVec3::new(
-                (index % grid.dims[0]) as f64,
-                (index / grid.dims[0] % grid.dims[1]) as f64,
-                (index / (grid.dims[0] * grid.dims[1])) as f64,
-            );
-            let lo = grid.origin + c * grid.cell - margin;
-            let hi = grid.origin + (c + 1.0) * grid.cell + margin;
+        // Each box's pixel rectangle and depth, in parallel; `None` gives up.
+        let project = |&(lo, hi): &(DVec3, DVec3)| -> Option<Option<Mark>> {
+            let (lo, hi) = (lo - margin, hi + margin);
             let (mut x0, mut x1) = (f64::INFINITY, f64::NEG_INFINITY);
             let (mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY);
             let mut near = f64::INFINITY;
@@ -445,10 +589,9 @@ impl EntryMap {
                 near: near - 1e-9 * near.abs(),
             }))
         };
-        let marks: Vec<Mark> = grid
-            .shell
+        let marks: Vec<Mark> = boxes
             .par_iter()
-            .filter_map(|&index| match project(index) {
+            .filter_map(|b| match project(b) {
                 None => Some(None), // give up
                 Some(None) => None, // off the image
                 Some(mark) => Some(mark),
@@ -721,6 +864,7 @@ mod tests {
             last: DVec3::from_array(dims.map(|n| (n - 1) as f64)),
             shell: shell(&dist, dims),
             dist,
+            passing: Default::default(),
         }
     }
 
@@ -894,6 +1038,157 @@ mod tests {
         assert!(mean > 0.75, "mean bound / hit {mean}");
     }
 
+    /// A dataset of `dims` nodes, 8-bit, with a few random spheres of 255 in 0 (each node
+    /// 255 or 0).
+    fn spheres(rng: &mut Rng, dims: [usize; 3], count: usize) -> Dataset {
+        let centres: Vec<(DVec3, f64)> = (0..count)
+            .map(|_| {
+                let c = DVec3::new(rng.next(), rng.next(), rng.next());
+                (c, 0.05 + 0.2 * rng.next())
+            })
+            .collect();
+        let mut raw = Vec::new();
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let p = DVec3::new(i as f64, j as f64, k as f64)
+                        / DVec3::from_array(dims.map(|n| (n - 1) as f64));
+                    let inside = centres.iter().any(|(c, r)| p.distance(*c) < *r);
+                    raw.push(if inside { 255u8 } else { 0 });
+                }
+            }
+        }
+        Dataset::new(dims, crate::dataset::Voxels::U8(raw), 0.0, 255.0).unwrap()
+    }
+
+    /// The first parameter at which `o + t·d` (t ≥ 0) enters the box of a cell that can pass
+    /// (a cell on a face of the dataset reaching to the object box there); ∞ if none.
+    fn first_passing(
+        data: &Dataset,
+        mask: &CellMask,
+        (box_min, box_max): (DVec3, DVec3),
+        o: DVec3,
+        d: DVec3,
+    ) -> f64 {
+        let n = data.dims();
+        let cells = n.map(|k| k - 1);
+        let mut first = f64::INFINITY;
+        for k in 0..cells[2] {
+            for j in 0..cells[1] {
+                for i in 0..cells[0] {
+                    if !mask.may_reach(data.node_index([i, j, k])) {
+                        continue;
+                    }
+                    let c = [i, j, k];
+                    let lo = DVec3::from_array(std::array::from_fn(|a| match c[a] {
+                        0 => box_min[a].min(0.0),
+                        v => v as f64 / cells[a] as f64,
+                    }));
+                    let hi = DVec3::from_array(std::array::from_fn(|a| {
+                        if c[a] + 1 == cells[a] {
+                            box_max[a].max(1.0)
+                        } else {
+                            (c[a] + 1) as f64 / cells[a] as f64
+                        }
+                    }));
+                    let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+                    for a in 0..3 {
+                        let (u, v) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);
+                        t0 = t0.max(u.min(v));
+                        t1 = t1.min(u.max(v));
+                    }
+                    if t0 <= t1 {
+                        first = first.min(t0);
+                    }
+                }
+            }
+        }
+        first
+    }
+
+    /// With the boxes of the cells that can pass the zero test, no ray through any pixel
+    /// meets such a cell before its pixel's bound, none at all where the bound is ∞, for
+    /// object boxes of 1 and 1.3 (samples outside the dataset take its edge cells' values),
+    /// cameras outside and inside the volume; the enclosed groups left out are really
+    /// enclosed (a full volume has boxes only at its faces); the bounds are informative.
+    #[test]
+    fn passing_boxes_bound_every_ray() {
+        let mut rng = Rng(0x5eed_0004);
+        let (mut hits, mut misses, mut ratio) = (0usize, 0usize, 0.0f64);
+        for case in 0..24 {
+            let dims = [13 + case % 5, 11 + case % 3, 12];
+            let data = spheres(&mut rng, dims, 1 + case % 4);
+            let mask = data.cells_above(0.5);
+            let half = if case % 2 == 0 { 0.5 } else { 0.65 };
+            let (box_min, box_max) = (DVec3::splat(0.5 - half), DVec3::splat(0.5 + half));
+            let boxes = passing_boxes(&data, &mask, box_min, box_max).expect("3D");
+            let margin = DVec3::from_array(dims.map(|n| 0.125 / (n - 1) as f64));
+            let angles = (rng.next() * 6.0, rng.next() * 6.0, rng.next() * 6.0);
+            let to_world = DMat4::from_scale_rotation_translation(
+                DVec3::new(30.0, 20.0 + 20.0 * rng.next(), 25.0),
+                glam::DQuat::from_euler(glam::EulerRot::XYZ, angles.0, angles.1, angles.2),
+                DVec3::new(rng.next() * 100.0 - 50.0, 7.0, -3.0),
+            );
+            let from = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
+            let camera = if case % 6 != 5 {
+                camera_at(to_world, from, 90.0 + 60.0 * rng.next(), 24)
+            } else {
+                // Inside the volume: a map only if no box is around or behind the eye.
+                Pinhole {
+                    eye: to_world.transform_point3(DVec3::new(rng.next(), rng.next(), 0.02)),
+                    ..camera_at(to_world, from, 90.0, 24)
+                }
+            };
+            let Some(map) = EntryMap::of_boxes(&boxes, margin, to_world, &camera) else {
+                assert!(case % 6 == 5, "case {case}: an outside camera gets a map");
+                continue;
+            };
+            let to_object = to_world.inverse();
+            let (w, h) = (camera.width as f64, camera.height as f64);
+            for py in 0..camera.height {
+                for px in 0..camera.width {
+                    let bound = map.bound(px, py);
+                    for (dx, dy) in [
+                        (0.5, 0.5),
+                        (0.0, 0.0),
+                        (0.999_999, 0.3),
+                        (rng.next(), rng.next()),
+                    ] {
+                        let (x, y) = (px as f64 + dx, py as f64 + dy);
+                        let (sx, sy) = (x / w * 2.0 - 1.0, 1.0 - y / h * 2.0);
+                        let dir = (camera.forward + sx * camera.right + sy * camera.up).normalize();
+                        let o = to_object.transform_point3(camera.eye);
+                        let d = to_object.transform_vector3(dir);
+                        let hit = first_passing(&data, &mask, (box_min, box_max), o, d);
+                        assert!(
+                            bound <= hit,
+                            "case {case} pixel ({px}, {py}): bound {bound} past the first \
+                             passing cell at {hit}"
+                        );
+                        if hit.is_finite() {
+                            hits += 1;
+                            ratio += bound / hit;
+                        } else if bound.is_infinite() {
+                            misses += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            hits > 1000 && misses > 1000,
+            "{hits} hits, {misses} bare misses"
+        );
+        let mean = ratio / hits as f64;
+        assert!(mean > 0.75, "mean bound / hit {mean}");
+        // A volume whose every cell passes: only the groups at its faces have boxes.
+        let raw = vec![255u8; 17 * 17 * 17];
+        let full = Dataset::new([17; 3], crate::dataset::Voxels::U8(raw), 0.0, 255.0).unwrap();
+        let boxes =
+            passing_boxes(&full, &full.cells_above(0.5), DVec3::ZERO, DVec3::ONE).expect("3D");
+        assert_eq!(boxes.len(), 4 * 4 * 4 - 2 * 2 * 2);
+    }
+
     /// No map where the walk's start cannot be proved: the eye in the grid, a shell corner
     /// behind the eye, or more marking than the budget; and a grid with no occupied block
     /// needs none.
@@ -926,7 +1221,10 @@ mod tests {
         };
         assert!(EntryMap::build(&g, to_world, &away).is_none());
         // The budget: what the default marks, and one pixel less.
-        let marked = |budget| EntryMap::build_within(&g, to_world, &outside, budget).is_some();
+        let boxes = g.shell_boxes();
+        let margin = g.cell * 0.125;
+        let marked =
+            |budget| EntryMap::build_within(&boxes, margin, to_world, &outside, budget).is_some();
         let need = (0..=16 * 13 * 64)
             .find(|&b| marked(b))
             .expect("within the default budget");
