@@ -27,6 +27,37 @@ pub struct Mapping {
     /// to row i + 1, counted from 0) is a_i, then per output j: b_{i,j} and the slope
     /// (b_{i+1,j} − b_{i,j})/(a_{i+1} − a_i), all as f64.
     segments: Vec<f64>,
+    /// Per input bucket b (the inputs v with ⌊v·[`BUCKETS`]⌋ = b, v in [0, 1]): the segment
+    /// [`Mapping::locate`] finds for every one of them, or [`SCAN`] where a breakpoint falls in
+    /// the bucket (the inputs are then counted against the breakpoints).
+    buckets: Vec<u16>,
+}
+
+/// Input buckets of [`Mapping::locate`]'s table: v·BUCKETS is exact in f32 (a power of two).
+const BUCKETS: usize = 1024;
+/// A bucket whose inputs do not share one segment.
+const SCAN: u16 = u16::MAX;
+
+/// The buckets of breakpoints `a` (strictly increasing): see `Mapping::buckets`.
+fn buckets(a: &[f32]) -> Vec<u16> {
+    let mut below = 0; // breakpoints below the bucket's first input
+    (0..=BUCKETS)
+        .map(|b| {
+            let lo = b as f32 / BUCKETS as f32;
+            while below < a.len() && a[below] < lo {
+                below += 1;
+            }
+            // The count is the same for every input of the bucket unless a breakpoint lies in
+            // [lo, hi) (the last bucket holds the input 1 alone).
+            let split = b < BUCKETS
+                && a.get(below)
+                    .is_some_and(|&x| x < (b + 1) as f32 / BUCKETS as f32);
+            match u16::try_from(below) {
+                Ok(k) if !split && k != SCAN => k,
+                _ => SCAN,
+            }
+        })
+        .collect()
 }
 
 /// Output `j` of a ramp segment (see [`Mapping::ramp_segment`]) at `dv` past its start:
@@ -103,6 +134,7 @@ impl Mapping {
         }
         Ok(Mapping {
             kind,
+            buckets: buckets(&a),
             a,
             b,
             outputs: k,
@@ -148,6 +180,11 @@ impl Mapping {
     #[inline]
     pub fn locate(&self, v: f32) -> (f32, usize) {
         let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+        // (v ≥ 0 here, −0 included: the truncation is the floor.)
+        let bucket = self.buckets[(v * BUCKETS as f32) as usize];
+        if bucket != SCAN {
+            return (v, bucket as usize);
+        }
         let k = if self.a.len() <= 16 {
             self.a.iter().take_while(|&&a| a < v).count()
         } else {
@@ -273,6 +310,62 @@ mod tests {
 
     fn lookup(table: &[f32], points: i32, outputs: i32) -> Mapping {
         Mapping::new(MappingType::Lookup, points, outputs, table).unwrap()
+    }
+
+    /// The bucket table gives `locate` the count of breakpoints below the input, as counting
+    /// them does: for breakpoints at 0 and 1, on bucket edges, a breakpoint in every bucket,
+    /// many in one bucket and more than a u16 can count; inputs at and one ulp around every
+    /// bucket edge and breakpoint, and spread between.
+    #[test]
+    fn buckets_locate_as_counting_does() {
+        let edge = |b: usize| b as f32 / BUCKETS as f32;
+        let mut tables: Vec<Vec<f32>> = vec![
+            vec![0.0],
+            vec![1.0],
+            vec![0.0, 1.0],
+            vec![0.1, 0.3, 0.35, 0.7],
+            vec![edge(3), edge(4), edge(1000), 1.0],
+            (0..=BUCKETS).map(edge).collect(),
+            (0..200).map(|i| 0.5 + i as f32 * 1e-6).collect(),
+            (0..70_000).map(|i| i as f32 / 70_000.0).collect(),
+        ];
+        let mut x = 0x2545_f491u32;
+        tables.push({
+            let mut v: Vec<f32> = (0..40)
+                .map(|_| {
+                    x ^= x << 13;
+                    x ^= x >> 17;
+                    x ^= x << 5;
+                    (x >> 8) as f32 / (1 << 24) as f32
+                })
+                .collect();
+            v.sort_by(f32::total_cmp);
+            v.dedup();
+            v
+        });
+        let mut checked = 0;
+        for a in tables {
+            let rows: Vec<f32> = a.iter().flat_map(|&x| [x, 0.5]).collect();
+            let m = Mapping::new(MappingType::Ramp, a.len() as i32, 1, &rows).unwrap();
+            let mut inputs: Vec<f32> = (0..=BUCKETS).map(edge).chain(a.iter().copied()).collect();
+            for v in inputs.clone() {
+                inputs.extend([v.next_down(), v.next_up()]);
+            }
+            inputs.extend((0..=10_000).map(|i| i as f32 / 10_000.0));
+            inputs.extend([-1.0, 2.0, f32::NAN, -0.0, f32::INFINITY]);
+            for v in inputs {
+                let clamped = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+                let want = a.partition_point(|&x| x < clamped);
+                assert_eq!(
+                    m.locate(v),
+                    (clamped, want),
+                    "input {v}, {} points",
+                    a.len()
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 100_000, "{checked}");
     }
 
     #[test]
