@@ -51,37 +51,81 @@ fn blob_scene(
     boundary: f32,
     super_sample: i32,
 ) -> Vec<u8> {
+    let view = BlobView {
+        eye: [0.0, 30.0, -80.0],
+        fov: 45.0,
+        scale: [39.0, 35.0, 31.0],
+        rotate: [10.0, 25.0, -5.0],
+        step: (0.7, 1.0),
+        size: (64, 48),
+    };
+    blob_scene_in(
+        Arc::new(blobs()),
+        &view,
+        (interp, cubic),
+        optimise,
+        boundary,
+        super_sample,
+    )
+}
+
+/// Where [`blob_scene_in`] puts the blobs and the camera, and the image's size.
+struct BlobView {
+    eye: [f32; 3],
+    fov: f32,
+    scale: [f32; 3],
+    rotate: [f32; 3],
+    /// `vlStepSize`'s step and reference.
+    step: (f32, f32),
+    size: (u32, u32),
+}
+
+/// The blobs (dataset `data`) through an opacity ramp, lit, seen as `view` says with the
+/// filter `interp` (and its B, C), rendered to 8-bit RGB.
+fn blob_scene_in(
+    data: Arc<Dataset>,
+    view: &BlobView,
+    (interp, cubic): (Interpolation, (f32, f32)),
+    optimise: Optimise,
+    boundary: f32,
+    super_sample: i32,
+) -> Vec<u8> {
     let mut vl = Library::new();
-    vl.add_dataset(7, blobs()).unwrap();
+    vl.add_dataset(7, data).unwrap();
     vl.mapping(1, MappingType::Ramp, 3, 1, &[0.3, 0.0, 0.6, 0.5, 0.9, 0.9])
         .unwrap();
     vl.scene().unwrap();
     vl.set_optimise(optimise).unwrap();
     vl.super_sample(super_sample).unwrap();
     vl.camera(&Camera {
-        eye: [0.0, 30.0, -80.0],
+        eye: view.eye,
         at: [0.0, 0.0, 0.0],
         up: [0.0, 1.0, 0.0],
-        fov: 45.0,
+        fov: view.fov,
     })
     .unwrap();
     vl.ambient(1.0, 1.0, 1.0, 0.3).unwrap();
     vl.directional_light([1.0, -1.0, 1.0], [1.0, 1.0, 1.0], 1.0)
         .unwrap();
-    vl.step_size(0.7, 1.0).unwrap();
+    vl.step_size(view.step.0, view.step.1).unwrap();
     vl.interpolation(interp).unwrap();
     vl.cubic_filter(cubic.0, cubic.1).unwrap();
     vl.object().unwrap();
     vl.translate(-0.5, -0.5, -0.5).unwrap();
-    vl.scale(39.0, 35.0, 31.0).unwrap();
-    vl.rotate(10.0, 25.0, -5.0).unwrap();
+    vl.scale(view.scale[0], view.scale[1], view.scale[2])
+        .unwrap();
+    vl.rotate(view.rotate[0], view.rotate[1], view.rotate[2])
+        .unwrap();
     vl.boundary(boundary, boundary, boundary).unwrap();
     vl.dataset(Fields::F, 7).unwrap();
     vl.map(Fields::O, Fields::F, 1, 1).unwrap();
     vl.set(Fields::COLORS | Fields::KA | Fields::KD, 0.8)
         .unwrap();
     vl.end().unwrap();
-    vl.render_preview(64, 48, 64.0 / 48.0).unwrap().to_rgb8()
+    let (w, h) = view.size;
+    vl.render_preview(w, h, w as f32 / h as f32)
+        .unwrap()
+        .to_rgb8()
 }
 
 #[test]
@@ -569,42 +613,23 @@ fn skipping_is_exact_from_any_camera() {
     );
     runner
         .run(&strategy, |(eye, rotate, scale, (wide, ss, fov))| {
+            let size = scale.iter().fold(0.0f32, |m, v| m.max(*v));
+            let view = BlobView {
+                eye: eye.map(|e| e * size),
+                fov,
+                scale,
+                rotate,
+                step: (0.02 * size, 0.05 * size),
+                size: (20, 15),
+            };
+            let filter = (Interpolation::Trilinear, (0.0, 0.5));
+            let b = if wide { 1.3 } else { 1.0 };
             let render = |skip_empty: bool| {
-                let mut vl = Library::new();
-                vl.add_dataset(7, data.clone()).unwrap();
-                vl.mapping(1, MappingType::Ramp, 3, 1, &[0.3, 0.0, 0.6, 0.5, 0.9, 0.9])
-                    .unwrap();
-                vl.scene().unwrap();
-                vl.set_optimise(Optimise {
+                let optimise = Optimise {
                     skip_empty,
                     ..Optimise::default()
-                })
-                .unwrap();
-                vl.super_sample(ss).unwrap();
-                let size = scale.iter().fold(0.0f32, |m, v| m.max(*v));
-                vl.camera(&Camera {
-                    eye: eye.map(|e| e * size),
-                    at: [0.0, 0.0, 0.0],
-                    up: [0.0, 1.0, 0.0],
-                    fov,
-                })
-                .unwrap();
-                vl.ambient(1.0, 1.0, 1.0, 0.3).unwrap();
-                vl.directional_light([1.0, -1.0, 1.0], [1.0, 1.0, 1.0], 1.0)
-                    .unwrap();
-                vl.step_size(0.02 * size, 0.05 * size).unwrap();
-                vl.object().unwrap();
-                vl.translate(-0.5, -0.5, -0.5).unwrap();
-                vl.scale(scale[0], scale[1], scale[2]).unwrap();
-                vl.rotate(rotate[0], rotate[1], rotate[2]).unwrap();
-                let b = if wide { 1.3 } else { 1.0 };
-                vl.boundary(b, b, b).unwrap();
-                vl.dataset(Fields::F, 7).unwrap();
-                vl.map(Fields::O, Fields::F, 1, 1).unwrap();
-                vl.set(Fields::COLORS | Fields::KA | Fields::KD, 0.8)
-                    .unwrap();
-                vl.end().unwrap();
-                vl.render_preview(20, 15, 20.0 / 15.0).unwrap().to_rgb8()
+                };
+                blob_scene_in(data.clone(), &view, filter, optimise, b, ss)
             };
             let with = render(true);
             prop_assert_eq!(&with, &render(false));
