@@ -1045,13 +1045,13 @@ impl Compiled {
                 .map(|b| (b, data.dims())),
             _ => None,
         };
-        match passing {
-            Some((boxes, n)) => {
+        // (Too many of them for the image: the shell's blocks, which may be fewer.)
+        passing
+            .and_then(|(boxes, n)| {
                 let cell = DVec3::from_array(n.map(|k| 1.0 / (k - 1) as f64));
                 EntryMap::of_boxes(&boxes, cell * 0.125, obj.to_world, &camera)
-            }
-            None => EntryMap::build(grid, obj.to_world, &camera),
-        }
+            })
+            .or_else(|| EntryMap::build(grid, obj.to_world, &camera))
     }
 
     /// Traces one primary ray whose pixel has the [`EntryMap`] bound `bound` (−∞ without a
