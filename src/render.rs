@@ -1018,7 +1018,7 @@ impl Compiled {
 
     /// The [`EntryMap`] of an image: for a scene of one DVR volume with a skip grid (the
     /// only case [`Compiled::trace_ray`] uses it), when the map can be built.
-    fn entry_map(&self, view: &View) -> Option<EntryMap> {
+    fn entry_map(&self, camera: &Pinhole) -> Option<EntryMap> {
         let [obj] = self.objects.as_slice() else {
             return None;
         };
@@ -1028,14 +1028,6 @@ impl Compiled {
         {
             return None;
         }
-        let camera = Pinhole {
-            eye: view.eye,
-            forward: view.forward,
-            right: view.right,
-            up: view.up,
-            width: view.width,
-            height: view.height,
-        };
         let grid = obj.skip.as_deref()?;
         // Where the batched march consults a cell mask, the boxes of the cells that can pass
         // its zero test bound where rays meet opacity more tightly than the shell's blocks.
@@ -1049,9 +1041,9 @@ impl Compiled {
         passing
             .and_then(|(boxes, n)| {
                 let cell = DVec3::from_array(n.map(|k| 1.0 / (k - 1) as f64));
-                EntryMap::of_boxes(&boxes, cell * 0.125, obj.to_world, &camera)
+                EntryMap::of_boxes(&boxes, cell * 0.125, obj.to_world, camera)
             })
-            .or_else(|| EntryMap::build(grid, obj.to_world, &camera))
+            .or_else(|| EntryMap::build(grid, obj.to_world, camera))
     }
 
     /// Traces one primary ray whose pixel has the [`EntryMap`] bound `bound` (−∞ without a
@@ -1535,42 +1527,25 @@ fn ray_point(o: DVec3, d: DVec3, t: f64) -> [f32; 3] {
     (o + t * d).as_vec3().to_array()
 }
 
-/// The primary-ray generator of one image.
-struct View {
-    eye: DVec3,
-    right: DVec3,
-    up: DVec3,
-    forward: DVec3,
-    width: u32,
-    height: u32,
-}
-
-impl View {
-    fn new(settings: &Settings, width: u32, height: u32, aspect: f32) -> View {
-        let cam = &settings.camera;
-        let (r, u, f) = cam.basis();
-        let half = (cam.fov as f64 * 0.5).to_radians().tan();
-        let aspect = aspect as f64;
-        let (hw, hh) = if aspect >= 1.0 {
-            (half * aspect, half)
-        } else {
-            (half, half / aspect)
-        };
-        View {
-            eye: crate::scene::v3(cam.eye),
-            right: r * hw,
-            up: u * hh,
-            forward: f,
-            width,
-            height,
-        }
-    }
-
-    /// The ray through image position (x, y) in pixels from the top-left corner.
-    fn ray(&self, x: f64, y: f64) -> DVec3 {
-        let sx = x / self.width as f64 * 2.0 - 1.0;
-        let sy = 1.0 - y / self.height as f64 * 2.0;
-        (self.forward + sx * self.right + sy * self.up).normalize()
+/// The primary-ray generator of a `width × height` image whose view plane has the given
+/// width / height `aspect`, for the scene's camera.
+fn view(settings: &Settings, width: u32, height: u32, aspect: f32) -> Pinhole {
+    let cam = &settings.camera;
+    let (r, u, f) = cam.basis();
+    let half = (cam.fov as f64 * 0.5).to_radians().tan();
+    let aspect = aspect as f64;
+    let (hw, hh) = if aspect >= 1.0 {
+        (half * aspect, half)
+    } else {
+        (half, half / aspect)
+    };
+    Pinhole {
+        eye: crate::scene::v3(cam.eye),
+        right: r * hw,
+        up: u * hh,
+        forward: f,
+        width,
+        height,
     }
 }
 
@@ -1631,7 +1606,7 @@ fn to_f32(c: DVec3) -> [f32; 3] {
 /// by the mean of an n×n grid of rays.
 pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> Result<Image> {
     let run = || {
-        let view = View::new(&scene.settings, width, height, aspect);
+        let view = view(&scene.settings, width, height, aspect);
         let entry = scene.entry_map(&view);
         let from = |x: u32, y: u32| entry.as_ref().map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
         let first = per_pixel(width, height, |x, y| {

@@ -458,6 +458,16 @@ pub(crate) struct Pinhole {
     pub height: u32,
 }
 
+impl Pinhole {
+    /// The unit direction of the ray through image position (x, y).
+    #[inline]
+    pub(crate) fn ray(&self, x: f64, y: f64) -> DVec3 {
+        let sx = x / self.width as f64 * 2.0 - 1.0;
+        let sy = 1.0 - y / self.height as f64 * 2.0;
+        (self.forward + sx * self.right + sy * self.up).normalize()
+    }
+}
+
 /// Per pixel of an image, a lower bound on the parameter t (distance from the eye along a unit
 /// direction) at which a primary ray through any point of the pixel meets a block of one
 /// object that may hold opacity; +∞ where no such ray meets one. A ray need not walk the
@@ -981,7 +991,6 @@ mod tests {
             case: usize,
         ) {
             let to_object = to_world.inverse();
-            let (w, h) = (camera.width as f64, camera.height as f64);
             for py in 0..camera.height {
                 for px in 0..camera.width {
                     let bound = map.bound(px, py);
@@ -989,8 +998,7 @@ mod tests {
                     offsets.extend((0..random).map(|_| (rng.next(), rng.next())));
                     for (dx, dy) in offsets {
                         let (x, y) = (px as f64 + dx, py as f64 + dy);
-                        let (sx, sy) = (x / w * 2.0 - 1.0, 1.0 - y / h * 2.0);
-                        let dir = (camera.forward + sx * camera.right + sy * camera.up).normalize();
+                        let dir = camera.ray(x, y);
                         let o = to_object.transform_point3(camera.eye);
                         let hit = first(o, to_object.transform_vector3(dir));
                         assert!(
