@@ -1032,17 +1032,14 @@ impl Compiled {
         // Where the batched march consults a cell mask, the boxes of the cells that can pass
         // its zero test bound where rays meet opacity more tightly than the shell's blocks.
         let passing = match (&obj.cells, obj.lean.as_ref().and_then(Lean::value_head)) {
-            (Some(mask), Some((data, _))) => grid
-                .passing_boxes(data, mask, obj.box_min, obj.box_max)
-                .map(|b| (b, data.dims())),
+            (Some(mask), Some((data, _))) => {
+                grid.passing_boxes(data, mask, obj.box_min, obj.box_max)
+            }
             _ => None,
         };
         // (Too many of them for the image: the shell's blocks, which may be fewer.)
         passing
-            .and_then(|(boxes, n)| {
-                let cell = DVec3::from_array(n.map(|k| 1.0 / (k - 1) as f64));
-                EntryMap::of_boxes(&boxes, cell * 0.125, obj.to_world, camera)
-            })
+            .and_then(|boxes| EntryMap::of_boxes(&boxes, obj.to_world, camera))
             .or_else(|| EntryMap::build(grid, obj.to_world, camera))
     }
 

@@ -32,16 +32,21 @@ pub(crate) struct SkipGrid {
     /// [`MAX_LEAP`]) to the nearest such block: every block within `dist − 1` of it is empty.
     dist: Vec<u8>,
     /// The shell: every block that may hold opacity and has an empty block, or the grid's
-    /// outside, among its 26 neighbours (by index). A ray that starts outside the grid and
+    /// outside, among its 26 neighbours, as boxes. A ray that starts outside the grid and
     /// meets a block that may hold opacity meets a shell block first (see [`EntryMap`]).
-    shell: Vec<u32>,
+    shell: Boxes,
     /// The boxes of the dataset's cells that can pass a zero test, by 4³ cells (see
     /// [`SkipGrid::passing_boxes`]), made by the first render that asks.
     passing: std::sync::OnceLock<Option<std::sync::Arc<Boxes>>>,
 }
 
-/// Object-space boxes (lowest and highest corner) an [`EntryMap`] projects.
-pub(crate) type Boxes = Vec<(DVec3, DVec3)>;
+/// Object-space boxes an [`EntryMap`] projects, and the size per axis of the blocks or cells
+/// they are made of (the map grows each box by an eighth of it).
+pub(crate) struct Boxes {
+    /// Each box's lowest and highest corner.
+    corners: Vec<(DVec3, DVec3)>,
+    unit: DVec3,
+}
 
 /// The largest leap, in blocks.
 const MAX_LEAP: u8 = 16;
@@ -90,8 +95,8 @@ fn chessboard(dist: &mut [u8], dims: [usize; 3]) {
 }
 
 /// The occupied blocks (distance 0) of a distance map with a block of distance > 0 or the
-/// outside of the grid among their 26 neighbours, in index order.
-fn shell(dist: &[u8], dims: [usize; 3]) -> Vec<u32> {
+/// outside of the grid among their 26 neighbours, by index, in order.
+fn shell(dist: &[u8], dims: [usize; 3]) -> Vec<usize> {
     let at = |i: usize, j: usize, k: usize| dist[i + dims[0] * (j + dims[1] * k)];
     let mut shell = Vec::new();
     for k in 0..dims[2] {
@@ -109,8 +114,7 @@ fn shell(dist: &[u8], dims: [usize; 3]) -> Vec<u32> {
                         (j - 1..=j + 1).any(|jj| (i - 1..=i + 1).any(|ii| at(ii, jj, kk) != 0))
                     });
                 if open {
-                    // Fits: a grid has at most MAX_BLOCKS = 2²⁴ blocks.
-                    shell.push((i + dims[0] * (j + dims[1] * k)) as u32);
+                    shell.push(i + dims[0] * (j + dims[1] * k));
                 }
             }
         }
@@ -169,7 +173,7 @@ fn passing_boxes(data: &Dataset, mask: &CellMask, box_min: DVec3, box_max: DVec3
         }
     };
     let full = |g: [i64; 3]| matches!(group(g), Some((_, _, true)));
-    let mut boxes = Vec::new();
+    let mut corners = Vec::new();
     for gk in 0..groups[2] as i64 {
         for gj in 0..groups[1] as i64 {
             for gi in 0..groups[0] as i64 {
@@ -195,11 +199,12 @@ fn passing_boxes(data: &Dataset, mask: &CellMask, box_min: DVec3, box_max: DVec3
                         (last[a] + 1) as f64 / cells[a] as f64
                     }
                 }));
-                boxes.push((lo, hi));
+                corners.push((lo, hi));
             }
         }
     }
-    Some(boxes)
+    let unit = DVec3::from_array(cells.map(|c| 1.0 / c as f64));
+    Some(Boxes { corners, unit })
 }
 
 /// The most blocks a grid may have.
@@ -353,17 +358,27 @@ impl SkipGrid {
             return None;
         }
         chessboard(&mut dist, dims);
+        Some(SkipGrid::new(dims, origin, cell, dist))
+    }
+
+    /// The grid of `dims` blocks of size `cell` from `origin`, with distance map `dist`.
+    fn new(dims: [usize; 3], origin: DVec3, cell: DVec3, dist: Vec<u8>) -> SkipGrid {
         let shell = shell(&dist, dims);
-        Some(SkipGrid {
+        let mut grid = SkipGrid {
             dims,
             origin,
             cell,
             inv_cell: cell.recip(),
             last: DVec3::from_array(dims.map(|n| (n - 1) as f64)),
             dist,
-            shell,
+            shell: Boxes {
+                corners: Vec::new(),
+                unit: cell,
+            },
             passing: Default::default(),
-        })
+        };
+        grid.shell.corners = shell.into_iter().map(|i| grid.block_box(i)).collect();
+        grid
     }
 
     /// The block with linear index `index` as an object-space box.
@@ -377,15 +392,6 @@ impl SkipGrid {
             self.origin + c * self.cell,
             self.origin + (c + 1.0) * self.cell,
         )
-    }
-
-    /// The shell's blocks (see [`SkipGrid`]) as object-space boxes: a ray from an eye
-    /// outside every block that may hold opacity meets such a block first in one of them.
-    pub(crate) fn shell_boxes(&self) -> Boxes {
-        self.shell
-            .iter()
-            .map(|&i| self.block_box(i as usize))
-            .collect()
     }
 
     /// For the batched march of `data` with the cell mask `mask` (its cells whose samples can
@@ -521,39 +527,34 @@ impl EntryMap {
     /// around or behind the eye), a singular camera basis, or more marking than
     /// [`ENTRY_BUDGET`] allows.
     pub(crate) fn build(grid: &SkipGrid, to_world: DMat4, camera: &Pinhole) -> Option<EntryMap> {
-        Self::of_boxes(&grid.shell_boxes(), grid.cell * 0.125, to_world, camera)
+        Self::of_boxes(&grid.shell, to_world, camera)
     }
 
-    /// The map of object-space `boxes`, each grown by `margin` on every side, that hold the
+    /// The map of `boxes`, each grown by an eighth of their unit on every side, that hold the
     /// first sample with opacity above 0 of any ray (the shell's blocks, or
     /// [`SkipGrid::passing_boxes`]); `None` as for [`EntryMap::build`], and for more boxes
     /// than [`ENTRY_BOXES_PER_PIXEL`] allows.
-    pub(crate) fn of_boxes(
-        boxes: &[(DVec3, DVec3)],
-        margin: DVec3,
-        to_world: DMat4,
-        camera: &Pinhole,
-    ) -> Option<EntryMap> {
+    pub(crate) fn of_boxes(boxes: &Boxes, to_world: DMat4, camera: &Pinhole) -> Option<EntryMap> {
         let pixels = (camera.width as usize).saturating_mul(camera.height as usize);
-        if boxes.len() > pixels.saturating_mul(ENTRY_BOXES_PER_PIXEL) {
+        if boxes.corners.len() > pixels.saturating_mul(ENTRY_BOXES_PER_PIXEL) {
             return None;
         }
         let budget = pixels.saturating_mul(ENTRY_BUDGET);
-        Self::build_within(boxes, margin, to_world, camera, budget)
+        Self::build_within(boxes, to_world, camera, budget)
     }
 
     /// [`EntryMap::of_boxes`], giving up past `budget` marked rectangle pixels.
     fn build_within(
-        boxes: &[(DVec3, DVec3)],
-        margin: DVec3,
+        boxes: &Boxes,
         to_world: DMat4,
         camera: &Pinhole,
         budget: usize,
     ) -> Option<EntryMap> {
         let (w, h) = (camera.width as usize, camera.height as usize);
-        if w == 0 || h == 0 || boxes.is_empty() {
+        if w == 0 || h == 0 || boxes.corners.is_empty() {
             return None;
         }
+        let margin = boxes.unit * 0.125;
         // Coefficients (depth, right, up) of an eye-relative vector: the rays' own basis.
         let basis = DMat3::from_cols(camera.forward, camera.right, camera.up);
         let det = basis.determinant().abs();
@@ -610,6 +611,7 @@ impl EntryMap {
             }))
         };
         let marks: Vec<Mark> = boxes
+            .corners
             .par_iter()
             .filter_map(|b| match project(b) {
                 None => Some(None), // give up
@@ -876,16 +878,7 @@ mod tests {
             .collect();
         chessboard(&mut dist, dims);
         let cell = DVec3::ONE / DVec3::from_array(dims.map(|n| n as f64));
-        SkipGrid {
-            dims,
-            origin: DVec3::ZERO,
-            cell,
-            inv_cell: cell.recip(),
-            last: DVec3::from_array(dims.map(|n| (n - 1) as f64)),
-            shell: shell(&dist, dims),
-            dist,
-            passing: Default::default(),
-        }
+        SkipGrid::new(dims, DVec3::ZERO, cell, dist)
     }
 
     fn random_grid(rng: &mut Rng, fill: f64) -> SkipGrid {
@@ -923,12 +916,13 @@ mod tests {
                                 (-1..=1).any(|b| (-1..=1).any(|a| !occupied(i + a, j + b, k + c)))
                             });
                             if occupied(i, j, k) && open {
-                                want.push((i + nx * (j + ny * k)) as u32);
+                                want.push((i + nx * (j + ny * k)) as usize);
                             }
                         }
                     }
                 }
-                assert_eq!(g.shell, want, "fill {fill}");
+                let want: Vec<_> = want.into_iter().map(|i| g.block_box(i)).collect();
+                assert_eq!(g.shell.corners, want, "fill {fill}");
             }
         }
     }
@@ -1169,7 +1163,6 @@ mod tests {
             let half = if case % 2 == 0 { 0.5 } else { 0.65 };
             let (box_min, box_max) = (DVec3::splat(0.5 - half), DVec3::splat(0.5 + half));
             let boxes = passing_boxes(&data, &mask, box_min, box_max).expect("3D");
-            let margin = DVec3::from_array(dims.map(|n| 0.125 / (n - 1) as f64));
             let to_world = random_placement(&mut rng);
             let from = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
             let camera = if case % 6 != 5 {
@@ -1181,7 +1174,7 @@ mod tests {
                     ..camera_at(to_world, from, 90.0, 24)
                 }
             };
-            let Some(map) = EntryMap::of_boxes(&boxes, margin, to_world, &camera) else {
+            let Some(map) = EntryMap::of_boxes(&boxes, to_world, &camera) else {
                 assert!(case % 6 == 5, "case {case}: an outside camera gets a map");
                 continue;
             };
@@ -1194,7 +1187,7 @@ mod tests {
         let full = Dataset::new([17; 3], crate::dataset::Voxels::U8(raw), 0.0, 255.0).unwrap();
         let boxes =
             passing_boxes(&full, &full.cells_above(0.5), DVec3::ZERO, DVec3::ONE).expect("3D");
-        assert_eq!(boxes.len(), 4 * 4 * 4 - 2 * 2 * 2);
+        assert_eq!(boxes.corners.len(), 4 * 4 * 4 - 2 * 2 * 2);
     }
 
     /// No map where the walk's start cannot be proved: the eye in the grid, a shell corner
@@ -1229,10 +1222,8 @@ mod tests {
         };
         assert!(EntryMap::build(&g, to_world, &away).is_none());
         // The budget: what the default marks, and one pixel less.
-        let boxes = g.shell_boxes();
-        let margin = g.cell * 0.125;
         let marked =
-            |budget| EntryMap::build_within(&boxes, margin, to_world, &outside, budget).is_some();
+            |budget| EntryMap::build_within(&g.shell, to_world, &outside, budget).is_some();
         let need = (0..=16 * 13 * 64)
             .find(|&b| marked(b))
             .expect("within the default budget");
@@ -1243,10 +1234,13 @@ mod tests {
             height: 2,
             ..camera_at(to_world, DVec3::new(1.0, 0.3, 0.2), 100.0, 16)
         };
-        assert!(boxes.len() > 4);
-        assert!(EntryMap::of_boxes(&boxes, margin, to_world, &tiny).is_none());
-        let few = &boxes[..4];
-        assert!(EntryMap::of_boxes(few, margin, to_world, &tiny).is_some());
+        assert!(g.shell.corners.len() > 4);
+        assert!(EntryMap::of_boxes(&g.shell, to_world, &tiny).is_none());
+        let few = Boxes {
+            corners: g.shell.corners[..4].to_vec(),
+            unit: g.shell.unit,
+        };
+        assert!(EntryMap::of_boxes(&few, to_world, &tiny).is_some());
         // Nothing occupied: nothing to project.
         let empty = grid_of(g.dims, &vec![false; g.dist.len()]);
         assert!(EntryMap::build(&empty, to_world, &outside).is_none());
