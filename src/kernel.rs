@@ -77,12 +77,96 @@ struct Direct {
 /// (fields 1 to 3, each once) and which leaves ka, kd, ks and the specular exponent (fields 4
 /// to 7) at the constants the registers start from: the colour is then three columns of the
 /// colour table at the dataset's value, and the rest is known before any sample.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(crate) struct DirectShading {
     /// The colour table's columns of r, g and b.
     rgb: [usize; 3],
     /// Fields 4 to 7 (ka, kd, ks, the specular exponent as a field value), as f64.
     pub(crate) coefficients: [f64; 4],
+    /// The two tables' segments per input bucket (see [`SegmentPairs`]).
+    pairs: SegmentPairs,
+}
+
+/// The opacity and colour tables of [`DirectShading`] on one scale of input buckets
+/// ([`Mapping::bucket_of`]): where the inputs of a bucket lie inside one ramp segment of each
+/// table (most buckets), the two segments' numbers side by side, so that a sample locates its
+/// input once for both tables and evaluates them without their case analysis. The same
+/// numbers and the same arithmetic as [`Mapping::eval`], so the same bits.
+#[derive(Clone, Debug)]
+struct SegmentPairs {
+    /// Per bucket, its pair in `pairs`, or [`SegmentPairs::NONE`].
+    index: Vec<u16>,
+    pairs: Vec<SegmentPair>,
+}
+
+/// One bucket's segments: the opacity segment's start, base and slope of the opacity column;
+/// the colour segment's start, then base and slope of the r, g and b columns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SegmentPair {
+    o: [f64; 3],
+    c: [f64; 7],
+}
+
+impl SegmentPairs {
+    /// A bucket without a pair: its inputs take the tables' general evaluation.
+    const NONE: u16 = u16::MAX;
+
+    /// The pairs of the opacity table's column `o_col` and the colour table's columns `rgb`.
+    fn new(opacity: &Mapping, o_col: usize, colour: &Mapping, rgb: [usize; 3]) -> SegmentPairs {
+        let mut pairs: Vec<SegmentPair> = Vec::new();
+        let index = (0..Mapping::BUCKET_COUNT)
+            .map(|b| {
+                let (Some(o), Some(c)) = (opacity.bucket_segment(b), colour.bucket_segment(b))
+                else {
+                    return Self::NONE;
+                };
+                let pair = SegmentPair {
+                    o: [o[0], o[1 + 2 * o_col], o[2 + 2 * o_col]],
+                    c: [
+                        c[0],
+                        c[1 + 2 * rgb[0]],
+                        c[2 + 2 * rgb[0]],
+                        c[1 + 2 * rgb[1]],
+                        c[2 + 2 * rgb[1]],
+                        c[1 + 2 * rgb[2]],
+                        c[2 + 2 * rgb[2]],
+                    ],
+                };
+                // Neighbouring buckets usually share their pair (at most one per bucket).
+                if pairs.last() != Some(&pair) {
+                    pairs.push(pair);
+                }
+                (pairs.len() - 1) as u16
+            })
+            .collect();
+        SegmentPairs { index, pairs }
+    }
+
+    /// The opacity and colour at input `x` (a field value, in [0, 1]) where its bucket has a
+    /// pair: [`map_value`] of the opacity table, then, if it is above 0, [`map_each`] of the
+    /// colour table, bit for bit. (Bucket 0, which holds the input 0, where a ramp is 0
+    /// whatever its first segment says, never has a pair: no breakpoint lies below its
+    /// inputs, so they are not between two rows.)
+    #[inline]
+    fn eval(&self, x: f32) -> Option<(f32, Option<[f32; 3]>)> {
+        let i = *self.index.get(Mapping::bucket_of(x))?;
+        let pair = self.pairs.get(i as usize)?; // NONE is past the end
+        let value = |start: f64, base: f64, slope: f64| {
+            clamp_field((base + (x as f64 - start) * slope) as f32)
+        };
+        let [a, b, s] = pair.o;
+        let o = value(a, b, s);
+        if o <= 0.0 {
+            return Some((o, None));
+        }
+        let c = &pair.c;
+        let rgb = [
+            value(c[0], c[1], c[2]),
+            value(c[0], c[3], c[4]),
+            value(c[0], c[5], c[6]),
+        ];
+        Some((o, Some(rgb)))
+    }
 }
 
 /// (field, output column) pairs of a transfer function, in order.
@@ -107,9 +191,11 @@ impl DirectShading {
         if rgb.contains(&usize::MAX) || mask & 0b1111_0000 != 0 {
             return None;
         }
+        let (colour, _) = direct.colour.as_ref()?;
         Some(DirectShading {
             rgb,
             coefficients: [start[4], start[5], start[6], start[7]].map(|v| v as f64),
+            pairs: SegmentPairs::new(&direct.opacity.0, direct.opacity.1, colour, rgb),
         })
     }
 }
@@ -477,6 +563,9 @@ impl Lean {
         };
         // The dataset writes the clamped value into the source field, which both tables read.
         let x = clamp_field(v);
+        if let Some(oc) = shading.pairs.eval(x) {
+            return oc;
+        }
         let o = map_value(&d.opacity.0, x, d.opacity.1);
         if o <= 0.0 {
             return (o, None);
@@ -754,6 +843,107 @@ mod tests {
             let o_prefix = crate::program::prefix_for(prog, Fields::O);
             if let Some(l) = Lean::new(prog, o_prefix) {
                 assert!(l.direct_shading().is_none(), "program {n}");
+            }
+        }
+    }
+
+    /// The segment pairs give [`Mapping::eval`]'s opacity and colour, clamped, bit for bit, at
+    /// 0, at every bucket edge and breakpoint and one ulp around them, for tables with
+    /// breakpoints inside buckets, first and last stretches, end rows at 0 and 1 (where the
+    /// first segment's base at 0 is not the ramp's value there), many rows, and colour
+    /// columns in any order; and they serve most inputs of the peer benchmark's tables.
+    #[test]
+    fn segment_pairs_are_the_tables() {
+        let table = |points: &[(f32, &[f32])]| {
+            let flat: Vec<f32> = points
+                .iter()
+                .flat_map(|&(a, b)| std::iter::once(a).chain(b.iter().copied()))
+                .collect();
+            let outputs = points[0].1.len() as i32;
+            Mapping::new(MappingType::Ramp, points.len() as i32, outputs, &flat).unwrap()
+        };
+        let s = 1.0 / 255.0;
+        let mni_o = table(&[
+            (40.0 * s, &[0.0]),
+            (80.0 * s, &[0.10]),
+            (120.0 * s, &[0.35]),
+            (180.0 * s, &[0.60]),
+            (255.0 * s, &[0.85]),
+        ]);
+        let mni_c = table(&[
+            (60.0 * s, &[0.55, 0.35, 0.30]),
+            (110.0 * s, &[0.88, 0.66, 0.56]),
+            (180.0 * s, &[0.96, 0.92, 0.86]),
+            (255.0 * s, &[1.0, 1.0, 1.0]),
+        ]);
+        // Two opacity columns; the ends at 0 and 1; many rows (buckets with breakpoints).
+        let ends = table(&[(0.0, &[0.0, 0.3]), (0.5, &[0.9, 0.1]), (1.0, &[0.2, 1.0])]);
+        let from_zero = table(&[(0.0, &[0.1, 0.2, 0.3]), (1.0, &[0.9, 0.8, 0.7])]);
+        let mut rng = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut rows: Vec<(f32, Vec<f32>)> = (0..900)
+            .map(|i| {
+                (
+                    i as f32 / 900.0 + next() / 1800.0,
+                    vec![next(), next(), next()],
+                )
+            })
+            .collect();
+        rows[0].0 = 0.001;
+        let many = {
+            let points: Vec<(f32, &[f32])> = rows.iter().map(|(a, b)| (*a, b.as_slice())).collect();
+            table(&points)
+        };
+        let cases = [
+            (&mni_o, 0, &mni_c, [0, 1, 2], true),
+            (&mni_o, 0, &mni_c, [2, 0, 1], true),
+            (&ends, 1, &mni_c, [1, 1, 0], true),
+            (&ends, 1, &from_zero, [0, 1, 2], true),
+            (&ends, 0, &many, [0, 1, 2], false),
+            (&mni_o, 0, &many, [2, 1, 0], false),
+        ];
+        for (n, (o, o_col, c, rgb, mostly)) in cases.into_iter().enumerate() {
+            let pairs = SegmentPairs::new(o, o_col, c, rgb);
+            assert_eq!(pairs.index[0], SegmentPairs::NONE, "case {n}");
+            let mut inputs: Vec<f32> = (0..Mapping::BUCKET_COUNT)
+                .map(|b| b as f32 / (Mapping::BUCKET_COUNT - 1) as f32)
+                .chain(o.breakpoints().iter().copied())
+                .chain(c.breakpoints().iter().copied())
+                .collect();
+            inputs.extend(
+                inputs
+                    .clone()
+                    .iter()
+                    .flat_map(|x| [x.next_up(), x.next_down()]),
+            );
+            inputs.extend((0..2000).map(|_| next()));
+            inputs.retain(|x| *x >= 0.0 && *x <= 1.0);
+            let mut served = 0;
+            for &x in &inputs {
+                let Some((po, prgb)) = pairs.eval(x) else {
+                    continue;
+                };
+                served += 1;
+                let want_o = clamp_field(o.eval(x, o_col));
+                assert_eq!(po.to_bits(), want_o.to_bits(), "case {n} at {x}");
+                assert_eq!(prgb.is_some(), want_o > 0.0, "case {n} at {x}");
+                if let Some(prgb) = prgb {
+                    let want = rgb.map(|j| clamp_field(c.eval(x, j)).to_bits());
+                    assert_eq!(prgb.map(f32::to_bits), want, "case {n} at {x}");
+                }
+            }
+            // Pairs serve the inputs from the colour table's first breakpoint (60/255 for the
+            // MNI tables) to 1 except in buckets a breakpoint splits: most of 900 rows' buckets.
+            let share = served as f64 / inputs.len() as f64;
+            if mostly {
+                assert!(share > 0.6, "case {n}: {share}");
+            } else {
+                assert!(served > 0 && share < 0.6, "case {n}: {share}");
             }
         }
     }

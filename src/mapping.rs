@@ -157,6 +157,12 @@ impl Mapping {
         self.a.len()
     }
 
+    /// The input points a_1 < … < a_n.
+    #[cfg(test)]
+    pub(crate) fn breakpoints(&self) -> &[f32] {
+        &self.a
+    }
+
     fn b(&self, i: usize, j: usize) -> f32 {
         self.b[i * self.outputs + j]
     }
@@ -181,7 +187,7 @@ impl Mapping {
     pub fn locate(&self, v: f32) -> (f32, usize) {
         let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
         // (v ≥ 0 here, −0 included: the truncation is the floor.)
-        let bucket = self.buckets[(v * BUCKETS as f32) as usize];
+        let bucket = self.buckets[Self::bucket_of(v)];
         if bucket != SCAN {
             return (v, bucket as usize);
         }
@@ -246,6 +252,29 @@ impl Mapping {
             Some(self.segment(k - 1))
         } else {
             None
+        }
+    }
+
+    /// The bucket of [`Mapping::locate`]'s table holding input `v` (in [0, 1], not NaN): the
+    /// same for every mapping, so one bucket index serves several tables.
+    #[inline]
+    pub(crate) fn bucket_of(v: f32) -> usize {
+        (v * BUCKETS as f32) as usize
+    }
+
+    /// The number of buckets [`Mapping::bucket_of`] can return.
+    pub(crate) const BUCKET_COUNT: usize = BUCKETS + 1;
+
+    /// For bucket `b`, the ramp segment that every input v > 0 of the bucket is evaluated on
+    /// (`eval(v, j)` is then `segment_value(seg, v − seg[0], j)`), where the bucket's inputs
+    /// share one segment strictly between the first and last rows; `None` elsewhere (a
+    /// breakpoint inside the bucket, the first or last stretch of a ramp, a lookup table).
+    pub(crate) fn bucket_segment(&self, b: usize) -> Option<&[f64]> {
+        match self.buckets.get(b) {
+            // Every input of the bucket locates to k, and for v > 0 `ramp_segment` depends
+            // on k alone.
+            Some(&k) if k != SCAN => self.ramp_segment(f32::MIN_POSITIVE, k as usize),
+            _ => None,
         }
     }
 
