@@ -964,9 +964,10 @@ impl Dataset {
         // the neighbourhood are never read.
         let lo = self.neighbourhood_lo(cell);
         if cache.lo != lo {
+            let (sy, sz) = (self.strides[1], self.strides[2]);
             let row = |j: usize, k: usize| -> Option<[f32; 4]> {
-                let o = lo + self.node_index([0, j, k]);
-                self.values.get(o..)?.first_chunk().copied()
+                let o = lo + j * sy + k * sz;
+                self.values.get(o..o + 4)?.try_into().ok()
             };
             let (r10, r20) = (row(1, 0)?, row(2, 0)?);
             let (r01, r11, r21, r31) = (row(0, 1)?, row(1, 1)?, row(2, 1)?, row(3, 1)?);
