@@ -983,16 +983,18 @@ impl Dataset {
                 (r12, r02, r22, r11, r13),
                 (r22, r12, r32, r21, r23),
             ];
-            // Row by row in lanes: x nodes 2, 3 minus nodes 0, 1 are the x differences of the
-            // row's two corners; the y and z differences are in lanes 1 and 2 of the row
-            // differences.
+            // Row by row in lanes: in lanes 1 and 2 (the row's two corners, x nodes 1 and 2),
+            // x nodes 2, 3 minus nodes 0, 1 are the x differences, and the row differences
+            // the y and z differences; a transposition then gives each corner its three
+            // differences in one register (lane 3 stays 0).
             use wide::f32x4;
             for (c, (r, ym, yp, zm, zp)) in corners.into_iter().enumerate() {
-                let dx = (f32x4::new([r[2], r[3], 0.0, 0.0]) - f32x4::new(r)).to_array();
-                let dy = (f32x4::new(yp) - f32x4::new(ym)).to_array();
-                let dz = (f32x4::new(zp) - f32x4::new(zm)).to_array();
-                cache.diffs[2 * c] = [dx[0], dy[1], dz[1], 0.0];
-                cache.diffs[2 * c + 1] = [dx[1], dy[2], dz[2], 0.0];
+                let dx = f32x4::new([0.0, r[2], r[3], 0.0]) - f32x4::new([0.0, r[0], r[1], 0.0]);
+                let dy = f32x4::new(yp) - f32x4::new(ym);
+                let dz = f32x4::new(zp) - f32x4::new(zm);
+                let [_, first, second, _] = f32x4::transpose([dx, dy, dz, f32x4::ZERO]);
+                cache.diffs[2 * c] = first.to_array();
+                cache.diffs[2 * c + 1] = second.to_array();
             }
             cache.lo = lo;
         }
