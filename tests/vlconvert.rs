@@ -1,5 +1,6 @@
 //! `vlconvert` end to end: raw volumes (8 and 16 bits, both byte orders), grey and colour
-//! images, `info`, and the exit codes for bad input and bad command lines.
+//! images, `info`, and the exit codes for bad input, bad command lines and an output closed or
+//! full.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -136,6 +137,53 @@ fn info_describes_a_file_and_refuses_a_malformed_one() {
     let o = run(&["info", s(&bad)]);
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("magic"));
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Standard output closed by its reader (`vlconvert info f | head -1`) ends the report
+/// quietly with success, and a conversion still writes its file; any other failure to write
+/// the report (a full device) is an error with exit code 1.
+#[test]
+fn a_closed_output_is_not_a_failure_but_a_full_one_is() {
+    let d = tmp("pipe");
+    let f = d.join("v.vlb");
+    Dataset::new([2, 2, 1], Voxels::U8(vec![0, 1, 2, 3]), 0.0, 255.0)
+        .unwrap()
+        .save(&f)
+        .unwrap();
+    let raw = d.join("v.raw");
+    std::fs::write(&raw, [9u8, 8, 7, 6]).unwrap();
+    let out = d.join("out.vlb");
+    for args in [
+        vec!["info", s(&f)],
+        vec!["raw", s(&raw), s(&out), "--dims", "2", "2", "1"],
+    ] {
+        // A pipe whose reading end is closed before the program writes a byte.
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let o = Command::new(env!("CARGO_BIN_EXE_vlconvert"))
+            .args(&args)
+            .stdout(writer)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{args:?}: {:?} {err}", o.status);
+        assert!(err.is_empty(), "{args:?}: {err}");
+    }
+    assert_eq!(
+        Dataset::load(&out).unwrap().raw(),
+        &Voxels::U8(vec![9, 8, 7, 6])
+    );
+    if let Ok(full) = std::fs::OpenOptions::new().write(true).open("/dev/full") {
+        let o = Command::new(env!("CARGO_BIN_EXE_vlconvert"))
+            .args(["info", s(&f)])
+            .stdout(full)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("writing to standard output"), "{err}");
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }
 

@@ -9,7 +9,8 @@
 //! ```
 //!
 //! Exit codes: 0 success, 1 the conversion failed (unreadable or malformed input, unwritable
-//! output), 2 bad command line.
+//! output, a report that cannot be written), 2 bad command line. A report whose reader has
+//! closed the pipe (`vlconvert info f.vlb | head -1`) ends quietly: not a failure.
 
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
@@ -90,15 +91,27 @@ fn norm_for(norm: Norm, bytes: u32) -> (f32, f32) {
     (norm.a.unwrap_or(0.0), norm.b.unwrap_or(max))
 }
 
+/// Writes a line to standard output. A reader that has gone away (a closed pipe, as in
+/// `vlconvert info f.vlb | head -1`) is not an error: what it did not read, it did not want.
+/// Any other failure to write is (a full disk behind a redirection).
+fn say(line: std::fmt::Arguments) -> Res<()> {
+    use std::io::Write;
+    match writeln!(std::io::stdout().lock(), "{line}") {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(format!("writing to standard output: {e}"))
+        }
+        _ => Ok(()),
+    }
+}
+
 fn save(d: &Dataset, path: &Path) -> Res<()> {
     d.save(path).map_err(|e| e.to_string())?;
     let [nx, ny, nz] = d.dims();
-    println!(
+    say(format_args!(
         "wrote {} ({nx}x{ny}x{nz}, {} byte(s) per voxel)",
         path.display(),
         d.raw().width()
-    );
-    Ok(())
+    ))
 }
 
 fn build(dims: [usize; 3], raw: Voxels, (a, b): (f32, f32)) -> Res<Dataset> {
@@ -286,7 +299,7 @@ fn nifti(input: &Path, output: &Path, norm: Norm) -> Res<()> {
         .iter()
         .map(|&v| (((v - lo) / span) * 65535.0).round() as u16)
         .collect();
-    println!("quantised values {lo} … {hi} to 0 … 65535");
+    say(format_args!("quantised values {lo} … {hi} to 0 … 65535"))?;
     save(&build(dims, Voxels::U16(q), norm_for(norm, 2))?, output)
 }
 
@@ -304,12 +317,14 @@ fn info(path: &Path) -> Res<()> {
             }
         }
     }
-    println!("file:        {}", path.display());
-    println!("dimensions:  {nx} x {ny} x {nz} ({} voxels)", nx * ny * nz);
-    println!("voxel width: {} byte(s)", d.raw().width());
-    println!("a, b:        {a} {b}");
-    println!("raw values:  {lo} … {hi}");
-    Ok(())
+    say(format_args!("file:        {}", path.display()))?;
+    say(format_args!(
+        "dimensions:  {nx} x {ny} x {nz} ({} voxels)",
+        nx * ny * nz
+    ))?;
+    say(format_args!("voxel width: {} byte(s)", d.raw().width()))?;
+    say(format_args!("a, b:        {a} {b}"))?;
+    say(format_args!("raw values:  {lo} … {hi}"))
 }
 
 fn main() -> ExitCode {
