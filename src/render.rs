@@ -1012,48 +1012,41 @@ impl Compiled {
                             });
                         }
                     } else if o > 0.0 || bends {
-                        let mut col = self.illuminate(obj, w, dir, &mut s, field);
                         let mut bend = None;
                         let secondary = (self.plan.reflections && obj.receive_reflections || bends)
                             && ray.depth < obj.recursion;
-                        if secondary {
-                            let (g, zero) = obj.field_gradient(
-                                w,
-                                s.position(),
-                                field,
-                                &mut CellGradients::default(),
-                            );
-                            if let Some(n) = (-g).try_normalize().filter(|_| !zero) {
-                                let eps = obj.step * 1e-3;
-                                if self.plan.reflections && obj.receive_reflections {
-                                    let ks = s.value(6) as f64;
-                                    if ks > 0.0 {
-                                        let r = reflect(dir, if n.dot(dir) > 0.0 { -n } else { n });
-                                        let mirror = Ray {
-                                            depth: ray.depth + 1,
-                                            mirror: true,
-                                            background: obj.reflect_background,
-                                        };
-                                        col += ks
-                                            * self.trace_ray(
-                                                w + eps * r,
-                                                r,
-                                                mirror,
-                                                f64::NEG_INFINITY,
-                                            );
-                                    }
+                        // Secondary rays leave along the normal the shading uses (the
+                        // gradient's, then the object's normal functions): computed once.
+                        let normal = secondary.then(|| obj.normal(w, -dir, &mut s, field));
+                        let f = s.values();
+                        let mut col = self.illuminate_with(obj, w, dir, &f, || {
+                            normal.unwrap_or_else(|| obj.normal(w, -dir, &mut s, field))
+                        });
+                        if let Some(Some(n)) = normal {
+                            let eps = obj.step * 1e-3;
+                            if self.plan.reflections && obj.receive_reflections {
+                                let ks = s.value(6) as f64;
+                                if ks > 0.0 {
+                                    let r = reflect(dir, if n.dot(dir) > 0.0 { -n } else { n });
+                                    let mirror = Ray {
+                                        depth: ray.depth + 1,
+                                        mirror: true,
+                                        background: obj.reflect_background,
+                                    };
+                                    col += ks
+                                        * self.trace_ray(w + eps * r, r, mirror, f64::NEG_INFINITY);
                                 }
-                                if bends {
-                                    // Entering where the field rises along the ray, leaving
-                                    // where it falls; the object's index is its RF field.
-                                    let eta = 1.0
-                                        + s.value(8) as f64
-                                            * (crate::types::MAX_REFRACTION as f64 - 1.0);
-                                    let entering = va < 0.0;
-                                    let (n1, n2) = if entering { (1.0, eta) } else { (eta, 1.0) };
-                                    let t = refract(dir, n, n1, n2);
-                                    bend = Some((w + eps * t, t));
-                                }
+                            }
+                            if bends {
+                                // Entering where the field rises along the ray, leaving
+                                // where it falls; the object's index is its RF field.
+                                let eta = 1.0
+                                    + s.value(8) as f64
+                                        * (crate::types::MAX_REFRACTION as f64 - 1.0);
+                                let entering = va < 0.0;
+                                let (n1, n2) = if entering { (1.0, eta) } else { (eta, 1.0) };
+                                let t = refract(dir, n, n1, n2);
+                                bend = Some((w + eps * t, t));
                             }
                         }
                         hits.push(Layer {

@@ -1,6 +1,7 @@
 //! Reflection and refraction at surfaces against closed forms: Snell's law and total internal
 //! reflection, the lateral offset of a parallel-sided slab, and a mirror's angle in = angle out
-//! checked by where a reflected marker lands.
+//! checked by where a reflected marker lands, with the mirror's normal as it is and as its
+//! normal functions tilt it.
 
 use glam::DVec3;
 use vlib::render::{reflect, refract};
@@ -231,6 +232,106 @@ fn a_mirror_reflects_a_marker_where_angle_in_equals_angle_out() {
     assert!(
         (gx - ex).abs() < 1.0 && (gy - ey).abs() < 1.0,
         "marker at ({gx:.2}, {gy:.2}), expected ({ex:.2}, {ey:.2})"
+    );
+}
+
+/// Mirror rays leave along the normal the shading uses, the object's normal functions
+/// included: a flat mirror whose normal function tilts every normal by a few degrees shows the
+/// marker where rays reflected about the tilted normal meet it (an independent ray-sphere
+/// computation per pixel), not where the flat mirror's image is.
+#[test]
+fn mirror_rays_follow_the_normal_functions() {
+    let cam = Camera {
+        eye: [-300.0, 0.0, -300.0],
+        at: [0.0; 3],
+        up: [0.0, 1.0, 0.0],
+        fov: 40.0,
+    };
+    let marker = DVec3::new(120.0, 30.0, -90.0);
+    let radius = 10.0; // the sphere field's 0.5 level, a quarter of the object's 40
+    let tilt = 6f64.to_radians();
+    let n_tilted = DVec3::new(tilt.sin(), 0.0, -tilt.cos());
+    let (w, h) = (160u32, 120u32);
+    let mut vl = Library::new();
+    vl.scene().unwrap();
+    vl.camera(&cam).unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.render_type(RenderType::Dsr).unwrap();
+    vl.surface(Fields::F, 0.5).unwrap();
+    vl.step_size(0.5, 1.0).unwrap();
+    vl.toggle(Feature::ReceiveReflections, true).unwrap();
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, 0.0).unwrap();
+    vl.scale(1000.0, 1000.0, 4.0).unwrap();
+    vl.set(Fields::F | Fields::O | Fields::KS, 1.0).unwrap();
+    let n = n_tilted.as_vec3().to_array();
+    vl.normal(move |nv, _s| *nv = n).unwrap();
+    vl.end().unwrap();
+    vl.toggle(Feature::ReceiveReflections, false).unwrap();
+    vl.toggle(Feature::CastReflections, true).unwrap();
+    vl.toggle(Feature::Visible, false).unwrap();
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, -0.5).unwrap();
+    vl.scale(40.0, 40.0, 40.0).unwrap();
+    vl.translate(marker.x as f32, marker.y as f32, marker.z as f32)
+        .unwrap();
+    vl.function(Fields::F, |s| {
+        let v = vlib::vlaux::sphere(s.position());
+        let _ = s.set(Fields::F, v);
+    })
+    .unwrap();
+    vl.set(Fields::O | Fields::COLORS | Fields::KA, 1.0)
+        .unwrap();
+    vl.end().unwrap();
+    let img = vl.render_preview(w, h, w as f32 / h as f32).unwrap();
+    // The camera's rays (the model `project` inverts) reflected at the plane z = 0.
+    let eye = DVec3::from_array(cam.eye.map(|v| v as f64));
+    let f = (DVec3::ZERO - eye).normalize();
+    let r = DVec3::Y.cross(f).normalize();
+    let u = f.cross(r);
+    let half = (cam.fov as f64 / 2.0).to_radians().tan();
+    let meets_marker = |x: f64, y: f64, n: DVec3| {
+        let sx = (2.0 * x / w as f64 - 1.0) * half * w as f64 / h as f64;
+        let sy = (1.0 - 2.0 * y / h as f64) * half;
+        let d = (f + sx * r + sy * u).normalize();
+        let p = eye + (-eye.z / d.z) * d;
+        let m = d - 2.0 * d.dot(n) * n;
+        let oc = p - marker;
+        let b = oc.dot(m);
+        let disc = b * b - (oc.length_squared() - radius * radius);
+        disc > 0.0 && -b - disc.sqrt() > 0.0
+    };
+    let centroid = |hit: &dyn Fn(u32, u32) -> bool| {
+        let (mut sx, mut sy, mut n) = (0.0, 0.0, 0.0);
+        for y in 0..h {
+            for x in 0..w {
+                if hit(x, y) {
+                    sx += x as f64 + 0.5;
+                    sy += y as f64 + 0.5;
+                    n += 1.0;
+                }
+            }
+        }
+        (sx / n, sy / n, n)
+    };
+    let (gx, gy, got) = centroid(&|x, y| img.pixel(x, y)[0] > 0.5);
+    let (ex, ey, want) = centroid(&|x, y| meets_marker(x as f64 + 0.5, y as f64 + 0.5, n_tilted));
+    let (fx, fy, _) = centroid(&|x, y| meets_marker(x as f64 + 0.5, y as f64 + 0.5, -DVec3::Z));
+    assert!(
+        want > 10.0,
+        "the tilted reflection is in view ({want} pixels)"
+    );
+    assert!(
+        (ex - fx).hypot(ey - fy) > 5.0,
+        "the tilt must move the reflection: ({ex:.1}, {ey:.1}) vs flat ({fx:.1}, {fy:.1})"
+    );
+    assert!(
+        (got - want).abs() <= 0.25 * want,
+        "{got} marker pixels, {want} expected"
+    );
+    assert!(
+        (gx - ex).abs() < 1.0 && (gy - ey).abs() < 1.0,
+        "marker at ({gx:.2}, {gy:.2}), expected ({ex:.2}, {ey:.2}); flat mirror ({fx:.2}, {fy:.2})"
     );
 }
 
