@@ -172,38 +172,45 @@ fn project(cam: &Camera, p: DVec3, w: f64, h: f64) -> (f64, f64) {
     )
 }
 
-#[test]
-fn a_mirror_reflects_a_marker_where_angle_in_equals_angle_out() {
-    let cam = Camera {
-        eye: [-300.0, 0.0, -300.0],
-        at: [0.0; 3],
-        up: [0.0, 1.0, 0.0],
-        fov: 40.0,
-    };
-    let marker = DVec3::new(120.0, 30.0, -90.0);
-    let (w, h) = (160u32, 120u32);
+/// The mirror scenes' camera, marker centre and image size.
+const MIRROR_CAMERA: Camera = Camera {
+    eye: [-300.0, 0.0, -300.0],
+    at: [0.0; 3],
+    up: [0.0, 1.0, 0.0],
+    fov: 40.0,
+};
+const MARKER: DVec3 = DVec3::new(120.0, 30.0, -90.0);
+const MIRROR_SIZE: (u32, u32) = (160, 120);
+
+/// A DSR mirror, the plane z = 0 (a thin slab behind it, all specular), whose normals a normal
+/// function replaces by `normal` if given, and a red marker sphere of radius 10 at [`MARKER`]
+/// in front of it, seen only in it; rendered with [`MIRROR_CAMERA`].
+fn mirror_image(normal: Option<DVec3>) -> vlib::Image {
+    let (w, h) = MIRROR_SIZE;
     let mut vl = Library::new();
     vl.scene().unwrap();
-    vl.camera(&cam).unwrap();
+    vl.camera(&MIRROR_CAMERA).unwrap();
     vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
     vl.render_type(RenderType::Dsr).unwrap();
     vl.surface(Fields::F, 0.5).unwrap();
     vl.step_size(0.5, 1.0).unwrap();
-    // The mirror: the plane z = 0 (a thin slab behind it), all specular.
     vl.toggle(Feature::ReceiveReflections, true).unwrap();
     vl.object().unwrap();
     vl.translate(-0.5, -0.5, 0.0).unwrap();
     vl.scale(1000.0, 1000.0, 4.0).unwrap();
     vl.set(Fields::F | Fields::O | Fields::KS, 1.0).unwrap();
+    if let Some(n) = normal {
+        let n = n.as_vec3().to_array();
+        vl.normal(move |nv, _s| *nv = n).unwrap();
+    }
     vl.end().unwrap();
-    // The marker: a small sphere in front of the mirror, seen only in it.
     vl.toggle(Feature::ReceiveReflections, false).unwrap();
     vl.toggle(Feature::CastReflections, true).unwrap();
     vl.toggle(Feature::Visible, false).unwrap();
     vl.object().unwrap();
     vl.translate(-0.5, -0.5, -0.5).unwrap();
     vl.scale(40.0, 40.0, 40.0).unwrap();
-    vl.translate(marker.x as f32, marker.y as f32, marker.z as f32)
+    vl.translate(MARKER.x as f32, MARKER.y as f32, MARKER.z as f32)
         .unwrap();
     vl.function(Fields::F, |s| {
         let v = vlib::vlaux::sphere(s.position());
@@ -213,22 +220,35 @@ fn a_mirror_reflects_a_marker_where_angle_in_equals_angle_out() {
     vl.set(Fields::O | Fields::COLORS | Fields::KA, 1.0)
         .unwrap();
     vl.end().unwrap();
-    let img = vl.render_preview(w, h, w as f32 / h as f32).unwrap();
+    vl.render_preview(w, h, w as f32 / h as f32).unwrap()
+}
+
+/// The centroid (x, y, in pixels) and the number of the pixels of a [`MIRROR_SIZE`] image
+/// for which `hit` holds.
+fn centroid(hit: impl Fn(u32, u32) -> bool) -> (f64, f64, f64) {
+    let (w, h) = MIRROR_SIZE;
     let (mut sx, mut sy, mut n) = (0.0, 0.0, 0.0);
     for y in 0..h {
         for x in 0..w {
-            if img.pixel(x, y)[0] > 0.5 {
+            if hit(x, y) {
                 sx += x as f64 + 0.5;
                 sy += y as f64 + 0.5;
                 n += 1.0;
             }
         }
     }
+    (sx / n, sy / n, n)
+}
+
+#[test]
+fn a_mirror_reflects_a_marker_where_angle_in_equals_angle_out() {
+    let (w, h) = MIRROR_SIZE;
+    let img = mirror_image(None);
+    let (gx, gy, n) = centroid(|x, y| img.pixel(x, y)[0] > 0.5);
     assert!(n > 10.0, "the reflected marker is visible ({n} pixels)");
     // Angle in = angle out: the marker appears where its mirror image behind the plane would.
-    let image = DVec3::new(marker.x, marker.y, -marker.z);
-    let (ex, ey) = project(&cam, image, w as f64, h as f64);
-    let (gx, gy) = (sx / n, sy / n);
+    let image = DVec3::new(MARKER.x, MARKER.y, -MARKER.z);
+    let (ex, ey) = project(&MIRROR_CAMERA, image, w as f64, h as f64);
     assert!(
         (gx - ex).abs() < 1.0 && (gy - ey).abs() < 1.0,
         "marker at ({gx:.2}, {gy:.2}), expected ({ex:.2}, {ey:.2})"
@@ -241,82 +261,32 @@ fn a_mirror_reflects_a_marker_where_angle_in_equals_angle_out() {
 /// computation per pixel), not where the flat mirror's image is.
 #[test]
 fn mirror_rays_follow_the_normal_functions() {
-    let cam = Camera {
-        eye: [-300.0, 0.0, -300.0],
-        at: [0.0; 3],
-        up: [0.0, 1.0, 0.0],
-        fov: 40.0,
-    };
-    let marker = DVec3::new(120.0, 30.0, -90.0);
+    let (w, h) = MIRROR_SIZE;
     let radius = 10.0; // the sphere field's 0.5 level, a quarter of the object's 40
     let tilt = 6f64.to_radians();
     let n_tilted = DVec3::new(tilt.sin(), 0.0, -tilt.cos());
-    let (w, h) = (160u32, 120u32);
-    let mut vl = Library::new();
-    vl.scene().unwrap();
-    vl.camera(&cam).unwrap();
-    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
-    vl.render_type(RenderType::Dsr).unwrap();
-    vl.surface(Fields::F, 0.5).unwrap();
-    vl.step_size(0.5, 1.0).unwrap();
-    vl.toggle(Feature::ReceiveReflections, true).unwrap();
-    vl.object().unwrap();
-    vl.translate(-0.5, -0.5, 0.0).unwrap();
-    vl.scale(1000.0, 1000.0, 4.0).unwrap();
-    vl.set(Fields::F | Fields::O | Fields::KS, 1.0).unwrap();
-    let n = n_tilted.as_vec3().to_array();
-    vl.normal(move |nv, _s| *nv = n).unwrap();
-    vl.end().unwrap();
-    vl.toggle(Feature::ReceiveReflections, false).unwrap();
-    vl.toggle(Feature::CastReflections, true).unwrap();
-    vl.toggle(Feature::Visible, false).unwrap();
-    vl.object().unwrap();
-    vl.translate(-0.5, -0.5, -0.5).unwrap();
-    vl.scale(40.0, 40.0, 40.0).unwrap();
-    vl.translate(marker.x as f32, marker.y as f32, marker.z as f32)
-        .unwrap();
-    vl.function(Fields::F, |s| {
-        let v = vlib::vlaux::sphere(s.position());
-        let _ = s.set(Fields::F, v);
-    })
-    .unwrap();
-    vl.set(Fields::O | Fields::COLORS | Fields::KA, 1.0)
-        .unwrap();
-    vl.end().unwrap();
-    let img = vl.render_preview(w, h, w as f32 / h as f32).unwrap();
-    // The camera's rays (the model `project` inverts) reflected at the plane z = 0.
+    let img = mirror_image(Some(n_tilted));
+    // The camera's rays (the model `project` inverts) reflected at the plane z = 0 about `n`.
+    let cam = MIRROR_CAMERA;
     let eye = DVec3::from_array(cam.eye.map(|v| v as f64));
     let f = (DVec3::ZERO - eye).normalize();
     let r = DVec3::Y.cross(f).normalize();
     let u = f.cross(r);
     let half = (cam.fov as f64 / 2.0).to_radians().tan();
-    let meets_marker = |x: f64, y: f64, n: DVec3| {
-        let sx = (2.0 * x / w as f64 - 1.0) * half * w as f64 / h as f64;
-        let sy = (1.0 - 2.0 * y / h as f64) * half;
+    let meets_marker = |x: u32, y: u32, n: DVec3| {
+        let sx = (2.0 * (x as f64 + 0.5) / w as f64 - 1.0) * half * w as f64 / h as f64;
+        let sy = (1.0 - 2.0 * (y as f64 + 0.5) / h as f64) * half;
         let d = (f + sx * r + sy * u).normalize();
         let p = eye + (-eye.z / d.z) * d;
         let m = d - 2.0 * d.dot(n) * n;
-        let oc = p - marker;
+        let oc = p - MARKER;
         let b = oc.dot(m);
         let disc = b * b - (oc.length_squared() - radius * radius);
         disc > 0.0 && -b - disc.sqrt() > 0.0
     };
-    let centroid = |hit: &dyn Fn(u32, u32) -> bool| {
-        let (mut sx, mut sy, mut n) = (0.0, 0.0, 0.0);
-        for y in 0..h {
-            for x in 0..w {
-                if hit(x, y) {
-                    sx += x as f64 + 0.5;
-                    sy += y as f64 + 0.5;
-                    n += 1.0;
-                }
-            }
-        }
-        (sx / n, sy / n, n)
-    };
-    let (gx, gy, got) = centroid(&|x, y| img.pixel(x, y)[0] > 0.5);
-    let (ex, ey, want) = centroid(&|x, y| meets_marker(x as f64 + 0.5, y as f64 + 0.5, n_tilted));
-    let (fx, fy, _) = centroid(&|x, y| meets_marker(x as f64 + 0.5, y as f64 + 0.5, -DVec3::Z));
+    let (gx, gy, got) = centroid(|x, y| img.pixel(x, y)[0] > 0.5);
+    let (ex, ey, want) = centroid(|x, y| meets_marker(x, y, n_tilted));
+    let (fx, fy, _) = centroid(|x, y| meets_marker(x, y, -DVec3::Z));
     assert!(
         want > 10.0,
         "the tilted reflection is in view ({want} pixels)"
