@@ -18,7 +18,9 @@
 //! - **Direct shading.** When that colour table writes exactly r, g and b and nothing writes
 //!   ka, kd, ks or the specular exponent, a sample's shading inputs are its opacity and colour
 //!   from the two tables and four constants known in advance ([`DirectShading`],
-//!   [`Lean::opacity_colour`]): the batched march then uses no registers at all.
+//!   [`Lean::opacity_colour`]): the batched march then uses no registers at all. Where an
+//!   input's bucket lies inside one ramp segment of each table, both segments are found by one
+//!   lookup ([`SegmentPairs`]) and evaluated without the tables' case analysis.
 
 use crate::dataset::{Dataset, Filter};
 use crate::mapping::{segment_value, Mapping};
