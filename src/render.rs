@@ -348,7 +348,7 @@ impl CObj {
 
     /// The normal from the gradient alone: −∇F at `w` (object point `p`), flipped towards the
     /// viewer if asked; `None` where the gradient vanishes.
-    #[inline]
+    #[inline(always)]
     fn gradient_normal(
         &self,
         w: DVec3,
