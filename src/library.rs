@@ -778,6 +778,13 @@ impl Library {
         crate::render::render_image(&crate::render::Compiled::new(&desc), width, height, aspect)
     }
 
+    /// The open scene (at scene scope) compiled as it would render now (for tests of the
+    /// renderer's internals).
+    #[cfg(test)]
+    pub(crate) fn compiled(&self) -> Result<crate::render::Compiled> {
+        Ok(crate::render::Compiled::new(&self.open_scene("compiled")?))
+    }
+
     /// The open scene (at scene scope) as it would render now, without its outputs.
     fn open_scene(&self, what: &str) -> Result<SceneDesc> {
         if self.scope() != Scope::Scene {

@@ -358,11 +358,7 @@ impl CObj {
         cache: &mut CellGradients,
     ) -> Option<DVec3> {
         let (grad, zero) = self.field_gradient(w, p, field, cache);
-        let n = if zero { None } else { (-grad).try_normalize() };
-        match n {
-            Some(v) if self.flip_normals && v.dot(view) < 0.0 => Some(-v),
-            n => n,
-        }
+        normal_of_gradient(grad, zero, view, self.flip_normals)
     }
 
     /// The normal at `w`: −∇F by world-space central differences, then flipped towards the viewer
@@ -384,6 +380,17 @@ impl CObj {
         } else {
             None
         }
+    }
+}
+
+/// The normal of gradient `grad` (`zero`: it vanishes): −`grad` normalised, flipped towards
+/// `view` if `flip`; `None` where the gradient vanishes or cannot be normalised.
+#[inline]
+fn normal_of_gradient(grad: DVec3, zero: bool, view: DVec3, flip: bool) -> Option<DVec3> {
+    let n = if zero { None } else { (-grad).try_normalize() };
+    match n {
+        Some(v) if flip && v.dot(view) < 0.0 => Some(-v),
+        n => n,
     }
 }
 
@@ -535,6 +542,129 @@ impl<'a> Headlit<'a> {
             col
         } else {
             DVec3::ZERO
+        }
+    }
+}
+
+/// The lanes of [`HeadlitLanes`]: samples of a run side by side.
+type Lanes = wide::f64x2;
+const LANES: usize = 2;
+
+/// [`Headlit`] under a single light, its constants spread across lanes once per ray, for the
+/// lighting of a run's samples side by side ([`HeadlitLanes::colours`]).
+struct HeadlitLanes {
+    ka_ambient: [Lanes; 3],
+    kd: Lanes,
+    ks: f64,
+    /// The specular exponent, an integer.
+    e: u32,
+    view: [Lanes; 3],
+    to_light: [Lanes; 3],
+    radiance: [Lanes; 3],
+    flip: bool,
+}
+
+impl HeadlitLanes {
+    /// `h` for normals flipped towards the viewer if `flip`, where it has exactly one light
+    /// and an integer specular exponent (`powf` is left to the scalar path).
+    fn new(h: &Headlit<'_>, flip: bool) -> Option<HeadlitLanes> {
+        let (&[(l, rad)], Some(e)) = (h.lights, h.e.integer) else {
+            return None;
+        };
+        let splat = |v: DVec3| v.to_array().map(Lanes::splat);
+        Some(HeadlitLanes {
+            ka_ambient: splat(h.ka_ambient),
+            kd: Lanes::splat(h.kd),
+            ks: h.ks,
+            e,
+            view: splat(h.view),
+            to_light: splat(l),
+            radiance: splat(rad),
+            flip,
+        })
+    }
+
+    /// [`Headlit::colour`] of samples `0..count` of a run, side by side in lanes, each lane
+    /// doing the scalar operations in the same order, so giving the same bits: sample j's
+    /// colour `(c[0][j], c[1][j], c[2][j])` is replaced by its lit colour, with the normal of
+    /// its gradient `grad[·][j]` by [`normal_of_gradient`], where a gradient that vanishes is
+    /// given as NaN (it has no normal either way).
+    #[inline]
+    fn colours(&self, count: usize, c: &mut [[f64; 8]; 3], grad: &[[f64; 8]; 3]) {
+        for q in 0..8 / LANES {
+            if q * LANES >= count {
+                break;
+            }
+            self.colours_at(q * LANES, c, grad);
+        }
+    }
+
+    /// [`HeadlitLanes::colours`] of samples `at..at + LANES` (`at + LANES <= 8`). Apart, so
+    /// that the constants are read where they are used rather than held (and spilled) across
+    /// the run.
+    #[inline(never)]
+    fn colours_at(&self, at: usize, c: &mut [[f64; 8]; 3], grad: &[[f64; 8]; 3]) {
+        let zero = Lanes::ZERO;
+        let (ka, kd, view, l, rad) = (
+            &self.ka_ambient,
+            self.kd,
+            &self.view,
+            &self.to_light,
+            &self.radiance,
+        );
+        let lanes = |a: &[f64; 8]| Lanes::new(std::array::from_fn(|k| a[at + k]));
+        let g = [lanes(&grad[0]), lanes(&grad[1]), lanes(&grad[2])];
+        // `(-g).try_normalize()`: (−g)·(−g) is g·g, and (−g)·rcp is g·(−rcp), bit for bit
+        // (a NaN's sign aside, and a NaN gradient has no normal).
+        let rcp = Lanes::ONE / (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        // `rcp.is_finite() && rcp > 0.0`: 0 < rcp < ∞ (a NaN fails both).
+        let valid = rcp.simd_gt(zero) & rcp.simd_lt(Lanes::splat(f64::INFINITY));
+        let mut n = g.map(|x| x * -rcp);
+        if self.flip {
+            let back = (n[0] * view[0] + n[1] * view[1] + n[2] * view[2]).simd_lt(zero);
+            let sign = back & Lanes::splat(-0.0);
+            n = n.map(|x| x ^ sign);
+        }
+        let cl = [lanes(&c[0]), lanes(&c[1]), lanes(&c[2])];
+        let col = [ka[0] * cl[0], ka[1] * cl[1], ka[2] * cl[2]];
+        let kdc = cl.map(|x| kd * x);
+        let ndl = n[0] * l[0] + n[1] * l[1] + n[2] * l[2];
+        let lit = ndl.simd_gt(zero) & valid;
+        // `ndl.max(0.0)` (ndl where above 0, else +0: a NaN and −0 included), and 1 where
+        // there is no normal, so that `term` is then `kd · C` itself (x·1 is x).
+        let m = (ndl & lit) | (Lanes::ONE & !valid);
+        let mut term = kdc.map(|x| x * m);
+        if self.ks > 0.0 {
+            let s = Lanes::splat(2.0) * ndl;
+            let r = [s * n[0] - l[0], s * n[1] - l[1], s * n[2] - l[2]];
+            let rv = r[0] * view[0] + r[1] * view[1] + r[2] * view[2];
+            let spec = lit & rv.simd_gt(zero);
+            if spec.any() {
+                // `powi`, lane by lane.
+                let (mut x, mut k, mut pow) = (rv, self.e, Lanes::ONE);
+                loop {
+                    if k & 1 != 0 {
+                        pow *= x;
+                    }
+                    k >>= 1;
+                    if k == 0 {
+                        break;
+                    }
+                    x *= x;
+                }
+                let p = Lanes::splat(self.ks) * pow;
+                term = term.map(|x| spec.bitselect(x + p, x));
+            }
+        }
+        let col = [
+            col[0] + rad[0] * term[0],
+            col[1] + rad[1] * term[1],
+            col[2] + rad[2] * term[2],
+        ];
+        // `is_finite`: x · 0 is ±0 for finite x, NaN for the others.
+        let finite = (col[0] * zero + col[1] * zero + col[2] * zero).simd_eq(zero);
+        for (o, x) in c.iter_mut().zip(col) {
+            o[at..at + LANES].copy_from_slice(&(x & finite).to_array());
         }
     }
 }
@@ -1257,7 +1387,7 @@ impl Compiled {
         if let Some(lean) = &obj.lean {
             if let Some((data, z)) = lean.value_head() {
                 if obj.normals.is_empty() {
-                    return self.march_batched(obj, lean, data, z, c, origin, dir);
+                    return self.march_batched::<true>(obj, lean, data, z, c, origin, dir);
                 }
             }
         }
@@ -1287,10 +1417,12 @@ impl Compiled {
     /// [`Compiled::march_one`] for a lean program with a value head (a scanned volume) and no
     /// normal functions: the samples of a run the cursor knows to be in one occupied block (or
     /// all of them, without skipping) are read in batches (positions and dataset values first,
-    /// in lanes across the samples), then shaded and composited one by one in order, exactly
-    /// as the sample-by-sample loop does.
+    /// in lanes across the samples), then shaded and composited in order, exactly as the
+    /// sample-by-sample loop does (for the usual program under a single directional light,
+    /// the lighting of the samples up to where the ray ends in lanes: [`HeadlitLanes`]).
+    /// `IN_LANES`: that lighting in lanes (only tests turn it off, to compare).
     #[allow(clippy::too_many_arguments)]
-    fn march_batched(
+    fn march_batched<const IN_LANES: bool>(
         &self,
         obj: &CObj,
         lean: &Lean,
@@ -1313,6 +1445,9 @@ impl Compiled {
         let mut cache = CellGradients::default();
         // A run's midpoints and lengths (see `Cursor::run`).
         let (mut mids, mut lens) = ([0.0f64; 8], [0.0f64; 8]);
+        // The usual program's shaded samples of a run, in order: their compositing weights,
+        // colours (then lit colours) and gradients, by axis.
+        let (mut weights, mut colours, mut grads) = ([0.0f64; 8], [[0.0f64; 8]; 3], [[0.0; 8]; 3]);
         // The usual program's coefficients and exponent, examined once per ray, and its
         // lighting prepared where every light is directional and nothing shadows the object.
         let shading = lean.direct_shading().map(|s| {
@@ -1321,6 +1456,11 @@ impl Compiled {
             let e = Specular::of_field(spec);
             (k, e, Headlit::new(self, obj, dir, k, e))
         });
+        // Under a single light, the lighting in lanes across a run's samples.
+        let lanes = shading
+            .as_ref()
+            .filter(|_| IN_LANES)
+            .and_then(|(_, _, h)| HeadlitLanes::new(h.as_ref()?, obj.flip_normals));
         while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
             let m = c.run(unbounded, &mut mids, &mut lens);
@@ -1340,32 +1480,76 @@ impl Compiled {
             // The samples that pass the zero test (and have a length), as bits in order: the
             // loop below visits only those, without a branch per sample.
             let mut pass = pass_bits(&lens, &vs, z) & ((1u32 << m) - 1);
+            if let Some((k, e, headlit)) = &shading {
+                // The usual program: opacity and colour straight from the tables, the other
+                // coefficients known (the same numbers as the registers'). In phases over the
+                // run: opacities, transmittance and gradients in order up to where the ray
+                // ends (no sample after that is shaded), under a single light the lighting in
+                // lanes across the samples, then the composite.
+                let (mut count, mut ends) = (0, false);
+                while pass != 0 {
+                    let i = pass.trailing_zeros() as usize;
+                    pass &= pass - 1;
+                    let (o, Some(rgb)) = lean.opacity_colour(vs[i]) else {
+                        continue;
+                    };
+                    let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
+                    let c = rgb.map(|x| x as f64);
+                    let (p, w) = ([ps[0][i], ps[1][i], ps[2][i]], origin + mids[i] * dir);
+                    let c = if lanes.is_some() {
+                        // The normal's gradient now; the rest in lanes below.
+                        let (g, vanishes) = obj.field_gradient(w, p, 9, &mut cache);
+                        let g = if vanishes {
+                            [f64::NAN; 3]
+                        } else {
+                            g.to_array()
+                        };
+                        for (a, x) in grads.iter_mut().zip(g) {
+                            a[count] = x;
+                        }
+                        c
+                    } else {
+                        let c = DVec3::from_array(c);
+                        let normal = || obj.gradient_normal(w, -dir, p, 9, &mut cache);
+                        match headlit {
+                            Some(h) => h.colour(c, normal),
+                            None => self.illuminate_colour(obj, w, dir, c, *k, *e, normal),
+                        }
+                        .to_array()
+                    };
+                    for (a, x) in colours.iter_mut().zip(c) {
+                        a[count] = x;
+                    }
+                    weights[count] = t * alpha;
+                    count += 1;
+                    t *= 1.0 - alpha;
+                    if t < stop {
+                        ends = true;
+                        break;
+                    }
+                }
+                if let Some(h) = &lanes {
+                    h.colours(count, &mut colours, &grads);
+                }
+                for (j, &w) in weights[..count].iter().enumerate() {
+                    col += w * DVec3::new(colours[0][j], colours[1][j], colours[2][j]);
+                }
+                if ends {
+                    return (col, 0.0);
+                }
+                continue;
+            }
             while pass != 0 {
                 let i = pass.trailing_zeros() as usize;
                 pass &= pass - 1;
                 let len = lens[i];
                 let (p, w) = ([ps[0][i], ps[1][i], ps[2][i]], origin + mids[i] * dir);
-                let (alpha, colour) = if let Some((k, e, headlit)) = &shading {
-                    // The usual program: opacity and colour straight from the tables, the
-                    // other coefficients known (the same numbers as the registers').
-                    let (o, Some(rgb)) = lean.opacity_colour(vs[i]) else {
-                        continue;
-                    };
-                    let alpha = 1.0 - obj.segment_transmittance(o as f64, len);
-                    let c = DVec3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64);
-                    let normal = || obj.gradient_normal(w, -dir, p, 9, &mut cache);
-                    let colour = match headlit {
-                        Some(h) => h.colour(c, normal),
-                        None => self.illuminate_colour(obj, w, dir, c, *k, *e, normal),
-                    };
-                    (alpha, colour)
-                } else {
-                    let o = lean.opacity_from_value(vs[i], p, &mut f) as f64;
-                    if o <= 0.0 {
-                        continue;
-                    }
-                    self.finish_lean(obj, lean, o, p, w, dir, len, &mut f, &mut cache)
-                };
+                let o = lean.opacity_from_value(vs[i], p, &mut f) as f64;
+                if o <= 0.0 {
+                    continue;
+                }
+                let (alpha, colour) =
+                    self.finish_lean(obj, lean, o, p, w, dir, len, &mut f, &mut cache);
                 col += t * alpha * colour;
                 t *= 1.0 - alpha;
                 if t < stop {
@@ -1945,6 +2129,266 @@ mod tests {
         let scene = lit_scene(vec![light(DVec3::Y, [1.0; 3])], true);
         assert!(scene.plan.shadows);
         assert!(Headlit::new(&scene, &scene.objects[0], DVec3::X, k, e).is_none());
+    }
+
+    /// [`HeadlitLanes`] gives [`Headlit::colour`]'s colour bit for bit, the normal made by
+    /// [`normal_of_gradient`] as [`CObj::gradient_normal`] makes it: for runs of 1 to 8
+    /// samples, random lights, views and gradients (N·L and R·V of either sign, exactly ±0,
+    /// vanishing, NaN and subnormal gradients), kd or ks 0 or negative, integer exponents,
+    /// normals flipped or not, colours from 0 to overflowing. It is refused for several lights,
+    /// none (kd and ks 0) and other exponents, which the scalar path keeps.
+    #[test]
+    fn headlit_lanes_are_headlit() {
+        let rng = std::cell::Cell::new(0x2545_f491_4f6c_dd1du64);
+        let next = || {
+            let mut x = rng.get();
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            rng.set(x);
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let unit = || {
+            DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5)
+                .try_normalize()
+                .unwrap_or(DVec3::Y)
+        };
+        let light = |to_light: DVec3, radiance: [f32; 3]| Light::Directional { to_light, radiance };
+        // What the scalar colours exercised: lit with a specular term, lit without, facing
+        // away, no normal, and not finite.
+        let mut seen = [0usize; 5];
+        let mut compared = 0;
+        for round in 0..12 {
+            let to_light = match round % 3 {
+                0 => DVec3::new(0.0, -1.0, 0.0),
+                _ => unit(),
+            };
+            let radiance = [1.0, 0.5 + next() as f32, 2.0 * next() as f32];
+            let scene = lit_scene(vec![light(to_light, radiance)], false);
+            let obj = &scene.objects[0];
+            for k in [
+                [0.2, 0.7, 0.3],
+                [1.0, 0.0, 0.5],
+                [0.1, 0.9, 0.0],
+                [0.3, -0.5, 0.4],
+            ] {
+                for e in [10.0, 0.0, 1.0, 7.0, 128.0].map(Specular::new) {
+                    for flip in [false, true] {
+                        for _ in 0..60 {
+                            let dir = match round % 3 {
+                                0 => DVec3::new(0.0, 1.0, 0.0),
+                                _ => unit(),
+                            };
+                            let h = Headlit::new(&scene, obj, dir, k, e).expect("directional");
+                            let lanes = HeadlitLanes::new(&h, flip).expect("one light");
+                            let count = 1 + (next() * 8.0) as usize;
+                            let (mut cs, mut grads) = ([[0.0; 8]; 3], [[0.0; 8]; 3]);
+                            let mut want = Vec::new();
+                            for j in 0..count {
+                                let v = next();
+                                let c = if v < 0.03 {
+                                    DVec3::new(f64::MAX, next(), 0.0)
+                                } else if v < 0.05 {
+                                    DVec3::new(next(), f64::INFINITY, 0.0)
+                                } else {
+                                    DVec3::new(next(), next() * 2.0, (next() < 0.8) as u8 as f64)
+                                };
+                                let u = next();
+                                let (g, zero) = if u < 0.05 {
+                                    (DVec3::ZERO, true)
+                                } else if u < 0.1 {
+                                    (unit(), true)
+                                } else if u < 0.13 {
+                                    (DVec3::new(f64::NAN, 1.0, 0.0), false)
+                                } else if u < 0.16 {
+                                    (DVec3::new(1e-320, 0.0, 0.0), false)
+                                } else if u < 0.25 {
+                                    // Along an axis: N·L exactly ±0 or ±1 for the axis light.
+                                    let mut g = DVec3::ZERO;
+                                    g[(next() * 3.0) as usize] = next() - 0.5;
+                                    (g, false)
+                                } else {
+                                    (unit() * (0.001 + 100.0 * next()), false)
+                                };
+                                let view = -dir;
+                                let n = normal_of_gradient(g, zero, view, flip);
+                                let col = h.colour(c, || n);
+                                want.push(col);
+                                let case = match n {
+                                    _ if col == DVec3::ZERO && c != DVec3::ZERO => 4,
+                                    None => 3,
+                                    Some(n) if n.dot(to_light) <= 0.0 => 2,
+                                    Some(n)
+                                        if (2.0 * n.dot(to_light) * n - to_light).dot(view)
+                                            > 0.0 =>
+                                    {
+                                        0
+                                    }
+                                    Some(_) => 1,
+                                };
+                                seen[case] += 1;
+                                let g = if zero { [f64::NAN; 3] } else { g.to_array() };
+                                for a in 0..3 {
+                                    cs[a][j] = c[a];
+                                    grads[a][j] = g[a];
+                                }
+                            }
+                            lanes.colours(count, &mut cs, &grads);
+                            for (j, want) in want.iter().enumerate() {
+                                let got = [cs[0][j], cs[1][j], cs[2][j]];
+                                assert_eq!(
+                                    got.map(f64::to_bits),
+                                    want.to_array().map(f64::to_bits),
+                                    "{got:?} {want:?}"
+                                );
+                                compared += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(compared > 40_000, "{compared}");
+        assert!(seen.iter().all(|&n| n > 500), "{seen:?}");
+        // Refused: several lights, none (kd and ks 0), an exponent that is not an integer.
+        let one = lit_scene(vec![light(DVec3::Y, [1.0; 3])], false);
+        let two = lit_scene(
+            vec![light(DVec3::Y, [1.0; 3]), light(DVec3::X, [1.0; 3])],
+            false,
+        );
+        let (k, e) = ([0.2, 0.7, 0.3], Specular::new(10.0));
+        let headlit = |scene, k, e| Headlit::new(scene, &scene.objects[0], DVec3::X, k, e);
+        assert!(HeadlitLanes::new(&headlit(&one, k, e).unwrap(), false).is_some());
+        assert!(HeadlitLanes::new(&headlit(&two, k, e).unwrap(), false).is_none());
+        let dark = headlit(&one, [0.2, 0.0, 0.0], e).unwrap();
+        assert!(HeadlitLanes::new(&dark, false).is_none());
+        let e = Specular::new(20.5);
+        assert!(HeadlitLanes::new(&headlit(&one, k, e).unwrap(), false).is_none());
+    }
+
+    /// The march in lanes is the march without them and the sample-by-sample loop, bit for
+    /// bit, ray for ray, through a lit random volume opaque enough that most rays end inside
+    /// a run (the transmittance falls below the threshold at a sample with others after it):
+    /// no sample after the end is lit, and the gradient cache is read in the same order.
+    #[test]
+    fn lanes_march_is_the_march() {
+        use crate::types::MappingType;
+        let rng = std::cell::Cell::new(0x9e37_79b9_7f4a_7c15u64);
+        let next = || {
+            let mut x = rng.get();
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            rng.set(x);
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let n = 24usize;
+        // Smooth blobs, with flat (zero-gradient) patches at 0 and 255.
+        let centres: Vec<[f64; 4]> = (0..6)
+            .map(|_| {
+                [
+                    next() * 24.0,
+                    next() * 24.0,
+                    next() * 24.0,
+                    3.0 + next() * 5.0,
+                ]
+            })
+            .collect();
+        let voxels: Vec<u8> = (0..n * n * n)
+            .map(|i| {
+                let p = [(i % n) as f64, (i / n % n) as f64, (i / n / n) as f64];
+                let v: f64 = centres
+                    .iter()
+                    .map(|c| {
+                        let d2 = (0..3).map(|a| (p[a] - c[a]).powi(2)).sum::<f64>();
+                        300.0 * (-d2 / (c[3] * c[3])).exp()
+                    })
+                    .sum();
+                v.min(255.0) as u8
+            })
+            .collect();
+        let data = Dataset::new([n; 3], crate::dataset::Voxels::U8(voxels), 0.0, 1.0).unwrap();
+        let mut terminated = 0;
+        for (ks, exponent) in [(0.3, 10.0), (0.0, 10.0), (0.6, 3.0), (0.3, 20.5)] {
+            let mut vl = crate::Library::new();
+            vl.add_dataset(1, data.clone()).unwrap();
+            vl.mapping(
+                2,
+                MappingType::Ramp,
+                3,
+                1,
+                &[0.15, 0.0, 0.5, 0.6, 1.0, 0.95],
+            )
+            .unwrap();
+            let colour = [0.2, 0.55, 0.35, 0.3, 0.6, 0.9, 0.7, 0.5, 1.0, 1.0, 1.0, 1.0];
+            vl.mapping(3, MappingType::Ramp, 3, 3, &colour).unwrap();
+            vl.scene().unwrap();
+            vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+            vl.directional_light([0.3, -1.0, 0.2], [1.0, 0.9, 0.8], 1.0)
+                .unwrap();
+            vl.step_size(0.5, 1.0).unwrap();
+            vl.object().unwrap();
+            vl.scale(23.0, 23.0, 23.0).unwrap();
+            vl.dataset(Fields::F, 1).unwrap();
+            vl.map(Fields::O, Fields::F, 2, 1).unwrap();
+            vl.map(Fields::R, Fields::F, 3, 1).unwrap();
+            vl.map(Fields::G, Fields::F, 3, 2).unwrap();
+            vl.map(Fields::B, Fields::F, 3, 3).unwrap();
+            vl.set(Fields::KA, 0.2).unwrap();
+            vl.set(Fields::KD, 0.7).unwrap();
+            vl.set(Fields::KS, ks).unwrap();
+            vl.set(Fields::N, crate::types::specular_to_field(exponent))
+                .unwrap();
+            vl.end().unwrap();
+            let scene = vl.compiled().unwrap();
+            let obj = &scene.objects[0];
+            let lean = obj.lean.as_ref().expect("lean");
+            let (data, z) = lean.value_head().expect("a value head");
+            assert!(lean.direct_shading().is_some());
+            let stop = scene.settings.optimise.stop_below();
+            for _ in 0..400 {
+                let at = DVec3::new(next(), next(), next()) * 23.0;
+                let dir = unit_dir(&next);
+                let origin = at - 60.0 * dir;
+                let (o, d) = obj.object_ray(origin, dir);
+                let Some((t0, t1)) = obj.clip(o, d) else {
+                    continue;
+                };
+                let cursor = || Cursor::new(&scene, obj, 0, (o, d), (t0, t1), f64::NEG_INFINITY);
+                let (mut a, mut b, mut c) = (cursor(), cursor(), cursor());
+                let lanes = scene.march_batched::<true>(obj, lean, data, z, &mut a, origin, dir);
+                let plain = scene.march_batched::<false>(obj, lean, data, z, &mut b, origin, dir);
+                // The sample-by-sample loop (`march_one`'s general one).
+                let (mut col, mut t) = (DVec3::ZERO, 1.0f64);
+                while let Some(mid) = c.peek(obj.skip.as_deref()) {
+                    let len = c.take();
+                    if len <= 0.0 {
+                        continue;
+                    }
+                    let (w, p) = (origin + mid * dir, c.object_point(mid));
+                    if let Some((alpha, colour)) = scene.shade(obj, w, p, dir, len) {
+                        col += t * alpha * colour;
+                        t *= 1.0 - alpha;
+                        if t < stop {
+                            t = 0.0;
+                            break;
+                        }
+                    }
+                }
+                let bits = |(c, t): (DVec3, f64)| (c.to_array().map(f64::to_bits), t.to_bits());
+                assert_eq!(bits(lanes), bits(plain));
+                assert_eq!(bits(lanes), bits((col, t)));
+                terminated += (lanes.1 == 0.0) as usize;
+            }
+        }
+        assert!(terminated > 300, "{terminated}");
+    }
+
+    /// A random unit direction from `next` (uniform in [0, 1)).
+    fn unit_dir(next: &impl Fn() -> f64) -> DVec3 {
+        DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5)
+            .try_normalize()
+            .unwrap_or(DVec3::Y)
     }
 
     /// A cursor over [t0, t1] in steps of `step`, with no walk.
