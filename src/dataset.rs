@@ -274,6 +274,10 @@ pub struct Dataset {
     lanes: Option<[[f32; 4]; 3]>,
     /// Node strides (1, nx, nx·ny), 0 along axes of one node.
     strides: [usize; 3],
+    /// The strides as f32 when there are at most 2²⁴ nodes (every node index, and every
+    /// product and sum of [`Dataset::node_index`], is then an integer exact in f32), for
+    /// [`Dataset::trilinear8`]'s cells' first nodes in lanes; else `None`.
+    index_lanes: Option<[f32; 3]>,
 }
 
 impl PartialEq for Dataset {
@@ -322,19 +326,23 @@ impl Dataset {
         }
         let (af, bf) = (a as f64, b as f64);
         let norm = |v: f64| ((v - af) / (bf - af)).clamp(0.0, 1.0) as f32;
-        let values = match &raw {
+        let values: Vec<f32> = match &raw {
             Voxels::U8(v) => {
                 let lut: Vec<f32> = (0..256).map(|x| norm(x as f64)).collect();
                 v.iter().map(|&x| lut[x as usize]).collect()
             }
             Voxels::U16(v) => v.iter().map(|&x| norm(x as f64)).collect(),
         };
+        let strides = [
+            usize::from(dims[0] > 1),
+            if dims[1] > 1 { dims[0] } else { 0 },
+            if dims[2] > 1 { dims[0] * dims[1] } else { 0 },
+        ];
         Ok(Dataset {
             dims,
             a,
             b,
             raw,
-            values,
             bricks: Default::default(),
             cell_masks: Default::default(),
             last: dims.map(|n| (n - 1) as f64),
@@ -349,11 +357,9 @@ impl Dataset {
                     lane(&|n| n as f32 - 2.0, 1.0),
                 ]
             }),
-            strides: [
-                usize::from(dims[0] > 1),
-                if dims[1] > 1 { dims[0] } else { 0 },
-                if dims[2] > 1 { dims[0] * dims[1] } else { 0 },
-            ],
+            strides,
+            index_lanes: (values.len() <= 1 << 24).then(|| strides.map(|s| s as f32)),
+            values,
         })
     }
 
@@ -855,17 +861,37 @@ impl Dataset {
             // The cells of the points along one axis, in lanes of `$F` (`$I` for the indices).
             macro_rules! cells {
                 ($F:ty, $I:ty, $N:literal) => {{
-                    let mut c = [[0i32; $N]; 3];
+                    let mut c = [<$I>::default(); 3];
+                    let mut cf = [<$F>::ZERO; 3];
                     let mut f = [[0f32; $N]; 3];
                     for axis in 0..3 {
                         let l = <$F>::splat(last[axis]);
                         let lanes: [f32; $N] = std::array::from_fn(|i| p[axis][i]);
                         let u = (<$F>::new(lanes) * l).fast_max(<$F>::ZERO).fast_min(l);
-                        let cu: $I = u.fast_min(<$F>::splat(top[axis])).fast_trunc_int();
-                        f[axis] = (u - cu.round_float()).to_array();
-                        c[axis] = cu.to_array();
+                        c[axis] = u.fast_min(<$F>::splat(top[axis])).fast_trunc_int();
+                        cf[axis] = c[axis].round_float();
+                        f[axis] = (u - cf[axis]).to_array();
                     }
-                    self.values_in_cells(&c, &f, count, mask, &mut out);
+                    if let Some([sx, sy, sz]) = self.index_lanes {
+                        // The first nodes' indices in lanes: integers below 2²⁴, so exact.
+                        let s = |s: f32| <$F>::splat(s);
+                        let at = cf[0] * s(sx) + cf[1] * s(sy) + cf[2] * s(sz);
+                        let at: $I = at.fast_trunc_int();
+                        let at = at.to_array().map(|a| a as u32);
+                        // Below 2²⁴ as well, so the conversions are exact.
+                        let rows = (
+                            self.strides[1] as u32 as usize,
+                            self.strides[2] as u32 as usize,
+                        );
+                        self.values_in_cells(at, |a| a as usize, rows, &f, count, mask, &mut out);
+                    } else {
+                        let [cx, cy, cz] = c.map(|c| c.to_array());
+                        let at: [usize; $N] = std::array::from_fn(|i| {
+                            self.node_index([cx[i], cy[i], cz[i]].map(|c| c as usize))
+                        });
+                        let rows = (self.strides[1], self.strides[2]);
+                        self.values_in_cells(at, |a| a, rows, &f, count, mask, &mut out);
+                    }
                 }};
             }
             // A short run (the usual one at large sample distances) needs only half the lanes.
@@ -882,54 +908,66 @@ impl Dataset {
         out
     }
 
-    /// The values at the first `count` of `N` points whose cells' first nodes `c` and
-    /// weights `f` are given by axis (see [`Dataset::trilinear8`]).
+    /// The values at the first `count` of `N` points whose cells' first nodes are `at` (as
+    /// `index` converts them to node indices) and whose weights `f` are given by axis (see
+    /// [`Dataset::trilinear8`]).
     #[inline(always)]
-    fn values_in_cells<const N: usize>(
+    #[allow(clippy::too_many_arguments)]
+    fn values_in_cells<T: Copy, const N: usize>(
         &self,
-        c: &[[i32; N]; 3],
+        at: [T; N],
+        index: impl Fn(T) -> usize,
+        rows: (usize, usize),
         f: &[[f32; N]; 3],
         count: usize,
         mask: Option<&CellMask>,
         out: &mut [f32; 8],
     ) {
-        for (i, out) in out.iter_mut().enumerate().take(count.min(N)) {
-            let cell = [c[0][i], c[1][i], c[2][i]].map(|c| c as usize);
-            *out = self.trilinear_cell(cell, [f[0][i], f[1][i], f[2][i]], mask);
+        for (i, (out, at)) in out.iter_mut().zip(at).enumerate().take(count.min(N)) {
+            *out = self.trilinear_cell(index(at), rows, [f[0][i], f[1][i], f[2][i]], mask);
         }
     }
 
     #[inline(always)]
     fn trilinear_in(&self, p: [f32; 3], mask: Option<&CellMask>) -> f32 {
         let (cell, f) = self.cell32(p);
-        self.trilinear_cell(cell, f, mask)
+        let rows = (self.strides[1], self.strides[2]);
+        self.trilinear_cell(self.node_index(cell), rows, f, mask)
     }
 
-    /// The trilinear value in the cell whose first node is `cell`, at weights `f` of its
-    /// second nodes; 0 where `mask` proves the cell below its bound.
+    /// The trilinear value in the cell whose first node has index `base`, at weights `f` of
+    /// its second nodes; 0 where `mask` proves the cell below its bound.
     #[inline(always)]
     fn trilinear_cell(
         &self,
-        cell: [usize; 3],
+        base: usize,
+        (sy, sz): (usize, usize),
         [fx, fy, fz]: [f32; 3],
         mask: Option<&CellMask>,
     ) -> f32 {
-        let base = self.node_index(cell);
         if mask.is_some_and(|m| !m.may_reach(base)) {
             return 0.0;
         }
-        let (sx, sy, sz) = (self.strides[0], self.strides[1], self.strides[2]);
+        let sx = self.strides[0];
         let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
         let v = &self.values;
         let (c00, c10, c01, c11) = if sx == 1 {
-            // Four rows of two nodes along x.
-            let pair = |o: usize| -> [f32; 2] {
-                v.get(o..o + 2)
-                    .and_then(|r| r.try_into().ok())
-                    .unwrap_or([0.0; 2]) // unreachable: the cell lies inside the grid
+            // Four rows of two nodes along x, in the span [base, base + sz + sy + 2): the
+            // first and last two nodes of its first sy + 2 and of its last sy + 2. Where base
+            // and the strides are below 2³² (given as such) no sum overflows, and the span's
+            // bounds check is the only one the compiler keeps.
+            let rows = v.get(base..base + sz + sy + 2).and_then(|w| {
+                let (lower, upper) = (w.get(..sy + 2)?, w.get(sz..)?);
+                Some([
+                    *lower.first_chunk::<2>()?,
+                    *lower.last_chunk::<2>()?,
+                    *upper.first_chunk::<2>()?,
+                    *upper.last_chunk::<2>()?,
+                ])
+            });
+            let Some([r00, r10, r01, r11]) = rows else {
+                return 0.0; // unreachable: the cell lies inside the grid
             };
-            let (r00, r10) = (pair(base), pair(base + sy));
-            let (r01, r11) = (pair(base + sz), pair(base + sz + sy));
             (
                 lerp(r00[0], r00[1], fx),
                 lerp(r10[0], r10[1], fx),
@@ -937,14 +975,15 @@ impl Dataset {
                 lerp(r11[0], r11[1], fx),
             )
         } else {
-            let Some(w) = v.get(base..=base + sx + sy + sz) else {
+            // (sx = 0: an axis of one node.)
+            let Some(w) = v.get(base..=base + sy + sz) else {
                 return 0.0; // unreachable: the cell lies inside the grid
             };
             (
-                lerp(w[0], w[sx], fx),
-                lerp(w[sy], w[sy + sx], fx),
-                lerp(w[sz], w[sz + sx], fx),
-                lerp(w[sz + sy], w[sz + sy + sx], fx),
+                lerp(w[0], w[0], fx),
+                lerp(w[sy], w[sy], fx),
+                lerp(w[sz], w[sz], fx),
+                lerp(w[sz + sy], w[sz + sy], fx),
             )
         };
         lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz).clamp(0.0, 1.0)
@@ -1746,6 +1785,87 @@ mod tests {
         .unwrap();
         assert!(long.lanes.is_none());
         trilinear8_is_trilinear(&long, &mut rng, &specials);
+    }
+
+    /// A cell's value as the eight nodes read one by one (the second node along an axis of one
+    /// node is the first) and interpolated in the order of [`Dataset::trilinear_cell`].
+    fn trilinear_by_nodes(d: &Dataset, p: [f32; 3]) -> f32 {
+        let ([i, j, k], [fx, fy, fz]) = d.cell32_scalar(p);
+        let [nx, ny, nz] = d.dims;
+        let n = |a: usize, b: usize, c: usize| {
+            d.node(
+                (i + a).min(nx - 1),
+                (j + b).min(ny - 1),
+                (k + c).min(nz - 1),
+            )
+        };
+        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+        let row = |b: usize, c: usize| lerp(n(0, b, c), n(1, b, c), fx);
+        lerp(
+            lerp(row(0, 0), row(1, 0), fy),
+            lerp(row(0, 1), row(1, 1), fy),
+            fz,
+        )
+        .clamp(0.0, 1.0)
+    }
+
+    /// The cells' nodes read from one span (and, in `trilinear8`, the cells' first nodes found
+    /// in f32 lanes) give the values of the eight nodes read one by one, bit for bit: on grids
+    /// with axes of one and two nodes, on the largest grid whose node indices are exact in f32
+    /// (2²⁴ nodes, points near its last cells) and on one node more (indices computed
+    /// axis by axis), with and without the lanes.
+    #[test]
+    fn cell_reads_are_the_nodes() {
+        let mut rng = Lcg(13);
+        let check = |d: &Dataset, points: &[[f32; 3]]| {
+            let mut plain = d.clone();
+            plain.index_lanes = None;
+            for chunk in points.chunks(8) {
+                let mut ps = [[0.5f32; 3]; 8];
+                ps[..chunk.len()].copy_from_slice(chunk);
+                let by_axis = std::array::from_fn(|axis| ps.map(|p| p[axis]));
+                for count in [chunk.len(), chunk.len().min(4)] {
+                    let (got, fallback) = (
+                        d.trilinear8(&by_axis, count, None),
+                        plain.trilinear8(&by_axis, count, None),
+                    );
+                    for (i, p) in ps.iter().enumerate().take(count) {
+                        let want = trilinear_by_nodes(d, *p).to_bits();
+                        assert_eq!(d.trilinear(*p).to_bits(), want, "{:?} {p:?}", d.dims);
+                        assert_eq!(got[i].to_bits(), want, "{:?} {p:?} lane {i}", d.dims);
+                        assert_eq!(fallback[i].to_bits(), want, "{:?} {p:?}", d.dims);
+                    }
+                }
+            }
+        };
+        for (seed, dims) in [
+            [9, 7, 8],
+            [1, 6, 5],
+            [5, 1, 4],
+            [4, 5, 1],
+            [2, 2, 2],
+            [1, 1, 1],
+            [2, 1, 1],
+            [197, 233, 189],
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let d = random_u8(dims, 40 + seed as u64);
+            assert!(d.index_lanes.is_some());
+            let points: Vec<[f32; 3]> = (0..2000).map(|_| rng.point_around_box()).collect();
+            check(&d, &points);
+        }
+        for (dims, exact) in [([2048, 2048, 4], true), ([2049, 2048, 4], false)] {
+            let d = random_u8(dims, 50);
+            assert!(d.lanes.is_some());
+            assert_eq!(d.index_lanes.is_some(), exact, "{dims:?}");
+            let mut points: Vec<[f32; 3]> = (0..2000)
+                .map(|_| std::array::from_fn(|_| 1.0 - (rng.next() * 0.01) as f32))
+                .collect();
+            points.extend((0..200).map(|_| rng.point_around_box()));
+            check(&d, &points);
+        }
     }
 
     /// [`Dataset::trilinear8`] at the first `count` points, for every count, against
