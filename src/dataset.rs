@@ -1004,9 +1004,16 @@ impl Dataset {
         let lo = self.neighbourhood_lo(cell);
         if cache.lo != lo {
             let (sy, sz) = (self.strides[1], self.strides[2]);
+            // A row starting at most 4 before the end lies inside the values: one comparison
+            // a row (the slice's own checks then follow from it and are dropped).
+            let v = &self.values[..];
+            let last = v.len().checked_sub(4)?;
             let row = |j: usize, k: usize| -> Option<[f32; 4]> {
                 let o = lo + j * sy + k * sz;
-                self.values.get(o..o + 4)?.try_into().ok()
+                if o > last {
+                    return None;
+                }
+                v.get(o..o + 4)?.try_into().ok()
             };
             let (r10, r20) = (row(1, 0)?, row(2, 0)?);
             let (r01, r11, r21, r31) = (row(0, 1)?, row(1, 1)?, row(2, 1)?, row(3, 1)?);
@@ -1555,6 +1562,32 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// The interior trilinear gradient the plain way, for bit-for-bit comparisons: the cell
+    /// axis by axis, each corner's central differences read node by node, the weights as
+    /// products, each axis summed corner by corner in f32, then 0.5·g·(n − 1) in f64.
+    fn plain_interior_gradient(d: &Dataset, p: [f32; 3]) -> [f64; 3] {
+        let ([x0, y0, z0], [fx, fy, fz]) = d.cell32_scalar(p);
+        let (gx, gy, gz) = (1.0 - fx, 1.0 - fy, 1.0 - fz);
+        let mut g = [0f32; 3];
+        for corner in 0..8 {
+            let [i, j, k] = [
+                x0 + (corner & 1),
+                y0 + (corner >> 1 & 1),
+                z0 + (corner >> 2),
+            ];
+            let w = [gx, fx][corner & 1] * [gy, fy][corner >> 1 & 1] * [gz, fz][corner >> 2];
+            let diffs = [
+                d.node(i + 1, j, k) - d.node(i - 1, j, k),
+                d.node(i, j + 1, k) - d.node(i, j - 1, k),
+                d.node(i, j, k + 1) - d.node(i, j, k - 1),
+            ];
+            for (g, diff) in g.iter_mut().zip(diffs) {
+                *g += w * diff;
+            }
+        }
+        std::array::from_fn(|axis| 0.5 * g[axis] as f64 * d.last[axis])
+    }
+
     #[test]
     fn specialised_trilinear_paths_agree_with_the_generic_filter() {
         let d = random_u8([9, 7, 8], 8);
@@ -1575,10 +1608,14 @@ mod tests {
             for q in [p, [p[0] + 1e-3, p[1] - 1e-3, p[2] + 1e-3]] {
                 let fresh = d.trilinear_gradient_interior(q, &mut CellGradients::default());
                 let lo = d.interior_cell32(q).map(|(c, _)| d.neighbourhood_lo(c));
+                // Every interior cell takes the specialised path (its rows are all inside).
+                assert_eq!(fresh.is_some(), lo.is_some(), "{q:?}");
                 hits += usize::from(fresh.is_some() && Some(cache.lo) == lo);
                 assert_eq!(d.trilinear_gradient_interior(q, &mut cache), fresh, "{q:?}");
             }
             if let Some(g) = d.trilinear_gradient_interior(p, &mut CellGradients::default()) {
+                let want = plain_interior_gradient(&d, p);
+                assert_eq!(g.map(f64::to_bits), want.map(f64::to_bits), "{p:?}");
                 for (axis, g) in g.into_iter().enumerate() {
                     let n = d.dims()[axis];
                     let want = d.filter(u, Filter::Trilinear, |i, j, k| {
