@@ -265,6 +265,11 @@ pub struct Dataset {
     cell_masks: std::sync::Arc<std::sync::Mutex<CellMasks>>,
     /// n − 1 per axis, as f64 (int ↔ float conversions of usize are slow on x86-64).
     last: [f64; 3],
+    /// 0.5·(n − 1) per axis (exact), the scale of a gradient's central differences.
+    half_last: [f64; 3],
+    /// The offset of node (1, 1, 1) from node (0, 0, 0) along a cell's neighbourhood: 1 + nx +
+    /// nx·ny (see [`Dataset::neighbourhood_lo`]).
+    lo_offset: usize,
     /// n − 1 per axis, as f32.
     last32: [f32; 3],
     /// The last cell's first node per axis, max(n − 2, 0), as i32 (saturated).
@@ -346,6 +351,8 @@ impl Dataset {
             bricks: Default::default(),
             cell_masks: Default::default(),
             last: dims.map(|n| (n - 1) as f64),
+            half_last: dims.map(|n| 0.5 * (n - 1) as f64),
+            lo_offset: 1 + dims[0] + dims[0] * dims[1],
             last32: dims.map(|n| (n - 1) as f32),
             top32: dims.map(|n| i32::try_from(n.saturating_sub(2)).unwrap_or(i32::MAX)),
             lanes: dims.iter().all(|&n| n <= 1 << 24).then(|| {
@@ -805,14 +812,9 @@ impl Dataset {
             == 0b1111;
         let c: i32x4 = cu.fast_trunc_int();
         let f = (u - c.round_float()).to_array();
-        let c = c.to_array();
-        (
-            (
-                [c[0] as usize, c[1] as usize, c[2] as usize],
-                [f[0], f[1], f[2]],
-            ),
-            interior,
-        )
+        // c ≥ 0 (cu ≥ 0), so through u32 (no sign extension) it is the same index.
+        let c = c.to_array().map(|c| c as u32 as usize);
+        (([c[0], c[1], c[2]], [f[0], f[1], f[2]]), interior)
     }
 
     /// [`Dataset::cell32`] axis by axis.
@@ -1044,17 +1046,14 @@ impl Dataset {
             }
             cache.lo = lo;
         }
-        // Trilinear weights of the cell's corners, in the order x fastest.
+        // Trilinear weights of the cell's corners, in the order x fastest: the products
+        // (wx·wy)·wz, four at a time in lanes.
         let (gx, gy, gz) = (1.0 - fx, 1.0 - fy, 1.0 - fz);
+        let xy = wide::f32x4::new([gx, fx, gx, fx]) * wide::f32x4::new([gy, gy, fy, fy]);
+        let near = (xy * wide::f32x4::splat(gz)).to_array();
+        let far = (xy * wide::f32x4::splat(fz)).to_array();
         let weights = [
-            gx * gy * gz,
-            fx * gy * gz,
-            gx * fy * gz,
-            fx * fy * gz,
-            gx * gy * fz,
-            fx * gy * fz,
-            gx * fy * fz,
-            fx * fy * fz,
+            near[0], near[1], near[2], near[3], far[0], far[1], far[2], far[3],
         ];
         // The three axes in the lanes of one register, each summed corner by corner in order
         // (as a scalar loop would).
@@ -1062,11 +1061,13 @@ impl Dataset {
         for (wt, d) in weights.into_iter().zip(cache.diffs) {
             g += wide::f32x4::splat(wt) * wide::f32x4::new(d);
         }
+        // 0.5·g·(n − 1) in f64, as g·(0.5·(n − 1)): halving is exact in both orders (g is
+        // an f32, far from f64's subnormals), so both are the one rounding of the same product.
         let g = g.to_array();
         Some([
-            0.5 * g[0] as f64 * self.last[0],
-            0.5 * g[1] as f64 * self.last[1],
-            0.5 * g[2] as f64 * self.last[2],
+            g[0] as f64 * self.half_last[0],
+            g[1] as f64 * self.half_last[1],
+            g[2] as f64 * self.half_last[2],
         ])
     }
 
@@ -1074,7 +1075,9 @@ impl Dataset {
     /// along every axis; see [`Dataset::interior_cell32`]): the key of [`CellGradients`].
     #[inline]
     fn neighbourhood_lo(&self, cell: [usize; 3]) -> usize {
-        self.node_index(cell.map(|c| c - 1))
+        // node_index(cell − (1, 1, 1)), without the three subtractions: the cell's first node
+        // is at least 1 along every axis, so no step wraps.
+        self.node_index(cell) - self.lo_offset
     }
 
     /// The derivative along `axis` at a node, per grid step: central inside, one-sided at faces.
