@@ -387,11 +387,21 @@ impl CObj {
 /// `view` if `flip`; `None` where the gradient vanishes or cannot be normalised.
 #[inline]
 fn normal_of_gradient(grad: DVec3, zero: bool, view: DVec3, flip: bool) -> Option<DVec3> {
-    let n = if zero { None } else { (-grad).try_normalize() };
+    let n = if zero { None } else { try_normalize(-grad) };
     match n {
         Some(v) if flip && v.dot(view) < 0.0 => Some(-v),
         n => n,
     }
+}
+
+/// `v.try_normalize()`: the same arithmetic (`v · (1 / |v|)`), and its test that the reciprocal
+/// is finite and above 0 as one unsigned comparison of its bits (those of the positive finite
+/// numbers are 1 to `f64::MAX`'s; 0, the negative numbers, the infinities and NaN are not)
+/// instead of the class test the compiler makes of `is_finite() && > 0`.
+#[inline(always)]
+fn try_normalize(v: DVec3) -> Option<DVec3> {
+    let rcp = v.length_recip();
+    (rcp.to_bits().wrapping_sub(1) < f64::MAX.to_bits()).then(|| v * rcp)
 }
 
 /// The children of `o` as its functions see them; `world_to_o` maps the world to `o`'s space.
@@ -1982,6 +1992,40 @@ pub fn render_outputs(desc: &SceneDesc) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `try_normalize` is glam's `DVec3::try_normalize`, bit for bit and in when it declines:
+    /// zero, tiny (a square that underflows), huge (one that overflows), infinite and NaN
+    /// components, and ordinary vectors of every sign.
+    #[test]
+    fn try_normalize_is_glams() {
+        let special = [
+            0.0,
+            -0.0,
+            1e-320,
+            -1e-200,
+            1e-150,
+            3.0,
+            -0.25,
+            1e150,
+            -1e200,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        let mut checked = 0;
+        for &x in &special {
+            for &y in &special {
+                for &z in &special {
+                    let v = DVec3::new(x, y, z);
+                    let bits = |n: Option<DVec3>| n.map(|n| n.to_array().map(f64::to_bits));
+                    assert_eq!(bits(try_normalize(v)), bits(v.try_normalize()), "{v:?}");
+                    checked += usize::from(v.try_normalize().is_some());
+                }
+            }
+        }
+        assert!(checked > 100, "only {checked} normalisable vectors");
+    }
 
     #[test]
     fn fast_powers_agree_with_powf() {
