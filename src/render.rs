@@ -530,22 +530,7 @@ impl<'a> Headlit<'a> {
             let n = normal();
             // (A directional light's attenuation is 1: `radiance · 1` is the radiance.)
             for &(l, rad) in self.lights {
-                let lit = match n {
-                    Some(n) => {
-                        let ndl = n.dot(l);
-                        let mut term = kd * c * ndl.max(0.0);
-                        if ks > 0.0 && ndl > 0.0 {
-                            let r = 2.0 * ndl * n - l;
-                            let rv = r.dot(view);
-                            if rv > 0.0 {
-                                term += DVec3::splat(ks * self.e.pow(rv));
-                            }
-                        }
-                        term
-                    }
-                    None => kd * c,
-                };
-                col += rad * lit;
+                col += rad * lit(n, l, view, c, [kd, ks], self.e);
             }
         }
         if col.is_finite() {
@@ -553,6 +538,38 @@ impl<'a> Headlit<'a> {
         } else {
             DVec3::ZERO
         }
+    }
+}
+
+/// One light's term of the illumination model before its radiance: `kd·C·max(N·L, 0) +
+/// ks·(R·V)^e` for unit normal `n` and unit `l` towards the light, the highlight only where
+/// N·L and R·V are above 0 and ks is; where the gradient vanishes (`n` is `None`) there is no
+/// preferred direction and the medium is lit isotropically: diffuse at full strength, no
+/// highlight. Shared by [`Compiled::illuminate_colour`] and [`Headlit::colour`], so the two
+/// compute it alike.
+#[inline(always)]
+fn lit(
+    n: Option<DVec3>,
+    l: DVec3,
+    view: DVec3,
+    c: DVec3,
+    [kd, ks]: [f64; 2],
+    e: Specular,
+) -> DVec3 {
+    match n {
+        Some(n) => {
+            let ndl = n.dot(l);
+            let mut term = kd * c * ndl.max(0.0);
+            if ks > 0.0 && ndl > 0.0 {
+                let r = 2.0 * ndl * n - l;
+                let rv = r.dot(view);
+                if rv > 0.0 {
+                    term += DVec3::splat(ks * e.pow(rv));
+                }
+            }
+            term
+        }
+        None => kd * c,
     }
 }
 
@@ -994,24 +1011,7 @@ impl Compiled {
                         continue;
                     }
                 }
-                let lit = match n {
-                    Some(n) => {
-                        let ndl = n.dot(l);
-                        let mut term = kd * c * ndl.max(0.0);
-                        if ks > 0.0 && ndl > 0.0 {
-                            let r = 2.0 * ndl * n - l;
-                            let rv = r.dot(view);
-                            if rv > 0.0 {
-                                term += DVec3::splat(ks * e.pow(rv));
-                            }
-                        }
-                        term
-                    }
-                    // A vanishing gradient: no preferred direction, the medium is lit
-                    // isotropically (diffuse at full strength, no highlight).
-                    None => kd * c,
-                };
-                col += rad * lit;
+                col += rad * lit(n, l, view, c, [kd, ks], e);
             }
         }
         if col.is_finite() {
