@@ -2101,6 +2101,30 @@ mod tests {
         })
     }
 
+    /// A xorshift generator of numbers in [0, 1) and of unit vectors, for the lighting tests.
+    struct Xorshift(std::cell::Cell<u64>);
+
+    impl Xorshift {
+        fn new(seed: u64) -> Xorshift {
+            Xorshift(std::cell::Cell::new(seed))
+        }
+
+        fn next(&self) -> f64 {
+            let mut x = self.0.get();
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            self.0.set(x);
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        }
+
+        fn unit(&self) -> DVec3 {
+            DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5)
+                .try_normalize()
+                .unwrap_or(DVec3::Y)
+        }
+    }
+
     /// [`Headlit`] gives [`Compiled::illuminate_colour`]'s colour bit for bit, and asks for the
     /// normal exactly when it does: for one and several directional lights and none, normals
     /// and none (a vanishing gradient), coefficients at and above 0, integer and other
@@ -2108,20 +2132,8 @@ mod tests {
     /// light and where a shadow may fall on the object.
     #[test]
     fn headlit_is_the_illumination_model() {
-        let rng = std::cell::Cell::new(0x9e37_79b9_7f4a_7c15u64);
-        let next = || {
-            let mut x = rng.get();
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            rng.set(x);
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let unit = || {
-            DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5)
-                .try_normalize()
-                .unwrap_or(DVec3::Y)
-        };
+        let rng = Xorshift::new(0x9e37_79b9_7f4a_7c15u64);
+        let (next, unit) = (|| rng.next(), || rng.unit());
         let light = |to_light: DVec3, radiance: [f32; 3]| Light::Directional { to_light, radiance };
         let configurations = [
             vec![light(DVec3::new(0.0, -1.0, 0.0), [1.0; 3])],
@@ -2195,20 +2207,8 @@ mod tests {
     /// none (kd and ks 0) and other exponents, which the scalar path keeps.
     #[test]
     fn headlit_lanes_are_headlit() {
-        let rng = std::cell::Cell::new(0x2545_f491_4f6c_dd1du64);
-        let next = || {
-            let mut x = rng.get();
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            rng.set(x);
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let unit = || {
-            DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5)
-                .try_normalize()
-                .unwrap_or(DVec3::Y)
-        };
+        let rng = Xorshift::new(0x2545_f491_4f6c_dd1du64);
+        let (next, unit) = (|| rng.next(), || rng.unit());
         let light = |to_light: DVec3, radiance: [f32; 3]| Light::Directional { to_light, radiance };
         // What the scalar colours exercised: lit with a specular term, lit without, facing
         // away, no normal, and not finite.
