@@ -160,43 +160,49 @@ fn reduce_axis(
     ext: [usize; 3],
     axis: usize,
     blocks: usize,
-    span: impl Fn(usize, usize) -> (usize, usize),
+    span: impl Fn(usize, usize) -> (usize, usize) + Sync,
 ) -> (Vec<f32>, Vec<f32>, [usize; 3]) {
+    use rayon::prelude::*;
     let mut out = ext;
     out[axis] = blocks;
     let stride = [1, ext[0], ext[0] * ext[1]];
-    let n = out[0] * out[1] * out[2];
+    let plane = out[0] * out[1];
+    let n = plane * out[2];
     let (mut min, mut max) = (vec![0f32; n], vec![0f32; n]);
-    let mut o = 0;
-    for k in 0..out[2] {
-        for j in 0..out[1] {
-            for i in 0..out[0] {
-                let mut at = [i, j, k];
-                let (lo, hi) = span(at[axis], ext[axis]);
-                at[axis] = 0;
-                let base = at[0] + stride[1] * at[1] + stride[2] * at[2];
-                let s = stride[axis];
-                let (a, b) = (base + lo * s, base + hi * s);
-                let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
-                let (lows, highs) = (&min_in[a..=b], &max_in[a..=b]);
-                let mut q = 0;
-                while q < lows.len() && q < highs.len() {
-                    // Plain comparisons: the values are never NaN, and f32::min/max's NaN
-                    // handling costs several instructions per value.
-                    if lows[q] < mn {
-                        mn = lows[q];
+    // The output's planes (k) in parallel: each reads the input and writes only its own plane.
+    min.par_chunks_mut(plane)
+        .zip(max.par_chunks_mut(plane))
+        .enumerate()
+        .for_each(|(k, (min, max))| {
+            let mut o = 0;
+            for j in 0..out[1] {
+                for i in 0..out[0] {
+                    let mut at = [i, j, k];
+                    let (lo, hi) = span(at[axis], ext[axis]);
+                    at[axis] = 0;
+                    let base = at[0] + stride[1] * at[1] + stride[2] * at[2];
+                    let s = stride[axis];
+                    let (a, b) = (base + lo * s, base + hi * s);
+                    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+                    let (lows, highs) = (&min_in[a..=b], &max_in[a..=b]);
+                    let mut q = 0;
+                    while q < lows.len() && q < highs.len() {
+                        // Plain comparisons: the values are never NaN, and f32::min/max's NaN
+                        // handling costs several instructions per value.
+                        if lows[q] < mn {
+                            mn = lows[q];
+                        }
+                        if highs[q] > mx {
+                            mx = highs[q];
+                        }
+                        q += s;
                     }
-                    if highs[q] > mx {
-                        mx = highs[q];
-                    }
-                    q += s;
+                    min[o] = mn;
+                    max[o] = mx;
+                    o += 1;
                 }
-                min[o] = mn;
-                max[o] = mx;
-                o += 1;
             }
-        }
-    }
+        });
     (min, max, out)
 }
 

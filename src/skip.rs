@@ -315,10 +315,6 @@ impl SkipGrid {
             },
         );
         let mut dist = vec![0u8; total];
-        let mut any = false;
-        // The opacity interval depends on the block only through the datasets' ranges there, and
-        // blocks share few distinct ranges: evaluate the interval program once per distinct set.
-        let mut memo: std::collections::HashMap<Vec<(u32, u32)>, bool> = Default::default();
         let data: Vec<(&Dataset, Filter, f64)> = prefix
             .iter()
             .filter_map(|i| match i {
@@ -326,34 +322,50 @@ impl SkipGrid {
                 _ => None,
             })
             .collect();
-        let mut key = Vec::with_capacity(data.len());
-        for k in 0..dims[2] {
-            for j in 0..dims[1] {
-                for i in 0..dims[0] {
-                    let lo = origin + DVec3::new(i as f64, j as f64, k as f64) * cell;
-                    let hi = lo + cell;
-                    key.clear();
-                    key.extend(data.iter().map(|(d, f, over)| {
-                        let (a, b) = dataset_range(d, *f, *over, lo, hi);
-                        (a.to_bits(), b.to_bits())
-                    }));
-                    let e = match memo.get(&key) {
-                        Some(&e) => e,
-                        None => {
-                            let ranges: Vec<(f32, f32)> = key
-                                .iter()
-                                .map(|&(a, b)| (f32::from_bits(a), f32::from_bits(b)))
-                                .collect();
-                            let e = opacity_range(prefix, &ranges).1 <= 0.0;
-                            memo.insert(key.clone(), e);
-                            e
-                        }
-                    };
-                    dist[i + dims[0] * (j + dims[1] * k)] = if e { MAX_LEAP } else { 0 };
-                    any |= e;
-                }
-            }
+        // The datasets' brick ranges first (each built once, itself in parallel), then the
+        // blocks plane by plane in parallel.
+        for (d, f, _) in &data {
+            d.bricks(*f);
         }
+        use rayon::prelude::*;
+        let any = dist
+            .par_chunks_mut(dims[0] * dims[1])
+            .enumerate()
+            .map(|(k, plane)| {
+                // The opacity interval depends on the block only through the datasets' ranges
+                // there, and blocks share few distinct ranges: evaluate the interval program
+                // once per distinct set (per plane).
+                let mut memo: std::collections::HashMap<Vec<(u32, u32)>, bool> = Default::default();
+                let mut key = Vec::with_capacity(data.len());
+                let mut any = false;
+                for j in 0..dims[1] {
+                    for i in 0..dims[0] {
+                        let lo = origin + DVec3::new(i as f64, j as f64, k as f64) * cell;
+                        let hi = lo + cell;
+                        key.clear();
+                        key.extend(data.iter().map(|(d, f, over)| {
+                            let (a, b) = dataset_range(d, *f, *over, lo, hi);
+                            (a.to_bits(), b.to_bits())
+                        }));
+                        let e = match memo.get(&key) {
+                            Some(&e) => e,
+                            None => {
+                                let ranges: Vec<(f32, f32)> = key
+                                    .iter()
+                                    .map(|&(a, b)| (f32::from_bits(a), f32::from_bits(b)))
+                                    .collect();
+                                let e = opacity_range(prefix, &ranges).1 <= 0.0;
+                                memo.insert(key.clone(), e);
+                                e
+                            }
+                        };
+                        plane[i + dims[0] * j] = if e { MAX_LEAP } else { 0 };
+                        any |= e;
+                    }
+                }
+                any
+            })
+            .reduce(|| false, |a, b| a || b);
         if !any {
             return None;
         }
