@@ -667,19 +667,7 @@ impl HeadlitLanes {
             let rv = r[0] * view[0] + r[1] * view[1] + r[2] * view[2];
             let spec = lit & rv.simd_gt(zero);
             if spec.any() {
-                // `powi`, lane by lane.
-                let (mut x, mut k, mut pow) = (rv, self.e, Lanes::ONE);
-                loop {
-                    if k & 1 != 0 {
-                        pow *= x;
-                    }
-                    k >>= 1;
-                    if k == 0 {
-                        break;
-                    }
-                    x *= x;
-                }
-                let p = Lanes::splat(self.ks) * pow;
+                let p = Lanes::splat(self.ks) * powi_in(rv, Lanes::ONE, self.e);
                 term = term.map(|x| spec.bitselect(x + p, x));
             }
         }
@@ -737,8 +725,15 @@ impl Specular {
 /// (what `f64::powi` calls for an exponent unknown at compile time), in the same order, so the
 /// same bits, without the call.
 #[inline]
-fn powi(mut x: f64, mut k: u32) -> f64 {
-    let mut r = 1.0;
+fn powi(x: f64, k: u32) -> f64 {
+    powi_in(x, 1.0, k)
+}
+
+/// [`powi`]'s products for any number type with a multiplication (f64, or f64 lanes, each
+/// lane then the scalar products in the same order); `one` is its 1.
+#[inline]
+fn powi_in<T: Copy + std::ops::MulAssign>(mut x: T, one: T, mut k: u32) -> T {
+    let mut r = one;
     loop {
         if k & 1 != 0 {
             r *= x;
