@@ -327,7 +327,6 @@ impl SkipGrid {
         for (d, f, _) in &data {
             d.bricks(*f);
         }
-        use rayon::prelude::*;
         let any = dist
             .par_chunks_mut(dims[0] * dims[1])
             .enumerate()
