@@ -323,10 +323,33 @@ impl CObj {
         field: usize,
         cache: &mut CellGradients,
     ) -> (DVec3, bool) {
+        let (g, zero) = self.field_gradient_in(w, p, field, cache);
+        if self.object_gradient(field) {
+            return (self.grad_to_world * g, zero);
+        }
+        (g, zero)
+    }
+
+    /// Whether [`CObj::field_gradient_in`] gives field `field`'s gradient in object space
+    /// (from the dataset's grid) rather than in world space.
+    #[inline(always)]
+    fn object_gradient(&self, field: usize) -> bool {
+        field == 9 && self.f_dataset.is_some()
+    }
+
+    /// [`CObj::field_gradient`] before the dataset's gradient is taken to world space (see
+    /// [`CObj::object_gradient`]), so that the lighting in lanes can do that product too.
+    #[inline]
+    fn field_gradient_in(
+        &self,
+        w: DVec3,
+        p: [f32; 3],
+        field: usize,
+        cache: &mut CellGradients,
+    ) -> (DVec3, bool) {
         if let (9, Some((data, filter))) = (field, &self.f_dataset) {
             let g = DVec3::from_array(data.gradient_cached(p, *filter, cache));
-            let zero = g.abs().max_element() <= ZERO_GRADIENT;
-            return (self.grad_to_world * g, zero);
+            return (g, g.abs().max_element() <= ZERO_GRADIENT);
         }
         self.sampled_gradient(w, field)
     }
@@ -589,12 +612,16 @@ struct HeadlitLanes {
     to_light: [Lanes; 3],
     radiance: [Lanes; 3],
     flip: bool,
+    /// Where the gradients come in object space: the columns of the matrix taking them to
+    /// world space ([`CObj::grad_to_world`]), by column and row; else `None` (world space).
+    to_world: Option<[[Lanes; 3]; 3]>,
 }
 
 impl HeadlitLanes {
     /// `h` for normals flipped towards the viewer if `flip`, where it has exactly one light
-    /// and an integer specular exponent (`powf` is left to the scalar path).
-    fn new(h: &Headlit<'_>, flip: bool) -> Option<HeadlitLanes> {
+    /// and an integer specular exponent (`powf` is left to the scalar path); for gradients
+    /// given in object space and taken to world space by `to_world` if that is given.
+    fn new(h: &Headlit<'_>, flip: bool, to_world: Option<glam::DMat3>) -> Option<HeadlitLanes> {
         let (&[(l, rad)], Some(e)) = (h.lights, h.e.integer) else {
             return None;
         };
@@ -608,6 +635,7 @@ impl HeadlitLanes {
             to_light: splat(l),
             radiance: splat(rad),
             flip,
+            to_world: to_world.map(|m| [splat(m.x_axis), splat(m.y_axis), splat(m.z_axis)]),
         })
     }
 
@@ -640,7 +668,12 @@ impl HeadlitLanes {
             &self.radiance,
         );
         let lanes = |a: &[f64; 8]| Lanes::new(std::array::from_fn(|k| a[at + k]));
-        let g = [lanes(&grad[0]), lanes(&grad[1]), lanes(&grad[2])];
+        let mut g = [lanes(&grad[0]), lanes(&grad[1]), lanes(&grad[2])];
+        if let Some([x, y, z]) = &self.to_world {
+            // `m * g` as glam computes it: column x times g.x, plus column y times g.y, plus
+            // column z times g.z (a NaN gradient stays NaN in every axis).
+            g = std::array::from_fn(|i| x[i] * g[0] + y[i] * g[1] + z[i] * g[2]);
+        }
         // `(-g).try_normalize()`: (−g)·(−g) is g·g, and (−g)·rcp is g·(−rcp), bit for bit
         // (a NaN's sign aside, and a NaN gradient has no normal).
         let rcp = Lanes::ONE / (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
@@ -1462,10 +1495,10 @@ impl Compiled {
             (k, e, Headlit::new(self, obj, dir, k, e))
         });
         // Under a single light, the lighting in lanes across a run's samples.
-        let lanes = shading
-            .as_ref()
-            .filter(|_| IN_LANES)
-            .and_then(|(_, _, h)| HeadlitLanes::new(h.as_ref()?, obj.flip_normals));
+        let lanes = shading.as_ref().filter(|_| IN_LANES).and_then(|(_, _, h)| {
+            let to_world = obj.object_gradient(9).then_some(obj.grad_to_world);
+            HeadlitLanes::new(h.as_ref()?, obj.flip_normals, to_world)
+        });
         while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
             let m = c.run(unbounded, &mut mids, &mut lens);
@@ -1502,8 +1535,9 @@ impl Compiled {
                     let c = rgb.map(|x| x as f64);
                     let (p, w) = ([ps[0][i], ps[1][i], ps[2][i]], origin + mids[i] * dir);
                     let c = if lanes.is_some() {
-                        // The normal's gradient now; the rest in lanes below.
-                        let (g, vanishes) = obj.field_gradient(w, p, 9, &mut cache);
+                        // The normal's gradient now (in object space where it is the dataset's:
+                        // the lanes take it to world space); the rest in lanes below.
+                        let (g, vanishes) = obj.field_gradient_in(w, p, 9, &mut cache);
                         let g = if vanishes {
                             [f64::NAN; 3]
                         } else {
@@ -2231,7 +2265,12 @@ mod tests {
                                 _ => unit(),
                             };
                             let h = Headlit::new(&scene, obj, dir, k, e).expect("directional");
-                            let lanes = HeadlitLanes::new(&h, flip).expect("one light");
+                            // Gradients in world space, or in object space for the lanes to
+                            // transform (a random matrix, as `CObj::field_gradient` would).
+                            let to_world = (next() < 0.5).then(|| {
+                                glam::DMat3::from_cols(unit() * 3.0, unit(), unit() * 0.1)
+                            });
+                            let lanes = HeadlitLanes::new(&h, flip, to_world).expect("one light");
                             let count = 1 + (next() * 8.0) as usize;
                             let (mut cs, mut grads) = ([[0.0; 8]; 3], [[0.0; 8]; 3]);
                             let mut want = Vec::new();
@@ -2262,7 +2301,8 @@ mod tests {
                                     (unit() * (0.001 + 100.0 * next()), false)
                                 };
                                 let view = -dir;
-                                let n = normal_of_gradient(g, zero, view, flip);
+                                let world = to_world.map_or(g, |m| m * g);
+                                let n = normal_of_gradient(world, zero, view, flip);
                                 let col = h.colour(c, || n);
                                 want.push(col);
                                 let case = match n {
@@ -2309,12 +2349,12 @@ mod tests {
         );
         let (k, e) = ([0.2, 0.7, 0.3], Specular::new(10.0));
         let headlit = |scene, k, e| Headlit::new(scene, &scene.objects[0], DVec3::X, k, e);
-        assert!(HeadlitLanes::new(&headlit(&one, k, e).unwrap(), false).is_some());
-        assert!(HeadlitLanes::new(&headlit(&two, k, e).unwrap(), false).is_none());
+        assert!(HeadlitLanes::new(&headlit(&one, k, e).unwrap(), false, None).is_some());
+        assert!(HeadlitLanes::new(&headlit(&two, k, e).unwrap(), false, None).is_none());
         let dark = headlit(&one, [0.2, 0.0, 0.0], e).unwrap();
-        assert!(HeadlitLanes::new(&dark, false).is_none());
+        assert!(HeadlitLanes::new(&dark, false, None).is_none());
         let e = Specular::new(20.5);
-        assert!(HeadlitLanes::new(&headlit(&one, k, e).unwrap(), false).is_none());
+        assert!(HeadlitLanes::new(&headlit(&one, k, e).unwrap(), false, None).is_none());
     }
 
     /// The march in lanes is the march without them and the sample-by-sample loop, bit for
