@@ -18,9 +18,9 @@
 //! - **Direct shading.** When that colour table writes exactly r, g and b and nothing writes
 //!   ka, kd, ks or the specular exponent, a sample's shading inputs are its opacity and colour
 //!   from the two tables and four constants known in advance ([`DirectShading`],
-//!   [`Lean::opacity_colour`]): the batched march then uses no registers at all. Where an
-//!   input's bucket lies inside one ramp segment of each table, both segments are found by one
-//!   lookup ([`SegmentPairs`]) and evaluated without the tables' case analysis.
+//!   [`DirectShading::opacity_colour`]): the batched march then uses no registers at all.
+//!   Where an input's bucket lies inside one ramp segment of each table, both segments are
+//!   found by one lookup ([`SegmentPairs`]) and evaluated without the tables' case analysis.
 
 use crate::dataset::{Dataset, Filter};
 use crate::mapping::{segment_value, Mapping};
@@ -81,6 +81,12 @@ struct Direct {
 /// colour table at the dataset's value, and the rest is known before any sample.
 #[derive(Clone, Debug)]
 pub(crate) struct DirectShading {
+    /// The direct form's opacity table and column (shared with [`Direct`]; held here too so
+    /// that [`DirectShading::opacity_colour`] finds its tables without unwrapping the
+    /// program's options per sample).
+    opacity: (Arc<Mapping>, usize),
+    /// The direct form's colour table.
+    colour: Arc<Mapping>,
     /// The colour table's columns of r, g and b.
     rgb: [usize; 3],
     /// Fields 4 to 7 (ka, kd, ks, the specular exponent as a field value), as f64.
@@ -215,10 +221,33 @@ impl DirectShading {
         }
         let (colour, _) = direct.colour.as_ref()?;
         Some(DirectShading {
+            opacity: direct.opacity.clone(),
+            colour: colour.clone(),
             rgb,
             coefficients: [start[4], start[5], start[6], start[7]].map(|v| v as f64),
             pairs: SegmentPairs::new(&direct.opacity.0, direct.opacity.1, colour, rgb),
         })
+    }
+
+    /// The opacity and the colour (r, g, b) of a sample whose dataset value is `v`: the
+    /// fields 0 to 3 that [`Lean::opacity_from_value`] and [`Lean::rest`] leave, bit for bit;
+    /// the colour only where the opacity is above 0. (The batched march holds the program's
+    /// `DirectShading` for the whole ray and calls this per sample.)
+    #[inline]
+    pub(crate) fn opacity_colour(&self, v: f32) -> (f32, Option<[f32; 3]>) {
+        // The dataset writes the clamped value into the source field, which both tables read.
+        let x = clamp_field(v);
+        if let Some(oc) = self.pairs.eval(x) {
+            return oc;
+        }
+        let o = map_value(&self.opacity.0, x, self.opacity.1);
+        if o <= 0.0 {
+            return (o, None);
+        }
+        let mut rgb = [0f32; 3];
+        let outputs = [0, 1, 2].map(|i| (i, self.rgb[i]));
+        map_each(&self.colour, x, &outputs, |i, v| rgb[i] = clamp_field(v));
+        (o, Some(rgb))
     }
 }
 
@@ -575,32 +604,6 @@ impl Lean {
         self.shading.as_ref()
     }
 
-    /// For a program with [`DirectShading`], the opacity and the colour (r, g, b) of a sample
-    /// whose dataset value is `v`: the fields 0 to 3 that [`Lean::opacity_from_value`] and
-    /// [`Lean::rest`] leave, bit for bit; the colour only where the opacity is above 0.
-    #[inline]
-    pub(crate) fn opacity_colour(&self, v: f32) -> (f32, Option<[f32; 3]>) {
-        let (Some(d), Some(shading)) = (&self.direct, &self.shading) else {
-            unreachable!("opacity_colour needs direct shading")
-        };
-        // The dataset writes the clamped value into the source field, which both tables read.
-        let x = clamp_field(v);
-        if let Some(oc) = shading.pairs.eval(x) {
-            return oc;
-        }
-        let o = map_value(&d.opacity.0, x, d.opacity.1);
-        if o <= 0.0 {
-            return (o, None);
-        }
-        let Some((mapping, _)) = &d.colour else {
-            unreachable!("direct shading has a colour table")
-        };
-        let mut rgb = [0f32; 3];
-        let outputs = [0, 1, 2].map(|i| (i, shading.rgb[i]));
-        map_each(mapping, x, &outputs, |i, v| rgb[i] = clamp_field(v));
-        (o, Some(rgb))
-    }
-
     /// Runs the rest of the program after [`Lean::opacity`] returned a positive opacity.
     #[inline]
     pub(crate) fn rest(&self, p: [f32; 3], fields: &mut [f32; FIELD_COUNT]) {
@@ -818,7 +821,7 @@ mod tests {
         for v in values {
             let mut f = [0.0; FIELD_COUNT];
             let o = usual.opacity_from_value(v, [0.5; 3], &mut f);
-            let (o2, rgb) = usual.opacity_colour(v);
+            let (o2, rgb) = shading.opacity_colour(v);
             assert_eq!(o.to_bits(), o2.to_bits(), "{v}");
             assert_eq!(rgb.is_some(), o > 0.0, "{v}");
             if let Some(rgb) = rgb {

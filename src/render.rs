@@ -1488,17 +1488,22 @@ impl Compiled {
         let (mut weights, mut colours, mut grads) = ([0.0f64; 8], [[0.0f64; 8]; 3], [[0.0; 8]; 3]);
         // The usual program's coefficients and exponent, examined once per ray, and its
         // lighting prepared where every light is directional and nothing shadows the object.
+        // (The direct shading itself is held here for the whole ray: its tables per sample
+        // without the program's options unwrapped each time.)
         let shading = lean.direct_shading().map(|s| {
             let [ka, kd, ks, spec] = s.coefficients;
             let k = [ka, kd, ks];
             let e = Specular::of_field(spec);
-            (k, e, Headlit::new(self, obj, dir, k, e))
+            (s, k, e, Headlit::new(self, obj, dir, k, e))
         });
         // Under a single light, the lighting in lanes across a run's samples.
-        let lanes = shading.as_ref().filter(|_| IN_LANES).and_then(|(_, _, h)| {
-            let to_world = obj.object_gradient(9).then_some(obj.grad_to_world);
-            HeadlitLanes::new(h.as_ref()?, obj.flip_normals, to_world)
-        });
+        let lanes = shading
+            .as_ref()
+            .filter(|_| IN_LANES)
+            .and_then(|(_, _, _, h)| {
+                let to_world = obj.object_gradient(9).then_some(obj.grad_to_world);
+                HeadlitLanes::new(h.as_ref()?, obj.flip_normals, to_world)
+            });
         while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
             let m = c.run(unbounded, &mut mids, &mut lens);
@@ -1518,7 +1523,7 @@ impl Compiled {
             // The samples that pass the zero test (and have a length), as bits in order: the
             // loop below visits only those, without a branch per sample.
             let mut pass = pass_bits(&lens, &vs, z) & ((1u32 << m) - 1);
-            if let Some((k, e, headlit)) = &shading {
+            if let Some((tables, k, e, headlit)) = &shading {
                 // The usual program: opacity and colour straight from the tables, the other
                 // coefficients known (the same numbers as the registers'). In phases over the
                 // run: opacities, transmittance and gradients in order up to where the ray
@@ -1528,7 +1533,7 @@ impl Compiled {
                 while pass != 0 {
                     let i = pass.trailing_zeros() as usize;
                     pass &= pass - 1;
-                    let (o, Some(rgb)) = lean.opacity_colour(vs[i]) else {
+                    let (o, Some(rgb)) = tables.opacity_colour(vs[i]) else {
                         continue;
                     };
                     let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
