@@ -24,7 +24,7 @@
 
 use crate::dataset::{Dataset, Filter};
 use crate::mapping::{segment_value, Mapping};
-use crate::program::{clamp_field, Instr};
+use crate::program::{clamp_field, clamp_fields, Instr};
 use crate::types::{Fields, FIELD_COUNT};
 use std::sync::Arc;
 
@@ -96,7 +96,7 @@ pub(crate) struct DirectShading {
 }
 
 /// The opacity and colour tables of [`DirectShading`] on one scale of input buckets
-/// ([`Mapping::bucket_of`]): where the inputs of a bucket lie inside one ramp segment of each
+/// ([`Mapping::clamp_and_bucket`]): where the inputs of a bucket lie inside one ramp segment of each
 /// table (most buckets), the two segments' numbers side by side, so that a sample locates its
 /// input once for both tables and evaluates them without their case analysis. The same
 /// numbers and the same arithmetic as [`Mapping::eval`], so the same bits.
@@ -130,17 +130,8 @@ impl SegmentPair {
         use wide::{f32x4, f64x4};
         let v = f64x4::new(self.base)
             + (f64x4::splat(x as f64) - f64x4::new(self.start)) * f64x4::new(self.slope);
-        clamp_fields(f32x4::new(v.to_array().map(|v| v as f32)))
+        clamp_fields(f32x4::new(v.to_array().map(|v| v as f32))).to_array()
     }
-}
-
-/// [`clamp_field`] in lanes, bit for bit: a lane not at least 0 (below it, or NaN) becomes
-/// +0 and the rest the lesser of it and 1 (−0 stays −0, as `f32::clamp` leaves it). Four
-/// vector operations instead of a NaN test and two comparisons per value.
-#[inline]
-fn clamp_fields(v: wide::f32x4) -> [f32; 4] {
-    use wide::f32x4;
-    (v.simd_ge(f32x4::ZERO) & v).fast_min(f32x4::ONE).to_array()
 }
 
 impl SegmentPairs {
@@ -181,16 +172,16 @@ impl SegmentPairs {
         SegmentPairs { index, pairs }
     }
 
-    /// The opacity and colour at input `x` (a field value, in [0, 1]) where its bucket has a
-    /// pair: [`map_value`] of the opacity table, then, if it is above 0, [`map_each`] of the
+    /// The opacity and colour at input `x` (a field value, in [0, 1]) of bucket `bucket` (see
+    /// [`Mapping::clamp_and_bucket`]) where the bucket has a pair: [`map_value`] of the opacity table, then, if it is above 0, [`map_each`] of the
     /// colour table, bit for bit. (Bucket 0, which holds the input 0, where a ramp is 0
     /// whatever its first segment says, never has a pair: no breakpoint lies below its
     /// inputs, so they are not between two rows.) The four columns are evaluated together
     /// in lanes ([`SegmentPair::values`]); the samples that get here have passed the zero
     /// test, so their opacity is nearly always above 0 and the colour needed.
     #[inline]
-    fn eval(&self, x: f32) -> Option<(f32, Option<[f32; 3]>)> {
-        let i = *self.index.get(Mapping::bucket_of(x))?;
+    fn eval(&self, x: f32, bucket: usize) -> Option<(f32, Option<[f32; 3]>)> {
+        let i = *self.index.get(bucket)?;
         let pair = self.pairs.get(i as usize)?; // NONE is past the end
         let [o, r, g, b] = pair.values(x);
         Some((o, (o > 0.0).then_some([r, g, b])))
@@ -236,8 +227,8 @@ impl DirectShading {
     #[inline]
     pub(crate) fn opacity_colour(&self, v: f32) -> (f32, Option<[f32; 3]>) {
         // The dataset writes the clamped value into the source field, which both tables read.
-        let x = clamp_field(v);
-        if let Some(oc) = self.pairs.eval(x) {
+        let (x, b) = Mapping::clamp_and_bucket(v);
+        if let Some(oc) = self.pairs.eval(x, b) {
             return oc;
         }
         let o = map_value(&self.opacity.0, x, self.opacity.1);
@@ -872,52 +863,6 @@ mod tests {
         }
     }
 
-    /// [`clamp_fields`] is [`clamp_field`] lane by lane, bit for bit: on NaNs, ±0, ±∞, the
-    /// subnormals, values around 0 and 1, and 100 000 random bit patterns, in every lane.
-    #[test]
-    fn clamp_fields_is_clamp_field() {
-        let mut values = vec![
-            f32::NAN,
-            -f32::NAN,
-            f32::from_bits(0x7f80_0001),
-            0.0,
-            -0.0,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::MIN_POSITIVE,
-            -f32::MIN_POSITIVE,
-            f32::from_bits(1),
-            f32::from_bits(0x8000_0001),
-            0.5,
-            1.0,
-            -1.0,
-            f32::MAX,
-            f32::MIN,
-        ];
-        values.extend(
-            [1.0f32, -0.0, 0.0]
-                .iter()
-                .flat_map(|x| [x.next_up(), x.next_down()]),
-        );
-        let mut rng = 0x9e37_79b9_7f4a_7c15u64;
-        values.extend((0..100_000).map(|_| {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            f32::from_bits((rng >> 32) as u32)
-        }));
-        for (k, w) in values.windows(4).enumerate() {
-            let mut lanes = [w[0], w[1], w[2], w[3]];
-            lanes.rotate_left(k % 4);
-            let got = clamp_fields(wide::f32x4::new(lanes));
-            assert_eq!(
-                got.map(f32::to_bits),
-                lanes.map(|v| clamp_field(v).to_bits()),
-                "{lanes:?}"
-            );
-        }
-    }
-
     /// [`SegmentPair::values`] is `clamp_field((base + (x − start)·slope) as f32)` column by
     /// column, bit for bit, for random segments with starts, bases and slopes of every
     /// magnitude (results below 0, inside [0, 1], past 1 and past f32's range) at inputs of
@@ -1026,7 +971,7 @@ mod tests {
             inputs.retain(|x| *x >= 0.0 && *x <= 1.0);
             let mut served = 0;
             for &x in &inputs {
-                let Some((po, prgb)) = pairs.eval(x) else {
+                let Some((po, prgb)) = pairs.eval(x, Mapping::clamp_and_bucket(x).1) else {
                     continue;
                 };
                 served += 1;

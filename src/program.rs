@@ -116,6 +116,15 @@ pub fn clamp_field(v: f32) -> f32 {
     }
 }
 
+/// [`clamp_field`] in lanes, bit for bit: a lane not at least 0 (below it, or NaN) becomes
+/// +0 and the rest the lesser of it and 1 (−0 stays −0, as `f32::clamp` leaves it). Four
+/// vector operations instead of a NaN test and two comparisons per value.
+#[inline]
+pub(crate) fn clamp_fields(v: wide::f32x4) -> wide::f32x4 {
+    use wide::f32x4;
+    (v.simd_ge(f32x4::ZERO) & v).fast_min(f32x4::ONE)
+}
+
 /// What a sample's callback may do (the sample scope of the state machine).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SampleRole {
@@ -482,6 +491,52 @@ pub fn prefix_for(program: &[Instr], field: Fields) -> usize {
 mod tests {
     use super::*;
     use crate::types::MappingType;
+
+    /// [`clamp_fields`] is [`clamp_field`] lane by lane, bit for bit: on NaNs, ±0, ±∞, the
+    /// subnormals, values around 0 and 1, and 100 000 random bit patterns, in every lane.
+    #[test]
+    fn clamp_fields_is_clamp_field() {
+        let mut values = vec![
+            f32::NAN,
+            -f32::NAN,
+            f32::from_bits(0x7f80_0001),
+            0.0,
+            -0.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            f32::from_bits(1),
+            f32::from_bits(0x8000_0001),
+            0.5,
+            1.0,
+            -1.0,
+            f32::MAX,
+            f32::MIN,
+        ];
+        values.extend(
+            [1.0f32, -0.0, 0.0]
+                .iter()
+                .flat_map(|x| [x.next_up(), x.next_down()]),
+        );
+        let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+        values.extend((0..100_000).map(|_| {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            f32::from_bits((rng >> 32) as u32)
+        }));
+        for (k, w) in values.windows(4).enumerate() {
+            let mut lanes = [w[0], w[1], w[2], w[3]];
+            lanes.rotate_left(k % 4);
+            let got = clamp_fields(wide::f32x4::new(lanes)).to_array();
+            assert_eq!(
+                got.map(f32::to_bits),
+                lanes.map(|v| clamp_field(v).to_bits()),
+                "{lanes:?}"
+            );
+        }
+    }
 
     #[test]
     fn set_is_masked_and_clamped() {
