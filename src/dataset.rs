@@ -853,15 +853,18 @@ impl Dataset {
     /// bound (the eight nodes are not read then; a mask's bound is never below 0, see
     /// [`Dataset::cells_above`]). The cells are found in lanes across the points, with the
     /// operations of [`Dataset::cell_in_lanes`] lane for lane, so the same values. The other
-    /// values are 0.
+    /// values are 0. (Written into `out`, all eight values, rather than returned: the batched
+    /// march keeps one array for every run, and a returned array was copied from the return
+    /// slot to the caller's, one f32 at a time, on every run.)
     #[inline]
     pub(crate) fn trilinear8(
         &self,
         p: &[[f32; 8]; 3],
         count: usize,
         mask: Option<&CellMask>,
-    ) -> [f32; 8] {
-        let mut out = [0f32; 8];
+        out: &mut [f32; 8],
+    ) {
+        *out = [0f32; 8];
         let count = count.min(8);
         #[cfg(target_arch = "x86_64")]
         if let Some([last, top, _]) = &self.lanes {
@@ -891,14 +894,14 @@ impl Dataset {
                             self.strides[1] as u32 as usize,
                             self.strides[2] as u32 as usize,
                         );
-                        self.values_in_cells(at, |a| a as usize, rows, &f, count, mask, &mut out);
+                        self.values_in_cells(at, |a| a as usize, rows, &f, count, mask, out);
                     } else {
                         let [cx, cy, cz] = c.map(|c| c.to_array());
                         let at: [usize; $N] = std::array::from_fn(|i| {
                             self.node_index([cx[i], cy[i], cz[i]].map(|c| c as usize))
                         });
                         let rows = (self.strides[1], self.strides[2]);
-                        self.values_in_cells(at, |a| a, rows, &f, count, mask, &mut out);
+                        self.values_in_cells(at, |a| a, rows, &f, count, mask, out);
                     }
                 }};
             }
@@ -908,12 +911,11 @@ impl Dataset {
             } else {
                 cells!(f32x8, i32x8, 8);
             }
-            return out;
+            return;
         }
         for (i, out) in out.iter_mut().enumerate().take(count) {
             *out = self.trilinear_in([p[0][i], p[1][i], p[2][i]], mask);
         }
-        out
     }
 
     /// The values at the first `count` of `N` points whose cells' first nodes are `at` (as
@@ -1744,7 +1746,7 @@ mod tests {
                 for _ in 0..250 {
                     let ps: [[f32; 3]; 8] = std::array::from_fn(|_| rng.point_around_box());
                     let by_axis = std::array::from_fn(|axis| ps.map(|p| p[axis]));
-                    let masked = d.trilinear8(&by_axis, 8, Some(&mask));
+                    let masked = values8(&d, &by_axis, 8, Some(&mask));
                     for (p, masked) in ps.into_iter().zip(masked) {
                         let plain = d.trilinear(p);
                         if plain > z {
@@ -1872,8 +1874,8 @@ mod tests {
                 let by_axis = std::array::from_fn(|axis| ps.map(|p| p[axis]));
                 for count in [chunk.len(), chunk.len().min(4)] {
                     let (got, fallback) = (
-                        d.trilinear8(&by_axis, count, None),
-                        plain.trilinear8(&by_axis, count, None),
+                        values8(&d, &by_axis, count, None),
+                        values8(&plain, &by_axis, count, None),
                     );
                     for (i, p) in ps.iter().enumerate().take(count) {
                         let want = trilinear_by_nodes(d, *p).to_bits();
@@ -1914,6 +1916,13 @@ mod tests {
         }
     }
 
+    /// [`Dataset::trilinear8`]'s values, returned.
+    fn values8(d: &Dataset, p: &[[f32; 8]; 3], count: usize, mask: Option<&CellMask>) -> [f32; 8] {
+        let mut out = [1.0f32; 8]; // not 0: `trilinear8` sets every value
+        d.trilinear8(p, count, mask, &mut out);
+        out
+    }
+
     /// [`Dataset::trilinear8`] at the first `count` points, for every count, against
     /// [`Dataset::trilinear`] point by point: the same bits, and 0 past the count.
     fn trilinear8_is_trilinear(d: &Dataset, rng: &mut Lcg, specials: &[f32]) {
@@ -1928,7 +1937,7 @@ mod tests {
             ps[..chunk.len()].copy_from_slice(chunk);
             let by_axis = std::array::from_fn(|axis| ps.map(|p| p[axis]));
             let count = batch % 9;
-            let got = d.trilinear8(&by_axis, count, None);
+            let got = values8(d, &by_axis, count, None);
             for (i, (p, got)) in ps.iter().zip(got).enumerate() {
                 let want = if i < count { d.trilinear(*p) } else { 0.0 };
                 assert_eq!(got.to_bits(), want.to_bits(), "{:?} {p:?} lane {i}", d.dims);

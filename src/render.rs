@@ -1481,8 +1481,8 @@ impl Compiled {
         let (ro, rd) = (c.o.to_array(), c.d.to_array());
         // Consecutive shaded samples often share a cell: its node differences are read once.
         let mut cache = CellGradients::default();
-        // A run's midpoints and lengths (see `Cursor::run`).
-        let (mut mids, mut lens) = ([0.0f64; 8], [0.0f64; 8]);
+        // A run's midpoints and lengths (see `Cursor::run`), and its samples' values.
+        let (mut mids, mut lens, mut vs) = ([0.0f64; 8], [0.0f64; 8], [0.0f32; 8]);
         // The usual program's shaded samples of a run, in order: their compositing weights,
         // colours (then lit colours) and gradients, by axis.
         let (mut weights, mut colours, mut grads) = ([0.0f64; 8], [[0.0f64; 8]; 3], [[0.0; 8]; 3]);
@@ -1519,7 +1519,7 @@ impl Compiled {
                 std::array::from_fn(|axis| mids.map(|t| point(axis, t)))
             };
             // In [0, 1], as field values; 0 (at most z) where the cell cannot pass the zero test.
-            let vs = data.trilinear8(&ps, m, cells);
+            data.trilinear8(&ps, m, cells, &mut vs);
             // The samples that pass the zero test (and have a length), as bits in order: the
             // loop below visits only those, without a branch per sample.
             let mut pass = pass_bits(&lens, &vs, z) & ((1u32 << m) - 1);
