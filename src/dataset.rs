@@ -933,8 +933,18 @@ impl Dataset {
         mask: Option<&CellMask>,
         out: &mut [f32; 8],
     ) {
-        for (i, (out, at)) in out.iter_mut().zip(at).enumerate().take(count.min(N)) {
-            *out = self.trilinear_cell(index(at), rows, [f[0][i], f[1][i], f[2][i]], mask);
+        // The x-stride's test outside the cells: the compiler merges the two loops again, but
+        // tests a register in each cell instead of reloading the stride from the dataset.
+        let mut cells = |unit_x: bool| {
+            for (i, (out, at)) in out.iter_mut().zip(at).enumerate().take(count.min(N)) {
+                let f = [f[0][i], f[1][i], f[2][i]];
+                *out = self.trilinear_cell(index(at), rows, f, mask, unit_x);
+            }
+        };
+        if self.strides[0] == 1 {
+            cells(true);
+        } else {
+            cells(false);
         }
     }
 
@@ -942,11 +952,13 @@ impl Dataset {
     fn trilinear_in(&self, p: [f32; 3], mask: Option<&CellMask>) -> f32 {
         let (cell, f) = self.cell32(p);
         let rows = (self.strides[1], self.strides[2]);
-        self.trilinear_cell(self.node_index(cell), rows, f, mask)
+        self.trilinear_cell(self.node_index(cell), rows, f, mask, self.strides[0] == 1)
     }
 
     /// The trilinear value in the cell whose first node has index `base`, at weights `f` of
-    /// its second nodes; 0 where `mask` proves the cell below its bound.
+    /// its second nodes; 0 where `mask` proves the cell below its bound. `unit_x`: whether
+    /// the x-stride is 1 (else 0, an axis of one node), given by the caller so that a loop
+    /// over cells tests it once.
     #[inline(always)]
     fn trilinear_cell(
         &self,
@@ -954,14 +966,14 @@ impl Dataset {
         (sy, sz): (usize, usize),
         [fx, fy, fz]: [f32; 3],
         mask: Option<&CellMask>,
+        unit_x: bool,
     ) -> f32 {
         if mask.is_some_and(|m| !m.may_reach(base)) {
             return 0.0;
         }
-        let sx = self.strides[0];
         let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
         let v = &self.values;
-        let (c00, c10, c01, c11) = if sx == 1 {
+        let (c00, c10, c01, c11) = if unit_x {
             // Four rows of two nodes along x, in the span [base, base + sz + sy + 2): the
             // first and last two nodes of its first sy + 2 and of its last sy + 2. Where base
             // and the strides are below 2³² (given as such) no sum overflows, and the span's
