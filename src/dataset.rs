@@ -1758,7 +1758,7 @@ mod tests {
                 for _ in 0..250 {
                     let ps: [[f32; 3]; 8] = std::array::from_fn(|_| rng.point_around_box());
                     let by_axis = std::array::from_fn(|axis| ps.map(|p| p[axis]));
-                    let masked = values8(&d, &by_axis, 8, Some(&mask));
+                    let masked = values8(d, &by_axis, 8, Some(&mask));
                     for (p, masked) in ps.into_iter().zip(masked) {
                         let plain = d.trilinear(p);
                         if plain > z {
@@ -1886,7 +1886,7 @@ mod tests {
                 let by_axis = std::array::from_fn(|axis| ps.map(|p| p[axis]));
                 for count in [chunk.len(), chunk.len().min(4)] {
                     let (got, fallback) = (
-                        values8(&d, &by_axis, count, None),
+                        values8(d, &by_axis, count, None),
                         values8(&plain, &by_axis, count, None),
                     );
                     for (i, p) in ps.iter().enumerate().take(count) {
