@@ -19,6 +19,8 @@
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
 
+#[path = "common/say.rs"]
+mod say;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -1919,12 +1921,12 @@ fn main() -> Res<()> {
         &voxel_plot,
         &combined_plot,
     ];
-    println!(
+    say::say(format_args!(
         "wrote {} and {} plots in {:.0} s",
         doc_path.display(),
         plots.len(),
         start.elapsed().as_secs_f64()
-    );
+    ))?;
     Ok(())
 }
 

@@ -5,6 +5,8 @@
 //! cargo run --release --example figure2 -- out/stone-rust.png
 //! ```
 
+#[path = "common/say.rs"]
+mod say;
 use vlib::{vlaux, Attenuation, Camera, Fields, Library, MappingType};
 
 /// A granite-like texture: turbulent greys with a warm tint and dark speckles.
@@ -18,7 +20,7 @@ fn stone(s: &mut vlib::Sample) {
     let _ = s.set(Fields::B, base - 0.05);
 }
 
-fn main() -> Result<(), vlib::Error> {
+fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "stone-rust.png".into());
@@ -53,6 +55,6 @@ fn main() -> Result<(), vlib::Error> {
     vl.set(Fields::N, vlib::types::specular_to_field(20.0))?;
     vl.end()?; // object
     vl.end()?; // scene: renders and writes the image
-    println!("wrote {out}");
+    say::say(format_args!("wrote {out}"))?;
     Ok(())
 }

@@ -35,6 +35,8 @@
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
 
+#[path = "common/say.rs"]
+mod say;
 use std::time::Instant;
 use vlib::{Camera, Fields, Library, MappingType, RenderType};
 
@@ -121,9 +123,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     vl.image(png, 1.0, size, size)?;
     build(&mut vl, dims, step, &view)?;
     vl.end()?;
-    println!(
+    say::say(format_args!(
         "wrote {png} ({view} view, {size}x{size}, step {step}) in {:.3} s",
         start.elapsed().as_secs_f64()
-    );
+    ))?;
     Ok(())
 }

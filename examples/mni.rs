@@ -17,6 +17,8 @@
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
 
+#[path = "common/say.rs"]
+mod say;
 use std::time::Instant;
 
 /// The value of the flag `name` (`--name=`) among `all`, parsed, or `default` without it.
@@ -70,16 +72,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             })
             .collect::<Result<_, _>>()?;
         times.sort_by(f64::total_cmp);
-        println!(
+        say::say(format_args!(
             "{frames} frames: fastest {:.1} ms, median {:.1} ms",
             times[0] * 1e3,
             times[frames / 2] * 1e3
-        );
+        ))?;
     }
     vl.end()?;
-    println!(
+    say::say(format_args!(
         "wrote {png} in {:.3} s (load {loaded:.3} s, then precomputation and render)",
         start.elapsed().as_secs_f64()
-    );
+    ))?;
     Ok(())
 }

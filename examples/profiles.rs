@@ -24,6 +24,8 @@
 //! base, and `knight_head.png`, a horse's head in profile (not swept: chess.c extrudes it into a
 //! slab standing on the base, facing +x, and takes the maximum of the two).
 
+#[path = "common/say.rs"]
+mod say;
 use std::error::Error;
 use std::path::Path;
 
@@ -426,7 +428,7 @@ fn save(path: &Path, img: &[f32], w: usize, h: usize) -> Result<(), Box<dyn Erro
     let buf = image::ImageBuffer::<image::Luma<u16>, _>::from_raw(w as u32, h as u32, px)
         .ok_or("image size")?;
     buf.save(path)?;
-    println!("wrote {} ({w}x{h})", path.display());
+    say::say(format_args!("wrote {} ({w}x{h})", path.display()))?;
     Ok(())
 }
 

@@ -6,6 +6,8 @@
 //! cargo run --release --example roundtrip [-- --write-doc]
 //! ```
 
+#[path = "common/say.rs"]
+mod say;
 use std::time::Instant;
 use vlib::{Attenuation, Camera, Fields, Image, Library, MappingType};
 
@@ -134,7 +136,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         eprintln!("{n}: rms {rms:.2}, max {max}");
     }
     std::fs::remove_dir_all(&dir)?;
-    println!("{table}");
+    say::say(format_args!("{table}"))?;
     if write_doc {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/accuracy.md");
         let doc = std::fs::read_to_string(path).unwrap_or_default();
@@ -145,7 +147,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             _ => format!("{doc}\n{block}\n"),
         };
         vlib::output::write_atomic(std::path::Path::new(path), new.as_bytes())?;
-        println!("updated {path}");
+        say::say(format_args!("updated {path}"))?;
     }
     Ok(())
 }

@@ -28,6 +28,8 @@
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
 
+#[path = "common/say.rs"]
+mod say;
 use std::f64::consts::FRAC_PI_2;
 use std::time::Instant;
 use vlib::{Camera, Library, Sample};
@@ -110,7 +112,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     vl.image(png, 1.0, size, size)?;
     build(&mut vl, dims, step)?;
     vl.end()?;
-    println!("wrote {png} in {:.3} s", start.elapsed().as_secs_f64());
+    say::say(format_args!(
+        "wrote {png} in {:.3} s",
+        start.elapsed().as_secs_f64()
+    ))?;
     Ok(())
 }
 

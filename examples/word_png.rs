@@ -16,6 +16,8 @@
 //! sides of the letters show those facets as stripes. Only the letters in the table are known
 //! (`vlib` by default).
 
+#[path = "common/say.rs"]
+mod say;
 use std::error::Error;
 
 /// One stroke of a glyph, in glyph units.
@@ -162,6 +164,6 @@ fn main() -> Result<(), Box<dyn Error>> {
         .collect();
     let img = image::GrayImage::from_raw(w, h, px).ok_or("image size")?;
     img.save(out)?;
-    println!("wrote {out} ({w}x{h}, \"{word}\")");
+    say::say(format_args!("wrote {out} ({w}x{h}, \"{word}\")"))?;
     Ok(())
 }

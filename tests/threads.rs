@@ -1,19 +1,10 @@
 //! The same scene rendered by separate processes with `RAYON_NUM_THREADS=1` and `=2` gives
 //! identical bytes (the Figure 2 example, built by `cargo test` alongside this test).
 
-use std::path::PathBuf;
 use std::process::Command;
 
-fn example(name: &str) -> PathBuf {
-    // target/<profile>/deps/threads-<hash> → target/<profile>/examples/<name>
-    let exe = std::env::current_exe().unwrap();
-    exe.parent()
-        .unwrap()
-        .parent()
-        .unwrap()
-        .join("examples")
-        .join(name)
-}
+mod common;
+use common::example;
 
 #[test]
 fn figure2_bytes_do_not_depend_on_the_thread_count() {
