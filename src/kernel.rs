@@ -96,9 +96,9 @@ pub(crate) struct DirectShading {
 }
 
 /// The opacity and colour tables of [`DirectShading`] on one scale of input buckets
-/// ([`Mapping::clamp_and_bucket`]): where the inputs of a bucket lie inside one ramp segment of each
-/// table (most buckets), the two segments' numbers side by side, so that a sample locates its
-/// input once for both tables and evaluates them without their case analysis. The same
+/// ([`Mapping::clamp_and_bucket`]): where the inputs of a bucket lie inside one ramp segment of
+/// each table (most buckets), the two segments' numbers side by side, so that a sample locates
+/// its input once for both tables and evaluates them without their case analysis. The same
 /// numbers and the same arithmetic as [`Mapping::eval`], so the same bits.
 #[derive(Clone, Debug)]
 struct SegmentPairs {
@@ -173,8 +173,8 @@ impl SegmentPairs {
     }
 
     /// The opacity and colour at input `x` (a field value, in [0, 1]) of bucket `bucket` (see
-    /// [`Mapping::clamp_and_bucket`]) where the bucket has a pair: [`map_value`] of the opacity table, then, if it is above 0, [`map_each`] of the
-    /// colour table, bit for bit. (Bucket 0, which holds the input 0, where a ramp is 0
+    /// [`Mapping::clamp_and_bucket`]) where the bucket has a pair: [`map_value`] of the opacity
+    /// table, then, if it is above 0, [`map_each`] of the colour table, bit for bit. (Bucket 0, which holds the input 0, where a ramp is 0
     /// whatever its first segment says, never has a pair: no breakpoint lies below its
     /// inputs, so they are not between two rows.) The four columns are evaluated together
     /// in lanes ([`SegmentPair::values`]); the samples that get here have passed the zero

@@ -355,9 +355,8 @@ mod tests {
     }
 
     /// `clamp_and_bucket` is `clamp_field` and the plain ⌊x·BUCKETS⌋ of its result x, bit for
-    /// bit: for
-    /// every input of [0, 1] within 64 ulps of a bucket edge, every 61st one between, and
-    /// for NaNs, ±0, ±∞, negative inputs, inputs past 1 and random bit patterns.
+    /// bit: for every input of [0, 1] within 64 ulps of a bucket edge, every 61st one between,
+    /// and for NaNs, ±0, ±∞, negative inputs, inputs past 1 and random bit patterns.
     #[test]
     fn clamp_and_bucket_is_clamp_then_bucket() {
         let check = |v: f32| {
