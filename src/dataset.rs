@@ -236,6 +236,22 @@ impl CellMask {
     }
 }
 
+/// The cells of [`Dataset::trilinear8`]'s points, handed out so that the batched march can
+/// take a shaded sample's gradient in its cell ([`Dataset::trilinear_gradient_in`]) instead of
+/// finding the cell again from the point.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Cells8 {
+    /// Per point, its cell's first node's index.
+    pub(crate) at: [u32; 8],
+    /// Per axis and point, the weight of the cell's second node.
+    pub(crate) f: [[f32; 8]; 3],
+    /// Bit `i`: point `i` (of the first `count`) lies in an interior cell (its 4×4×4
+    /// neighbourhood inside the grid, see [`Dataset::interior_cell32`]), and `at` and `f` hold
+    /// that cell. No bit where the cells were not found in lanes: those points keep the
+    /// gradient's own path.
+    pub(crate) interior: u32,
+}
+
 /// The central differences (per grid step) at the eight nodes of the cell a trilinear
 /// gradient last read, per corner (x fastest) and axis (x, y, z), for
 /// [`Dataset::gradient_cached`]; `lo` is the first node of
@@ -855,7 +871,8 @@ impl Dataset {
     /// operations of [`Dataset::cell_in_lanes`] lane for lane, so the same values. The other
     /// values are 0. (Written into `out`, all eight values, rather than returned: the batched
     /// march keeps one array for every run, and a returned array was copied from the return
-    /// slot to the caller's, one f32 at a time, on every run.)
+    /// slot to the caller's, one f32 at a time, on every run.) `cells` receives the points'
+    /// cells, for their gradients (see [`Cells8`]).
     #[inline]
     pub(crate) fn trilinear8(
         &self,
@@ -863,25 +880,31 @@ impl Dataset {
         count: usize,
         mask: Option<&CellMask>,
         out: &mut [f32; 8],
+        cells: &mut Cells8,
     ) {
         *out = [0f32; 8];
+        cells.interior = 0;
         let count = count.min(8);
         #[cfg(target_arch = "x86_64")]
-        if let Some([last, top, _]) = &self.lanes {
+        if let Some([last, top, inner]) = &self.lanes {
             use wide::{f32x4, f32x8, i32x4, i32x8};
             // The cells of the points along one axis, in lanes of `$F` (`$I` for the indices).
             macro_rules! cells {
                 ($F:ty, $I:ty, $N:literal) => {{
                     let mut c = [<$I>::default(); 3];
                     let mut cf = [<$F>::ZERO; 3];
-                    let mut f = [[0f32; $N]; 3];
+                    let mut inside = [<$F>::ZERO; 3];
+                    let f = &mut cells.f;
                     for axis in 0..3 {
                         let l = <$F>::splat(last[axis]);
                         let lanes: [f32; $N] = std::array::from_fn(|i| p[axis][i]);
                         let u = (<$F>::new(lanes) * l).fast_max(<$F>::ZERO).fast_min(l);
-                        c[axis] = u.fast_min(<$F>::splat(top[axis])).fast_trunc_int();
+                        let cu = u.fast_min(<$F>::splat(top[axis]));
+                        // Interior along the axis: 1 ≤ cu < n − 2 (see `cell_in_lanes`).
+                        inside[axis] = cu.simd_ge(<$F>::ONE) & cu.simd_lt(<$F>::splat(inner[axis]));
+                        c[axis] = cu.fast_trunc_int();
                         cf[axis] = c[axis].round_float();
-                        f[axis] = (u - cf[axis]).to_array();
+                        f[axis][..$N].copy_from_slice(&(u - cf[axis]).to_array());
                     }
                     if let Some([sx, sy, sz]) = self.index_lanes {
                         // The first nodes' indices in lanes: integers below 2²⁴, so exact.
@@ -889,19 +912,22 @@ impl Dataset {
                         let at = cf[0] * s(sx) + cf[1] * s(sy) + cf[2] * s(sz);
                         let at: $I = at.fast_trunc_int();
                         let at = at.to_array().map(|a| a as u32);
+                        cells.at[..$N].copy_from_slice(&at);
+                        cells.interior =
+                            (inside[0] & inside[1] & inside[2]).to_bitmask() & ((1 << count) - 1);
                         // Below 2²⁴ as well, so the conversions are exact.
                         let rows = (
                             self.strides[1] as u32 as usize,
                             self.strides[2] as u32 as usize,
                         );
-                        self.values_in_cells(at, |a| a as usize, rows, &f, count, mask, out);
+                        self.values_in_cells(at, |a| a as usize, rows, &cells.f, count, mask, out);
                     } else {
                         let [cx, cy, cz] = c.map(|c| c.to_array());
                         let at: [usize; $N] = std::array::from_fn(|i| {
                             self.node_index([cx[i], cy[i], cz[i]].map(|c| c as usize))
                         });
                         let rows = (self.strides[1], self.strides[2]);
-                        self.values_in_cells(at, |a| a, rows, &f, count, mask, out);
+                        self.values_in_cells(at, |a| a, rows, &cells.f, count, mask, out);
                     }
                 }};
             }
@@ -928,7 +954,7 @@ impl Dataset {
         at: [T; N],
         index: impl Fn(T) -> usize,
         rows: (usize, usize),
-        f: &[[f32; N]; 3],
+        f: &[[f32; 8]; 3],
         count: usize,
         mask: Option<&CellMask>,
         out: &mut [f32; 8],
@@ -1020,10 +1046,40 @@ impl Dataset {
         p: [f32; 3],
         cache: &mut CellGradients,
     ) -> Option<[f64; 3]> {
-        let (cell, [fx, fy, fz]) = self.interior_cell32(p)?;
+        let (cell, f) = self.interior_cell32(p)?;
+        self.trilinear_gradient_at(self.neighbourhood_lo(cell), f, cache)
+    }
+
+    /// [`Dataset::gradient_cached`] with the trilinear filter at a point of interior cell
+    /// `cells` holds as its lane `i` (bit `i` of [`Cells8::interior`] set): the batched march
+    /// has found that cell for the point's value, so the gradient need not find it again. The
+    /// same value, bit for bit (the same cell and weights, see [`Dataset::trilinear8`]).
+    #[inline]
+    pub(crate) fn trilinear_gradient_in(
+        &self,
+        p: [f32; 3],
+        cells: &Cells8,
+        i: usize,
+        cache: &mut CellGradients,
+    ) -> [f64; 3] {
+        let f = [cells.f[0][i], cells.f[1][i], cells.f[2][i]];
+        (cells.at[i] as usize)
+            .checked_sub(self.lo_offset)
+            .and_then(|lo| self.trilinear_gradient_at(lo, f, cache))
+            .unwrap_or_else(|| self.gradient_generic(p, Filter::Trilinear))
+    }
+
+    /// [`Dataset::trilinear_gradient_interior`] in the interior cell whose neighbourhood starts
+    /// at node `lo` (see [`Dataset::neighbourhood_lo`]), at weights `f` of its second nodes.
+    #[inline(always)]
+    fn trilinear_gradient_at(
+        &self,
+        lo: usize,
+        [fx, fy, fz]: [f32; 3],
+        cache: &mut CellGradients,
+    ) -> Option<[f64; 3]> {
         // Row (j, k) holds nodes x0 − 1 … x0 + 2 at y0 − 1 + j, z0 − 1 + k; the corner rows of
         // the neighbourhood are never read.
-        let lo = self.neighbourhood_lo(cell);
         if cache.lo != lo {
             let (sy, sz) = (self.strides[1], self.strides[2]);
             // A row starting at most 4 before the end lies inside the values: one comparison
@@ -1931,7 +1987,7 @@ mod tests {
     /// [`Dataset::trilinear8`]'s values, returned.
     fn values8(d: &Dataset, p: &[[f32; 8]; 3], count: usize, mask: Option<&CellMask>) -> [f32; 8] {
         let mut out = [1.0f32; 8]; // not 0: `trilinear8` sets every value
-        d.trilinear8(p, count, mask, &mut out);
+        d.trilinear8(p, count, mask, &mut out, &mut Cells8::default());
         out
     }
 
@@ -1954,6 +2010,67 @@ mod tests {
                 let want = if i < count { d.trilinear(*p) } else { 0.0 };
                 assert_eq!(got.to_bits(), want.to_bits(), "{:?} {p:?} lane {i}", d.dims);
             }
+        }
+        trilinear8_cells(d, rng, specials);
+    }
+
+    /// [`Dataset::trilinear8`]'s cells against [`Dataset::interior_cell32`] point by point (an
+    /// interior bit exactly where that finds an interior cell, and then the same cell and
+    /// weights), and [`Dataset::trilinear_gradient_in`] in them against [`Dataset::gradient`],
+    /// bit for bit (one cache across the points, as in a ray): at random points, points in
+    /// the cells next to the faces and just either side of their nodes, and `specials`.
+    fn trilinear8_cells(d: &Dataset, rng: &mut Lcg, specials: &[f32]) {
+        let mut points: Vec<[f32; 3]> = (0..400).map(|_| rng.point_around_box()).collect();
+        for axis in 0..3 {
+            let n = d.dims[axis];
+            let last = n.saturating_sub(1).max(1) as f32;
+            for node in [0, 1, 2, 3, n.saturating_sub(3), n.saturating_sub(2), n - 1] {
+                let at = node as f32 / last;
+                for a in [at, at.next_down(), at.next_up(), at + 0.3 / last] {
+                    let mut p = rng.point_around_box();
+                    p[axis] = a;
+                    points.push(p);
+                }
+            }
+        }
+        for &a in specials {
+            points.push([a, 0.4, 0.3]);
+            points.push([0.5, a, 0.6]);
+        }
+        let mut cache = CellGradients::default();
+        let mut interior = 0;
+        for (batch, chunk) in points.chunks(8).enumerate() {
+            let mut ps = [[0.5f32; 3]; 8];
+            ps[..chunk.len()].copy_from_slice(chunk);
+            let by_axis = std::array::from_fn(|axis| ps.map(|p| p[axis]));
+            let count = (batch + 5) % 9;
+            // Not the defaults: `trilinear8` sets the interior bits.
+            let mut cells = Cells8 {
+                interior: u32::MAX,
+                ..Cells8::default()
+            };
+            d.trilinear8(&by_axis, count, None, &mut [0.0; 8], &mut cells);
+            assert_eq!(cells.interior >> count, 0, "{:?}", d.dims);
+            for (i, p) in ps.iter().enumerate().take(count) {
+                let found = d.interior_cell32(*p);
+                if cells.interior >> i & 1 == 0 {
+                    // Only where the cells were not found in lanes may an interior cell have no bit.
+                    assert!(found.is_none() || d.index_lanes.is_none(), "{p:?}");
+                    continue;
+                }
+                interior += 1;
+                let (cell, f) = found.expect("an interior cell");
+                assert_eq!(cells.at[i] as usize, d.node_index(cell), "{p:?}");
+                let got = [cells.f[0][i], cells.f[1][i], cells.f[2][i]];
+                assert_eq!(got.map(f32::to_bits), f.map(f32::to_bits), "{p:?}");
+                let g = d.trilinear_gradient_in(*p, &cells, i, &mut cache);
+                let want = d.gradient(*p, Filter::Trilinear);
+                assert_eq!(g.map(f64::to_bits), want.map(f64::to_bits), "{p:?}");
+            }
+        }
+        // A grid with interior cells had points in them.
+        if d.dims.iter().all(|&n| n >= 4) && d.index_lanes.is_some() {
+            assert!(interior > 10, "{:?}: {interior}", d.dims);
         }
     }
 }

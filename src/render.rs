@@ -17,7 +17,7 @@
 //! [`T_MIN`]). Shadow rays use the same
 //! segments; mirror and refracted rays start at surface hits.
 
-use crate::dataset::{CellGradients, Dataset, Filter};
+use crate::dataset::{CellGradients, Cells8, Dataset, Filter};
 use crate::error::{Error, ErrorCode, Result};
 use crate::kernel::Lean;
 use crate::program::{prefix_for, run, Instr, NormalFn, Sample, SampleEnv, SampleRole};
@@ -1483,6 +1483,13 @@ impl Compiled {
         let mut cache = CellGradients::default();
         // A run's midpoints and lengths (see `Cursor::run`), and its samples' values.
         let (mut mids, mut lens, mut vs) = ([0.0f64; 8], [0.0f64; 8], [0.0f32; 8]);
+        // And their cells: where the normal's gradient is that of this very dataset, trilinear,
+        // a shaded sample's gradient is taken in the cell its value was read from.
+        let mut cells8 = Cells8::default();
+        let same_cells = matches!(
+            &obj.f_dataset,
+            Some((d, Filter::Trilinear)) if std::ptr::eq(Arc::as_ptr(d), data)
+        );
         // The usual program's shaded samples of a run, in order: their compositing weights,
         // colours (then lit colours) and gradients, by axis.
         let (mut weights, mut colours, mut grads) = ([0.0f64; 8], [[0.0f64; 8]; 3], [[0.0; 8]; 3]);
@@ -1519,7 +1526,7 @@ impl Compiled {
                 std::array::from_fn(|axis| mids.map(|t| point(axis, t)))
             };
             // In [0, 1], as field values; 0 (at most z) where the cell cannot pass the zero test.
-            data.trilinear8(&ps, m, cells, &mut vs);
+            data.trilinear8(&ps, m, cells, &mut vs, &mut cells8);
             // The samples that pass the zero test (and have a length), as bits in order: the
             // loop below visits only those, without a branch per sample.
             let mut pass = pass_bits(&lens, &vs, z) & ((1u32 << m) - 1);
@@ -1542,7 +1549,13 @@ impl Compiled {
                     let c = if lanes.is_some() {
                         // The normal's gradient now (in object space where it is the dataset's:
                         // the lanes take it to world space); the rest in lanes below.
-                        let (g, vanishes) = obj.field_gradient_in(w, p, 9, &mut cache);
+                        let (g, vanishes) = if same_cells && cells8.interior >> i & 1 != 0 {
+                            let g = data.trilinear_gradient_in(p, &cells8, i, &mut cache);
+                            let g = DVec3::from_array(g);
+                            (g, g.abs().max_element() <= ZERO_GRADIENT)
+                        } else {
+                            obj.field_gradient_in(w, p, 9, &mut cache)
+                        };
                         let g = if vanishes {
                             [f64::NAN; 3]
                         } else {
