@@ -2054,7 +2054,8 @@ mod tests {
             for (i, p) in ps.iter().enumerate().take(count) {
                 let found = d.interior_cell32(*p);
                 if cells.interior >> i & 1 == 0 {
-                    // Only where the cells were not found in lanes may an interior cell have no bit.
+                    // Only where the cells were not found in lanes may an interior cell have
+                    // no bit.
                     assert!(found.is_none() || d.index_lanes.is_none(), "{p:?}");
                     continue;
                 }

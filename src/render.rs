@@ -348,8 +348,7 @@ impl CObj {
         cache: &mut CellGradients,
     ) -> (DVec3, bool) {
         if let (9, Some((data, filter))) = (field, &self.f_dataset) {
-            let g = DVec3::from_array(data.gradient_cached(p, *filter, cache));
-            return (g, g.abs().max_element() <= ZERO_GRADIENT);
+            return vanishing(data.gradient_cached(p, *filter, cache));
         }
         self.sampled_gradient(w, field)
     }
@@ -404,6 +403,14 @@ impl CObj {
             None
         }
     }
+}
+
+/// A dataset's gradient `g`, and whether it vanishes (no component above [`ZERO_GRADIENT`]
+/// in magnitude).
+#[inline(always)]
+fn vanishing(g: [f64; 3]) -> (DVec3, bool) {
+    let g = DVec3::from_array(g);
+    (g, g.abs().max_element() <= ZERO_GRADIENT)
 }
 
 /// The normal of gradient `grad` (`zero`: it vanishes): −`grad` normalised, flipped towards
@@ -1550,9 +1557,7 @@ impl Compiled {
                         // The normal's gradient now (in object space where it is the dataset's:
                         // the lanes take it to world space); the rest in lanes below.
                         let (g, vanishes) = if same_cells && cells8.interior >> i & 1 != 0 {
-                            let g = data.trilinear_gradient_in(p, &cells8, i, &mut cache);
-                            let g = DVec3::from_array(g);
-                            (g, g.abs().max_element() <= ZERO_GRADIENT)
+                            vanishing(data.trilinear_gradient_in(p, &cells8, i, &mut cache))
                         } else {
                             obj.field_gradient_in(w, p, 9, &mut cache)
                         };
