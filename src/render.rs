@@ -124,6 +124,31 @@ struct CObj {
     recursion: i32,
 }
 
+/// One axis of [`CObj::clip`]: the interval `(t0, t1)` narrowed to where the ray's coordinate
+/// `o + t·d` lies in [min, max]; `None` where `d` is 0 and `o` is outside.
+#[inline(always)]
+fn slab((mut t0, mut t1): (f64, f64), o: f64, d: f64, min: f64, max: f64) -> Option<(f64, f64)> {
+    if d == 0.0 {
+        // (A NaN `o` is not outside.)
+        if o < min || o > max {
+            return None;
+        }
+        return Some((t0, t1));
+    }
+    let inv = 1.0 / d;
+    let (a, b) = ((min - o) * inv, (max - o) * inv);
+    // `a.min(b)` and `a.max(b)`: b where a is NaN, a where b is.
+    let lo = if b < a || a.is_nan() { b } else { a };
+    let hi = if b > a || a.is_nan() { b } else { a };
+    if lo > t0 {
+        t0 = lo;
+    }
+    if hi < t1 {
+        t1 = hi;
+    }
+    Some((t0, t1))
+}
+
 impl CObj {
     fn new(
         o: &ObjectDesc,
@@ -242,23 +267,24 @@ impl CObj {
 
     /// The parameter interval [t0, t1] (t ≥ 0) where the object-space ray `o + t·d` lies
     /// inside the boundary box.
+    ///
+    /// Per axis, the slab's entry `lo` and exit `hi` are the minimum and maximum of its two
+    /// face parameters with NaN ignored (either NaN: the other; both: NaN), as `f64::min` and
+    /// `f64::max` give them, and t0 and t1 then take them with comparisons, which ignore a NaN
+    /// too: t0 starts at +0 and only ever takes a larger value, t1 starts at +∞, so neither is
+    /// NaN, and the NaN-aware `f64::max` / `f64::min` on them (7 instructions each, twice an axis
+    /// a ray) give the same values. Only the sign of a zero can differ (a tie of +0 and −0, where
+    /// `f64::min` and `f64::max` may answer either): t0 is never −0 in either form (it starts at
+    /// +0 and moves only to a value above it), and a t1 of ±0 fails `t0 < t1` in both.
+    /// (`clip_is_the_nan_aware_clip` checks them bit for bit, special values included.)
+    #[inline]
     fn clip(&self, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
-        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
-        for i in 0..3 {
-            if d[i] == 0.0 {
-                if o[i] < self.box_min[i] || o[i] > self.box_max[i] {
-                    return None;
-                }
-                continue;
-            }
-            let inv = 1.0 / d[i];
-            let (a, b) = (
-                (self.box_min[i] - o[i]) * inv,
-                (self.box_max[i] - o[i]) * inv,
-            );
-            t0 = t0.max(a.min(b));
-            t1 = t1.min(a.max(b));
-        }
+        let (min, max) = (self.box_min, self.box_max);
+        // Axis by axis, written out: as a loop the compiler kept the loop and picked each
+        // axis's values by index.
+        let t = slab((0.0, f64::INFINITY), o.x, d.x, min.x, max.x)?;
+        let t = slab(t, o.y, d.y, min.y, max.y)?;
+        let (t0, t1) = slab(t, o.z, d.z, min.z, max.z)?;
         (t0 < t1 && t1.is_finite()).then_some((t0, t1))
     }
 
@@ -1323,6 +1349,17 @@ impl Compiled {
             // A scene of one volume (the usual scanned-data case): what the general path below
             // does for it, without building its lists.
             if obj.seen_by(ray) && obj.render_type == RenderType::Dvr {
+                if bound == f64::INFINITY {
+                    // Without the clip: a ray that misses the box shows `background`, one that
+                    // meets it takes no sample (its bound is past t1, which is finite) and shows
+                    // `0 + 1·background`. The two differ only in a component that is −0 (0 + −0
+                    // is +0); where none is, either is the answer.
+                    let shown = DVec3::ZERO + 1.0 * background;
+                    if shown.to_array().map(f64::to_bits) == background.to_array().map(f64::to_bits)
+                    {
+                        return shown;
+                    }
+                }
                 let (o, d) = obj.object_ray(origin, dir);
                 let Some((t0, t1)) = obj.clip(o, d) else {
                     return background;
@@ -1331,7 +1368,9 @@ impl Compiled {
                     // What the march gives when it takes no sample.
                     return DVec3::ZERO + 1.0 * background;
                 }
-                let mut c = Cursor::new(self, obj, 0, (o, d), (t0, t1), bound);
+                // In place (see `Cursor::unstarted`).
+                let mut c = Cursor::unstarted(obj, 0, (o, d), (t0, t1));
+                c.start(self, obj, bound);
                 let (col, t) = self.march_one(&mut c, origin, dir);
                 return col + t * background;
             }
@@ -1651,37 +1690,57 @@ impl Cursor {
         scene: &Compiled,
         obj: &CObj,
         index: usize,
-        (o, d): (DVec3, DVec3),
-        (t0, t1): (f64, f64),
+        ray: (DVec3, DVec3),
+        span: (f64, f64),
         from: f64,
     ) -> Cursor {
+        let mut c = Cursor::unstarted(obj, index, ray, span);
+        c.start(scene, obj, from);
+        c
+    }
+
+    /// [`Cursor::new`] before its walk is started ([`Cursor::start`]). Apart, so that a caller
+    /// that starts it in place builds the cursor where it keeps it: a cursor whose address was
+    /// taken (by the walk's start) before it was returned was built on the callee's stack and
+    /// copied (a `memcpy` of the whole cursor a ray).
+    #[inline]
+    fn unstarted(obj: &CObj, index: usize, (o, d): (DVec3, DVec3), (t0, t1): (f64, f64)) -> Cursor {
         let n = crate::num::ceil((t1 - t0) / obj.step).max(1.0);
         let n = if n.is_finite() && n < u64::MAX as f64 {
             n as u64
         } else {
             u64::MAX
         };
-        let start = from.max(t0);
-        let walk = match (&obj.skip, scene.settings.optimise.skip_empty) {
-            (Some(grid), true) => Some(grid.walk(o, d, start)),
-            _ => None,
-        };
-        let mut c = Cursor {
+        Cursor {
             object: index,
             t0,
             t1,
             step: obj.step,
             k: 0,
             n,
-            walk,
+            walk: None,
             o,
             d,
             occupied_until: f64::NEG_INFINITY,
-        };
-        if c.walk.is_some() {
-            c.start_at(start);
         }
-        c
+    }
+
+    /// Starts an [`Cursor::unstarted`] cursor's walk when empty-space skipping is on, at `from`
+    /// as [`Cursor::new`] takes it.
+    #[inline]
+    fn start(&mut self, scene: &Compiled, obj: &CObj, from: f64) {
+        if let (Some(grid), true) = (&obj.skip, scene.settings.optimise.skip_empty) {
+            self.start_walk(grid, from.max(self.t0));
+        }
+    }
+
+    /// Starts the block walk through `grid` at `start` (the cursor's first segment's start, or
+    /// later: an [`EntryMap`] bound) and passes over the segments whose midpoints are before
+    /// it. The walk is built in the cursor's field (see [`SkipGrid::walk_into`]).
+    #[inline(never)]
+    fn start_walk(&mut self, grid: &SkipGrid, start: f64) {
+        grid.walk_into(&mut self.walk, self.o, self.d, start);
+        self.start_at(start);
     }
 
     /// Passes over the segments whose midpoints are before `t` (none if the next one's is
@@ -2503,6 +2562,227 @@ mod tests {
             }
         }
         assert!(terminated > 300, "{terminated}");
+    }
+
+    /// A scene of one DVR volume with a skip grid: random spheres in a 20³ dataset, scaled
+    /// to a box 19 wide.
+    fn sphere_scene() -> Compiled {
+        use crate::types::MappingType;
+        let n = 20usize;
+        let centres = [
+            [5.0, 6.0, 7.0, 3.0],
+            [14.0, 12.0, 9.0, 4.0],
+            [8.0, 15.0, 15.0, 2.5],
+        ];
+        let voxels: Vec<u8> = (0..n * n * n)
+            .map(|i| {
+                let p = [(i % n) as f64, (i / n % n) as f64, (i / n / n) as f64];
+                let inside = centres
+                    .iter()
+                    .any(|c| (0..3).map(|a| (p[a] - c[a]).powi(2)).sum::<f64>() < c[3] * c[3]);
+                if inside {
+                    200
+                } else {
+                    0
+                }
+            })
+            .collect();
+        let data = Dataset::new([n; 3], crate::dataset::Voxels::U8(voxels), 0.0, 1.0).unwrap();
+        let mut vl = crate::Library::new();
+        vl.add_dataset(1, data).unwrap();
+        vl.mapping(2, MappingType::Ramp, 3, 1, &[0.3, 0.0, 0.5, 0.6, 1.0, 0.95])
+            .unwrap();
+        vl.scene().unwrap();
+        vl.step_size(0.5, 1.0).unwrap();
+        vl.object().unwrap();
+        vl.scale(19.0, 19.0, 19.0).unwrap();
+        vl.dataset(Fields::F, 1).unwrap();
+        vl.map(Fields::O, Fields::F, 2, 1).unwrap();
+        vl.set(Fields::R, 1.0).unwrap();
+        vl.end().unwrap();
+        let scene = vl.compiled().unwrap();
+        assert!(scene.objects[0].skip.is_some(), "a skip grid");
+        scene
+    }
+
+    /// Ray parts that make trouble: zeros of both signs, magnitudes below 10⁻³⁰⁸ (whose
+    /// reciprocals overflow), huge values, infinities and NaN, and ordinary ones.
+    const AWKWARD: [f64; 14] = [
+        0.0,
+        -0.0,
+        1.0,
+        -1.0,
+        0.37,
+        -2.5,
+        1e-310,
+        -1e-310,
+        1e300,
+        -1e300,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+        19.0,
+    ];
+
+    /// [`CObj::clip`] as it was, with `f64::min` / `f64::max`.
+    fn clip_reference(min: DVec3, max: DVec3, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
+        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+        for i in 0..3 {
+            if d[i] == 0.0 {
+                if o[i] < min[i] || o[i] > max[i] {
+                    return None;
+                }
+                continue;
+            }
+            let inv = 1.0 / d[i];
+            let (a, b) = ((min[i] - o[i]) * inv, (max[i] - o[i]) * inv);
+            t0 = t0.max(a.min(b));
+            t1 = t1.min(a.max(b));
+        }
+        (t0 < t1 && t1.is_finite()).then_some((t0, t1))
+    }
+
+    /// The clip is the NaN-aware one, bit for bit: rays from outside, inside, on faces and
+    /// edges, parallel to faces, with zero, tiny, huge, infinite and NaN parts, through
+    /// ordinary, flat (one axis of zero width) and signed-zero boxes.
+    #[test]
+    fn clip_is_the_nan_aware_clip() {
+        let mut scene = sphere_scene();
+        let mut rng = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let boxes = [
+            (DVec3::ZERO, DVec3::ONE),
+            (DVec3::new(-0.0, 0.0, -0.0), DVec3::new(2.0, 0.0, 1.0)),
+            (DVec3::new(-3.0, 1e-310, -1.0), DVec3::new(-1.0, 1.0, 1e300)),
+        ];
+        let (mut some, mut none) = (0, 0);
+        for (min, max) in boxes {
+            scene.objects[0].box_min = min;
+            scene.objects[0].box_max = max;
+            let obj = &scene.objects[0];
+            let mut check = |o: DVec3, d: DVec3| {
+                let bits = |r: Option<(f64, f64)>| r.map(|(a, b)| (a.to_bits(), b.to_bits()));
+                let got = obj.clip(o, d);
+                assert_eq!(bits(got), bits(clip_reference(min, max, o, d)), "{o} {d}");
+                if got.is_some() {
+                    some += 1;
+                } else {
+                    none += 1;
+                }
+            };
+            let mut parts: Vec<f64> = AWKWARD.to_vec();
+            parts.extend([min.x, max.y, min.z, max.x]);
+            let inside = (min + max) * 0.5;
+            for &a in &parts {
+                for &b in &parts {
+                    for &c in &parts {
+                        let v = DVec3::new(a, b, c);
+                        check(inside, v);
+                        check(v, DVec3::new(0.3, -0.5, 0.8));
+                        check(v, DVec3::new(b, c, a));
+                        check(DVec3::new(-5.0, c, b), v);
+                    }
+                }
+            }
+            for _ in 0..20_000 {
+                let o = DVec3::new(next() * 8.0 - 4.0, next() * 8.0 - 4.0, next() * 8.0 - 4.0);
+                let mut d = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
+                // Some parallel to a face.
+                let axis = (next() * 6.0) as usize;
+                if axis < 3 {
+                    d[axis] = 0.0;
+                }
+                check(o, d);
+            }
+        }
+        assert!(some > 10_000 && none > 10_000, "{some} / {none}");
+    }
+
+    /// A ray whose entry bound is +∞ shows the background as the clip and march would give
+    /// it, bit for bit (`background` where it misses the box, `0 + 1·background` where it
+    /// meets it): through a background with −0 parts too (where the two differ), infinite
+    /// and NaN parts, and rays with zero, tiny, infinite and NaN parts.
+    #[test]
+    fn unbounded_rays_show_the_background() {
+        let mut scene = sphere_scene();
+        let mut checked = 0;
+        for background in [
+            [0.2f32, 0.5, 0.9],
+            [-0.0, 0.5, 0.0],
+            [f32::NAN, f32::INFINITY, -0.0],
+        ] {
+            scene.settings.background = background;
+            let bg = crate::scene::v3(background);
+            let obj = &scene.objects[0];
+            for &a in &AWKWARD {
+                for &b in &AWKWARD {
+                    for (origin, dir) in [
+                        (DVec3::new(-30.0, a, 9.0), DVec3::new(1.0, b, 0.01)),
+                        (DVec3::new(a, b, 5.0), DVec3::new(0.2, 0.3, 0.9)),
+                        (DVec3::new(9.0, 9.0, 9.0), DVec3::new(a, b, 1.0)),
+                        (DVec3::new(9.0, 40.0, a), DVec3::new(0.0, -1.0, b)),
+                    ] {
+                        let (o, d) = obj.object_ray(origin, dir);
+                        let want = match obj.clip(o, d) {
+                            None => bg,
+                            Some(_) => DVec3::ZERO + 1.0 * bg,
+                        };
+                        let got = scene.trace_ray(origin, dir, Ray::PRIMARY, f64::INFINITY);
+                        let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+                        assert_eq!(bits(got), bits(want), "{origin} {dir} {background:?}");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 2000, "{checked}");
+    }
+
+    /// The one-volume path, whose cursor is built in place ([`Cursor::unstarted`] and
+    /// [`Cursor::start`]), is [`Cursor::new`] and [`Compiled::march_one`], bit for bit, for
+    /// entry bounds of −∞, NaN, the clip's t0, and points inside the box's span.
+    #[test]
+    fn cursor_started_in_place_is_the_new_cursor() {
+        let mut scene = sphere_scene();
+        scene.settings.background = [0.1, 0.2, 0.3];
+        let bg = crate::scene::v3(scene.settings.background);
+        let obj = &scene.objects[0];
+        let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut hits, mut checked) = (0, 0);
+        for i in 0..3000 {
+            let at = DVec3::new(next(), next(), next()) * 19.0;
+            let mut dir = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
+            if i % 7 == 0 {
+                dir[i % 3] = 0.0;
+            }
+            let origin = at - 50.0 * dir;
+            let (o, d) = obj.object_ray(origin, dir);
+            let Some((t0, t1)) = obj.clip(o, d) else {
+                continue;
+            };
+            for bound in [f64::NEG_INFINITY, f64::NAN, t0, t0 + (t1 - t0) * next()] {
+                let mut c = Cursor::new(&scene, obj, 0, (o, d), (t0, t1), bound);
+                let (col, t) = scene.march_one(&mut c, origin, dir);
+                let want = col + t * bg;
+                let got = scene.trace_ray(origin, dir, Ray::PRIMARY, bound);
+                let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+                assert_eq!(bits(got), bits(want), "{origin} {dir} {bound}");
+                hits += (t < 1.0) as usize;
+                checked += 1;
+            }
+        }
+        assert!(checked > 2000 && hits > 500, "{checked} / {hits}");
     }
 
     /// A random unit direction from `next` (uniform in [0, 1)).

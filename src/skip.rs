@@ -435,9 +435,18 @@ impl SkipGrid {
         self.dist[c[0] as usize + self.dims[0] * (c[1] as usize + self.dims[1] * c[2] as usize)]
     }
 
-    /// Starts a walk along the object-space ray `o + t·d` at parameter `t0`.
-    pub(crate) fn walk(&self, o: DVec3, d: DVec3, t0: f64) -> Walk {
-        let mut w = Walk {
+    /// Starts a walk along the object-space ray `o + t·d` at parameter `t0` in `slot` (the
+    /// caller's, e.g. a cursor's field): built in place, where a walk returned by value was
+    /// built on the stack and copied (a `memcpy` call a ray). Inlined: called once a ray.
+    #[inline]
+    pub(crate) fn walk_into<'a>(
+        &self,
+        slot: &'a mut Option<Walk>,
+        o: DVec3,
+        d: DVec3,
+        t0: f64,
+    ) -> &'a mut Walk {
+        let w = slot.insert(Walk {
             o,
             d,
             inv_d: d.recip(),
@@ -447,7 +456,7 @@ impl SkipGrid {
             t_delta: [f64::INFINITY; 3],
             done: false,
             entry: t0,
-        };
+        });
         for axis in 0..3 {
             let size = self.cell[axis];
             if d[axis] > 0.0 {
