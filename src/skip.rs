@@ -634,16 +634,12 @@ impl EntryMap {
                 }
                 near = near.min(q.dot(unit_forward));
             }
-            // Pixel squares [px, px + 1) meeting [x0 − ε, x1 + ε] (and likewise in y).
+            // Pixel squares [px, px + 1) meeting [x0 − ε, x1 + ε] (and likewise in y). (The
+            // floor inline, bit for bit the library's, which is a call on the SSE2 baseline.)
             const EPS: f64 = 0.01;
-            let (px0, px1) = (
-                (x0 - EPS).floor().max(0.0),
-                (x1 + EPS).floor().min(wf - 1.0),
-            );
-            let (py0, py1) = (
-                (y0 - EPS).floor().max(0.0),
-                (y1 + EPS).floor().min(hf - 1.0),
-            );
+            let floor = crate::num::floor;
+            let (px0, px1) = (floor(x0 - EPS).max(0.0), floor(x1 + EPS).min(wf - 1.0));
+            let (py0, py1) = (floor(y0 - EPS).max(0.0), floor(y1 + EPS).min(hf - 1.0));
             if px0 > px1 || py0 > py1 {
                 return Some(None); // off the image
             }
