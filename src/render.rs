@@ -277,7 +277,9 @@ impl CObj {
     /// `f64::min` and `f64::max` may answer either): t0 is never −0 in either form (it starts at
     /// +0 and moves only to a value above it), and a t1 of ±0 fails `t0 < t1` in both.
     /// (`clip_is_the_nan_aware_clip` checks them bit for bit, special values included.)
-    #[inline]
+    /// Always inlined: a call left to the compiler's choice stayed out of line in
+    /// [`Compiled::trace_ray`], passing the ray and the interval through memory.
+    #[inline(always)]
     fn clip(&self, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
         let (min, max) = (self.box_min, self.box_max);
         // Axis by axis, written out: as a loop the compiler kept the loop and picked each
@@ -1662,6 +1664,24 @@ impl Compiled {
     }
 }
 
+/// The number of segments of `x` steps (the span over the step): ⌈x⌉, at least 1, saturating
+/// at `u64::MAX` (NaN: 1). For 0 < x < 2⁵², the usual case, by truncation: ⌈x⌉ is the
+/// truncation where that is x and one more where it is below, both exact there; elsewhere by
+/// the rounding function (`segment_count_is_the_rounded_up_span` checks the two agree).
+#[inline]
+fn segment_count(x: f64) -> u64 {
+    if x > 0.0 && x < 4_503_599_627_370_496.0 {
+        let t = x as i64;
+        return (t + ((t as f64) < x) as i64) as u64;
+    }
+    let n = crate::num::ceil(x).max(1.0);
+    if n.is_finite() && n < u64::MAX as f64 {
+        n as u64
+    } else {
+        u64::MAX
+    }
+}
+
 /// One object's segments along a ray: segment k spans [t0 + k·step, t0 + (k + 1)·step], the last
 /// one ending at t1; its sample is at its midpoint.
 struct Cursor {
@@ -1705,12 +1725,7 @@ impl Cursor {
     /// copied (a `memcpy` of the whole cursor a ray).
     #[inline]
     fn unstarted(obj: &CObj, index: usize, (o, d): (DVec3, DVec3), (t0, t1): (f64, f64)) -> Cursor {
-        let n = crate::num::ceil((t1 - t0) / obj.step).max(1.0);
-        let n = if n.is_finite() && n < u64::MAX as f64 {
-            n as u64
-        } else {
-            u64::MAX
-        };
+        let n = segment_count((t1 - t0) / obj.step);
         Cursor {
             object: index,
             t0,
@@ -1755,9 +1770,17 @@ impl Cursor {
     /// midpoint is before `t`.
     #[inline]
     fn pass_before(&mut self, t: f64) {
-        let guess = crate::num::ceil((t - self.t0) / self.step - 0.5);
-        let mut k = if guess.is_finite() && guess > self.k as f64 {
-            (guess as u64).min(self.n)
+        // Where the first midpoint not before t should be: ⌈g⌉ for g not an integer, g + 1 for
+        // one (the truncation, plus 1: no rounding call, and a saturating conversion of a
+        // value known to be in range). Any start above `k` settles on the same segment below
+        // (midpoints do not decrease), at most one step further here than from ⌈g⌉.
+        let g = (t - self.t0) / self.step - 0.5;
+        let mut k = if g > self.k as f64 {
+            if g < 9.0e18 {
+                (g as i64 as u64 + 1).min(self.n)
+            } else {
+                self.n
+            }
         } else {
             self.k + 1
         };
@@ -2783,6 +2806,63 @@ mod tests {
             }
         }
         assert!(checked > 2000 && hits > 500, "{checked} / {hits}");
+    }
+
+    /// The segment count is ⌈x⌉ clamped as it was, at integers and next to them, in (0, 1),
+    /// around 2⁵² and 2⁶⁴, at zeros, negatives, infinities and NaN.
+    #[test]
+    fn segment_count_is_the_rounded_up_span() {
+        let reference = |x: f64| {
+            let n = crate::num::ceil(x).max(1.0);
+            if n.is_finite() && n < u64::MAX as f64 {
+                n as u64
+            } else {
+                u64::MAX
+            }
+        };
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            -1.0,
+            1e-310,
+            0.5,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            1e300,
+            u64::MAX as f64,
+            (1u64 << 63) as f64,
+        ];
+        for base in [
+            1.0f64,
+            2.0,
+            3.0,
+            17.0,
+            1e6,
+            4_503_599_627_370_496.0,
+            9e15,
+            1.8e19,
+        ] {
+            let mut x = base;
+            for _ in 0..4 {
+                x = x.next_down();
+            }
+            for _ in 0..9 {
+                xs.extend([x, -x, x + 0.5]);
+                x = x.next_up();
+            }
+        }
+        let mut rng = 0x1234_5678_9abc_def1u64;
+        for _ in 0..100_000 {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            xs.push(f64::from_bits(rng));
+            xs.push((rng >> 11) as f64 / (1u64 << 40) as f64);
+        }
+        for x in xs {
+            assert_eq!(segment_count(x), reference(x), "{x:e}");
+        }
     }
 
     /// A random unit direction from `next` (uniform in [0, 1)).
