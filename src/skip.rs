@@ -696,10 +696,13 @@ impl EntryMap {
 }
 
 /// The block holding block coordinate `rel`: floor(rel) clamped to [0, last] (`last` an
-/// integer ≥ 0), NaN to 0. Clamping first makes the truncation of `as` the floor.
+/// integer ≥ 0), NaN to 0. Clamping first makes the truncation of `as` the floor. The clamp by
+/// comparisons, NaN taking the lower end as `f64::clamp`'s NaN becomes 0 in the conversion:
+/// `f64::clamp` checks `0 ≤ last` on every call (a branch to a panic).
 #[inline]
 fn block_index(rel: f64, last: f64) -> i64 {
-    rel.clamp(0.0, last) as i64
+    let r = if rel > 0.0 { rel } else { 0.0 };
+    (if r < last { r } else { last }) as i64
 }
 
 /// The interval of every field after `prefix`, given the range of each of its `vlDataset`
