@@ -640,7 +640,9 @@ const LANES: usize = 2;
 struct HeadlitLanes {
     ka_ambient: [Lanes; 3],
     kd: Lanes,
-    ks: f64,
+    /// ks where it is above 0, else `None` (no highlight): tested once per pair rather than
+    /// compared as a float.
+    ks: Option<Lanes>,
     /// The specular exponent, an integer.
     e: u32,
     view: [Lanes; 3],
@@ -664,7 +666,7 @@ impl HeadlitLanes {
         Some(HeadlitLanes {
             ka_ambient: splat(h.ka_ambient),
             kd: Lanes::splat(h.kd),
-            ks: h.ks,
+            ks: (h.ks > 0.0).then(|| Lanes::splat(h.ks)),
             e,
             view: splat(h.view),
             to_light: splat(l),
@@ -714,28 +716,36 @@ impl HeadlitLanes {
         let rcp = Lanes::ONE / (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
         // `rcp.is_finite() && rcp > 0.0`: 0 < rcp < ∞ (a NaN fails both).
         let valid = rcp.simd_gt(zero) & rcp.simd_lt(Lanes::splat(f64::INFINITY));
-        let mut n = g.map(|x| x * -rcp);
-        if self.flip {
-            let back = (n[0] * view[0] + n[1] * view[1] + n[2] * view[2]).simd_lt(zero);
-            let sign = back & Lanes::splat(-0.0);
-            n = n.map(|x| x ^ sign);
-        }
+        // The normal is ±u, its sign left to N·L alone: rounding to nearest is symmetric, so
+        // negating a factor of products and sums negates them exactly, and (−u)·x is −(u·x)
+        // bit for bit. The normal −u is flipped where −(u·V) < 0, that is where u·V > 0 (a
+        // NaN, or ±0, neither); there N·L is u·L, else −(u·L). The mirror direction
+        // `2(N·L)N − L` is the same for both signs, (2(−a))(−b) being (2a)b.
+        let u = g.map(|x| x * rcp);
+        let ndl_u = u[0] * l[0] + u[1] * l[1] + u[2] * l[2];
+        let neg = Lanes::splat(-0.0);
+        let sign = if self.flip {
+            let front = (u[0] * view[0] + u[1] * view[1] + u[2] * view[2]).simd_gt(zero);
+            !front & neg
+        } else {
+            neg
+        };
+        let ndl = ndl_u ^ sign;
         let cl = [lanes(&c[0]), lanes(&c[1]), lanes(&c[2])];
         let col = [ka[0] * cl[0], ka[1] * cl[1], ka[2] * cl[2]];
         let kdc = cl.map(|x| kd * x);
-        let ndl = n[0] * l[0] + n[1] * l[1] + n[2] * l[2];
         let lit = ndl.simd_gt(zero) & valid;
         // `ndl.max(0.0)` (ndl where above 0, else +0: a NaN and −0 included), and 1 where
         // there is no normal, so that `term` is then `kd · C` itself (x·1 is x).
         let m = (ndl & lit) | (Lanes::ONE & !valid);
         let mut term = kdc.map(|x| x * m);
-        if self.ks > 0.0 {
-            let s = Lanes::splat(2.0) * ndl;
-            let r = [s * n[0] - l[0], s * n[1] - l[1], s * n[2] - l[2]];
+        if let Some(ks) = self.ks {
+            let s = Lanes::splat(2.0) * ndl_u;
+            let r = [s * u[0] - l[0], s * u[1] - l[1], s * u[2] - l[2]];
             let rv = r[0] * view[0] + r[1] * view[1] + r[2] * view[2];
             let spec = lit & rv.simd_gt(zero);
             if spec.any() {
-                let p = Lanes::splat(self.ks) * powi_in(rv, Lanes::ONE, self.e);
+                let p = ks * powi_in(rv, Lanes::ONE, self.e);
                 term = term.map(|x| spec.bitselect(x + p, x));
             }
         }
