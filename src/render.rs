@@ -732,7 +732,6 @@ impl HeadlitLanes {
         };
         let ndl = ndl_u ^ sign;
         let cl = [lanes(&c[0]), lanes(&c[1]), lanes(&c[2])];
-        let col = [ka[0] * cl[0], ka[1] * cl[1], ka[2] * cl[2]];
         let kdc = cl.map(|x| kd * x);
         let lit = ndl.simd_gt(zero) & valid;
         // `ndl.max(0.0)` (ndl where above 0, else +0: a NaN and −0 included), and 1 where
@@ -749,13 +748,17 @@ impl HeadlitLanes {
                 term = term.map(|x| spec.bitselect(x + p, x));
             }
         }
+        // The ambient term only now, its constants read here rather than held (and spilled)
+        // across the highlight.
         let col = [
-            col[0] + rad[0] * term[0],
-            col[1] + rad[1] * term[1],
-            col[2] + rad[2] * term[2],
+            ka[0] * cl[0] + rad[0] * term[0],
+            ka[1] * cl[1] + rad[1] * term[1],
+            ka[2] * cl[2] + rad[2] * term[2],
         ];
-        // `is_finite`: x · 0 is ±0 for finite x, NaN for the others.
-        let finite = (col[0] * zero + col[1] * zero + col[2] * zero).simd_eq(zero);
+        // `is_finite` of all three: x · 0 is ±0 for finite x, NaN for the others, and ±0 + y is
+        // as finite as y, NaN + y NaN; so `((x·0 + y)·0 + z)·0` is ±0 where all three are
+        // finite, else NaN (one product fewer than summing the three products).
+        let finite = (((col[0] * zero + col[1]) * zero + col[2]) * zero).simd_eq(zero);
         for (o, x) in c.iter_mut().zip(col) {
             o[at..at + LANES].copy_from_slice(&(x & finite).to_array());
         }
