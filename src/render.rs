@@ -744,8 +744,10 @@ impl HeadlitLanes {
             let rv = r[0] * view[0] + r[1] * view[1] + r[2] * view[2];
             let spec = lit & rv.simd_gt(zero);
             if spec.any() {
-                let p = ks * powi_in(rv, Lanes::ONE, self.e);
-                term = term.map(|x| spec.bitselect(x + p, x));
+                // Lanes without a highlight add −0, x + (−0) being x bit for bit (+0 and NaN
+                // included): one selection rather than one per channel.
+                let p = spec.bitselect(ks * powi_in(rv, Lanes::ONE, self.e), neg);
+                term = term.map(|x| x + p);
             }
         }
         // The ambient term only now, its constants read here rather than held (and spilled)
