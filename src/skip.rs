@@ -762,17 +762,20 @@ impl Walk {
     fn relocate(&mut self, grid: &SkipGrid, t0: f64, forced: [Option<i64>; 3]) {
         let p = self.o + t0 * self.d;
         for axis in 0..3 {
+            // Only a forced index can lie outside the grid: `block_index` clamps to it.
             let c = match forced[axis] {
-                Some(c) => c,
+                Some(c) => {
+                    if c < 0 || c >= grid.dims[axis] as i64 {
+                        self.done = true;
+                        return;
+                    }
+                    c
+                }
                 None => {
                     let rel = (p[axis] - grid.origin[axis]) * grid.inv_cell[axis];
                     block_index(rel, grid.last[axis])
                 }
             };
-            if c < 0 || c >= grid.dims[axis] as i64 {
-                self.done = true;
-                return;
-            }
             self.cell[axis] = c;
             let size = grid.cell[axis];
             let d = self.d[axis];
@@ -787,10 +790,27 @@ impl Walk {
         }
     }
 
-    /// The ray parameter at which the current block is left.
+    /// The ray parameter at which the current block is left: `f64::min` of the three exits,
+    /// by comparisons. A running minimum that takes a later exit only where it is below
+    /// (false against NaN) skips NaN exits after the first and is, operand for operand,
+    /// `f64::min`'s `minsd` with the NaN test on the accumulator; only a NaN first exit
+    /// (a direction component of magnitude below 10⁻³⁰⁸, see [`Walk::advance`]) leaves it
+    /// NaN, and that case takes `f64::min` of the other two, as the old chain did. Saves
+    /// `f64::min`'s two NaN selects a call (`exit_is_the_nan_aware_minimum`).
     #[inline]
     fn exit(&self) -> f64 {
-        self.t_max[0].min(self.t_max[1]).min(self.t_max[2])
+        let [a, b, c] = self.t_max;
+        let mut m = a;
+        if b < m {
+            m = b;
+        }
+        if c < m {
+            m = c;
+        }
+        if m.is_nan() {
+            return b.min(c);
+        }
+        m
     }
 
     /// `t >= self.exit()`, without the NaN-aware minimum: t is at or past the block's exit if
@@ -909,6 +929,12 @@ mod tests {
             self.0 ^= self.0 << 25;
             self.0 ^= self.0 >> 27;
             (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    impl Walk {
+        fn clone_walk(&self) -> Walk {
+            Walk { ..*self }
         }
     }
 
@@ -1467,5 +1493,147 @@ mod tests {
                 assert_eq!(block_index(rel, last), want, "{rel} in [0, {last}]");
             }
         }
+    }
+
+    /// `Walk::exit` by comparisons equals the `f64::min` chain it replaced, bit for bit, on
+    /// every triple of awkward exits (±0, ±∞, NaN, subnormals, extremes) and random bits.
+    #[test]
+    fn exit_is_the_nan_aware_minimum() {
+        let walk = |t_max: [f64; 3]| Walk {
+            o: DVec3::ZERO,
+            d: DVec3::X,
+            inv_d: DVec3::X,
+            cell: [0; 3],
+            step: [0; 3],
+            t_max,
+            t_delta: [f64::INFINITY; 3],
+            done: false,
+            entry: 0.0,
+        };
+        let old = |t: [f64; 3]| {
+            std::hint::black_box(t[0])
+                .min(std::hint::black_box(t[1]))
+                .min(std::hint::black_box(t[2]))
+        };
+        let mut vals = vec![
+            0.0,
+            -0.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            -f64::NAN,
+            f64::from_bits(1),
+            -f64::from_bits(1),
+            f64::MIN_POSITIVE,
+            f64::MAX,
+            f64::MIN,
+            1.0,
+            -1.0,
+            2.5,
+        ];
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..20 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            vals.push(f64::from_bits(x));
+        }
+        for &a in &vals {
+            for &b in &vals {
+                for &c in &vals {
+                    let t = [a, b, c];
+                    let got = std::hint::black_box(walk(t)).exit();
+                    assert_eq!(got.to_bits(), old(t).to_bits(), "{t:?}");
+                }
+            }
+        }
+    }
+
+    /// `Walk::relocate` without the bounds test on unforced axes (`block_index` clamps into
+    /// the grid) leaves the walk as the old body did, bit for bit, at awkward parameters and
+    /// points (outside the grid, ±0, ±∞, NaN, subnormal and zero direction parts) and with
+    /// forced indices in and out of the grid (NaN exits as NaN, whatever their bits).
+    #[test]
+    fn relocate_is_the_bounds_checked_relocate() {
+        fn old(w: &mut Walk, grid: &SkipGrid, t0: f64, forced: [Option<i64>; 3]) {
+            let p = w.o + t0 * w.d;
+            for axis in 0..3 {
+                let c = match forced[axis] {
+                    Some(c) => c,
+                    None => {
+                        let rel = (p[axis] - grid.origin[axis]) * grid.inv_cell[axis];
+                        block_index(rel, grid.last[axis])
+                    }
+                };
+                if c < 0 || c >= grid.dims[axis] as i64 {
+                    w.done = true;
+                    return;
+                }
+                w.cell[axis] = c;
+                let size = grid.cell[axis];
+                let (d, inv) = (w.d[axis], w.inv_d[axis]);
+                if d > 0.0 {
+                    let boundary = grid.origin[axis] + (c + 1) as f64 * size;
+                    w.t_max[axis] = t0 + (boundary - p[axis]) * inv;
+                } else if d < 0.0 {
+                    let boundary = grid.origin[axis] + c as f64 * size;
+                    w.t_max[axis] = t0 + (boundary - p[axis]) * inv;
+                }
+            }
+        }
+        // A NaN's sign and payload follow the operand order the compiler picks for the
+        // arithmetic (x86 keeps the first NaN operand's), not the code: NaNs compare as one.
+        let bits = |t: f64| {
+            if t.is_nan() {
+                f64::NAN.to_bits()
+            } else {
+                t.to_bits()
+            }
+        };
+        let state = |w: &Walk| (w.cell, w.t_max.map(bits), w.done, w.entry.to_bits());
+        let grid = grid_of([5, 4, 3], &[false; 60]);
+        let parts = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.3,
+            -0.7,
+            f64::from_bits(1),
+            -f64::from_bits(1),
+            1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        let ts = [0.0, -0.0, 0.25, 1.0, -3.0, 1e300, f64::INFINITY, f64::NAN];
+        let forceds = [
+            [None, None, None],
+            [Some(4), None, None],
+            [None, Some(-1), None],
+            [None, None, Some(3)],
+            [Some(5), Some(0), None],
+        ];
+        let mut n = 0;
+        for &ox in &parts {
+            for &dx in &parts {
+                for &dy in &parts {
+                    let o = DVec3::new(ox, 0.4, -0.2);
+                    let d = DVec3::new(dx, dy, 0.5);
+                    let mut slot = None;
+                    let start = grid.walk_into(&mut slot, o, d, 0.0);
+                    for &t0 in &ts {
+                        for forced in forceds {
+                            let (mut a, mut b) = (start.clone_walk(), start.clone_walk());
+                            a.relocate(&grid, t0, forced);
+                            old(&mut b, &grid, t0, forced);
+                            assert_eq!(state(&a), state(&b), "{o} {d} {t0} {forced:?}");
+                            n += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(n > 0);
     }
 }
