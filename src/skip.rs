@@ -705,6 +705,15 @@ fn block_index(rel: f64, last: f64) -> i64 {
     (if r < last { r } else { last }) as i64
 }
 
+/// Whether block index `c` lies outside `0..dims`: `c < 0 || c >= dims as i64` as one
+/// unsigned comparison (a negative index is above every `dims` as u64; a grid's `dims` is far
+/// below 2⁶³). The compiler cannot make the fold itself: it does not know `dims as i64` is not
+/// negative.
+#[inline]
+fn outside(c: i64, dims: usize) -> bool {
+    c as u64 >= dims as u64
+}
+
 /// The interval of every field after `prefix`, given the range of each of its `vlDataset`
 /// instructions (in order) over a block; returns the opacity interval.
 fn opacity_range(prefix: &[Instr], data_ranges: &[(f32, f32)]) -> (f32, f32) {
@@ -765,7 +774,7 @@ impl Walk {
             // Only a forced index can lie outside the grid: `block_index` clamps to it.
             let c = match forced[axis] {
                 Some(c) => {
-                    if c < 0 || c >= grid.dims[axis] as i64 {
+                    if outside(c, grid.dims[axis]) {
                         self.done = true;
                         return;
                     }
@@ -836,8 +845,7 @@ impl Walk {
         self.entry = self.t_max[axis];
         self.cell[axis] += self.step[axis];
         self.t_max[axis] += self.t_delta[axis];
-        if self.step[axis] == 0 || self.cell[axis] < 0 || self.cell[axis] >= grid.dims[axis] as i64
-        {
+        if self.step[axis] == 0 || outside(self.cell[axis], grid.dims[axis]) {
             self.done = true;
         }
     }
@@ -1635,5 +1643,32 @@ mod tests {
             }
         }
         assert!(n > 0);
+    }
+
+    /// `outside` is the two-sided bounds test it replaced, at and around 0, the grid's size
+    /// and the ends of i64.
+    #[test]
+    fn outside_is_the_two_sided_bounds_test() {
+        for dims in [1usize, 2, 5, 255, 1 << 20] {
+            let d = dims as i64;
+            for c in [
+                i64::MIN,
+                i64::MIN + 1,
+                -d - 1,
+                -d,
+                -2,
+                -1,
+                0,
+                1,
+                d - 1,
+                d,
+                d + 1,
+            ]
+            .into_iter()
+            .chain([2 * d, i64::MAX - 1, i64::MAX])
+            {
+                assert_eq!(outside(c, dims), c < 0 || c >= d, "{c} in 0..{dims}");
+            }
+        }
     }
 }
