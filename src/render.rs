@@ -1697,6 +1697,23 @@ fn segment_count(x: f64) -> u64 {
     }
 }
 
+/// Segment number `k` of a cursor of `n` segments (k ≤ n) as f64, the same value as
+/// `k as f64`: where n < 2⁶³ (every count a cursor meets in practice) by the signed
+/// conversion, one `cvtsi2sd`, where `k as f64` is six instructions on the SSE2 baseline
+/// (which has no unsigned conversion); the same integer, rounded the same way. The test is on
+/// n, not k: the compiler turns a signed conversion under `k ≤ i64::MAX` back into the
+/// unsigned one. Taken for every midpoint a cursor looks at
+/// (`index_f64_is_the_unsigned_conversion`).
+#[inline(always)]
+fn index_f64(k: u64, n: u64) -> f64 {
+    debug_assert!(k <= n);
+    if n <= i64::MAX as u64 {
+        k as i64 as f64
+    } else {
+        k as f64
+    }
+}
+
 /// One object's segments along a ray: segment k spans [t0 + k·step, t0 + (k + 1)·step], the last
 /// one ending at t1; its sample is at its midpoint.
 struct Cursor {
@@ -1790,7 +1807,7 @@ impl Cursor {
         // value known to be in range). Any start above `k` settles on the same segment below
         // (midpoints do not decrease), at most one step further here than from ⌈g⌉.
         let g = (t - self.t0) / self.step - 0.5;
-        let mut k = if g > self.k as f64 {
+        let mut k = if g > index_f64(self.k, self.n) {
             if g < 9.0e18 {
                 (g as i64 as u64 + 1).min(self.n)
             } else {
@@ -1833,8 +1850,11 @@ impl Cursor {
 
     #[inline]
     fn segment(&self, k: u64) -> (f64, f64) {
-        let a = self.boundary(k as f64);
-        (a, self.end(self.boundary((k + 1) as f64), k + 1 >= self.n))
+        let a = self.boundary(index_f64(k, self.n));
+        (
+            a,
+            self.end(self.boundary(index_f64(k + 1, self.n)), k + 1 >= self.n),
+        )
     }
 
     /// The length of the next segment, which is then passed.
@@ -1862,7 +1882,7 @@ impl Cursor {
     fn run(&self, unbounded: bool, mids: &mut [f64; 8], lens: &mut [f64; 8]) -> usize {
         let left = (self.n - self.k).min(8) as usize; // k < n
         let last = self.k + left as u64 == self.n; // the run may reach the last segment
-        let k = self.k as f64;
+        let k = index_f64(self.k, self.n);
         if k < (1u64 << 53) as f64 - 16.0 {
             let next: [f64; 8] = std::array::from_fn(|j| self.boundary(k + (j + 1) as f64));
             let a: [f64; 8] = std::array::from_fn(|j| {
@@ -2821,6 +2841,40 @@ mod tests {
             }
         }
         assert!(checked > 2000 && hits > 500, "{checked} / {hits}");
+    }
+
+    /// `index_f64` is `k as f64` bit for bit, for counts n ≥ k below and above 2⁶³: small numbers, around 2⁵³ (where the conversion
+    /// starts rounding), 2⁶³ and 2⁶⁴, and random bit patterns of every width.
+    #[test]
+    fn index_f64_is_the_unsigned_conversion() {
+        let mut ks = vec![0u64, 1, 2, 3, 1000, u64::MAX, u64::MAX - 1];
+        for e in [52u32, 53, 54, 62, 63] {
+            let b = 1u64 << e;
+            ks.extend([b - 2, b - 1, b, b + 1, b + 2, b + 3]);
+        }
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        for i in 0..4000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            ks.push(x >> (i % 64));
+        }
+        for &k in &ks {
+            for n in [
+                k,
+                k.saturating_add(1),
+                k | (1 << 62),
+                i64::MAX as u64,
+                u64::MAX,
+            ] {
+                let (k, n) = std::hint::black_box((k, n.max(k)));
+                assert_eq!(
+                    index_f64(k, n).to_bits(),
+                    (k as f64).to_bits(),
+                    "{k} of {n}"
+                );
+            }
+        }
     }
 
     /// The segment count is ⌈x⌉ clamped as it was, at integers and next to them, in (0, 1),
