@@ -624,6 +624,7 @@ mod tests {
     use super::*;
     use crate::dataset::Voxels;
     use crate::program::{run, Sample};
+    use crate::testing::Xorshift;
     use crate::types::MappingType;
 
     fn ramp(table: &[f32], outputs: i32) -> Arc<Mapping> {
@@ -869,16 +870,11 @@ mod tests {
     /// [0, 1].
     #[test]
     fn segment_pair_values_are_the_scalar_ones() {
-        let mut rng = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            (rng >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let rng = Xorshift::new(0x2545_f491_4f6c_dd1du64);
+        let next = || rng.next();
         for n in 0..20_000 {
             let scale = [1.0, 1e-3, 10.0, 1e6, 1e40][n % 5];
-            let mut signed = |s: f64| (next() * 2.0 - 1.0) * s;
+            let signed = |s: f64| (next() * 2.0 - 1.0) * s;
             let pair = SegmentPair {
                 start: std::array::from_fn(|_| signed(1.0)),
                 base: std::array::from_fn(|_| signed(1.5)),
@@ -925,13 +921,8 @@ mod tests {
         // Two opacity columns; the ends at 0 and 1; many rows (buckets with breakpoints).
         let ends = table(&[(0.0, &[0.0, 0.3]), (0.5, &[0.9, 0.1]), (1.0, &[0.2, 1.0])]);
         let from_zero = table(&[(0.0, &[0.1, 0.2, 0.3]), (1.0, &[0.9, 0.8, 0.7])]);
-        let mut rng = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            (rng >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let rng = Xorshift::new(0x2545_f491_4f6c_dd1du64);
+        let next = || (rng.bits() >> 40) as f32 / (1u64 << 24) as f32;
         let mut rows: Vec<(f32, Vec<f32>)> = (0..900)
             .map(|i| {
                 (

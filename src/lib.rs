@@ -41,6 +41,8 @@ pub mod render;
 pub mod scene;
 pub mod scope;
 mod skip;
+#[cfg(test)]
+mod testing;
 pub mod types;
 pub mod vlaux;
 pub mod voxel;

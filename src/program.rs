@@ -490,6 +490,7 @@ pub fn prefix_for(program: &[Instr], field: Fields) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::Xorshift;
     use crate::types::MappingType;
 
     /// [`clamp_fields`] is [`clamp_field`] lane by lane, bit for bit: on NaNs, ±0, ±∞, the
@@ -519,13 +520,8 @@ mod tests {
                 .iter()
                 .flat_map(|x| [x.next_up(), x.next_down()]),
         );
-        let mut rng = 0x9e37_79b9_7f4a_7c15u64;
-        values.extend((0..100_000).map(|_| {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            f32::from_bits((rng >> 32) as u32)
-        }));
+        let rng = Xorshift::new(0x9e37_79b9_7f4a_7c15u64);
+        values.extend((0..100_000).map(|_| f32::from_bits((rng.bits() >> 32) as u32)));
         for (k, w) in values.windows(4).enumerate() {
             let mut lanes = [w[0], w[1], w[2], w[3]];
             lanes.rotate_left(k % 4);

@@ -2168,6 +2168,7 @@ pub fn render_outputs(desc: &SceneDesc) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::Xorshift;
 
     /// `try_normalize` is glam's `DVec3::try_normalize`, bit for bit and in when it declines:
     /// zero, tiny (a square that underflows), huge (one that overflows), infinite and NaN
@@ -2277,30 +2278,6 @@ mod tests {
         })
     }
 
-    /// A xorshift generator of numbers in [0, 1) and of unit vectors, for the lighting tests.
-    struct Xorshift(std::cell::Cell<u64>);
-
-    impl Xorshift {
-        fn new(seed: u64) -> Xorshift {
-            Xorshift(std::cell::Cell::new(seed))
-        }
-
-        fn next(&self) -> f64 {
-            let mut x = self.0.get();
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            self.0.set(x);
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        }
-
-        fn unit(&self) -> DVec3 {
-            DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5)
-                .try_normalize()
-                .unwrap_or(DVec3::Y)
-        }
-    }
-
     /// [`Headlit`] gives [`Compiled::illuminate_colour`]'s colour bit for bit, and asks for the
     /// normal exactly when it does: for one and several directional lights and none, normals
     /// and none (a vanishing gradient), coefficients at and above 0, integer and other
@@ -2309,7 +2286,7 @@ mod tests {
     #[test]
     fn headlit_is_the_illumination_model() {
         let rng = Xorshift::new(0x9e37_79b9_7f4a_7c15u64);
-        let (next, unit) = (|| rng.next(), || rng.unit());
+        let (next, unit) = (|| rng.next(), || unit_dir(&|| rng.next()));
         let light = |to_light: DVec3, radiance: [f32; 3]| Light::Directional { to_light, radiance };
         let configurations = [
             vec![light(DVec3::new(0.0, -1.0, 0.0), [1.0; 3])],
@@ -2384,7 +2361,7 @@ mod tests {
     #[test]
     fn headlit_lanes_are_headlit() {
         let rng = Xorshift::new(0x2545_f491_4f6c_dd1du64);
-        let (next, unit) = (|| rng.next(), || rng.unit());
+        let (next, unit) = (|| rng.next(), || unit_dir(&|| rng.next()));
         let light = |to_light: DVec3, radiance: [f32; 3]| Light::Directional { to_light, radiance };
         // What the scalar colours exercised: lit with a specular term, lit without, facing
         // away, no normal, and not finite.
@@ -2511,15 +2488,8 @@ mod tests {
     #[test]
     fn lanes_march_is_the_march() {
         use crate::types::MappingType;
-        let rng = std::cell::Cell::new(0x9e37_79b9_7f4a_7c15u64);
-        let next = || {
-            let mut x = rng.get();
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            rng.set(x);
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let rng = Xorshift::new(0x9e37_79b9_7f4a_7c15u64);
+        let next = || rng.next();
         let n = 24usize;
         // Smooth blobs, with flat (zero-gradient) patches at 0 and 255.
         let centres: Vec<[f64; 4]> = (0..6)
@@ -2706,13 +2676,8 @@ mod tests {
     #[test]
     fn clip_is_the_nan_aware_clip() {
         let mut scene = sphere_scene();
-        let mut rng = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            (rng >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let rng = Xorshift::new(0x2545_f491_4f6c_dd1du64);
+        let next = || rng.next();
         let boxes = [
             (DVec3::ZERO, DVec3::ONE),
             (DVec3::new(-0.0, 0.0, -0.0), DVec3::new(2.0, 0.0, 1.0)),
@@ -2810,13 +2775,8 @@ mod tests {
         scene.settings.background = [0.1, 0.2, 0.3];
         let bg = crate::scene::v3(scene.settings.background);
         let obj = &scene.objects[0];
-        let mut rng = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            (rng >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let rng = Xorshift::new(0x9e37_79b9_7f4a_7c15u64);
+        let next = || rng.next();
         let (mut hits, mut checked) = (0, 0);
         for i in 0..3000 {
             let at = DVec3::new(next(), next(), next()) * 19.0;
@@ -2843,8 +2803,9 @@ mod tests {
         assert!(checked > 2000 && hits > 500, "{checked} / {hits}");
     }
 
-    /// `index_f64` is `k as f64` bit for bit, for counts n ≥ k below and above 2⁶³: small numbers, around 2⁵³ (where the conversion
-    /// starts rounding), 2⁶³ and 2⁶⁴, and random bit patterns of every width.
+    /// `index_f64` is `k as f64` bit for bit, for counts n ≥ k below and above 2⁶³: small
+    /// numbers, around 2⁵³ (where the conversion starts rounding), 2⁶³ and 2⁶⁴, and random bit
+    /// patterns of every width.
     #[test]
     fn index_f64_is_the_unsigned_conversion() {
         let mut ks = vec![0u64, 1, 2, 3, 1000, u64::MAX, u64::MAX - 1];
@@ -2852,12 +2813,9 @@ mod tests {
             let b = 1u64 << e;
             ks.extend([b - 2, b - 1, b, b + 1, b + 2, b + 3]);
         }
-        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let rng = Xorshift::new(0x2545_f491_4f6c_dd1du64);
         for i in 0..4000 {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            ks.push(x >> (i % 64));
+            ks.push(rng.bits() >> (i % 64));
         }
         for &k in &ks {
             for n in [
@@ -2921,13 +2879,11 @@ mod tests {
                 x = x.next_up();
             }
         }
-        let mut rng = 0x1234_5678_9abc_def1u64;
+        let rng = Xorshift::new(0x1234_5678_9abc_def1u64);
         for _ in 0..100_000 {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            xs.push(f64::from_bits(rng));
-            xs.push((rng >> 11) as f64 / (1u64 << 40) as f64);
+            let bits = rng.bits();
+            xs.push(f64::from_bits(bits));
+            xs.push((bits >> 11) as f64 / (1u64 << 40) as f64);
         }
         for x in xs {
             assert_eq!(segment_count(x), reference(x), "{x:e}");

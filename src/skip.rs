@@ -1539,13 +1539,8 @@ mod tests {
             -1.0,
             2.5,
         ];
-        let mut x = 0x9e37_79b9_7f4a_7c15u64;
-        for _ in 0..20 {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            vals.push(f64::from_bits(x));
-        }
+        let rng = crate::testing::Xorshift::new(0x9e37_79b9_7f4a_7c15u64);
+        vals.extend((0..20).map(|_| f64::from_bits(rng.bits())));
         for &a in &vals {
             for &b in &vals {
                 for &c in &vals {
