@@ -1366,14 +1366,16 @@ impl Compiled {
             // A scene of one volume (the usual scanned-data case): what the general path below
             // does for it, without building its lists.
             if obj.seen_by(ray) && obj.render_type == RenderType::Dvr {
+                // What the march gives when it takes no sample.
+                let unsampled = || DVec3::ZERO + 1.0 * background;
                 if bound == f64::INFINITY {
                     // Without the clip: a ray that misses the box shows `background`, one that
                     // meets it takes no sample (its bound is past t1, which is finite) and shows
-                    // `0 + 1·background`. The two differ only in a component that is −0 (0 + −0
-                    // is +0); where none is, either is the answer.
-                    let shown = DVec3::ZERO + 1.0 * background;
-                    if shown.to_array().map(f64::to_bits) == background.to_array().map(f64::to_bits)
-                    {
+                    // `unsampled`. The two differ only in a component that is −0 (0 + −0 is
+                    // +0); where none is, either is the answer.
+                    let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+                    let shown = unsampled();
+                    if bits(shown) == bits(background) {
                         return shown;
                     }
                 }
@@ -1382,8 +1384,7 @@ impl Compiled {
                     return background;
                 };
                 if bound >= t1 {
-                    // What the march gives when it takes no sample.
-                    return DVec3::ZERO + 1.0 * background;
+                    return unsampled();
                 }
                 // In place (see `Cursor::unstarted`).
                 let mut c = Cursor::unstarted(obj, 0, (o, d), (t0, t1));
