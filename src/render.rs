@@ -1517,8 +1517,8 @@ impl Compiled {
     }
 
     /// [`Compiled::march_one`] for a lean program with a value head (a scanned volume) and no
-    /// normal functions: the samples of a run the cursor knows to be in one occupied block (or
-    /// all of them, without skipping) are read in batches (positions and dataset values first,
+    /// normal functions: the samples of a run the cursor knows to be in occupied blocks (or
+    /// all of them, without skipping; see [`Cursor::next_run`]) are read in batches (positions and dataset values first,
     /// in lanes across the samples), then shaded and composited in order, exactly as the
     /// sample-by-sample loop does (for the usual program under a single directional light,
     /// the lighting of the samples up to where the ray ends in lanes: [`HeadlitLanes`]).
@@ -1536,7 +1536,6 @@ impl Compiled {
     ) -> (DVec3, f64) {
         let grid = obj.skip.as_deref();
         let stop = self.settings.optimise.stop_below();
-        let unbounded = c.walk.is_none() || grid.is_none();
         let cells = obj.cells.as_deref();
         let mut col = DVec3::ZERO;
         let mut t = 1.0f64;
@@ -1545,7 +1544,7 @@ impl Compiled {
         let (ro, rd) = (c.o.to_array(), c.d.to_array());
         // Consecutive shaded samples often share a cell: its node differences are read once.
         let mut cache = CellGradients::default();
-        // A run's midpoints and lengths (see `Cursor::run`), and its samples' values.
+        // A run's midpoints and lengths (see `Cursor::next_run`), and its samples' values.
         let (mut mids, mut lens, mut vs) = ([0.0f64; 8], [0.0f64; 8], [0.0f32; 8]);
         // And their cells: where the normal's gradient is that of this very dataset, trilinear,
         // a shaded sample's gradient is taken in the cell its value was read from.
@@ -1575,10 +1574,12 @@ impl Compiled {
                 let to_world = obj.object_gradient(9).then_some(obj.grad_to_world);
                 HeadlitLanes::new(h.as_ref()?, obj.flip_normals, to_world)
             });
-        while c.peek(grid).is_some() {
-            // The run: the sample peek chose and those after it in the same occupied block.
-            let m = c.run(unbounded, &mut mids, &mut lens);
-            c.k += m as u64;
+        loop {
+            // The run: the next sample to take and those after it in occupied blocks.
+            let m = c.next_run(grid, &mut mids, &mut lens);
+            if m == 0 {
+                break;
+            }
             // Their object points by axis, and their values (the cells in lanes across them).
             // (A short run needs only the first four.)
             let point = |axis: usize, t: f64| (ro[axis] + t * rd[axis]) as f32;
@@ -1875,15 +1876,14 @@ impl Cursor {
         0.5 * (a + b)
     }
 
-    /// The run of samples from the next one (there is one: `k < n`): up to eight segments,
-    /// all in the occupied block the walk last reported unless `unbounded`: returns their
-    /// number and writes their midpoints and lengths into `mids` and `lens` (the entries past
-    /// the number are meaningless, possibly left from an earlier run). Each segment's end
-    /// is the next one's start: one boundary per sample, the same numbers as
-    /// [`Cursor::segment`]. In lanes across the segments while their boundary numbers are exact
-    /// in f64 (below 2⁵³), so that k + j + 1 is one rounding-free addition.
+    /// The next segments (there is one: `k < n`), up to eight: writes their midpoints and
+    /// lengths into `mids` and `lens` and returns their number (the entries past the number
+    /// are meaningless, possibly left from an earlier run). Each segment's end is the next
+    /// one's start: one boundary per sample, the same numbers as [`Cursor::segment`]. In lanes
+    /// across the segments while their boundary numbers are exact in f64 (below 2⁵³), so that
+    /// k + j + 1 is one rounding-free addition.
     #[inline]
-    fn run(&self, unbounded: bool, mids: &mut [f64; 8], lens: &mut [f64; 8]) -> usize {
+    fn segments(&self, mids: &mut [f64; 8], lens: &mut [f64; 8]) -> usize {
         let left = (self.n - self.k).min(8) as usize; // k < n
         let last = self.k + left as u64 == self.n; // the run may reach the last segment
         let k = index_f64(self.k, self.n);
@@ -1915,16 +1915,61 @@ impl Cursor {
                 a = next;
             }
         }
-        // The first sample is in the block (peek chose it); the run ends at the first other
-        // one that is not.
-        if unbounded {
-            left
-        } else {
-            (1..left)
-                .find(|&j| {
-                    mids[j].partial_cmp(&self.occupied_until) != Some(std::cmp::Ordering::Less)
-                })
-                .unwrap_or(left)
+        left
+    }
+
+    /// The batched march's next run: the next sample to take ([`Cursor::peek`]) and those after
+    /// it, up to eight, that lie in occupied blocks. It used to end where the walk's block did,
+    /// the next peek asking the walk about the sample past it; it now asks the walk there itself
+    /// and carries on while the answer is an occupied block. Writes the run's midpoints and
+    /// lengths as [`Cursor::segments`] does, passes its segments and returns their number (0: no
+    /// sample left). The same samples, and the same questions to the walk in the same order,
+    /// as the peek-then-run loop, except that the walk may be asked once more at the end of a
+    /// run after which the ray ends (`joined_runs_are_peek_and_run`).
+    #[inline(never)]
+    fn next_run(
+        &mut self,
+        grid: Option<&SkipGrid>,
+        mids: &mut [f64; 8],
+        lens: &mut [f64; 8],
+    ) -> usize {
+        loop {
+            if self.k >= self.n {
+                return 0;
+            }
+            let left = self.segments(mids, lens);
+            let (Some(walk), Some(grid)) = (self.walk.as_mut(), grid) else {
+                self.k += left as u64;
+                return left;
+            };
+            // Samples before j are taken; sample j is taken if it lies before `until` or the
+            // walk finds it in an occupied block.
+            let (mut j, mut until) = (0, self.occupied_until);
+            let exit = loop {
+                while j < left && mids[j] < until {
+                    j += 1;
+                }
+                if j == left {
+                    break None;
+                }
+                match walk.skip_until(grid, mids[j]) {
+                    Err(u) => {
+                        until = u;
+                        j += 1;
+                    }
+                    Ok(exit) => break Some(exit),
+                }
+            };
+            self.occupied_until = until;
+            self.k += j as u64;
+            let Some(exit) = exit else {
+                return j;
+            };
+            // Sample j lies in an empty block: pass it and those after it up to the exit.
+            self.pass_before(exit);
+            if j > 0 {
+                return j;
+            }
         }
     }
 
@@ -2917,6 +2962,23 @@ mod tests {
         }
     }
 
+    /// The batched march's run before `Cursor::next_run` (the oracle of
+    /// `joined_runs_are_peek_and_run`): from the sample `Cursor::peek` chose, the samples
+    /// after it in the occupied block the walk last reported (all unless `unbounded`), up to
+    /// eight; their number, their midpoints and lengths written into `mids` and `lens`.
+    fn run(c: &Cursor, unbounded: bool, mids: &mut [f64; 8], lens: &mut [f64; 8]) -> usize {
+        let left = c.segments(mids, lens);
+        // The first sample is in the block (peek chose it); the run ends at the first other
+        // one that is not.
+        if unbounded {
+            left
+        } else {
+            (1..left)
+                .find(|&j| mids[j].partial_cmp(&c.occupied_until) != Some(std::cmp::Ordering::Less))
+                .unwrap_or(left)
+        }
+    }
+
     /// A run in lanes has the segments of the sample-by-sample cursor, bit for bit, ends
     /// at the first sample past the occupied block, and never passes the last segment: near the
     /// start, the end and 2⁵³ (where the boundary numbers stop being exact and the run goes
@@ -2952,7 +3014,7 @@ mod tests {
                     for unbounded in [false, true] {
                         let c = cursor(t0, t1, step, n, k, occupied);
                         let (mut mids, mut lens) = ([0.0; 8], [0.0; 8]);
-                        let m = c.run(unbounded, &mut mids, &mut lens);
+                        let m = run(&c, unbounded, &mut mids, &mut lens);
                         let left = (n - k).min(8) as usize;
                         assert!(m >= 1 && m <= left, "{k} of {n}: {m}");
                         for j in 0..m {
@@ -2975,6 +3037,115 @@ mod tests {
             }
         }
         assert!(checked > 300, "{checked}");
+    }
+
+    /// The batched march's runs (`Cursor::next_run`, joined across occupied blocks) take
+    /// exactly the samples of `Cursor::peek` and the run (`run`, the march before them, kept
+    /// here as the oracle), in the same order, bit for bit: on random grids of every fill,
+    /// for rays from outside and inside the grid, along axes and diagonals (zero direction
+    /// parts), with entry bounds before, inside and past the span, small and large steps, and
+    /// without a walk or a grid.
+    #[test]
+    fn joined_runs_are_peek_and_run() {
+        let rng = Xorshift::new(0x1234_5678_9abc_def1);
+        let next = || rng.next();
+        let mut runs = [0usize; 2];
+        let mut taken = 0usize;
+        for case in 0..3000 {
+            let dims = [
+                1 + (next() * 9.0) as usize,
+                1 + (next() * 9.0) as usize,
+                1 + (next() * 9.0) as usize,
+            ];
+            let fill = [0.0, 0.1, 0.5, 0.9, 1.0][case % 5];
+            let occupied: Vec<bool> = (0..dims.iter().product::<usize>())
+                .map(|_| next() < fill)
+                .collect();
+            let cell = DVec3::new(0.5 + next(), 0.5 + next(), 0.5 + next()) * 0.25;
+            let origin = DVec3::new(next(), next(), next()) - 0.5;
+            let grid = SkipGrid::of_occupied(dims, origin, cell, &occupied);
+            let size = DVec3::from_array(dims.map(|n| n as f64)) * cell;
+            let mut d = unit_dir(&next);
+            // Some rays along an axis or in a coordinate plane.
+            match case % 7 {
+                0 => {
+                    d = DVec3::new(d.x, 0.0, 0.0)
+                        .try_normalize()
+                        .unwrap_or(DVec3::X)
+                }
+                1 => {
+                    d = DVec3::new(d.x, d.y, 0.0)
+                        .try_normalize()
+                        .unwrap_or(DVec3::Y)
+                }
+                2 => {
+                    d = DVec3::new(0.0, -0.0, d.z)
+                        .try_normalize()
+                        .unwrap_or(DVec3::Z)
+                }
+                _ => {}
+            }
+            // From inside the grid, or outside it.
+            let inside = origin + size * DVec3::new(next(), next(), next());
+            let o = if case % 3 == 0 {
+                inside
+            } else {
+                inside - d * (size.length() * (0.5 + next()))
+            };
+            let t0 = next() * 0.3;
+            let t1 = t0 + size.length() * (0.2 + 2.0 * next());
+            let step = [0.5, 0.25, 0.125, 0.7, 2.0, 0.03][case % 6] * cell.x * (0.9 + 0.2 * next());
+            let n = segment_count((t1 - t0) / step);
+            let from = match case % 4 {
+                0 => f64::NEG_INFINITY,
+                1 => t0 + (t1 - t0) * next(),
+                2 => t0 - 1.0,
+                _ => t0 + (t1 - t0) * next() * 0.2,
+            };
+            let start = || {
+                let mut c = cursor(t0, t1, step, n, 0, f64::NEG_INFINITY);
+                c.o = o;
+                c.d = d;
+                if case % 11 != 10 {
+                    c.start_walk(&grid, from.max(t0));
+                }
+                c
+            };
+            let have_grid = case % 13 != 12;
+            let g = have_grid.then_some(&grid);
+            // The march before: peek, then the run in the walk's block.
+            let (mut want, mut got) = (Vec::new(), Vec::new());
+            let mut c = start();
+            let unbounded = c.walk.is_none() || !have_grid;
+            while c.peek(g).is_some() {
+                let (mut mids, mut lens) = ([0.0; 8], [0.0; 8]);
+                let m = run(&c, unbounded, &mut mids, &mut lens);
+                for j in 0..m {
+                    want.push((mids[j].to_bits(), lens[j].to_bits()));
+                }
+                c.k += m as u64;
+                runs[0] += 1;
+            }
+            let mut c = start();
+            loop {
+                let (mut mids, mut lens) = ([f64::NAN; 8], [f64::NAN; 8]);
+                let m = c.next_run(g, &mut mids, &mut lens);
+                if m == 0 {
+                    break;
+                }
+                assert!(m <= 8 && c.k <= c.n);
+                for j in 0..m {
+                    got.push((mids[j].to_bits(), lens[j].to_bits()));
+                }
+                runs[1] += 1;
+            }
+            // (A segment's midpoint and length name it: midpoints increase.)
+            assert_eq!(got, want, "case {case}");
+            assert_eq!(c.k, c.n, "case {case}");
+            taken += want.len();
+        }
+        // Joined runs are fewer; every kind of case came up.
+        assert!(runs[1] < runs[0] && taken > 100_000, "{runs:?} {taken}");
     }
 
     /// `at_most` is `f64::min` wherever the bound is not NaN (a cursor's end never is): for

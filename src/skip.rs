@@ -472,6 +472,25 @@ impl SkipGrid {
     }
 }
 
+#[cfg(test)]
+impl SkipGrid {
+    /// A grid of `dims` blocks of size `cell` from `origin` whose blocks that may hold opacity
+    /// are `occupied` (x fastest), with the distance map `build` makes.
+    pub(crate) fn of_occupied(
+        dims: [usize; 3],
+        origin: DVec3,
+        cell: DVec3,
+        occupied: &[bool],
+    ) -> SkipGrid {
+        let mut dist: Vec<u8> = occupied
+            .iter()
+            .map(|&o| if o { 0 } else { MAX_LEAP })
+            .collect();
+        chessboard(&mut dist, dims);
+        SkipGrid::new(dims, origin, cell, dist)
+    }
+}
+
 /// A pinhole camera as the image's primary rays see it: the ray through image position
 /// (x, y) (pixels from the top-left corner of a `width × height` image) leaves `eye` along
 /// `forward + sx·right + sy·up`, with sx = 2x/width − 1 and sy = 1 − 2y/height.
@@ -949,13 +968,8 @@ mod tests {
     /// A grid over the unit cube with the given occupied blocks (distance map as `build`
     /// makes it).
     fn grid_of(dims: [usize; 3], occupied: &[bool]) -> SkipGrid {
-        let mut dist: Vec<u8> = occupied
-            .iter()
-            .map(|&o| if o { 0 } else { MAX_LEAP })
-            .collect();
-        chessboard(&mut dist, dims);
         let cell = DVec3::ONE / DVec3::from_array(dims.map(|n| n as f64));
-        SkipGrid::new(dims, DVec3::ZERO, cell, dist)
+        SkipGrid::of_occupied(dims, DVec3::ZERO, cell, occupied)
     }
 
     fn random_grid(rng: &mut Rng, fill: f64) -> SkipGrid {
