@@ -872,8 +872,9 @@ impl Walk {
     /// If the sample at parameter `t` lies in an empty block, `Ok` with the parameter at which
     /// that block (and the empty blocks right after it) is left; else `Err` with the parameter
     /// up to which samples stay in the same occupied block (and must all be taken).
-    /// Calls must come with non-decreasing `t`.
-    #[inline]
+    /// Calls must come with non-decreasing `t`. Always inlined: from `Cursor::next_run` the
+    /// compiler left it a call per question.
+    #[inline(always)]
     pub(crate) fn skip_until(&mut self, grid: &SkipGrid, t: f64) -> Result<f64, f64> {
         while !self.done && self.left_before(t) {
             self.advance(grid);
