@@ -137,9 +137,14 @@ fn slab((mut t0, mut t1): (f64, f64), o: f64, d: f64, min: f64, max: f64) -> Opt
     }
     let inv = 1.0 / d;
     let (a, b) = ((min - o) * inv, (max - o) * inv);
-    // `a.min(b)` and `a.max(b)`: b where a is NaN, a where b is.
-    let lo = if b < a || a.is_nan() { b } else { a };
-    let hi = if b > a || a.is_nan() { b } else { a };
+    // `a.min(b)` and `a.max(b)`: b where a is NaN, a where b is. Neither NaN (one comparison
+    // tells), a `minsd` and a `maxsd`: the same values as with the NaN terms.
+    let (lo, hi) = if a.is_nan() || b.is_nan() {
+        let x = if a.is_nan() { b } else { a };
+        (x, x)
+    } else {
+        (if b < a { b } else { a }, if b > a { b } else { a })
+    };
     if lo > t0 {
         t0 = lo;
     }
