@@ -1938,44 +1938,57 @@ impl Cursor {
         mids: &mut [f64; 8],
         lens: &mut [f64; 8],
     ) -> usize {
-        loop {
-            if self.k >= self.n {
-                return 0;
+        if self.k >= self.n {
+            return 0;
+        }
+        let left = self.segments(mids, lens);
+        let (Some(walk), Some(grid)) = (self.walk.as_mut(), grid) else {
+            self.k += left as u64;
+            return left;
+        };
+        // Samples before j are taken; sample j is taken if it lies before `until` or the
+        // walk finds it in an occupied block.
+        let (mut j, mut until) = (0, self.occupied_until);
+        let exit = loop {
+            while j < left && mids[j] < until {
+                j += 1;
             }
-            let left = self.segments(mids, lens);
-            let (Some(walk), Some(grid)) = (self.walk.as_mut(), grid) else {
-                self.k += left as u64;
-                return left;
-            };
-            // Samples before j are taken; sample j is taken if it lies before `until` or the
-            // walk finds it in an occupied block.
-            let (mut j, mut until) = (0, self.occupied_until);
-            let exit = loop {
-                while j < left && mids[j] < until {
+            if j == left {
+                break None;
+            }
+            match walk.skip_until(grid, mids[j]) {
+                Err(u) => {
+                    until = u;
                     j += 1;
                 }
-                if j == left {
-                    break None;
-                }
-                match walk.skip_until(grid, mids[j]) {
-                    Err(u) => {
-                        until = u;
-                        j += 1;
-                    }
-                    Ok(exit) => break Some(exit),
-                }
-            };
-            self.occupied_until = until;
-            self.k += j as u64;
-            let Some(exit) = exit else {
-                return j;
-            };
-            // Sample j lies in an empty block: pass it and those after it up to the exit.
-            self.pass_before(exit);
-            if j > 0 {
-                return j;
+                Ok(exit) => break Some(exit),
             }
+        };
+        self.occupied_until = until;
+        self.k += j as u64;
+        let Some(exit) = exit else {
+            return j;
+        };
+        // Sample j lies in an empty block: pass it and those after it up to the exit.
+        self.pass_before(exit);
+        if j > 0 {
+            return j;
         }
+        // The run starts after the empty blocks (apart: as a loop here, the compiler kept
+        // the run's constants in registers across every call).
+        self.next_run_after_gap(Some(grid), mids, lens)
+    }
+
+    /// [`Cursor::next_run`] again, where its first sample lay in an empty block.
+    #[cold]
+    #[inline(never)]
+    fn next_run_after_gap(
+        &mut self,
+        grid: Option<&SkipGrid>,
+        mids: &mut [f64; 8],
+        lens: &mut [f64; 8],
+    ) -> usize {
+        self.next_run(grid, mids, lens)
     }
 
     /// The midpoint of the next segment that must be sampled, passing over segments whose
