@@ -786,7 +786,9 @@ impl Walk {
     /// Moves the walk to parameter `t0` (its start, or a leap): the block there and the
     /// parameters at which it is left (steps and deltas do not change along a ray). `forced`
     /// sets the block index on the axes where the ray is known to have just crossed into a
-    /// block (so rounding cannot put it back).
+    /// block (so rounding cannot put it back). Always inlined: at a walk's start the forced
+    /// axes are known to be none, and the tests of them go.
+    #[inline(always)]
     fn relocate(&mut self, grid: &SkipGrid, t0: f64, forced: [Option<i64>; 3]) {
         let p = self.o + t0 * self.d;
         for axis in 0..3 {
