@@ -272,6 +272,29 @@ impl Default for CellGradients {
     }
 }
 
+/// The trilinear value of a cell, clamped to [0, 1], from its eight nodes as two pairs of
+/// x-rows, `z0 = [r00, r01]` and `z1 = [r10, r11]` (`rYZ` the row at y + Y, z + Z, its two
+/// nodes along x), at weights `f` of the second nodes: the lerps `a + (b − a)·t` along x, then
+/// y, then z, of the scalar code (`c00 = lerp(r00[0], r00[1], fx)`, …,
+/// `lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz)`), but the x-lerps and the y-lerps in
+/// SSE lanes: lanes 0 and 2 of each register hold the two rows' first nodes, lanes 1 and 3
+/// their second, so lerping each register against itself shifted down a lane leaves c00 and
+/// c01 (c10 and c11) in lanes 0 and 2, and lerping the two results leaves both y-lerps there
+/// (lanes 1 and 3 are never read). Each lane is the same f32 subtraction, product and sum, with
+/// no fused multiply-add, so the same bits (`trilinear_rows_is_the_scalar_lerps`); it takes
+/// the pairs as the two rows' 8-byte loads, where the scalar lerps shuffled them about.
+#[inline(always)]
+fn trilinear_rows(z0: [f32; 4], z1: [f32; 4], [fx, fy, fz]: [f32; 3]) -> f32 {
+    use wide::f32x4;
+    let x = |r: [f32; 4]| {
+        let a = f32x4::new(r);
+        a + (f32x4::new([r[1], r[1], r[3], r[3]]) - a) * f32x4::splat(fx)
+    };
+    let (a, b) = (x(z0), x(z1));
+    let d = (a + (b - a) * f32x4::splat(fy)).to_array();
+    (d[0] + (d[2] - d[0]) * fz).clamp(0.0, 1.0)
+}
+
 /// A loaded dataset: dimensions, raw voxels, normalisation and the normalised node values.
 #[derive(Clone, Debug)]
 pub struct Dataset {
@@ -990,16 +1013,15 @@ impl Dataset {
         &self,
         base: usize,
         (sy, sz): (usize, usize),
-        [fx, fy, fz]: [f32; 3],
+        f: [f32; 3],
         mask: Option<&CellMask>,
         unit_x: bool,
     ) -> f32 {
         if mask.is_some_and(|m| !m.may_reach(base)) {
             return 0.0;
         }
-        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
         let v = &self.values;
-        let (c00, c10, c01, c11) = if unit_x {
+        if unit_x {
             // Four rows of two nodes along x, in the span [base, base + sz + sy + 2): the
             // first and last two nodes of its first sy + 2 and of its last sy + 2. Where base
             // and the strides are below 2³² (given as such) no sum overflows, and the span's
@@ -1007,34 +1029,34 @@ impl Dataset {
             let rows = v.get(base..base + sz + sy + 2).and_then(|w| {
                 let (lower, upper) = (w.get(..sy + 2)?, w.get(sz..)?);
                 Some([
-                    *lower.first_chunk::<2>()?,
-                    *lower.last_chunk::<2>()?,
-                    *upper.first_chunk::<2>()?,
-                    *upper.last_chunk::<2>()?,
+                    lower.first_chunk::<2>()?,
+                    lower.last_chunk::<2>()?,
+                    upper.first_chunk::<2>()?,
+                    upper.last_chunk::<2>()?,
                 ])
             });
             let Some([r00, r10, r01, r11]) = rows else {
                 return 0.0; // unreachable: the cell lies inside the grid
             };
-            (
-                lerp(r00[0], r00[1], fx),
-                lerp(r10[0], r10[1], fx),
-                lerp(r01[0], r01[1], fx),
-                lerp(r11[0], r11[1], fx),
-            )
+            // (The rows by reference: copied out as arrays, they were loaded through integer
+            // registers.)
+            let z0 = [r00[0], r00[1], r01[0], r01[1]];
+            trilinear_rows(z0, [r10[0], r10[1], r11[0], r11[1]], f)
         } else {
             // (sx = 0: an axis of one node.)
             let Some(w) = v.get(base..=base + sy + sz) else {
                 return 0.0; // unreachable: the cell lies inside the grid
             };
-            (
+            let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+            let [fx, fy, fz] = f;
+            let (c00, c10, c01, c11) = (
                 lerp(w[0], w[0], fx),
                 lerp(w[sy], w[sy], fx),
                 lerp(w[sz], w[sz], fx),
                 lerp(w[sz + sy], w[sz + sy], fx),
-            )
-        };
-        lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz).clamp(0.0, 1.0)
+            );
+            lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz).clamp(0.0, 1.0)
+        }
     }
 
     /// The trilinear gradient where all the nodes it reads are interior (central differences
@@ -1901,6 +1923,66 @@ mod tests {
         .unwrap();
         assert!(long.lanes.is_none());
         trilinear8_is_trilinear(&long, &mut rng, &specials);
+    }
+
+    /// [`trilinear_rows`] in lanes against the scalar lerps it replaced (kept here verbatim),
+    /// bit for bit, on nodes and weights drawn from awkward values (NaN, ±0, ±∞, subnormals,
+    /// huge, the unit interval's ends) and from random bits, and on the usual nodes in [0, 1]
+    /// with weights in [0, 1). Where both give NaN only that is required: Rust leaves a NaN's
+    /// payload unspecified, and the compiler may swap a sum's or product's operands.
+    #[test]
+    fn trilinear_rows_is_the_scalar_lerps() {
+        let old = |[r00, r10, r01, r11]: [[f32; 2]; 4], [fx, fy, fz]: [f32; 3]| {
+            let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+            let (c00, c10, c01, c11) = (
+                lerp(r00[0], r00[1], fx),
+                lerp(r10[0], r10[1], fx),
+                lerp(r01[0], r01[1], fx),
+                lerp(r11[0], r11[1], fx),
+            );
+            lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz).clamp(0.0, 1.0)
+        };
+        let rng = crate::testing::Xorshift::new(0x9e37_79b9_7f4a_7c15u64);
+        let specials = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            1.0 - f32::EPSILON / 2.0,
+            f32::MIN_POSITIVE,
+            f32::MIN_POSITIVE / 8.0,
+            -f32::MIN_POSITIVE / 8.0,
+            f32::from_bits(1),
+            1e30,
+            -1e30,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+        ];
+        let special = || specials[(rng.bits() % specials.len() as u64) as usize];
+        let awkward = || match rng.bits() % 4 {
+            0 => f32::from_bits(rng.bits() as u32),
+            1 => rng.next() as f32,
+            _ => special(),
+        };
+        let unit = || rng.next() as f32;
+        for round in 0..400_000 {
+            let draw = || if round % 2 == 0 { awkward() } else { unit() };
+            let rows: [[f32; 2]; 4] = std::array::from_fn(|_| [draw(), draw()]);
+            let f: [f32; 3] = std::array::from_fn(|_| draw());
+            let [r00, r10, r01, r11] = rows;
+            let z0 = [r00[0], r00[1], r01[0], r01[1]];
+            let new = trilinear_rows(z0, [r10[0], r10[1], r11[0], r11[1]], f);
+            let want = old(rows, f);
+            assert!(
+                new.to_bits() == want.to_bits() || (new.is_nan() && want.is_nan()),
+                "{rows:?} {f:?}: {new:?} against {want:?}"
+            );
+        }
     }
 
     /// A cell's value as the eight nodes read one by one (the second node along an axis of one
