@@ -969,7 +969,10 @@ impl Dataset {
 
     /// The values at the first `count` of `N` points whose cells' first nodes are `at` (as
     /// `index` converts them to node indices) and whose weights `f` are given by axis (see
-    /// [`Dataset::trilinear8`]).
+    /// [`Dataset::trilinear8`]), written into `out`, which holds 0s: a value the mask knows to
+    /// be 0 is left as it is. (The mask tested here rather than in the cell's interpolation, the
+    /// rejected cells skip the 0's store and the loads of their weights, which the compiler had
+    /// hoisted above the test.)
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn values_in_cells<T: Copy, const N: usize>(
@@ -986,8 +989,12 @@ impl Dataset {
         // tests a register in each cell instead of reloading the stride from the dataset.
         let mut cells = |unit_x: bool| {
             for (i, (out, at)) in out.iter_mut().zip(at).enumerate().take(count.min(N)) {
+                let at = index(at);
+                if mask.is_some_and(|m| !m.may_reach(at)) {
+                    continue;
+                }
                 let f = [f[0][i], f[1][i], f[2][i]];
-                *out = self.trilinear_cell(index(at), rows, f, mask, unit_x);
+                *out = self.trilinear_cell(at, rows, f, unit_x);
             }
         };
         if self.strides[0] == 1 {
@@ -1000,26 +1007,26 @@ impl Dataset {
     #[inline(always)]
     fn trilinear_in(&self, p: [f32; 3], mask: Option<&CellMask>) -> f32 {
         let (cell, f) = self.cell32(p);
+        let base = self.node_index(cell);
+        if mask.is_some_and(|m| !m.may_reach(base)) {
+            return 0.0;
+        }
         let rows = (self.strides[1], self.strides[2]);
-        self.trilinear_cell(self.node_index(cell), rows, f, mask, self.strides[0] == 1)
+        self.trilinear_cell(base, rows, f, self.strides[0] == 1)
     }
 
     /// The trilinear value in the cell whose first node has index `base`, at weights `f` of
-    /// its second nodes; 0 where `mask` proves the cell below its bound. `unit_x`: whether
-    /// the x-stride is 1 (else 0, an axis of one node), given by the caller so that a loop
-    /// over cells tests it once.
+    /// its second nodes (the callers test the cell mask first). `unit_x`: whether the x-stride
+    /// is 1 (else 0, an axis of one node), given by the caller so that a loop over cells tests
+    /// it once.
     #[inline(always)]
     fn trilinear_cell(
         &self,
         base: usize,
         (sy, sz): (usize, usize),
         f: [f32; 3],
-        mask: Option<&CellMask>,
         unit_x: bool,
     ) -> f32 {
-        if mask.is_some_and(|m| !m.may_reach(base)) {
-            return 0.0;
-        }
         let v = &self.values;
         if unit_x {
             // Four rows of two nodes along x, in the span [base, base + sz + sy + 2): the
@@ -1836,13 +1843,22 @@ mod tests {
                 for _ in 0..250 {
                     let ps: [[f32; 3]; 8] = std::array::from_fn(|_| rng.point_around_box());
                     let by_axis = std::array::from_fn(|axis| ps.map(|p| p[axis]));
-                    let masked = values8(d, &by_axis, 8, Some(&mask));
-                    for (p, masked) in ps.into_iter().zip(masked) {
-                        let plain = d.trilinear(p);
-                        if plain > z {
-                            assert_eq!(plain.to_bits(), masked.to_bits(), "{dims:?} {p:?}");
-                        } else {
-                            assert!(masked == plain || masked == 0.0, "{dims:?} {p:?}");
+                    for count in [8, 5, 4, 3] {
+                        // (`values8` starts from 1s: a rejected cell's value must be set to 0.)
+                        let masked = values8(d, &by_axis, count, Some(&mask));
+                        for (i, (p, masked)) in ps.into_iter().zip(masked).enumerate() {
+                            let plain = d.trilinear(p);
+                            if i >= count {
+                                assert_eq!(masked.to_bits(), 0, "{dims:?} {p:?}");
+                            } else if plain > z {
+                                assert_eq!(plain.to_bits(), masked.to_bits(), "{dims:?} {p:?}");
+                            } else {
+                                assert!(masked == plain || masked == 0.0, "{dims:?} {p:?}");
+                            }
+                            // Exactly: the value where the cell may reach z, else 0.
+                            let reach = mask.may_reach(d.node_index(d.cell32(p).0));
+                            let want = if i < count && reach { plain } else { 0.0 };
+                            assert_eq!(masked.to_bits(), want.to_bits(), "{dims:?} {p:?}");
                         }
                     }
                 }
