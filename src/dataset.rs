@@ -245,11 +245,12 @@ pub(crate) struct Cells8 {
     pub(crate) at: [u32; 8],
     /// Per axis and point, the weight of the cell's second node.
     pub(crate) f: [[f32; 8]; 3],
-    /// Bit `i`: point `i` (of the first `count`) lies in an interior cell (its 4×4×4
-    /// neighbourhood inside the grid, see [`Dataset::interior_cell32`]), and `at` and `f` hold
-    /// that cell. No bit where the cells were not found in lanes: those points keep the
-    /// gradient's own path.
-    pub(crate) interior: u32,
+    /// Per axis and point, the clamped coordinate the cell was found from (min(u, n − 2), see
+    /// [`Dataset::cell_in_lanes`]), for [`Dataset::interior8`].
+    pub(crate) cu: [[f32; 8]; 3],
+    /// How many of the points (the first) the cells were found for in lanes (0: none, those
+    /// points keep the gradient's own path).
+    pub(crate) count: u32,
 }
 
 /// The central differences (per grid step) at the eight nodes of the cell a trilinear
@@ -906,25 +907,23 @@ impl Dataset {
         cells: &mut Cells8,
     ) {
         *out = [0f32; 8];
-        cells.interior = 0;
+        cells.count = 0;
         let count = count.min(8);
         #[cfg(target_arch = "x86_64")]
-        if let Some([last, top, inner]) = &self.lanes {
+        if let Some([last, top, _]) = &self.lanes {
             use wide::{f32x4, f32x8, i32x4, i32x8};
             // The cells of the points along one axis, in lanes of `$F` (`$I` for the indices).
             macro_rules! cells {
                 ($F:ty, $I:ty, $N:literal) => {{
                     let mut c = [<$I>::default(); 3];
                     let mut cf = [<$F>::ZERO; 3];
-                    let mut inside = [<$F>::ZERO; 3];
-                    let f = &mut cells.f;
+                    let (f, cus) = (&mut cells.f, &mut cells.cu);
                     for axis in 0..3 {
                         let l = <$F>::splat(last[axis]);
                         let lanes: [f32; $N] = std::array::from_fn(|i| p[axis][i]);
                         let u = (<$F>::new(lanes) * l).fast_max(<$F>::ZERO).fast_min(l);
                         let cu = u.fast_min(<$F>::splat(top[axis]));
-                        // Interior along the axis: 1 ≤ cu < n − 2 (see `cell_in_lanes`).
-                        inside[axis] = cu.simd_ge(<$F>::ONE) & cu.simd_lt(<$F>::splat(inner[axis]));
+                        cus[axis][..$N].copy_from_slice(&cu.to_array());
                         c[axis] = cu.fast_trunc_int();
                         cf[axis] = c[axis].round_float();
                         f[axis][..$N].copy_from_slice(&(u - cf[axis]).to_array());
@@ -936,8 +935,7 @@ impl Dataset {
                         let at: $I = at.fast_trunc_int();
                         let at = at.to_array().map(|a| a as u32);
                         cells.at[..$N].copy_from_slice(&at);
-                        cells.interior =
-                            (inside[0] & inside[1] & inside[2]).to_bitmask() & ((1 << count) - 1);
+                        cells.count = count as u32;
                         // Below 2²⁴ as well, so the conversions are exact.
                         let rows = (
                             self.strides[1] as u32 as usize,
@@ -965,6 +963,26 @@ impl Dataset {
         for (i, out) in out.iter_mut().enumerate().take(count) {
             *out = self.trilinear_in([p[0][i], p[1][i], p[2][i]], mask);
         }
+    }
+
+    /// Bit `i`: point `i` of the last [`Dataset::trilinear8`] that filled `cells` (of the
+    /// first [`Cells8::count`]) lies in an interior cell (its 4×4×4 neighbourhood inside the
+    /// grid, see [`Dataset::interior_cell32`]): 1 ≤ cu < n − 2 along every axis (see
+    /// [`Dataset::cell_in_lanes`]). Taken by the batched march only for runs with a sample to
+    /// shade, not for every run as `trilinear8` did.
+    #[inline]
+    pub(crate) fn interior8(&self, cells: &Cells8) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        if let Some([_, _, inner]) = &self.lanes {
+            use wide::f32x8;
+            let inside = |axis: usize| {
+                let cu = f32x8::new(cells.cu[axis]);
+                cu.simd_ge(f32x8::ONE) & cu.simd_lt(f32x8::splat(inner[axis]))
+            };
+            let count = cells.count.min(8);
+            return (inside(0) & inside(1) & inside(2)).to_bitmask() & ((1 << count) - 1);
+        }
+        0
     }
 
     /// The values at the first `count` of `N` points whose cells' first nodes are `at` (as
@@ -1080,7 +1098,7 @@ impl Dataset {
     }
 
     /// [`Dataset::gradient_cached`] with the trilinear filter at a point of interior cell
-    /// `cells` holds as its lane `i` (bit `i` of [`Cells8::interior`] set): the batched march
+    /// `cells` holds as its lane `i` (bit `i` of [`Dataset::interior8`] set): the batched march
     /// has found that cell for the point's value, so the gradient need not find it again. The
     /// same value, bit for bit (the same cell and weights, see [`Dataset::trilinear8`]).
     #[inline]
@@ -2142,16 +2160,19 @@ mod tests {
             ps[..chunk.len()].copy_from_slice(chunk);
             let by_axis = std::array::from_fn(|axis| ps.map(|p| p[axis]));
             let count = (batch + 5) % 9;
-            // Not the defaults: `trilinear8` sets the interior bits.
+            // Not the defaults: `trilinear8` sets the count and the coordinates (the ones of
+            // the eight lanes, interior in grids of more than 3 nodes a side, must go).
             let mut cells = Cells8 {
-                interior: u32::MAX,
+                count: 8,
+                cu: [[1.0; 8]; 3],
                 ..Cells8::default()
             };
             d.trilinear8(&by_axis, count, None, &mut [0.0; 8], &mut cells);
-            assert_eq!(cells.interior >> count, 0, "{:?}", d.dims);
+            let bits = d.interior8(&cells);
+            assert_eq!(bits >> count, 0, "{:?}", d.dims);
             for (i, p) in ps.iter().enumerate().take(count) {
                 let found = d.interior_cell32(*p);
-                if cells.interior >> i & 1 == 0 {
+                if bits >> i & 1 == 0 {
                     // Only where the cells were not found in lanes may an interior cell have
                     // no bit.
                     assert!(found.is_none() || d.index_lanes.is_none(), "{p:?}");

@@ -1607,6 +1607,12 @@ impl Compiled {
                 // ends (no sample after that is shaded), under a single light the lighting in
                 // lanes across the samples, then the composite.
                 let (mut count, mut ends) = (0, false);
+                // Which of the run's cells are interior, for the gradients taken in them.
+                let interior = if same_cells && pass != 0 {
+                    data.interior8(&cells8)
+                } else {
+                    0
+                };
                 while pass != 0 {
                     let i = pass.trailing_zeros() as usize;
                     pass &= pass - 1;
@@ -1621,7 +1627,7 @@ impl Compiled {
                     let c = if lanes.is_some() {
                         // The normal's gradient now (in object space where it is the dataset's:
                         // the lanes take it to world space); the rest in lanes below.
-                        let (g, vanishes) = if same_cells && cells8.interior >> i & 1 != 0 {
+                        let (g, vanishes) = if interior >> i & 1 != 0 {
                             vanishing(data.trilinear_gradient_in(p, &cells8, i, &mut cache))
                         } else {
                             obj.field_gradient_in(w(), p, 9, &mut cache)
