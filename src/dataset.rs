@@ -329,6 +329,11 @@ pub struct Dataset {
     /// product and sum of [`Dataset::node_index`], is then an integer exact in f32), for
     /// [`Dataset::trilinear8`]'s cells' first nodes in lanes; else `None`.
     index_lanes: Option<[f32; 3]>,
+    /// [`Dataset::lanes`]' three rows and [`Dataset::index_lanes`] (0s where that is `None`),
+    /// each number splatted across eight aligned lanes: [`Dataset::trilinear8`] then reads a
+    /// splat as one load, or as the memory operand of its first use, instead of a scalar load
+    /// and a shuffle.
+    splats: ([[wide::f32x4; 3]; 4], [[wide::f32x8; 3]; 4]),
 }
 
 impl PartialEq for Dataset {
@@ -412,8 +417,27 @@ impl Dataset {
             }),
             strides,
             index_lanes: (values.len() <= 1 << 24).then(|| strides.map(|s| s as f32)),
+            splats: Default::default(),
             values,
-        })
+        }
+        .with_splats())
+    }
+
+    /// The dataset with its [`Dataset::splats`] filled in.
+    fn with_splats(mut self) -> Dataset {
+        let rows = self.lanes.unwrap_or_default();
+        let strides = self.index_lanes.unwrap_or_default();
+        let rows = [
+            [rows[0][0], rows[0][1], rows[0][2]],
+            [rows[1][0], rows[1][1], rows[1][2]],
+            [rows[2][0], rows[2][1], rows[2][2]],
+            strides,
+        ];
+        self.splats = (
+            rows.map(|r| r.map(wide::f32x4::splat)),
+            rows.map(|r| r.map(wide::f32x8::splat)),
+        );
+        self
     }
 
     /// The brick ranges for `filter` (computed once per dataset and reach, then shared).
@@ -910,28 +934,28 @@ impl Dataset {
         cells.count = 0;
         let count = count.min(8);
         #[cfg(target_arch = "x86_64")]
-        if let Some([last, top, _]) = &self.lanes {
+        if self.lanes.is_some() {
             use wide::{f32x4, f32x8, i32x4, i32x8};
             // The cells of the points along one axis, in lanes of `$F` (`$I` for the indices).
             macro_rules! cells {
-                ($F:ty, $I:ty, $N:literal) => {{
+                ($F:ty, $I:ty, $N:literal, $S:tt) => {{
                     let mut c = [<$I>::default(); 3];
                     let mut cf = [<$F>::ZERO; 3];
                     let (f, cus) = (&mut cells.f, &mut cells.cu);
                     for axis in 0..3 {
-                        let l = <$F>::splat(last[axis]);
+                        let l = self.splats.$S[0][axis];
                         let lanes: [f32; $N] = std::array::from_fn(|i| p[axis][i]);
                         let u = (<$F>::new(lanes) * l).fast_max(<$F>::ZERO).fast_min(l);
-                        let cu = u.fast_min(<$F>::splat(top[axis]));
+                        let cu = u.fast_min(self.splats.$S[1][axis]);
                         cus[axis][..$N].copy_from_slice(&cu.to_array());
                         c[axis] = cu.fast_trunc_int();
                         cf[axis] = c[axis].round_float();
                         f[axis][..$N].copy_from_slice(&(u - cf[axis]).to_array());
                     }
-                    if let Some([sx, sy, sz]) = self.index_lanes {
+                    if self.index_lanes.is_some() {
                         // The first nodes' indices in lanes: integers below 2²⁴, so exact.
-                        let s = |s: f32| <$F>::splat(s);
-                        let at = cf[0] * s(sx) + cf[1] * s(sy) + cf[2] * s(sz);
+                        let s = |axis: usize| self.splats.$S[3][axis];
+                        let at = cf[0] * s(0) + cf[1] * s(1) + cf[2] * s(2);
                         let at: $I = at.fast_trunc_int();
                         let at = at.to_array().map(|a| a as u32);
                         cells.at[..$N].copy_from_slice(&at);
@@ -954,9 +978,9 @@ impl Dataset {
             }
             // A short run (the usual one at large sample distances) needs only half the lanes.
             if count <= 4 {
-                cells!(f32x4, i32x4, 4);
+                cells!(f32x4, i32x4, 4, 0);
             } else {
-                cells!(f32x8, i32x8, 8);
+                cells!(f32x8, i32x8, 8, 1);
             }
             return;
         }
@@ -969,18 +993,20 @@ impl Dataset {
     /// first [`Cells8::count`]) lies in an interior cell (its 4×4×4 neighbourhood inside the
     /// grid, see [`Dataset::interior_cell32`]): 1 ≤ cu < n − 2 along every axis (see
     /// [`Dataset::cell_in_lanes`]). Taken by the batched march only for runs with a sample to
-    /// shade, not for every run as `trilinear8` did.
+    /// shade, not for every run as `trilinear8` did. The lower bound as one test of the three
+    /// axes' least (`interior8_is_the_tests_axis_by_axis`).
     #[inline]
     pub(crate) fn interior8(&self, cells: &Cells8) -> u32 {
         #[cfg(target_arch = "x86_64")]
-        if let Some([_, _, inner]) = &self.lanes {
+        if self.lanes.is_some() {
             use wide::f32x8;
-            let inside = |axis: usize| {
-                let cu = f32x8::new(cells.cu[axis]);
-                cu.simd_ge(f32x8::ONE) & cu.simd_lt(f32x8::splat(inner[axis]))
-            };
+            let cu = cells.cu.map(f32x8::new);
+            // At least 1 along every axis where the least of the three is: `cu` is never NaN
+            // (`max(u, 0)` by `maxps` maps NaN to 0), so the minima are the numbers' least.
+            let low = cu[0].fast_min(cu[1]).fast_min(cu[2]).simd_ge(f32x8::ONE);
+            let high = |axis: usize| cu[axis].simd_lt(self.splats.1[2][axis]);
             let count = cells.count.min(8);
-            return (inside(0) & inside(1) & inside(2)).to_bitmask() & ((1 << count) - 1);
+            return (low & high(0) & high(1) & high(2)).to_bitmask() & ((1 << count) - 1);
         }
         0
     }
@@ -2016,6 +2042,74 @@ mod tests {
                 new.to_bits() == want.to_bits() || (new.is_nan() && want.is_nan()),
                 "{rows:?} {f:?}: {new:?} against {want:?}"
             );
+        }
+    }
+
+    /// [`Dataset::interior8`] against the test axis by axis it replaced (kept here verbatim),
+    /// on clamped coordinates drawn from awkward numbers (±0, ±∞, subnormals, huge, 1 and the
+    /// interior bound and their neighbours) and random bits, at every count: every number but
+    /// NaN, which `trilinear8` never writes (checked here from NaN points).
+    #[test]
+    fn interior8_is_the_tests_axis_by_axis() {
+        use wide::f32x8;
+        let rng = crate::testing::Xorshift::new(0x2545_f491_4f6c_dd1du64);
+        for dims in [[9, 7, 8], [4, 5, 4], [1, 6, 5], [3, 3, 3], [197, 233, 189]] {
+            let d = random_u8(dims, 7);
+            let Some([_, _, inner]) = d.lanes else {
+                panic!("{dims:?} is small enough for lanes");
+            };
+            let old = |cells: &Cells8| {
+                let inside = |axis: usize| {
+                    let cu = f32x8::new(cells.cu[axis]);
+                    cu.simd_ge(f32x8::ONE) & cu.simd_lt(f32x8::splat(inner[axis]))
+                };
+                let count = cells.count.min(8);
+                (inside(0) & inside(1) & inside(2)).to_bitmask() & ((1 << count) - 1)
+            };
+            let mut specials = vec![
+                0.0f32,
+                -0.0,
+                1.0,
+                f32::MIN_POSITIVE,
+                f32::from_bits(1),
+                -f32::from_bits(1),
+                1e30,
+                -1e30,
+                f32::MAX,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+            ];
+            for x in [1.0f32, inner[0], inner[1], inner[2]] {
+                specials.extend([x, x.next_up(), x.next_down(), -x]);
+            }
+            let draw = || match rng.bits() % 4 {
+                0 => loop {
+                    let x = f32::from_bits(rng.bits() as u32);
+                    if !x.is_nan() {
+                        break x;
+                    }
+                },
+                1 => (rng.next() * 4.0 - 1.0) as f32 * inner[(rng.bits() % 3) as usize],
+                _ => specials[(rng.bits() % specials.len() as u64) as usize],
+            };
+            for round in 0..20_000 {
+                let cells = Cells8 {
+                    cu: std::array::from_fn(|_| std::array::from_fn(|_| draw())),
+                    count: round % 10,
+                    ..Cells8::default()
+                };
+                assert_eq!(d.interior8(&cells), old(&cells), "{dims:?} {cells:?}");
+            }
+            // NaN and infinite points give clamped coordinates that are numbers.
+            let mut cells = Cells8::default();
+            for a in [f32::NAN, -f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.5] {
+                let p = [[a; 8], [0.5; 8], [a; 8]];
+                for count in [3, 8] {
+                    d.trilinear8(&p, count, None, &mut [0.0; 8], &mut cells);
+                    let cu = cells.cu.as_flattened();
+                    assert!(cu.iter().all(|x| !x.is_nan()), "{dims:?} {a}");
+                }
+            }
         }
     }
 
