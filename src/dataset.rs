@@ -232,8 +232,15 @@ impl CellMask {
     /// Whether the cell with first node `c` may reach the bound.
     #[inline]
     pub(crate) fn may_reach(&self, c: usize) -> bool {
-        self.bits.get(c >> 6).is_none_or(|w| w >> (c & 63) & 1 != 0)
+        reaches(&self.bits, c)
     }
+}
+
+/// [`CellMask::may_reach`] on the mask's bits (a cell past their end may reach the bound, so
+/// no bits at all stand for no mask).
+#[inline(always)]
+fn reaches(bits: &[u64], c: usize) -> bool {
+    bits.get(c >> 6).is_none_or(|w| w >> (c & 63) & 1 != 0)
 }
 
 /// The cells of [`Dataset::trilinear8`]'s points, handed out so that the batched march can
@@ -1031,10 +1038,13 @@ impl Dataset {
     ) {
         // The x-stride's test outside the cells: the compiler merges the two loops again, but
         // tests a register in each cell instead of reloading the stride from the dataset.
+        // The mask's bits as a slice, no mask as no bits (which let every cell through): the
+        // cells then test neither the option nor reload the slice from the mask.
+        let bits: &[u64] = mask.map_or(&[], |m| &m.bits);
         let mut cells = |unit_x: bool| {
             for (i, (out, at)) in out.iter_mut().zip(at).enumerate().take(count.min(N)) {
                 let at = index(at);
-                if mask.is_some_and(|m| !m.may_reach(at)) {
+                if !reaches(bits, at) {
                     continue;
                 }
                 let f = [f[0][i], f[1][i], f[2][i]];
@@ -2216,9 +2226,13 @@ mod tests {
             let by_axis = std::array::from_fn(|axis| ps.map(|p| p[axis]));
             let count = batch % 9;
             let got = values8(d, &by_axis, count, None);
+            // A mask of no bits lets every cell through, as no mask does.
+            let empty = CellMask { bits: Vec::new() };
+            let unmasked = values8(d, &by_axis, count, Some(&empty));
             for (i, (p, got)) in ps.iter().zip(got).enumerate() {
                 let want = if i < count { d.trilinear(*p) } else { 0.0 };
                 assert_eq!(got.to_bits(), want.to_bits(), "{:?} {p:?} lane {i}", d.dims);
+                assert_eq!(unmasked[i].to_bits(), want.to_bits(), "{:?} {p:?}", d.dims);
             }
         }
         trilinear8_cells(d, rng, specials);
