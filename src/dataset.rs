@@ -1048,7 +1048,9 @@ impl Dataset {
                     continue;
                 }
                 let f = [f[0][i], f[1][i], f[2][i]];
-                *out = self.trilinear_cell(at, rows, f, unit_x);
+                if let Some(v) = self.trilinear_cell(at, rows, f, unit_x) {
+                    *out = v;
+                }
             }
         };
         if self.strides[0] == 1 {
@@ -1067,12 +1069,15 @@ impl Dataset {
         }
         let rows = (self.strides[1], self.strides[2]);
         self.trilinear_cell(base, rows, f, self.strides[0] == 1)
+            .unwrap_or(0.0)
     }
 
     /// The trilinear value in the cell whose first node has index `base`, at weights `f` of
     /// its second nodes (the callers test the cell mask first). `unit_x`: whether the x-stride
     /// is 1 (else 0, an axis of one node), given by the caller so that a loop over cells tests
-    /// it once.
+    /// it once. `None` where the cell's nodes are not all in the values, which never happens
+    /// (the cell lies inside the grid): the caller keeps its 0 then, so no 0 is made in a
+    /// register for that path on every cell.
     #[inline(always)]
     fn trilinear_cell(
         &self,
@@ -1080,7 +1085,7 @@ impl Dataset {
         (sy, sz): (usize, usize),
         f: [f32; 3],
         unit_x: bool,
-    ) -> f32 {
+    ) -> Option<f32> {
         let v = &self.values;
         if unit_x {
             // Four rows of two nodes along x, in the span [base, base + sz + sy + 2): the
@@ -1096,18 +1101,14 @@ impl Dataset {
                     upper.last_chunk::<2>()?,
                 ])
             });
-            let Some([r00, r10, r01, r11]) = rows else {
-                return 0.0; // unreachable: the cell lies inside the grid
-            };
-            // (The rows by reference: copied out as arrays, they were loaded through integer
-            // registers.)
+            let [r00, r10, r01, r11] = rows?; // (always there: the cell lies inside the grid)
+                                              // (The rows by reference: copied out as arrays, they were loaded through integer
+                                              // registers.)
             let z0 = [r00[0], r00[1], r01[0], r01[1]];
-            trilinear_rows(z0, [r10[0], r10[1], r11[0], r11[1]], f)
+            Some(trilinear_rows(z0, [r10[0], r10[1], r11[0], r11[1]], f))
         } else {
             // (sx = 0: an axis of one node.)
-            let Some(w) = v.get(base..=base + sy + sz) else {
-                return 0.0; // unreachable: the cell lies inside the grid
-            };
+            let w = v.get(base..=base + sy + sz)?; // (always there, as above)
             let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
             let [fx, fy, fz] = f;
             let (c00, c10, c01, c11) = (
@@ -1116,7 +1117,7 @@ impl Dataset {
                 lerp(w[sz], w[sz], fx),
                 lerp(w[sz + sy], w[sz + sy], fx),
             );
-            lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz).clamp(0.0, 1.0)
+            Some(lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz).clamp(0.0, 1.0))
         }
     }
 
