@@ -1036,20 +1036,22 @@ impl Dataset {
         mask: Option<&CellMask>,
         out: &mut [f32; 8],
     ) {
-        // The x-stride's test outside the cells: the compiler merges the two loops again, but
-        // tests a register in each cell instead of reloading the stride from the dataset.
         // The mask's bits as a slice, no mask as no bits (which let every cell through): the
         // cells then test neither the option nor reload the slice from the mask.
         let bits: &[u64] = mask.map_or(&[], |m| &m.bits);
+        // The x-stride's test outside the cells: the compiler merges the two loops again, but
+        // tests a register in each cell instead of reloading the stride from the dataset.
+        // (The cells by index: iterating over `at` by value copied it and set up its
+        // iterator on every run.)
         let mut cells = |unit_x: bool| {
-            for (i, (out, at)) in out.iter_mut().zip(at).enumerate().take(count.min(N)) {
-                let at = index(at);
+            for i in 0..count.min(N) {
+                let at = index(at[i]);
                 if !reaches(bits, at) {
                     continue;
                 }
                 let f = [f[0][i], f[1][i], f[2][i]];
                 if let Some(v) = self.trilinear_cell(at, rows, f, unit_x) {
-                    *out = v;
+                    out[i] = v;
                 }
             }
         };
