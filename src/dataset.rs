@@ -1103,9 +1103,9 @@ impl Dataset {
                     upper.last_chunk::<2>()?,
                 ])
             });
-            let [r00, r10, r01, r11] = rows?; // (always there: the cell lies inside the grid)
-                                              // (The rows by reference: copied out as arrays, they were loaded through integer
-                                              // registers.)
+            // (Always there: the cell lies inside the grid. The rows by reference: copied
+            // out as arrays, they were loaded through integer registers.)
+            let [r00, r10, r01, r11] = rows?;
             let z0 = [r00[0], r00[1], r01[0], r01[1]];
             Some(trilinear_rows(z0, [r10[0], r10[1], r11[0], r11[1]], f))
         } else {

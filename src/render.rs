@@ -1523,10 +1523,11 @@ impl Compiled {
 
     /// [`Compiled::march_one`] for a lean program with a value head (a scanned volume) and no
     /// normal functions: the samples of a run the cursor knows to be in occupied blocks (or
-    /// all of them, without skipping; see [`Cursor::next_run`]) are read in batches (positions and dataset values first,
-    /// in lanes across the samples), then shaded and composited in order, exactly as the
-    /// sample-by-sample loop does (for the usual program under a single directional light,
-    /// the lighting of the samples up to where the ray ends in lanes: [`HeadlitLanes`]).
+    /// all of them, without skipping; see [`Cursor::next_run`]) are read in batches (positions
+    /// and dataset values first, in lanes across the samples), then shaded and composited in
+    /// order, exactly as the sample-by-sample loop does (for the usual program under a single
+    /// directional light, the lighting of the samples up to where the ray ends in lanes:
+    /// [`HeadlitLanes`]).
     /// `IN_LANES`: that lighting in lanes (only tests turn it off, to compare).
     #[allow(clippy::too_many_arguments)]
     fn march_batched<const IN_LANES: bool>(
