@@ -259,7 +259,7 @@ pub(crate) struct Cells8 {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct CellGradients {
     lo: usize,
-    /// Per corner, its differences along x, y and z, and a 0 (one SSE register).
+    /// Per corner, its differences along y, z and x, and a lane not read (one SSE register).
     diffs: [[f32; 4]; 8],
 }
 
@@ -1039,7 +1039,7 @@ impl Dataset {
 
     /// The trilinear gradient where all the nodes it reads are interior (central differences
     /// everywhere): the same value as the generic path, with the 4×4×4 neighbourhood of the cell
-    /// read as its twelve x-rows that are needed (one bounds check each).
+    /// read as its twelve x-rows that are needed (under the bounds checks of the two furthest).
     #[inline]
     fn trilinear_gradient_interior(
         &self,
@@ -1081,16 +1081,24 @@ impl Dataset {
         // Row (j, k) holds nodes x0 − 1 … x0 + 2 at y0 − 1 + j, z0 − 1 + k; the corner rows of
         // the neighbourhood are never read.
         if cache.lo != lo {
-            let (sy, sz) = (self.strides[1], self.strides[2]);
-            // A row starting at most 4 before the end lies inside the values: one comparison
-            // a row (the slice's own checks then follow from it and are dropped).
+            // The node indices and strides are below 2³² (a dataset has at most 2³² nodes, and
+            // a stride of more than one node spans at most half of them): given as such, no
+            // sum below overflows, and the compiler derives every row's bounds check from the
+            // tests of the two furthest rows, (3, 2) and (2, 3) (the others start before one
+            // of them: the rows grow with j and k), so the neighbourhood is read whole or not
+            // at all, as with a check per row.
+            debug_assert!(self.strides.iter().all(|&s| s <= u32::MAX as usize));
+            let (sy, sz) = (
+                self.strides[1] as u32 as usize,
+                self.strides[2] as u32 as usize,
+            );
+            let lo = u32::try_from(lo).ok()? as usize;
             let v = &self.values[..];
-            let last = v.len().checked_sub(4)?;
+            if lo + 3 * sy + 2 * sz + 4 > v.len() || lo + 2 * sy + 3 * sz + 4 > v.len() {
+                return None;
+            }
             let row = |j: usize, k: usize| -> Option<[f32; 4]> {
                 let o = lo + j * sy + k * sz;
-                if o > last {
-                    return None;
-                }
                 v.get(o..o + 4)?.try_into().ok()
             };
             let (r10, r20) = (row(1, 0)?, row(2, 0)?);
@@ -1107,18 +1115,17 @@ impl Dataset {
                 (r12, r02, r22, r11, r13),
                 (r22, r12, r32, r21, r23),
             ];
-            // Row by row in lanes: in lanes 1 and 2 (the row's two corners, x nodes 1 and 2),
-            // x nodes 2, 3 minus nodes 0, 1 are the x differences, and the row differences
-            // the y and z differences; a transposition then gives each corner its three
-            // differences in one register (lane 3 stays 0).
+            // Row by row in lanes: the row differences in y and z (lanes 1 and 2: the row's
+            // two corners, x nodes 1 and 2), and x nodes 2, 3 minus nodes 0, 1 (lanes 0 and
+            // 1); each corner's three differences then gathered into one register, in the
+            // cache's order (y, z, x) (lane 3 is not read).
             use wide::f32x4;
             for (c, (r, ym, yp, zm, zp)) in corners.into_iter().enumerate() {
-                let dx = f32x4::new([0.0, r[2], r[3], 0.0]) - f32x4::new([0.0, r[0], r[1], 0.0]);
-                let dy = f32x4::new(yp) - f32x4::new(ym);
-                let dz = f32x4::new(zp) - f32x4::new(zm);
-                let [_, first, second, _] = f32x4::transpose([dx, dy, dz, f32x4::ZERO]);
-                cache.diffs[2 * c] = first.to_array();
-                cache.diffs[2 * c + 1] = second.to_array();
+                let dy = (f32x4::new(yp) - f32x4::new(ym)).to_array();
+                let dz = (f32x4::new(zp) - f32x4::new(zm)).to_array();
+                let dx = (f32x4::new([r[2], r[3], r[2], r[3]]) - f32x4::new(r)).to_array();
+                cache.diffs[2 * c] = [dy[1], dz[1], dx[0], dx[0]];
+                cache.diffs[2 * c + 1] = [dy[2], dz[2], dx[1], dx[1]];
             }
             cache.lo = lo;
         }
@@ -1139,11 +1146,12 @@ impl Dataset {
         }
         // 0.5·g·(n − 1) in f64, as g·(0.5·(n − 1)): halving is exact in both orders (g is
         // an f32, far from f64's subnormals), so both are the one rounding of the same product.
+        // (The lanes hold y, z, x.)
         let g = g.to_array();
         Some([
-            g[0] as f64 * self.half_last[0],
-            g[1] as f64 * self.half_last[1],
-            g[2] as f64 * self.half_last[2],
+            g[2] as f64 * self.half_last[0],
+            g[0] as f64 * self.half_last[1],
+            g[1] as f64 * self.half_last[2],
         ])
     }
 
@@ -1425,6 +1433,150 @@ mod tests {
         let n = dims.iter().product();
         let raw: Vec<u8> = (0..n).map(|_| (rng.next() * 256.0) as u8).collect();
         Dataset::new(dims, Voxels::U8(raw), 10.0, 240.0).unwrap()
+    }
+
+    /// [`CellGradients`] as it was before the differences were stored in the order (y, z, x).
+    struct OldCellGradients {
+        lo: usize,
+        diffs: [[f32; 4]; 8],
+    }
+
+    /// `Dataset::trilinear_gradient_at` before its rows were bounds-checked through the two
+    /// furthest rows and its differences gathered in the order (y, z, x), verbatim (`self` as
+    /// `d`), the oracle of `gradient_rows_are_the_row_by_row_read`.
+    fn old_trilinear_gradient_at(
+        d: &Dataset,
+        lo: usize,
+        [fx, fy, fz]: [f32; 3],
+        cache: &mut OldCellGradients,
+    ) -> Option<[f64; 3]> {
+        if cache.lo != lo {
+            let (sy, sz) = (d.strides[1], d.strides[2]);
+            let v = &d.values[..];
+            let last = v.len().checked_sub(4)?;
+            let row = |j: usize, k: usize| -> Option<[f32; 4]> {
+                let o = lo + j * sy + k * sz;
+                if o > last {
+                    return None;
+                }
+                v.get(o..o + 4)?.try_into().ok()
+            };
+            let (r10, r20) = (row(1, 0)?, row(2, 0)?);
+            let (r01, r11, r21, r31) = (row(0, 1)?, row(1, 1)?, row(2, 1)?, row(3, 1)?);
+            let (r02, r12, r22, r32) = (row(0, 2)?, row(1, 2)?, row(2, 2)?, row(3, 2)?);
+            let (r13, r23) = (row(1, 3)?, row(2, 3)?);
+            let corners = [
+                (r11, r01, r21, r10, r12),
+                (r21, r11, r31, r20, r22),
+                (r12, r02, r22, r11, r13),
+                (r22, r12, r32, r21, r23),
+            ];
+            use wide::f32x4;
+            for (c, (r, ym, yp, zm, zp)) in corners.into_iter().enumerate() {
+                let dx = f32x4::new([0.0, r[2], r[3], 0.0]) - f32x4::new([0.0, r[0], r[1], 0.0]);
+                let dy = f32x4::new(yp) - f32x4::new(ym);
+                let dz = f32x4::new(zp) - f32x4::new(zm);
+                let [_, first, second, _] = f32x4::transpose([dx, dy, dz, f32x4::ZERO]);
+                cache.diffs[2 * c] = first.to_array();
+                cache.diffs[2 * c + 1] = second.to_array();
+            }
+            cache.lo = lo;
+        }
+        let (gx, gy, gz) = (1.0 - fx, 1.0 - fy, 1.0 - fz);
+        let xy = wide::f32x4::new([gx, fx, gx, fx]) * wide::f32x4::new([gy, gy, fy, fy]);
+        let near = (xy * wide::f32x4::splat(gz)).to_array();
+        let far = (xy * wide::f32x4::splat(fz)).to_array();
+        let weights = [
+            near[0], near[1], near[2], near[3], far[0], far[1], far[2], far[3],
+        ];
+        let mut g = wide::f32x4::ZERO;
+        for (wt, d) in weights.into_iter().zip(cache.diffs) {
+            g += wide::f32x4::splat(wt) * wide::f32x4::new(d);
+        }
+        let g = g.to_array();
+        Some([
+            g[0] as f64 * d.half_last[0],
+            g[1] as f64 * d.half_last[1],
+            g[2] as f64 * d.half_last[2],
+        ])
+    }
+
+    /// The same bits, or both NaN (a NaN's payload is not promised).
+    fn same_f64(a: f64, b: f64) -> bool {
+        a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+    }
+
+    /// The trilinear gradient's rows read under the two tests of the furthest rows, and its
+    /// differences gathered in the order (y, z, x), give what the row-by-row read gave: the
+    /// same `None` for every neighbourhood start of a grid (those whose rows leave the values
+    /// included), and the same bits through a cache that hits and misses, on values of every
+    /// kind (random bits: NaNs, infinities, subnormals, ±0, huge) and awkward weights.
+    #[test]
+    fn gradient_rows_are_the_row_by_row_read() {
+        let rng = crate::testing::Xorshift::new(0x5eed_6a0d);
+        let weight = |rng: &crate::testing::Xorshift| -> f32 {
+            match rng.bits() % 8 {
+                0 => 0.0,
+                1 => -0.0,
+                2 => 1.0,
+                3 => f32::from_bits(rng.bits() as u32),
+                4 => f32::from_bits(1),
+                _ => rng.next() as f32,
+            }
+        };
+        for (dims, bits) in [
+            ([4, 4, 4], false),
+            ([5, 4, 6], false),
+            ([7, 5, 4], true),
+            ([4, 9, 5], true),
+            ([6, 6, 6], true),
+        ] {
+            let mut d = random_u8(dims, 21);
+            if bits {
+                // Any f32 at all, to check the lanes' operations, not only the dataset's
+                // values in [0, 1].
+                let n = d.values.len();
+                d.values = (0..n)
+                    .map(|i| match i % 13 {
+                        0 => -0.0,
+                        1 => f32::NAN,
+                        2 => f32::INFINITY,
+                        3 => f32::NEG_INFINITY,
+                        4 => f32::from_bits(rng.bits() as u32 & 0x807f_ffff),
+                        5 => f32::MAX,
+                        _ => f32::from_bits(rng.bits() as u32),
+                    })
+                    .collect();
+            }
+            let (mut new, mut old) = (
+                CellGradients::default(),
+                OldCellGradients {
+                    lo: usize::MAX,
+                    diffs: [[0.0; 4]; 8],
+                },
+            );
+            for lo in 0..d.values.len() + 3 {
+                for _ in 0..3 {
+                    let f = [weight(&rng), weight(&rng), weight(&rng)];
+                    let got = d.trilinear_gradient_at(lo, f, &mut new);
+                    let want = old_trilinear_gradient_at(&d, lo, f, &mut old);
+                    assert_eq!(got.is_some(), want.is_some(), "{dims:?} lo {lo}");
+                    if let (Some(g), Some(w)) = (got, want) {
+                        assert!(
+                            g.iter().zip(w).all(|(&g, w)| same_f64(g, w)),
+                            "{dims:?} lo {lo} {f:?}: {g:?} vs {w:?}"
+                        );
+                    }
+                    // A fresh cache: the miss's path at every start, not only the first.
+                    let fresh = d.trilinear_gradient_at(lo, f, &mut CellGradients::default());
+                    assert_eq!(
+                        fresh.map(|g| g.map(f64::to_bits)),
+                        got.map(|g| g.map(f64::to_bits)),
+                        "{dims:?} lo {lo}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
