@@ -1053,11 +1053,14 @@ impl Dataset {
     /// [`Dataset::gradient_cached`] with the trilinear filter at a point of interior cell
     /// `cells` holds as its lane `i` (bit `i` of [`Cells8::interior`] set): the batched march
     /// has found that cell for the point's value, so the gradient need not find it again. The
-    /// same value, bit for bit (the same cell and weights, see [`Dataset::trilinear8`]).
+    /// same value, bit for bit (the same cell and weights, see [`Dataset::trilinear8`]). The
+    /// point is lane `i` of `ps` (by axis, as `trilinear8` takes them), read only where the
+    /// cell's rows are not all inside the values (never, for an interior cell): so the caller
+    /// need not gather it.
     #[inline]
     pub(crate) fn trilinear_gradient_in(
         &self,
-        p: [f32; 3],
+        ps: &[[f32; 8]; 3],
         cells: &Cells8,
         i: usize,
         cache: &mut CellGradients,
@@ -1066,7 +1069,9 @@ impl Dataset {
         (cells.at[i] as usize)
             .checked_sub(self.lo_offset)
             .and_then(|lo| self.trilinear_gradient_at(lo, f, cache))
-            .unwrap_or_else(|| self.gradient_generic(p, Filter::Trilinear))
+            .unwrap_or_else(|| {
+                self.gradient_generic([ps[0][i], ps[1][i], ps[2][i]], Filter::Trilinear)
+            })
     }
 
     /// [`Dataset::trilinear_gradient_interior`] in the interior cell whose neighbourhood starts
@@ -2216,7 +2221,7 @@ mod tests {
                 assert_eq!(cells.at[i] as usize, d.node_index(cell), "{p:?}");
                 let got = [cells.f[0][i], cells.f[1][i], cells.f[2][i]];
                 assert_eq!(got.map(f32::to_bits), f.map(f32::to_bits), "{p:?}");
-                let g = d.trilinear_gradient_in(*p, &cells, i, &mut cache);
+                let g = d.trilinear_gradient_in(&by_axis, &cells, i, &mut cache);
                 let want = d.gradient(*p, Filter::Trilinear);
                 assert_eq!(g.map(f64::to_bits), want.map(f64::to_bits), "{p:?}");
             }

@@ -1609,16 +1609,17 @@ impl Compiled {
                     };
                     let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
                     let c = rgb.map(|x| x as f64);
-                    let p = [ps[0][i], ps[1][i], ps[2][i]];
-                    // The sample's world point, only where a branch below needs it.
+                    // The sample's object and world points, only where a branch below needs
+                    // them.
+                    let p = || [ps[0][i], ps[1][i], ps[2][i]];
                     let w = || origin + mids[i] * dir;
                     let c = if lanes.is_some() {
                         // The normal's gradient now (in object space where it is the dataset's:
                         // the lanes take it to world space); the rest in lanes below.
                         let (g, vanishes) = if same_cells && cells8.interior >> i & 1 != 0 {
-                            vanishing(data.trilinear_gradient_in(p, &cells8, i, &mut cache))
+                            vanishing(data.trilinear_gradient_in(&ps, &cells8, i, &mut cache))
                         } else {
-                            obj.field_gradient_in(w(), p, 9, &mut cache)
+                            obj.field_gradient_in(w(), p(), 9, &mut cache)
                         };
                         let g = if vanishes {
                             [f64::NAN; 3]
@@ -1631,7 +1632,7 @@ impl Compiled {
                         c
                     } else {
                         let c = DVec3::from_array(c);
-                        let w = w();
+                        let (p, w) = (p(), w());
                         let normal = || obj.gradient_normal(w, -dir, p, 9, &mut cache);
                         match headlit {
                             Some(h) => h.colour(c, normal),
