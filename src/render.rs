@@ -680,7 +680,9 @@ impl HeadlitLanes {
     /// doing the scalar operations in the same order, so giving the same bits: sample j's
     /// colour `(c[0][j], c[1][j], c[2][j])` is replaced by its lit colour, with the normal of
     /// its gradient `grad[·][j]` by [`normal_of_gradient`], where a gradient that vanishes is
-    /// given as NaN (it has no normal either way).
+    /// given as NaN (it has no normal either way). Gradients in object space (`to_world`
+    /// given: a dataset's) are also tested here as [`vanishing`] tests them, so that the
+    /// caller may pass them as they are.
     #[inline]
     fn colours(&self, count: usize, c: &mut [[f64; 8]; 3], grad: &[[f64; 8]; 3]) {
         for q in 0..8 / LANES {
@@ -706,7 +708,17 @@ impl HeadlitLanes {
         );
         let lanes = |a: &[f64; 8]| Lanes::new(std::array::from_fn(|k| a[at + k]));
         let mut g = [lanes(&grad[0]), lanes(&grad[1]), lanes(&grad[2])];
+        let mut vanishes = None;
         if let Some([x, y, z]) = &self.to_world {
+            // A dataset's gradient vanishes where its largest component in magnitude is at
+            // most `ZERO_GRADIENT` ([`vanishing`]); which of equal components is the largest
+            // does not matter, nor how a NaN is ordered: a gradient with a NaN (or an
+            // infinity) has no normal anyway (its reciprocal length is NaN, or 0).
+            let a = g.map(Lanes::abs);
+            vanishes = Some(
+                a[0].fast_max(a[1].fast_max(a[2]))
+                    .simd_le(Lanes::splat(ZERO_GRADIENT)),
+            );
             // `m * g` as glam computes it: column x times g.x, plus column y times g.y, plus
             // column z times g.z (a NaN gradient stays NaN in every axis).
             g = std::array::from_fn(|i| x[i] * g[0] + y[i] * g[1] + z[i] * g[2]);
@@ -714,8 +726,14 @@ impl HeadlitLanes {
         // `(-g).try_normalize()`: (−g)·(−g) is g·g, and (−g)·rcp is g·(−rcp), bit for bit
         // (a NaN's sign aside, and a NaN gradient has no normal).
         let rcp = Lanes::ONE / (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
-        // `rcp.is_finite() && rcp > 0.0`: 0 < rcp < ∞ (a NaN fails both).
+        // `rcp.is_finite() && rcp > 0.0`: 0 < rcp < ∞ (a NaN fails both); and no normal where
+        // the gradient vanishes. (Everything below depends on the gradient only through
+        // `valid` where it is false, so such a lane is lit as one given as NaN.)
         let valid = rcp.simd_gt(zero) & rcp.simd_lt(Lanes::splat(f64::INFINITY));
+        let valid = match vanishes {
+            Some(v) => valid & !v,
+            None => valid,
+        };
         // The normal is ±u, its sign left to N·L alone: rounding to nearest is symmetric, so
         // negating a factor of products and sums negates them exactly, and (−u)·x is −(u·x)
         // bit for bit. The normal −u is flipped where −(u·V) < 0, that is where u·V > 0 (a
@@ -1616,15 +1634,14 @@ impl Compiled {
                     let c = if lanes.is_some() {
                         // The normal's gradient now (in object space where it is the dataset's:
                         // the lanes take it to world space); the rest in lanes below.
-                        let (g, vanishes) = if same_cells && cells8.interior >> i & 1 != 0 {
-                            vanishing(data.trilinear_gradient_in(&ps, &cells8, i, &mut cache))
+                        // (The dataset's own gradient is tested for vanishing in the lanes.)
+                        let g = if same_cells && cells8.interior >> i & 1 != 0 {
+                            data.trilinear_gradient_in(&ps, &cells8, i, &mut cache)
                         } else {
-                            obj.field_gradient_in(w(), p(), 9, &mut cache)
-                        };
-                        let g = if vanishes {
-                            [f64::NAN; 3]
-                        } else {
-                            g.to_array()
+                            match obj.field_gradient_in(w(), p(), 9, &mut cache) {
+                                (_, true) => [f64::NAN; 3],
+                                (g, false) => g.to_array(),
+                            }
                         };
                         for (a, x) in grads.iter_mut().zip(g) {
                             a[count] = x;
@@ -2421,6 +2438,18 @@ mod tests {
                                     (DVec3::new(f64::NAN, 1.0, 0.0), false)
                                 } else if u < 0.16 {
                                     (DVec3::new(1e-320, 0.0, 0.0), false)
+                                } else if u < 0.22 {
+                                    // About the threshold of a vanishing gradient.
+                                    let t = ZERO_GRADIENT;
+                                    let tiny = [0.0, -0.0, t, -t, t.next_up(), -t.next_up()];
+                                    let pick = || match (next() * 9.0) as usize {
+                                        k @ 0..6 => tiny[k],
+                                        6 => 1e-320,
+                                        7 => t * next(),
+                                        _ => -t * next(),
+                                    };
+                                    let g = DVec3::new(pick(), pick(), pick());
+                                    (g, vanishing(g.to_array()).1)
                                 } else if u < 0.25 {
                                     // Along an axis: N·L exactly ±0 or ±1 for the axis light.
                                     let mut g = DVec3::ZERO;
@@ -2428,6 +2457,14 @@ mod tests {
                                     (g, false)
                                 } else {
                                     (unit() * (0.001 + 100.0 * next()), false)
+                                };
+                                // An object-space gradient is a dataset's: it vanishes as
+                                // `vanishing` finds, and the lanes test that themselves
+                                // (given as it is, or as NaN where it vanishes, as the march
+                                // passes a gradient from `CObj::field_gradient_in`).
+                                let (g, zero, as_it_is) = match to_world {
+                                    Some(_) => (g, vanishing(g.to_array()).1, next() < 0.5),
+                                    None => (g, zero, false),
                                 };
                                 let view = -dir;
                                 let world = to_world.map_or(g, |m| m * g);
@@ -2447,7 +2484,11 @@ mod tests {
                                     Some(_) => 1,
                                 };
                                 seen[case] += 1;
-                                let g = if zero { [f64::NAN; 3] } else { g.to_array() };
+                                let g = if zero && !as_it_is {
+                                    [f64::NAN; 3]
+                                } else {
+                                    g.to_array()
+                                };
                                 for a in 0..3 {
                                     cs[a][j] = c[a];
                                     grads[a][j] = g[a];
