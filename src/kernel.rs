@@ -224,7 +224,7 @@ impl DirectShading {
     /// fields 0 to 3 that [`Lean::opacity_from_value`] and [`Lean::rest`] leave, bit for bit;
     /// the colour only where the opacity is above 0. (The batched march holds the program's
     /// `DirectShading` for the whole ray and calls this per sample.)
-    #[inline]
+    #[inline(always)]
     pub(crate) fn opacity_colour(&self, v: f32) -> (f32, Option<[f32; 3]>) {
         // The dataset writes the clamped value into the source field, which both tables read.
         let (x, b) = Mapping::clamp_and_bucket(v);

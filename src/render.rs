@@ -1615,61 +1615,82 @@ impl Compiled {
             if let Some((tables, k, e, headlit)) = &shading {
                 // The usual program: opacity and colour straight from the tables, the other
                 // coefficients known (the same numbers as the registers'). In phases over the
-                // run: opacities, transmittance and gradients in order up to where the ray
-                // ends (no sample after that is shaded), under a single light the lighting in
-                // lanes across the samples, then the composite.
+                // run: opacities, transmittance (without the lanes, the lit colours too) in
+                // order up to where the ray ends (no sample after that is shaded); under a
+                // single light, then those samples' gradients and their lighting in lanes
+                // across them; then the composite.
                 let (mut count, mut ends) = (0, false);
-                while pass != 0 {
-                    let i = pass.trailing_zeros() as usize;
-                    pass &= pass - 1;
-                    let (o, Some(rgb)) = tables.opacity_colour(vs[i]) else {
-                        continue;
-                    };
-                    let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
-                    let c = rgb.map(|x| x as f64);
-                    // The sample's object and world points, only where a branch below needs
-                    // them.
-                    let p = || [ps[0][i], ps[1][i], ps[2][i]];
-                    let w = || origin + mids[i] * dir;
-                    let c = if lanes.is_some() {
-                        // The normal's gradient now (in object space where it is the dataset's:
-                        // the lanes take it to world space); the rest in lanes below.
-                        // (The dataset's own gradient is tested for vanishing in the lanes.)
-                        let g = if same_cells && cells8.interior >> i & 1 != 0 {
+                if let Some(h) = &lanes {
+                    // Under a single light: the opacities, colours and weights first, in
+                    // order up to where the ray ends, noting each shaded sample's place in
+                    // the run; then their gradients, in the same order (through the same
+                    // cache, which nothing else reads); then the lighting in lanes.
+                    let mut at = [0u8; 8];
+                    while pass != 0 {
+                        let i = pass.trailing_zeros() as usize;
+                        pass &= pass - 1;
+                        let (o, Some(rgb)) = tables.opacity_colour(vs[i]) else {
+                            continue;
+                        };
+                        let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
+                        for (a, x) in colours.iter_mut().zip(rgb) {
+                            a[count] = x as f64;
+                        }
+                        at[count] = i as u8;
+                        weights[count] = t * alpha;
+                        count += 1;
+                        t *= 1.0 - alpha;
+                        if t < stop {
+                            ends = true;
+                            break;
+                        }
+                    }
+                    // The normals' gradients (in object space where they are the dataset's:
+                    // the lanes take them to world space, and test the dataset's own for
+                    // vanishing).
+                    let interior = if same_cells { cells8.interior } else { 0 };
+                    for (j, &i) in at[..count].iter().enumerate() {
+                        let i = i as usize;
+                        let g = if interior >> i & 1 != 0 {
                             data.trilinear_gradient_in(&ps, &cells8, i, &mut cache)
                         } else {
-                            match obj.field_gradient_in(w(), p(), 9, &mut cache) {
+                            let (p, w) = ([ps[0][i], ps[1][i], ps[2][i]], origin + mids[i] * dir);
+                            match obj.field_gradient_in(w, p, 9, &mut cache) {
                                 (_, true) => [f64::NAN; 3],
                                 (g, false) => g.to_array(),
                             }
                         };
                         for (a, x) in grads.iter_mut().zip(g) {
-                            a[count] = x;
+                            a[j] = x;
                         }
-                        c
-                    } else {
-                        let c = DVec3::from_array(c);
-                        let (p, w) = (p(), w());
+                    }
+                    h.colours(count, &mut colours, &grads);
+                } else {
+                    while pass != 0 {
+                        let i = pass.trailing_zeros() as usize;
+                        pass &= pass - 1;
+                        let (o, Some(rgb)) = tables.opacity_colour(vs[i]) else {
+                            continue;
+                        };
+                        let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
+                        let c = DVec3::from_array(rgb.map(|x| x as f64));
+                        let (p, w) = ([ps[0][i], ps[1][i], ps[2][i]], origin + mids[i] * dir);
                         let normal = || obj.gradient_normal(w, -dir, p, 9, &mut cache);
-                        match headlit {
+                        let c = match headlit {
                             Some(h) => h.colour(c, normal),
                             None => self.illuminate_colour(obj, w, dir, c, *k, *e, normal),
+                        };
+                        for (a, x) in colours.iter_mut().zip(c.to_array()) {
+                            a[count] = x;
                         }
-                        .to_array()
-                    };
-                    for (a, x) in colours.iter_mut().zip(c) {
-                        a[count] = x;
+                        weights[count] = t * alpha;
+                        count += 1;
+                        t *= 1.0 - alpha;
+                        if t < stop {
+                            ends = true;
+                            break;
+                        }
                     }
-                    weights[count] = t * alpha;
-                    count += 1;
-                    t *= 1.0 - alpha;
-                    if t < stop {
-                        ends = true;
-                        break;
-                    }
-                }
-                if let Some(h) = &lanes {
-                    h.colours(count, &mut colours, &grads);
                 }
                 for (j, &w) in weights[..count].iter().enumerate() {
                     col += w * DVec3::new(colours[0][j], colours[1][j], colours[2][j]);
