@@ -1629,7 +1629,7 @@ impl Compiled {
                     while pass != 0 {
                         let i = pass.trailing_zeros() as usize;
                         pass &= pass - 1;
-                        let (o, Some(rgb)) = tables.opacity_colour(vs[i]) else {
+                        let (o, Some(rgb)) = tables.opacity_colour_in_range(vs[i]) else {
                             continue;
                         };
                         let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
