@@ -649,9 +649,26 @@ struct HeadlitLanes {
     to_light: [Lanes; 3],
     radiance: [Lanes; 3],
     flip: bool,
-    /// Where the gradients come in object space: the columns of the matrix taking them to
-    /// world space ([`CObj::grad_to_world`]), by column and row; else `None` (world space).
-    to_world: Option<[[Lanes; 3]; 3]>,
+    /// Where the gradients come in object space: the matrix taking them to world space
+    /// ([`CObj::grad_to_world`]); else `None` (world space).
+    to_world: Option<ToWorld>,
+}
+
+/// The matrix of [`HeadlitLanes::to_world`].
+enum ToWorld {
+    /// Its columns, by column and row.
+    General([[Lanes; 3]; 3]),
+    /// Its diagonal, where every entry off the diagonal is zero (an object scaled or flipped
+    /// along its axes, as the MNI brain is). Each world component is then the diagonal
+    /// product alone, where glam's `m * g` adds the zero products to it: the two differ only
+    /// where that product is −0 (which a +0 product makes +0) or where the gradient has an
+    /// infinity or a NaN (which has no normal either way: its length is not finite and
+    /// positive). A component's sign of zero cannot change a lit colour: it reaches the
+    /// lighting's sums only as a term ±0, so they differ at most in the sign of a zero too,
+    /// which no comparison with 0 sees, and every product taken where they pass has nonzero
+    /// factors there (`headlit_lanes_are_headlit` compares both forms with the scalar
+    /// lighting).
+    Diagonal([Lanes; 3]),
 }
 
 impl HeadlitLanes {
@@ -672,7 +689,16 @@ impl HeadlitLanes {
             to_light: splat(l),
             radiance: splat(rad),
             flip,
-            to_world: to_world.map(|m| [splat(m.x_axis), splat(m.y_axis), splat(m.z_axis)]),
+            to_world: to_world.map(|m| {
+                let off = [
+                    m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.z, m.z_axis.x, m.z_axis.y,
+                ];
+                if off.iter().all(|&x| x == 0.0) {
+                    ToWorld::Diagonal([m.x_axis.x, m.y_axis.y, m.z_axis.z].map(Lanes::splat))
+                } else {
+                    ToWorld::General([splat(m.x_axis), splat(m.y_axis), splat(m.z_axis)])
+                }
+            }),
         })
     }
 
@@ -709,7 +735,7 @@ impl HeadlitLanes {
         let lanes = |a: &[f64; 8]| Lanes::new(std::array::from_fn(|k| a[at + k]));
         let mut g = [lanes(&grad[0]), lanes(&grad[1]), lanes(&grad[2])];
         let mut vanishes = None;
-        if let Some([x, y, z]) = &self.to_world {
+        if let Some(m) = &self.to_world {
             // A dataset's gradient vanishes where its largest component in magnitude is at
             // most `ZERO_GRADIENT` ([`vanishing`]); which of equal components is the largest
             // does not matter, nor how a NaN is ordered: a gradient with a NaN (or an
@@ -719,9 +745,15 @@ impl HeadlitLanes {
                 a[0].fast_max(a[1].fast_max(a[2]))
                     .simd_le(Lanes::splat(ZERO_GRADIENT)),
             );
-            // `m * g` as glam computes it: column x times g.x, plus column y times g.y, plus
-            // column z times g.z (a NaN gradient stays NaN in every axis).
-            g = std::array::from_fn(|i| x[i] * g[0] + y[i] * g[1] + z[i] * g[2]);
+            g = match m {
+                // `m * g` as glam computes it: column x times g.x, plus column y times g.y,
+                // plus column z times g.z (a NaN gradient stays NaN in every axis).
+                ToWorld::General([x, y, z]) => {
+                    std::array::from_fn(|i| x[i] * g[0] + y[i] * g[1] + z[i] * g[2])
+                }
+                // (The same lighting: see `ToWorld::Diagonal`.)
+                ToWorld::Diagonal(d) => std::array::from_fn(|i| d[i] * g[i]),
+            };
         }
         // `(-g).try_normalize()`: (−g)·(−g) is g·g, and (−g)·rcp is g·(−rcp), bit for bit
         // (a NaN's sign aside, and a NaN gradient has no normal).
@@ -2395,6 +2427,88 @@ mod tests {
         assert!(Headlit::new(&scene, &scene.objects[0], DVec3::X, k, e).is_none());
     }
 
+    /// The lighting lanes' diagonal form of a matrix whose entries off the diagonal are ±0
+    /// (`ToWorld::Diagonal`) lights every sample as the general product with that matrix
+    /// (`ToWorld::General`, glam's `m * g`), bit for bit: gradients with components of every
+    /// kind (±0, subnormal, tiny, huge, infinite, NaN, random bits), diagonals with negative,
+    /// zero and huge entries, lights and views along the axes and not, flipped or not.
+    #[test]
+    fn diagonal_to_world_is_the_matrix_product() {
+        let rng = Xorshift::new(0x9e37_79b9_7f4a_7c15);
+        let (next, unit) = (|| rng.next(), || unit_dir(&|| rng.next()));
+        let comp = || match (next() * 10.0) as usize {
+            0 => 0.0,
+            1 => -0.0,
+            2 => 1e-310,
+            3 => -1e-8,
+            4 => 1e300,
+            5 => f64::INFINITY,
+            6 => f64::NAN,
+            7 => f64::from_bits(rng.bits()),
+            _ => next() - 0.5,
+        };
+        let axis = |v: f64| {
+            let mut d = DVec3::ZERO;
+            d[(next() * 3.0) as usize] = v;
+            d
+        };
+        let mut compared = 0;
+        for round in 0..400 {
+            let to_light = if round % 2 == 0 { axis(1.0) } else { unit() };
+            let scene = lit_scene(
+                vec![Light::Directional {
+                    to_light,
+                    radiance: [1.0, 0.7, 0.3],
+                }],
+                false,
+            );
+            let dir = if round % 3 == 0 { -axis(1.0) } else { unit() };
+            let e = Specular::new([10.0, 1.0, 0.0][round % 3]);
+            let h = Headlit::new(&scene, &scene.objects[0], dir, [0.2, 0.7, 0.3], e).unwrap();
+            let z = || if next() < 0.5 { 0.0 } else { -0.0 };
+            let d = || match (next() * 4.0) as usize {
+                0 => -1.0,
+                1 => 0.0,
+                2 => 1e300,
+                _ => (next() - 0.5) * 300.0,
+            };
+            let m = glam::DMat3::from_cols(
+                DVec3::new(d(), z(), z()),
+                DVec3::new(z(), d(), z()),
+                DVec3::new(z(), z(), d()),
+            );
+            for flip in [false, true] {
+                let diagonal = HeadlitLanes::new(&h, flip, Some(m)).unwrap();
+                assert!(matches!(diagonal.to_world, Some(ToWorld::Diagonal(_))));
+                let mut general = HeadlitLanes::new(&h, flip, Some(m)).unwrap();
+                let splat = |v: DVec3| v.to_array().map(Lanes::splat);
+                general.to_world = Some(ToWorld::General([
+                    splat(m.x_axis),
+                    splat(m.y_axis),
+                    splat(m.z_axis),
+                ]));
+                let mut cs = [[0.0; 8]; 3];
+                let mut grads = [[0.0; 8]; 3];
+                for j in 0..8 {
+                    for a in 0..3 {
+                        cs[a][j] = next();
+                        grads[a][j] = if next() < 0.3 { z() } else { comp() };
+                    }
+                }
+                let (mut a, mut b) = (cs, cs);
+                diagonal.colours(8, &mut a, &grads);
+                general.colours(8, &mut b, &grads);
+                assert_eq!(
+                    a.map(|c| c.map(f64::to_bits)),
+                    b.map(|c| c.map(f64::to_bits)),
+                    "{m:?} {grads:?}"
+                );
+                compared += 8;
+            }
+        }
+        assert!(compared > 6000);
+    }
+
     /// [`HeadlitLanes`] gives [`Headlit::colour`]'s colour bit for bit, the normal made by
     /// [`normal_of_gradient`] as [`CObj::gradient_normal`] makes it: for runs of 1 to 8
     /// samples, random lights, views and gradients (N·L and R·V of either sign, exactly ±0,
@@ -2433,10 +2547,29 @@ mod tests {
                             };
                             let h = Headlit::new(&scene, obj, dir, k, e).expect("directional");
                             // Gradients in world space, or in object space for the lanes to
-                            // transform (a random matrix, as `CObj::field_gradient` would).
-                            let to_world = (next() < 0.5).then(|| {
-                                glam::DMat3::from_cols(unit() * 3.0, unit(), unit() * 0.1)
-                            });
+                            // transform (a random matrix, as `CObj::field_gradient` would, or
+                            // a diagonal one, a flip or scale along the axes, with +0 and −0
+                            // off the diagonal).
+                            let to_world = match (next() * 4.0) as usize {
+                                0 | 1 => None,
+                                2 => {
+                                    Some(glam::DMat3::from_cols(unit() * 3.0, unit(), unit() * 0.1))
+                                }
+                                _ => {
+                                    let z = || if next() < 0.5 { 0.0 } else { -0.0 };
+                                    let d = || match (next() * 5.0) as usize {
+                                        0 => -1.0,
+                                        1 => 0.0,
+                                        2 => 196.0,
+                                        _ => (next() - 0.5) * 300.0,
+                                    };
+                                    Some(glam::DMat3::from_cols(
+                                        DVec3::new(d(), z(), z()),
+                                        DVec3::new(z(), d(), z()),
+                                        DVec3::new(z(), z(), d()),
+                                    ))
+                                }
+                            };
                             let lanes = HeadlitLanes::new(&h, flip, to_world).expect("one light");
                             let count = 1 + (next() * 8.0) as usize;
                             let (mut cs, mut grads) = ([[0.0; 8]; 3], [[0.0; 8]; 3]);
@@ -2472,8 +2605,10 @@ mod tests {
                                     let g = DVec3::new(pick(), pick(), pick());
                                     (g, vanishing(g.to_array()).1)
                                 } else if u < 0.25 {
-                                    // Along an axis: N·L exactly ±0 or ±1 for the axis light.
-                                    let mut g = DVec3::ZERO;
+                                    // Along an axis: N·L exactly ±0 or ±1 for the axis light
+                                    // (the other components +0 or −0).
+                                    let z = || if next() < 0.5 { 0.0 } else { -0.0 };
+                                    let mut g = DVec3::new(z(), z(), z());
                                     g[(next() * 3.0) as usize] = next() - 0.5;
                                     (g, false)
                                 } else {
