@@ -650,12 +650,16 @@ struct HeadlitLanes {
     radiance: [Lanes; 3],
     flip: bool,
     /// Where the gradients come in object space: the matrix taking them to world space
-    /// ([`CObj::grad_to_world`]); else `None` (world space).
-    to_world: Option<ToWorld>,
+    /// ([`CObj::grad_to_world`]); else [`ToWorld::None`] (world space).
+    to_world: ToWorld,
 }
 
-/// The matrix of [`HeadlitLanes::to_world`].
+/// The matrix of [`HeadlitLanes::to_world`]. (With the tag a byte of its own: as an `Option`,
+/// telling `None` from the others took a comparison of sixteen bytes.)
+#[repr(u8)]
 enum ToWorld {
+    /// None: the gradients come in world space.
+    None,
     /// Its columns, by column and row.
     General([[Lanes; 3]; 3]),
     /// Its diagonal, where every entry off the diagonal is zero (an object scaled or flipped
@@ -689,16 +693,19 @@ impl HeadlitLanes {
             to_light: splat(l),
             radiance: splat(rad),
             flip,
-            to_world: to_world.map(|m| {
-                let off = [
-                    m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.z, m.z_axis.x, m.z_axis.y,
-                ];
-                if off.iter().all(|&x| x == 0.0) {
-                    ToWorld::Diagonal([m.x_axis.x, m.y_axis.y, m.z_axis.z].map(Lanes::splat))
-                } else {
-                    ToWorld::General([splat(m.x_axis), splat(m.y_axis), splat(m.z_axis)])
+            to_world: match to_world {
+                None => ToWorld::None,
+                Some(m) => {
+                    let off = [
+                        m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.z, m.z_axis.x, m.z_axis.y,
+                    ];
+                    if off.iter().all(|&x| x == 0.0) {
+                        ToWorld::Diagonal([m.x_axis.x, m.y_axis.y, m.z_axis.z].map(Lanes::splat))
+                    } else {
+                        ToWorld::General([splat(m.x_axis), splat(m.y_axis), splat(m.z_axis)])
+                    }
                 }
-            }),
+            },
         })
     }
 
@@ -735,7 +742,7 @@ impl HeadlitLanes {
         let lanes = |a: &[f64; 8]| Lanes::new(std::array::from_fn(|k| a[at + k]));
         let mut g = [lanes(&grad[0]), lanes(&grad[1]), lanes(&grad[2])];
         let mut vanishes = None;
-        if let Some(m) = &self.to_world {
+        if !matches!(self.to_world, ToWorld::None) {
             // A dataset's gradient vanishes where its largest component in magnitude is at
             // most `ZERO_GRADIENT` ([`vanishing`]); which of equal components is the largest
             // does not matter, nor how a NaN is ordered: a gradient with a NaN (or an
@@ -745,7 +752,8 @@ impl HeadlitLanes {
                 a[0].fast_max(a[1].fast_max(a[2]))
                     .simd_le(Lanes::splat(ZERO_GRADIENT)),
             );
-            g = match m {
+            g = match &self.to_world {
+                ToWorld::None => g,
                 // `m * g` as glam computes it: column x times g.x, plus column y times g.y,
                 // plus column z times g.z (a NaN gradient stays NaN in every axis).
                 ToWorld::General([x, y, z]) => {
@@ -2479,14 +2487,11 @@ mod tests {
             );
             for flip in [false, true] {
                 let diagonal = HeadlitLanes::new(&h, flip, Some(m)).unwrap();
-                assert!(matches!(diagonal.to_world, Some(ToWorld::Diagonal(_))));
+                assert!(matches!(diagonal.to_world, ToWorld::Diagonal(_)));
                 let mut general = HeadlitLanes::new(&h, flip, Some(m)).unwrap();
                 let splat = |v: DVec3| v.to_array().map(Lanes::splat);
-                general.to_world = Some(ToWorld::General([
-                    splat(m.x_axis),
-                    splat(m.y_axis),
-                    splat(m.z_axis),
-                ]));
+                general.to_world =
+                    ToWorld::General([splat(m.x_axis), splat(m.y_axis), splat(m.z_axis)]);
                 let mut cs = [[0.0; 8]; 3];
                 let mut grads = [[0.0; 8]; 3];
                 for j in 0..8 {
