@@ -1047,13 +1047,15 @@ impl Dataset {
         cache: &mut CellGradients,
     ) -> Option<[f64; 3]> {
         let (cell, f) = self.interior_cell32(p)?;
-        self.trilinear_gradient_at(self.neighbourhood_lo(cell), f, cache)
+        self.trilinear_gradient_at::<true>(self.neighbourhood_lo(cell), f, cache)
     }
 
     /// [`Dataset::gradient_cached`] with the trilinear filter at a point of interior cell
     /// `cells` holds as its lane `i` (bit `i` of [`Cells8::interior`] set): the batched march
     /// has found that cell for the point's value, so the gradient need not find it again. The
-    /// same value, bit for bit (the same cell and weights, see [`Dataset::trilinear8`]). The
+    /// same value, bit for bit (the same cell and weights, see [`Dataset::trilinear8`]), but
+    /// for the sign of a zero component (see [`Dataset::trilinear_gradient_at`]'s
+    /// `SIGNED_ZEROS`): for the lighting lanes, where that sign cannot change a colour. The
     /// point is lane `i` of `ps` (by axis, as `trilinear8` takes them), read only where the
     /// cell's rows are not all inside the values (never, for an interior cell): so the caller
     /// need not gather it.
@@ -1068,7 +1070,7 @@ impl Dataset {
         let f = [cells.f[0][i], cells.f[1][i], cells.f[2][i]];
         (cells.at[i] as usize)
             .checked_sub(self.lo_offset)
-            .and_then(|lo| self.trilinear_gradient_at(lo, f, cache))
+            .and_then(|lo| self.trilinear_gradient_at::<false>(lo, f, cache))
             .unwrap_or_else(|| {
                 self.gradient_generic([ps[0][i], ps[1][i], ps[2][i]], Filter::Trilinear)
             })
@@ -1076,8 +1078,10 @@ impl Dataset {
 
     /// [`Dataset::trilinear_gradient_interior`] in the interior cell whose neighbourhood starts
     /// at node `lo` (see [`Dataset::neighbourhood_lo`]), at weights `f` of its second nodes.
+    /// Without `SIGNED_ZEROS`, a component whose sum of products is −0 may come out −0
+    /// instead of +0 (nothing else differs; see below).
     #[inline(always)]
-    fn trilinear_gradient_at(
+    fn trilinear_gradient_at<const SIGNED_ZEROS: bool>(
         &self,
         lo: usize,
         [fx, fy, fz]: [f32; 3],
@@ -1145,10 +1149,17 @@ impl Dataset {
         ];
         // The three axes in the lanes of one register, each summed corner by corner in order
         // (as a scalar loop would).
-        let mut g = wide::f32x4::ZERO;
-        for (wt, d) in weights.into_iter().zip(cache.diffs) {
-            g += wide::f32x4::splat(wt) * wide::f32x4::new(d);
-        }
+        // The products summed from the first, not from a 0: ((0 + p0) + p1) + … differs from
+        // (p0 + p1) + … only where a partial sum is −0 (which 0 + makes +0), and from then on
+        // only there; so the first is the second plus +0 (which turns −0 into +0 and leaves
+        // every other number as it is). Without `SIGNED_ZEROS` that last sum is left out.
+        let p = |c: usize| wide::f32x4::splat(weights[c]) * wide::f32x4::new(cache.diffs[c]);
+        let g = p(0) + p(1) + p(2) + p(3) + p(4) + p(5) + p(6) + p(7);
+        let g = if SIGNED_ZEROS {
+            g + wide::f32x4::ZERO
+        } else {
+            g
+        };
         // 0.5·g·(n − 1) in f64, as g·(0.5·(n − 1)): halving is exact in both orders (g is
         // an f32, far from f64's subnormals), so both are the one rounding of the same product.
         // (The lanes hold y, z, x.)
@@ -1564,7 +1575,7 @@ mod tests {
             for lo in 0..d.values.len() + 3 {
                 for _ in 0..3 {
                     let f = [weight(&rng), weight(&rng), weight(&rng)];
-                    let got = d.trilinear_gradient_at(lo, f, &mut new);
+                    let got = d.trilinear_gradient_at::<true>(lo, f, &mut new);
                     let (sy, sz) = (d.strides[1], d.strides[2]);
                     let inside = lo + 3 * sy + 3 * sz + 4 <= d.values.len();
                     assert_eq!(got.is_some(), inside, "{dims:?} lo {lo}");
@@ -1582,7 +1593,16 @@ mod tests {
                         );
                     }
                     // A fresh cache: the miss's path at every start, not only the first.
-                    let fresh = d.trilinear_gradient_at(lo, f, &mut CellGradients::default());
+                    let fresh =
+                        d.trilinear_gradient_at::<true>(lo, f, &mut CellGradients::default());
+                    // Without the signed zeros: the same but for the sign of a zero.
+                    let unsigned =
+                        d.trilinear_gradient_at::<false>(lo, f, &mut CellGradients::default());
+                    assert_eq!(
+                        unsigned.map(|g| g.map(|x| (x + 0.0).to_bits())),
+                        fresh.map(|g| g.map(|x| (x + 0.0).to_bits())),
+                        "{dims:?} lo {lo}"
+                    );
                     assert_eq!(
                         fresh.map(|g| g.map(f64::to_bits)),
                         got.map(|g| g.map(f64::to_bits)),

@@ -2439,7 +2439,9 @@ mod tests {
     /// (`ToWorld::Diagonal`) lights every sample as the general product with that matrix
     /// (`ToWorld::General`, glam's `m * g`), bit for bit: gradients with components of every
     /// kind (±0, subnormal, tiny, huge, infinite, NaN, random bits), diagonals with negative,
-    /// zero and huge entries, lights and views along the axes and not, flipped or not.
+    /// zero and huge entries, lights and views along the axes and not, flipped or not. And
+    /// the sign of a zero component of a gradient changes no colour, in either form or in
+    /// world space.
     #[test]
     fn diagonal_to_world_is_the_matrix_product() {
         let rng = Xorshift::new(0x9e37_79b9_7f4a_7c15);
@@ -2508,6 +2510,21 @@ mod tests {
                     b.map(|c| c.map(f64::to_bits)),
                     "{m:?} {grads:?}"
                 );
+                // Nor does the sign of a zero component of the gradient change a colour
+                // (`Dataset::trilinear_gradient_in` may give either), in object space or in
+                // world space.
+                let flipped = grads.map(|a| a.map(|x| if x == 0.0 { -x } else { x }));
+                let mut world = HeadlitLanes::new(&h, flip, None).unwrap();
+                for lanes in [&diagonal, &general, &mut world] {
+                    let (mut a, mut b) = (cs, cs);
+                    lanes.colours(8, &mut a, &grads);
+                    lanes.colours(8, &mut b, &flipped);
+                    assert_eq!(
+                        a.map(|c| c.map(f64::to_bits)),
+                        b.map(|c| c.map(f64::to_bits)),
+                        "{grads:?}"
+                    );
+                }
                 compared += 8;
             }
         }
