@@ -645,7 +645,6 @@ struct HeadlitLanes {
     ks: Option<Lanes>,
     /// The specular exponent, an integer.
     e: u32,
-    view: [Lanes; 3],
     to_light: [Lanes; 3],
     radiance: [Lanes; 3],
     flip: bool,
@@ -689,7 +688,6 @@ impl HeadlitLanes {
             kd: Lanes::splat(h.kd),
             ks: (h.ks > 0.0).then(|| Lanes::splat(h.ks)),
             e,
-            view: splat(h.view),
             to_light: splat(l),
             radiance: splat(rad),
             flip,
@@ -716,13 +714,22 @@ impl HeadlitLanes {
     /// given as NaN (it has no normal either way). Gradients in object space (`to_world`
     /// given: a dataset's) are also tested here as [`vanishing`] tests them, so that the
     /// caller may pass them as they are.
+    /// `view`: towards the eye (−(the ray's direction)) in lanes, the one number of
+    /// [`Headlit`] that is the ray's (the rest is prepared once per scene and object:
+    /// [`Compiled::lanes`]).
     #[inline]
-    fn colours(&self, count: usize, c: &mut [[f64; 8]; 3], grad: &[[f64; 8]; 3]) {
+    fn colours(
+        &self,
+        count: usize,
+        view: &[Lanes; 3],
+        c: &mut [[f64; 8]; 3],
+        grad: &[[f64; 8]; 3],
+    ) {
         for q in 0..8 / LANES {
             if q * LANES >= count {
                 break;
             }
-            self.colours_at(q * LANES, c, grad);
+            self.colours_at(q * LANES, view, c, grad);
         }
     }
 
@@ -730,15 +737,15 @@ impl HeadlitLanes {
     /// that the constants are read where they are used rather than held (and spilled) across
     /// the run.
     #[inline(never)]
-    fn colours_at(&self, at: usize, c: &mut [[f64; 8]; 3], grad: &[[f64; 8]; 3]) {
+    fn colours_at(
+        &self,
+        at: usize,
+        view: &[Lanes; 3],
+        c: &mut [[f64; 8]; 3],
+        grad: &[[f64; 8]; 3],
+    ) {
         let zero = Lanes::ZERO;
-        let (ka, kd, view, l, rad) = (
-            &self.ka_ambient,
-            self.kd,
-            &self.view,
-            &self.to_light,
-            &self.radiance,
-        );
+        let (ka, kd, l, rad) = (&self.ka_ambient, self.kd, &self.to_light, &self.radiance);
         let lanes = |a: &[f64; 8]| Lanes::new(std::array::from_fn(|k| a[at + k]));
         let mut g = [lanes(&grad[0]), lanes(&grad[1]), lanes(&grad[2])];
         let mut vanishes = None;
@@ -929,6 +936,10 @@ pub struct Compiled {
     /// Where every light is directional: each light's direction towards it and radiance (see
     /// [`Headlit`]).
     directional: Option<Vec<(DVec3, DVec3)>>,
+    /// Per object, the lighting lanes of its direct shading (`DirectShading`) where every
+    /// light is directional and there is one ([`HeadlitLanes`]): what [`Headlit::new`] and
+    /// [`HeadlitLanes::new`] would give every ray, but for its view, prepared once.
+    lanes: Vec<Option<HeadlitLanes>>,
     settings: Settings,
     plan: Plan,
 }
@@ -965,14 +976,37 @@ impl Compiled {
                 Light::Point { .. } => None,
             })
             .collect();
-        Compiled {
+        let mut scene = Compiled {
             objects,
             lights,
             directional,
+            lanes: Vec::new(),
             ambient: crate::scene::v3(desc.settings.ambient),
             settings: desc.settings.clone(),
             plan,
-        }
+        };
+        scene.lanes = scene
+            .objects
+            .iter()
+            .map(|o| scene.headlit_lanes(o))
+            .collect();
+        scene
+    }
+
+    /// [`Compiled::lanes`] of `obj`: as the batched march made them for every ray (the view,
+    /// which they do not hold, apart).
+    fn headlit_lanes(&self, obj: &CObj) -> Option<HeadlitLanes> {
+        let s = obj.lean.as_ref()?.direct_shading()?;
+        let [ka, kd, ks, spec] = s.coefficients;
+        let h = Headlit::new(
+            self,
+            obj,
+            DVec3::ZERO,
+            [ka, kd, ks],
+            Specular::of_field(spec),
+        )?;
+        let to_world = obj.object_gradient(9).then_some(obj.grad_to_world);
+        HeadlitLanes::new(&h, obj.flip_normals, to_world)
     }
 
     /// The render plan: which effects this scene calls for.
@@ -1619,20 +1653,20 @@ impl Compiled {
         // lighting prepared where every light is directional and nothing shadows the object.
         // (The direct shading itself is held here for the whole ray: its tables per sample
         // without the program's options unwrapped each time.)
+        // Under a single light, the lighting in lanes across a run's samples (prepared for
+        // the object once: the ray's view apart); else the scalar lighting's preparation.
+        let lanes = self.lanes[c.object].as_ref().filter(|_| IN_LANES);
+        let view = (-dir).to_array().map(Lanes::splat);
         let shading = lean.direct_shading().map(|s| {
             let [ka, kd, ks, spec] = s.coefficients;
             let k = [ka, kd, ks];
             let e = Specular::of_field(spec);
-            (s, k, e, Headlit::new(self, obj, dir, k, e))
+            let headlit = match lanes {
+                Some(_) => None,
+                None => Headlit::new(self, obj, dir, k, e),
+            };
+            (s, k, e, headlit)
         });
-        // Under a single light, the lighting in lanes across a run's samples.
-        let lanes = shading
-            .as_ref()
-            .filter(|_| IN_LANES)
-            .and_then(|(_, _, _, h)| {
-                let to_world = obj.object_gradient(9).then_some(obj.grad_to_world);
-                HeadlitLanes::new(h.as_ref()?, obj.flip_normals, to_world)
-            });
         while c.peek(grid).is_some() {
             // The run: the sample peek chose and those after it in the same occupied block.
             let m = c.run(unbounded, &mut mids, &mut lens);
@@ -1704,7 +1738,7 @@ impl Compiled {
                             a[j] = x;
                         }
                     }
-                    h.colours(count, &mut colours, &grads);
+                    h.colours(count, &view, &mut colours, &grads);
                 } else {
                     while pass != 0 {
                         let i = pass.trailing_zeros() as usize;
@@ -2502,9 +2536,10 @@ mod tests {
                         grads[a][j] = if next() < 0.3 { z() } else { comp() };
                     }
                 }
+                let view = h.view.to_array().map(Lanes::splat);
                 let (mut a, mut b) = (cs, cs);
-                diagonal.colours(8, &mut a, &grads);
-                general.colours(8, &mut b, &grads);
+                diagonal.colours(8, &view, &mut a, &grads);
+                general.colours(8, &view, &mut b, &grads);
                 assert_eq!(
                     a.map(|c| c.map(f64::to_bits)),
                     b.map(|c| c.map(f64::to_bits)),
@@ -2517,8 +2552,8 @@ mod tests {
                 let mut world = HeadlitLanes::new(&h, flip, None).unwrap();
                 for lanes in [&diagonal, &general, &mut world] {
                     let (mut a, mut b) = (cs, cs);
-                    lanes.colours(8, &mut a, &grads);
-                    lanes.colours(8, &mut b, &flipped);
+                    lanes.colours(8, &view, &mut a, &grads);
+                    lanes.colours(8, &view, &mut b, &flipped);
                     assert_eq!(
                         a.map(|c| c.map(f64::to_bits)),
                         b.map(|c| c.map(f64::to_bits)),
@@ -2672,7 +2707,8 @@ mod tests {
                                     grads[a][j] = g[a];
                                 }
                             }
-                            lanes.colours(count, &mut cs, &grads);
+                            let view = h.view.to_array().map(Lanes::splat);
+                            lanes.colours(count, &view, &mut cs, &grads);
                             for (j, want) in want.iter().enumerate() {
                                 let got = [cs[0][j], cs[1][j], cs[2][j]];
                                 assert_eq!(
