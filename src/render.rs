@@ -1649,14 +1649,14 @@ impl Compiled {
         // The usual program's shaded samples of a run, in order: their compositing weights,
         // colours (then lit colours) and gradients, by axis.
         let (mut weights, mut colours, mut grads) = ([0.0f64; 8], [[0.0f64; 8]; 3], [[0.0; 8]; 3]);
-        // The usual program's coefficients and exponent, examined once per ray, and its
-        // lighting prepared where every light is directional and nothing shadows the object.
-        // (The direct shading itself is held here for the whole ray: its tables per sample
-        // without the program's options unwrapped each time.)
         // Under a single light, the lighting in lanes across a run's samples (prepared for
-        // the object once: the ray's view apart); else the scalar lighting's preparation.
+        // the object once: the ray's view apart).
         let lanes = self.lanes[c.object].as_ref().filter(|_| IN_LANES);
         let view = (-dir).to_array().map(Lanes::splat);
+        // The usual program's coefficients and exponent, examined once per ray, and, without
+        // the lanes, its lighting prepared where every light is directional and nothing
+        // shadows the object. (The direct shading itself is held here for the whole ray: its
+        // tables per sample without the program's options unwrapped each time.)
         let shading = lean.direct_shading().map(|s| {
             let [ka, kd, ks, spec] = s.coefficients;
             let k = [ka, kd, ks];
