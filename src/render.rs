@@ -708,20 +708,21 @@ impl HeadlitLanes {
     }
 
     /// [`Headlit::colour`] of samples `0..count` of a run, side by side in lanes, each lane
-    /// doing the scalar operations in the same order, so giving the same bits: sample j's
-    /// colour `(c[0][j], c[1][j], c[2][j])` is replaced by its lit colour, with the normal of
-    /// its gradient `grad[·][j]` by [`normal_of_gradient`], where a gradient that vanishes is
-    /// given as NaN (it has no normal either way). Gradients in object space (`to_world`
-    /// given: a dataset's) are also tested here as [`vanishing`] tests them, so that the
-    /// caller may pass them as they are.
-    /// `view`: towards the eye (−(the ray's direction)) in lanes, the one number of
-    /// [`Headlit`] that is the ray's (the rest is prepared once per scene and object:
-    /// [`Compiled::lanes`]).
+    /// doing the scalar operations in the same order, so giving the same bits: sample j's lit
+    /// colour `(c[0][j], c[1][j], c[2][j])` from its colour `(rgb[0][j], rgb[1][j], rgb[2][j])`
+    /// as the tables give it (f32, converted to f64 here, two to a register, as the march
+    /// converted each), with the normal of its gradient `grad[·][j]` by [`normal_of_gradient`],
+    /// where a gradient that vanishes is given as NaN (it has no normal either way). Gradients
+    /// in object space (`to_world` given: a dataset's) are also tested here as [`vanishing`]
+    /// tests them, so that the caller may pass them as they are. `view`: towards the eye
+    /// (−(the ray's direction)) in lanes, the one number of [`Headlit`] that is the ray's (the
+    /// rest is prepared once per scene and object: [`Compiled::lanes`]).
     #[inline]
     fn colours(
         &self,
         count: usize,
         view: &[Lanes; 3],
+        rgb: &[[f32; 8]; 3],
         c: &mut [[f64; 8]; 3],
         grad: &[[f64; 8]; 3],
     ) {
@@ -729,7 +730,7 @@ impl HeadlitLanes {
             if q * LANES >= count {
                 break;
             }
-            self.colours_at(q * LANES, view, c, grad);
+            self.colours_at(q * LANES, view, rgb, c, grad);
         }
     }
 
@@ -741,6 +742,7 @@ impl HeadlitLanes {
         &self,
         at: usize,
         view: &[Lanes; 3],
+        rgb: &[[f32; 8]; 3],
         c: &mut [[f64; 8]; 3],
         grad: &[[f64; 8]; 3],
     ) {
@@ -796,7 +798,9 @@ impl HeadlitLanes {
             neg
         };
         let ndl = ndl_u ^ sign;
-        let cl = [lanes(&c[0]), lanes(&c[1]), lanes(&c[2])];
+        // The samples' colours as the tables give them, in f32, converted here.
+        let cl: [Lanes; 3] =
+            std::array::from_fn(|ch| Lanes::new(std::array::from_fn(|k| rgb[ch][at + k] as f64)));
         let kdc = cl.map(|x| kd * x);
         let lit = ndl.simd_gt(zero) & valid;
         // `ndl.max(0.0)` (ndl where above 0, else +0: a NaN and −0 included), and 1 where
@@ -1649,6 +1653,8 @@ impl Compiled {
         // The usual program's shaded samples of a run, in order: their compositing weights,
         // colours (then lit colours) and gradients, by axis.
         let (mut weights, mut colours, mut grads) = ([0.0f64; 8], [[0.0f64; 8]; 3], [[0.0; 8]; 3]);
+        // Under the lighting lanes, those samples' colours as the tables give them.
+        let mut rgb32 = [[0.0f32; 8]; 3];
         // Under a single light, the lighting in lanes across a run's samples (prepared for
         // the object once: the ray's view apart).
         let lanes = self.lanes[c.object].as_ref().filter(|_| IN_LANES);
@@ -1707,8 +1713,8 @@ impl Compiled {
                             continue;
                         };
                         let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
-                        for (a, x) in colours.iter_mut().zip(rgb) {
-                            a[count] = x as f64;
+                        for (a, x) in rgb32.iter_mut().zip(rgb) {
+                            a[count] = x;
                         }
                         at[count] = i as u8;
                         weights[count] = t * alpha;
@@ -1738,7 +1744,7 @@ impl Compiled {
                             a[j] = x;
                         }
                     }
-                    h.colours(count, &view, &mut colours, &grads);
+                    h.colours(count, &view, &rgb32, &mut colours, &grads);
                 } else {
                     while pass != 0 {
                         let i = pass.trailing_zeros() as usize;
@@ -2528,18 +2534,18 @@ mod tests {
                 let splat = |v: DVec3| v.to_array().map(Lanes::splat);
                 general.to_world =
                     ToWorld::General([splat(m.x_axis), splat(m.y_axis), splat(m.z_axis)]);
-                let mut cs = [[0.0; 8]; 3];
+                let mut cs = [[0.0f32; 8]; 3];
                 let mut grads = [[0.0; 8]; 3];
                 for j in 0..8 {
                     for a in 0..3 {
-                        cs[a][j] = next();
+                        cs[a][j] = next() as f32;
                         grads[a][j] = if next() < 0.3 { z() } else { comp() };
                     }
                 }
                 let view = h.view.to_array().map(Lanes::splat);
-                let (mut a, mut b) = (cs, cs);
-                diagonal.colours(8, &view, &mut a, &grads);
-                general.colours(8, &view, &mut b, &grads);
+                let (mut a, mut b) = ([[0.0; 8]; 3], [[0.0; 8]; 3]);
+                diagonal.colours(8, &view, &cs, &mut a, &grads);
+                general.colours(8, &view, &cs, &mut b, &grads);
                 assert_eq!(
                     a.map(|c| c.map(f64::to_bits)),
                     b.map(|c| c.map(f64::to_bits)),
@@ -2551,9 +2557,9 @@ mod tests {
                 let flipped = grads.map(|a| a.map(|x| if x == 0.0 { -x } else { x }));
                 let mut world = HeadlitLanes::new(&h, flip, None).unwrap();
                 for lanes in [&diagonal, &general, &mut world] {
-                    let (mut a, mut b) = (cs, cs);
-                    lanes.colours(8, &view, &mut a, &grads);
-                    lanes.colours(8, &view, &mut b, &flipped);
+                    let (mut a, mut b) = ([[0.0; 8]; 3], [[0.0; 8]; 3]);
+                    lanes.colours(8, &view, &cs, &mut a, &grads);
+                    lanes.colours(8, &view, &cs, &mut b, &flipped);
                     assert_eq!(
                         a.map(|c| c.map(f64::to_bits)),
                         b.map(|c| c.map(f64::to_bits)),
@@ -2629,17 +2635,21 @@ mod tests {
                             };
                             let lanes = HeadlitLanes::new(&h, flip, to_world).expect("one light");
                             let count = 1 + (next() * 8.0) as usize;
-                            let (mut cs, mut grads) = ([[0.0; 8]; 3], [[0.0; 8]; 3]);
+                            let (mut cs, mut grads) = ([[0.0f32; 8]; 3], [[0.0; 8]; 3]);
                             let mut want = Vec::new();
                             for j in 0..count {
+                                // Colours in f32, as the tables give them (the largest, and
+                                // an infinite one, included).
                                 let v = next();
-                                let c = if v < 0.03 {
-                                    DVec3::new(f64::MAX, next(), 0.0)
+                                let c32 = if v < 0.03 {
+                                    [f32::MAX, next() as f32, 0.0]
                                 } else if v < 0.05 {
-                                    DVec3::new(next(), f64::INFINITY, 0.0)
+                                    [next() as f32, f32::INFINITY, 0.0]
                                 } else {
-                                    DVec3::new(next(), next() * 2.0, (next() < 0.8) as u8 as f64)
+                                    let b = (next() < 0.8) as u8 as f32;
+                                    [next() as f32, next() as f32 * 2.0, b]
                                 };
+                                let c = DVec3::from_array(c32.map(f64::from));
                                 let u = next();
                                 let (g, zero) = if u < 0.05 {
                                     (DVec3::ZERO, true)
@@ -2703,14 +2713,15 @@ mod tests {
                                     g.to_array()
                                 };
                                 for a in 0..3 {
-                                    cs[a][j] = c[a];
+                                    cs[a][j] = c32[a];
                                     grads[a][j] = g[a];
                                 }
                             }
                             let view = h.view.to_array().map(Lanes::splat);
-                            lanes.colours(count, &view, &mut cs, &grads);
+                            let mut out = [[0.0; 8]; 3];
+                            lanes.colours(count, &view, &cs, &mut out, &grads);
                             for (j, want) in want.iter().enumerate() {
-                                let got = [cs[0][j], cs[1][j], cs[2][j]];
+                                let got = [out[0][j], out[1][j], out[2][j]];
                                 assert_eq!(
                                     got.map(f64::to_bits),
                                     want.to_array().map(f64::to_bits),
