@@ -267,7 +267,7 @@ pub(crate) struct Cells8 {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct CellGradients {
     lo: usize,
-    /// Per corner, its differences along x, y and z, and a 0 (one SSE register).
+    /// Per corner, its differences along y, z and x, and a lane not read (one SSE register).
     diffs: [[f32; 4]; 8],
 }
 
@@ -1125,7 +1125,7 @@ impl Dataset {
 
     /// The trilinear gradient where all the nodes it reads are interior (central differences
     /// everywhere): the same value as the generic path, with the 4×4×4 neighbourhood of the cell
-    /// read as its twelve x-rows that are needed (one bounds check each).
+    /// read as its twelve x-rows that are needed (under the bounds checks of the two furthest).
     #[inline]
     fn trilinear_gradient_interior(
         &self,
@@ -1133,17 +1133,22 @@ impl Dataset {
         cache: &mut CellGradients,
     ) -> Option<[f64; 3]> {
         let (cell, f) = self.interior_cell32(p)?;
-        self.trilinear_gradient_at(self.neighbourhood_lo(cell), f, cache)
+        self.trilinear_gradient_at::<true>(self.neighbourhood_lo(cell), f, cache)
     }
 
     /// [`Dataset::gradient_cached`] with the trilinear filter at a point of interior cell
     /// `cells` holds as its lane `i` (bit `i` of [`Dataset::interior8`] set): the batched march
     /// has found that cell for the point's value, so the gradient need not find it again. The
-    /// same value, bit for bit (the same cell and weights, see [`Dataset::trilinear8`]).
+    /// same value, bit for bit (the same cell and weights, see [`Dataset::trilinear8`]), but
+    /// for the sign of a zero component (see [`Dataset::trilinear_gradient_at`]'s
+    /// `SIGNED_ZEROS`): for the lighting lanes, where that sign cannot change a colour. The
+    /// point is lane `i` of `ps` (by axis, as `trilinear8` takes them), read only where the
+    /// cell's rows are not all inside the values (never, for an interior cell): so the caller
+    /// need not gather it.
     #[inline]
     pub(crate) fn trilinear_gradient_in(
         &self,
-        p: [f32; 3],
+        ps: &[[f32; 8]; 3],
         cells: &Cells8,
         i: usize,
         cache: &mut CellGradients,
@@ -1151,14 +1156,18 @@ impl Dataset {
         let f = [cells.f[0][i], cells.f[1][i], cells.f[2][i]];
         (cells.at[i] as usize)
             .checked_sub(self.lo_offset)
-            .and_then(|lo| self.trilinear_gradient_at(lo, f, cache))
-            .unwrap_or_else(|| self.gradient_generic(p, Filter::Trilinear))
+            .and_then(|lo| self.trilinear_gradient_at::<false>(lo, f, cache))
+            .unwrap_or_else(|| {
+                self.gradient_generic([ps[0][i], ps[1][i], ps[2][i]], Filter::Trilinear)
+            })
     }
 
     /// [`Dataset::trilinear_gradient_interior`] in the interior cell whose neighbourhood starts
     /// at node `lo` (see [`Dataset::neighbourhood_lo`]), at weights `f` of its second nodes.
+    /// Without `SIGNED_ZEROS`, a component whose sum of products is −0 may come out −0
+    /// instead of +0 (nothing else differs; see below).
     #[inline(always)]
-    fn trilinear_gradient_at(
+    fn trilinear_gradient_at<const SIGNED_ZEROS: bool>(
         &self,
         lo: usize,
         [fx, fy, fz]: [f32; 3],
@@ -1167,16 +1176,24 @@ impl Dataset {
         // Row (j, k) holds nodes x0 − 1 … x0 + 2 at y0 − 1 + j, z0 − 1 + k; the corner rows of
         // the neighbourhood are never read.
         if cache.lo != lo {
-            let (sy, sz) = (self.strides[1], self.strides[2]);
-            // A row starting at most 4 before the end lies inside the values: one comparison
-            // a row (the slice's own checks then follow from it and are dropped).
+            // The node indices and strides are below 2³² (a dataset has at most 2³² nodes, and
+            // a stride of more than one node spans at most half of them): given as such, no
+            // sum below overflows, and the compiler derives every row's bounds check from one
+            // test, that the neighbourhood's last row (3, 3), not itself read, lies inside the
+            // values (the rows grow with j and k). An interior cell's does: its neighbourhood
+            // lies inside the grid.
+            debug_assert!(self.strides.iter().all(|&s| s <= u32::MAX as usize));
+            let (sy, sz) = (
+                self.strides[1] as u32 as usize,
+                self.strides[2] as u32 as usize,
+            );
+            let lo = u32::try_from(lo).ok()? as usize;
             let v = &self.values[..];
-            let last = v.len().checked_sub(4)?;
+            if lo + 3 * sy + 3 * sz + 4 > v.len() {
+                return None;
+            }
             let row = |j: usize, k: usize| -> Option<[f32; 4]> {
                 let o = lo + j * sy + k * sz;
-                if o > last {
-                    return None;
-                }
                 v.get(o..o + 4)?.try_into().ok()
             };
             let (r10, r20) = (row(1, 0)?, row(2, 0)?);
@@ -1193,18 +1210,17 @@ impl Dataset {
                 (r12, r02, r22, r11, r13),
                 (r22, r12, r32, r21, r23),
             ];
-            // Row by row in lanes: in lanes 1 and 2 (the row's two corners, x nodes 1 and 2),
-            // x nodes 2, 3 minus nodes 0, 1 are the x differences, and the row differences
-            // the y and z differences; a transposition then gives each corner its three
-            // differences in one register (lane 3 stays 0).
+            // Row by row in lanes: the row differences in y and z (lanes 1 and 2: the row's
+            // two corners, x nodes 1 and 2), and x nodes 2, 3 minus nodes 0, 1 (lanes 0 and
+            // 1); each corner's three differences then gathered into one register, in the
+            // cache's order (y, z, x) (lane 3 is not read).
             use wide::f32x4;
             for (c, (r, ym, yp, zm, zp)) in corners.into_iter().enumerate() {
-                let dx = f32x4::new([0.0, r[2], r[3], 0.0]) - f32x4::new([0.0, r[0], r[1], 0.0]);
-                let dy = f32x4::new(yp) - f32x4::new(ym);
-                let dz = f32x4::new(zp) - f32x4::new(zm);
-                let [_, first, second, _] = f32x4::transpose([dx, dy, dz, f32x4::ZERO]);
-                cache.diffs[2 * c] = first.to_array();
-                cache.diffs[2 * c + 1] = second.to_array();
+                let dy = (f32x4::new(yp) - f32x4::new(ym)).to_array();
+                let dz = (f32x4::new(zp) - f32x4::new(zm)).to_array();
+                let dx = (f32x4::new([r[2], r[3], r[2], r[3]]) - f32x4::new(r)).to_array();
+                cache.diffs[2 * c] = [dy[1], dz[1], dx[0], dx[0]];
+                cache.diffs[2 * c + 1] = [dy[2], dz[2], dx[1], dx[1]];
             }
             cache.lo = lo;
         }
@@ -1219,17 +1235,25 @@ impl Dataset {
         ];
         // The three axes in the lanes of one register, each summed corner by corner in order
         // (as a scalar loop would).
-        let mut g = wide::f32x4::ZERO;
-        for (wt, d) in weights.into_iter().zip(cache.diffs) {
-            g += wide::f32x4::splat(wt) * wide::f32x4::new(d);
-        }
+        // The products summed from the first, not from a 0: ((0 + p0) + p1) + … differs from
+        // (p0 + p1) + … only where a partial sum is −0 (which 0 + makes +0), and from then on
+        // only there; so the first is the second plus +0 (which turns −0 into +0 and leaves
+        // every other number as it is). Without `SIGNED_ZEROS` that last sum is left out.
+        let p = |c: usize| wide::f32x4::splat(weights[c]) * wide::f32x4::new(cache.diffs[c]);
+        let g = p(0) + p(1) + p(2) + p(3) + p(4) + p(5) + p(6) + p(7);
+        let g = if SIGNED_ZEROS {
+            g + wide::f32x4::ZERO
+        } else {
+            g
+        };
         // 0.5·g·(n − 1) in f64, as g·(0.5·(n − 1)): halving is exact in both orders (g is
         // an f32, far from f64's subnormals), so both are the one rounding of the same product.
+        // (The lanes hold y, z, x.)
         let g = g.to_array();
         Some([
-            g[0] as f64 * self.half_last[0],
-            g[1] as f64 * self.half_last[1],
-            g[2] as f64 * self.half_last[2],
+            g[2] as f64 * self.half_last[0],
+            g[0] as f64 * self.half_last[1],
+            g[1] as f64 * self.half_last[2],
         ])
     }
 
@@ -1511,6 +1535,168 @@ mod tests {
         let n = dims.iter().product();
         let raw: Vec<u8> = (0..n).map(|_| (rng.next() * 256.0) as u8).collect();
         Dataset::new(dims, Voxels::U8(raw), 10.0, 240.0).unwrap()
+    }
+
+    /// [`CellGradients`] as it was before the differences were stored in the order (y, z, x).
+    struct OldCellGradients {
+        lo: usize,
+        diffs: [[f32; 4]; 8],
+    }
+
+    /// `Dataset::trilinear_gradient_at` before its rows were bounds-checked through the two
+    /// furthest rows and its differences gathered in the order (y, z, x), verbatim (`self` as
+    /// `d`), the oracle of `gradient_rows_are_the_row_by_row_read`.
+    fn old_trilinear_gradient_at(
+        d: &Dataset,
+        lo: usize,
+        [fx, fy, fz]: [f32; 3],
+        cache: &mut OldCellGradients,
+    ) -> Option<[f64; 3]> {
+        if cache.lo != lo {
+            let (sy, sz) = (d.strides[1], d.strides[2]);
+            let v = &d.values[..];
+            let last = v.len().checked_sub(4)?;
+            let row = |j: usize, k: usize| -> Option<[f32; 4]> {
+                let o = lo + j * sy + k * sz;
+                if o > last {
+                    return None;
+                }
+                v.get(o..o + 4)?.try_into().ok()
+            };
+            let (r10, r20) = (row(1, 0)?, row(2, 0)?);
+            let (r01, r11, r21, r31) = (row(0, 1)?, row(1, 1)?, row(2, 1)?, row(3, 1)?);
+            let (r02, r12, r22, r32) = (row(0, 2)?, row(1, 2)?, row(2, 2)?, row(3, 2)?);
+            let (r13, r23) = (row(1, 3)?, row(2, 3)?);
+            let corners = [
+                (r11, r01, r21, r10, r12),
+                (r21, r11, r31, r20, r22),
+                (r12, r02, r22, r11, r13),
+                (r22, r12, r32, r21, r23),
+            ];
+            use wide::f32x4;
+            for (c, (r, ym, yp, zm, zp)) in corners.into_iter().enumerate() {
+                let dx = f32x4::new([0.0, r[2], r[3], 0.0]) - f32x4::new([0.0, r[0], r[1], 0.0]);
+                let dy = f32x4::new(yp) - f32x4::new(ym);
+                let dz = f32x4::new(zp) - f32x4::new(zm);
+                let [_, first, second, _] = f32x4::transpose([dx, dy, dz, f32x4::ZERO]);
+                cache.diffs[2 * c] = first.to_array();
+                cache.diffs[2 * c + 1] = second.to_array();
+            }
+            cache.lo = lo;
+        }
+        let (gx, gy, gz) = (1.0 - fx, 1.0 - fy, 1.0 - fz);
+        let xy = wide::f32x4::new([gx, fx, gx, fx]) * wide::f32x4::new([gy, gy, fy, fy]);
+        let near = (xy * wide::f32x4::splat(gz)).to_array();
+        let far = (xy * wide::f32x4::splat(fz)).to_array();
+        let weights = [
+            near[0], near[1], near[2], near[3], far[0], far[1], far[2], far[3],
+        ];
+        let mut g = wide::f32x4::ZERO;
+        for (wt, d) in weights.into_iter().zip(cache.diffs) {
+            g += wide::f32x4::splat(wt) * wide::f32x4::new(d);
+        }
+        let g = g.to_array();
+        Some([
+            g[0] as f64 * d.half_last[0],
+            g[1] as f64 * d.half_last[1],
+            g[2] as f64 * d.half_last[2],
+        ])
+    }
+
+    /// The same bits, or both NaN (a NaN's payload is not promised).
+    fn same_f64(a: f64, b: f64) -> bool {
+        a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+    }
+
+    /// The trilinear gradient's rows read under the test of the neighbourhood's last row, and
+    /// its differences gathered in the order (y, z, x), give what the row-by-row read gave:
+    /// a gradient exactly for the neighbourhood starts whose last row lies inside the values
+    /// (every interior cell's: `specialised_trilinear_paths_agree_with_the_generic_filter`),
+    /// and there the same bits, through a cache that hits and misses, on values of every kind
+    /// (random bits: NaNs, infinities, subnormals, ±0, huge) and awkward weights.
+    #[test]
+    fn gradient_rows_are_the_row_by_row_read() {
+        let rng = crate::testing::Xorshift::new(0x5eed_6a0d);
+        let weight = |rng: &crate::testing::Xorshift| -> f32 {
+            match rng.bits() % 8 {
+                0 => 0.0,
+                1 => -0.0,
+                2 => 1.0,
+                3 => f32::from_bits(rng.bits() as u32),
+                4 => f32::from_bits(1),
+                _ => rng.next() as f32,
+            }
+        };
+        for (dims, bits) in [
+            ([4, 4, 4], false),
+            ([5, 4, 6], false),
+            ([7, 5, 4], true),
+            ([4, 9, 5], true),
+            ([6, 6, 6], true),
+        ] {
+            let mut d = random_u8(dims, 21);
+            if bits {
+                // Any f32 at all, to check the lanes' operations, not only the dataset's
+                // values in [0, 1].
+                let n = d.values.len();
+                d.values = (0..n)
+                    .map(|i| match i % 13 {
+                        0 => -0.0,
+                        1 => f32::NAN,
+                        2 => f32::INFINITY,
+                        3 => f32::NEG_INFINITY,
+                        4 => f32::from_bits(rng.bits() as u32 & 0x807f_ffff),
+                        5 => f32::MAX,
+                        _ => f32::from_bits(rng.bits() as u32),
+                    })
+                    .collect();
+            }
+            let (mut new, mut old) = (
+                CellGradients::default(),
+                OldCellGradients {
+                    lo: usize::MAX,
+                    diffs: [[0.0; 4]; 8],
+                },
+            );
+            for lo in 0..d.values.len() + 3 {
+                for _ in 0..3 {
+                    let f = [weight(&rng), weight(&rng), weight(&rng)];
+                    let got = d.trilinear_gradient_at::<true>(lo, f, &mut new);
+                    let (sy, sz) = (d.strides[1], d.strides[2]);
+                    let inside = lo + 3 * sy + 3 * sz + 4 <= d.values.len();
+                    assert_eq!(got.is_some(), inside, "{dims:?} lo {lo}");
+                    // (The old read where the new one reads, the same cache traffic.)
+                    let want = if inside {
+                        old_trilinear_gradient_at(&d, lo, f, &mut old)
+                    } else {
+                        None
+                    };
+                    assert_eq!(got.is_some(), want.is_some(), "{dims:?} lo {lo}");
+                    if let (Some(g), Some(w)) = (got, want) {
+                        assert!(
+                            g.iter().zip(w).all(|(&g, w)| same_f64(g, w)),
+                            "{dims:?} lo {lo} {f:?}: {g:?} vs {w:?}"
+                        );
+                    }
+                    // A fresh cache: the miss's path at every start, not only the first.
+                    let fresh =
+                        d.trilinear_gradient_at::<true>(lo, f, &mut CellGradients::default());
+                    // Without the signed zeros: the same but for the sign of a zero.
+                    let unsigned =
+                        d.trilinear_gradient_at::<false>(lo, f, &mut CellGradients::default());
+                    assert_eq!(
+                        unsigned.map(|g| g.map(|x| (x + 0.0).to_bits())),
+                        fresh.map(|g| g.map(|x| (x + 0.0).to_bits())),
+                        "{dims:?} lo {lo}"
+                    );
+                    assert_eq!(
+                        fresh.map(|g| g.map(f64::to_bits)),
+                        got.map(|g| g.map(f64::to_bits)),
+                        "{dims:?} lo {lo}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
@@ -2294,9 +2480,11 @@ mod tests {
                 assert_eq!(cells.at[i] as usize, d.node_index(cell), "{p:?}");
                 let got = [cells.f[0][i], cells.f[1][i], cells.f[2][i]];
                 assert_eq!(got.map(f32::to_bits), f.map(f32::to_bits), "{p:?}");
-                let g = d.trilinear_gradient_in(*p, &cells, i, &mut cache);
+                let g = d.trilinear_gradient_in(&by_axis, &cells, i, &mut cache);
                 let want = d.gradient(*p, Filter::Trilinear);
-                assert_eq!(g.map(f64::to_bits), want.map(f64::to_bits), "{p:?}");
+                // (But for the sign of a zero, which `trilinear_gradient_in` leaves.)
+                let bits = |g: [f64; 3]| g.map(|x| (x + 0.0).to_bits());
+                assert_eq!(bits(g), bits(want), "{p:?}");
             }
         }
         // A grid with interior cells had points in them.

@@ -109,8 +109,11 @@ struct SegmentPairs {
 
 /// One bucket's segments, as lanes of the opacity, r, g and b columns (the opacity
 /// segment's numbers in the first lane, the colour segment's in the other three), so that
-/// [`SegmentPairs::eval`] evaluates the four in f64 lanes.
+/// [`SegmentPairs::eval`] evaluates the four in f64 lanes. Aligned to 16 bytes, so that the
+/// lanes' arithmetic reads its numbers straight from memory (SSE operands must be aligned)
+/// rather than loading each pair of lanes first.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(align(16))]
 struct SegmentPair {
     /// The segments' starts (a): the opacity segment's, then the colour segment's thrice.
     start: [f64; 4],
@@ -224,10 +227,24 @@ impl DirectShading {
     /// fields 0 to 3 that [`Lean::opacity_from_value`] and [`Lean::rest`] leave, bit for bit;
     /// the colour only where the opacity is above 0. (The batched march holds the program's
     /// `DirectShading` for the whole ray and calls this per sample.)
-    #[inline]
+    #[inline(always)]
     pub(crate) fn opacity_colour(&self, v: f32) -> (f32, Option<[f32; 3]>) {
         // The dataset writes the clamped value into the source field, which both tables read.
         let (x, b) = Mapping::clamp_and_bucket(v);
+        self.opacity_colour_of(x, b)
+    }
+
+    /// [`DirectShading::opacity_colour`] of a value already in [0, 1] (−0 included: a
+    /// trilinear value, which `Dataset::trilinear8` clamps), which the clamp leaves as it is.
+    #[inline(always)]
+    pub(crate) fn opacity_colour_in_range(&self, x: f32) -> (f32, Option<[f32; 3]>) {
+        debug_assert!((0.0..=1.0).contains(&x), "{x}");
+        self.opacity_colour_of(x, Mapping::bucket_in_range(x))
+    }
+
+    /// [`DirectShading::opacity_colour`] of the clamped value `x` in bucket `b`.
+    #[inline(always)]
+    fn opacity_colour_of(&self, x: f32, b: usize) -> (f32, Option<[f32; 3]>) {
         if let Some(oc) = self.pairs.eval(x, b) {
             return oc;
         }
@@ -827,6 +844,34 @@ mod tests {
             }
         }
         assert!(coloured > 200, "{coloured}");
+        // Of a value in [0, 1] (−0 included), without the clamp: the same bits, at and within
+        // 3 ulps of every bucket edge and of the tables' breakpoints, and at random values.
+        let rng = crate::testing::Xorshift::new(0x0c1a_4b5e);
+        let mut inputs = vec![-0.0f32, 0.0, 1.0, 1.0f32.next_down()];
+        for edge in (0..=Mapping::BUCKET_COUNT)
+            .map(|b| b as f32 / 1024.0)
+            .chain([0.1, 0.2, 0.3, 0.5, 0.6, 0.7, 0.9])
+        {
+            let mut x = edge;
+            for _ in 0..3 {
+                x = x.next_down();
+            }
+            for _ in 0..7 {
+                inputs.push(x);
+                x = x.next_up();
+            }
+        }
+        inputs.extend((0..10_000).map(|_| rng.next() as f32));
+        inputs.extend((0..200).map(|_| f32::from_bits(rng.bits() as u32 % 0x3f80_0001)));
+        for x in inputs.into_iter().filter(|x| (0.0..=1.0).contains(x)) {
+            let (o, rgb) = shading.opacity_colour(x);
+            let (o2, rgb2) = shading.opacity_colour_in_range(x);
+            assert_eq!(o.to_bits(), o2.to_bits(), "{x:e}");
+            assert_eq!(
+                rgb.map(|c| c.map(f32::to_bits)),
+                rgb2.map(|c| c.map(f32::to_bits))
+            );
+        }
         // Not taken: no colour table; ka, kd, ks or the exponent written by the dataset or
         // the colour table; a colour field missing or written twice; the general shapes.
         let c = ramp(&[0.1, 0.3, 0.2, 0.1, 0.6, 0.9, 0.5, 0.4], 3);

@@ -274,6 +274,15 @@ impl Mapping {
         (x.to_array()[0], b.to_array()[0] as u32 as usize)
     }
 
+    /// [`Mapping::clamp_and_bucket`]'s bucket of a value already in [0, 1] (−0 included),
+    /// which the clamp leaves as it is.
+    #[inline]
+    pub(crate) fn bucket_in_range(x: f32) -> usize {
+        use wide::f32x4;
+        let b = (f32x4::splat(x) * f32x4::splat(BUCKETS as f32)).fast_trunc_int();
+        b.to_array()[0] as u32 as usize
+    }
+
     /// The number of buckets [`Mapping::clamp_and_bucket`] can return.
     pub(crate) const BUCKET_COUNT: usize = BUCKETS + 1;
 
@@ -357,6 +366,29 @@ mod tests {
     /// `clamp_and_bucket` is `clamp_field` and the plain ⌊x·BUCKETS⌋ of its result x, bit for
     /// bit: for every input of [0, 1] within 64 ulps of a bucket edge, every 61st one between,
     /// and for NaNs, ±0, ±∞, negative inputs, inputs past 1 and random bit patterns.
+    /// `bucket_in_range` is `clamp_and_bucket`'s bucket for inputs of [0, 1] (−0 included):
+    /// every one within 64 ulps of a bucket edge, and every 97th between.
+    #[test]
+    fn bucket_in_range_is_the_clamped_bucket() {
+        let check = |x: f32| {
+            assert_eq!(
+                Mapping::bucket_in_range(x),
+                Mapping::clamp_and_bucket(x).1,
+                "{x:e}"
+            );
+        };
+        check(-0.0);
+        for b in 0..=BUCKETS {
+            let edge = (b as f32 / BUCKETS as f32).to_bits();
+            for bits in edge.saturating_sub(64)..=(edge + 64).min(1.0f32.to_bits()) {
+                check(f32::from_bits(bits));
+            }
+        }
+        for bits in (0..=1.0f32.to_bits()).step_by(97) {
+            check(f32::from_bits(bits));
+        }
+    }
+
     #[test]
     fn clamp_and_bucket_is_clamp_then_bucket() {
         let check = |v: f32| {

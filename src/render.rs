@@ -650,13 +650,33 @@ struct HeadlitLanes {
     ks: Option<Lanes>,
     /// The specular exponent, an integer.
     e: u32,
-    view: [Lanes; 3],
     to_light: [Lanes; 3],
     radiance: [Lanes; 3],
     flip: bool,
-    /// Where the gradients come in object space: the columns of the matrix taking them to
-    /// world space ([`CObj::grad_to_world`]), by column and row; else `None` (world space).
-    to_world: Option<[[Lanes; 3]; 3]>,
+    /// Where the gradients come in object space: the matrix taking them to world space
+    /// ([`CObj::grad_to_world`]); else [`ToWorld::None`] (world space).
+    to_world: ToWorld,
+}
+
+/// The matrix of [`HeadlitLanes::to_world`]. (With the tag a byte of its own: as an `Option`,
+/// telling `None` from the others took a comparison of sixteen bytes.)
+#[repr(u8)]
+enum ToWorld {
+    /// None: the gradients come in world space.
+    None,
+    /// Its columns, by column and row.
+    General([[Lanes; 3]; 3]),
+    /// Its diagonal, where every entry off the diagonal is zero (an object scaled or flipped
+    /// along its axes, as the MNI brain is). Each world component is then the diagonal
+    /// product alone, where glam's `m * g` adds the zero products to it: the two differ only
+    /// where that product is −0 (which a +0 product makes +0) or where the gradient has an
+    /// infinity or a NaN (which has no normal either way: its length is not finite and
+    /// positive). A component's sign of zero cannot change a lit colour: it reaches the
+    /// lighting's sums only as a term ±0, so they differ at most in the sign of a zero too,
+    /// which no comparison with 0 sees, and every product taken where they pass has nonzero
+    /// factors there (`headlit_lanes_are_headlit` compares both forms with the scalar
+    /// lighting).
+    Diagonal([Lanes; 3]),
 }
 
 impl HeadlitLanes {
@@ -673,26 +693,49 @@ impl HeadlitLanes {
             kd: Lanes::splat(h.kd),
             ks: (h.ks > 0.0).then(|| Lanes::splat(h.ks)),
             e,
-            view: splat(h.view),
             to_light: splat(l),
             radiance: splat(rad),
             flip,
-            to_world: to_world.map(|m| [splat(m.x_axis), splat(m.y_axis), splat(m.z_axis)]),
+            to_world: match to_world {
+                None => ToWorld::None,
+                Some(m) => {
+                    let off = [
+                        m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.z, m.z_axis.x, m.z_axis.y,
+                    ];
+                    if off.iter().all(|&x| x == 0.0) {
+                        ToWorld::Diagonal([m.x_axis.x, m.y_axis.y, m.z_axis.z].map(Lanes::splat))
+                    } else {
+                        ToWorld::General([splat(m.x_axis), splat(m.y_axis), splat(m.z_axis)])
+                    }
+                }
+            },
         })
     }
 
     /// [`Headlit::colour`] of samples `0..count` of a run, side by side in lanes, each lane
-    /// doing the scalar operations in the same order, so giving the same bits: sample j's
-    /// colour `(c[0][j], c[1][j], c[2][j])` is replaced by its lit colour, with the normal of
-    /// its gradient `grad[·][j]` by [`normal_of_gradient`], where a gradient that vanishes is
-    /// given as NaN (it has no normal either way).
+    /// doing the scalar operations in the same order, so giving the same bits: sample j's lit
+    /// colour `(c[0][j], c[1][j], c[2][j])` from its colour `(rgb[0][j], rgb[1][j], rgb[2][j])`
+    /// as the tables give it (f32, converted to f64 here, two to a register, as the march
+    /// converted each), with the normal of its gradient `grad[·][j]` by [`normal_of_gradient`],
+    /// where a gradient that vanishes is given as NaN (it has no normal either way). Gradients
+    /// in object space (`to_world` given: a dataset's) are also tested here as [`vanishing`]
+    /// tests them, so that the caller may pass them as they are. `view`: towards the eye
+    /// (−(the ray's direction)) in lanes, the one number of [`Headlit`] that is the ray's (the
+    /// rest is prepared once per scene and object: [`Compiled::lanes`]).
     #[inline]
-    fn colours(&self, count: usize, c: &mut [[f64; 8]; 3], grad: &[[f64; 8]; 3]) {
+    fn colours(
+        &self,
+        count: usize,
+        view: &[Lanes; 3],
+        rgb: &[[f32; 8]; 3],
+        c: &mut [[f64; 8]; 3],
+        grad: &[[f64; 8]; 3],
+    ) {
         for q in 0..8 / LANES {
             if q * LANES >= count {
                 break;
             }
-            self.colours_at(q * LANES, c, grad);
+            self.colours_at(q * LANES, view, rgb, c, grad);
         }
     }
 
@@ -700,27 +743,51 @@ impl HeadlitLanes {
     /// that the constants are read where they are used rather than held (and spilled) across
     /// the run.
     #[inline(never)]
-    fn colours_at(&self, at: usize, c: &mut [[f64; 8]; 3], grad: &[[f64; 8]; 3]) {
+    fn colours_at(
+        &self,
+        at: usize,
+        view: &[Lanes; 3],
+        rgb: &[[f32; 8]; 3],
+        c: &mut [[f64; 8]; 3],
+        grad: &[[f64; 8]; 3],
+    ) {
         let zero = Lanes::ZERO;
-        let (ka, kd, view, l, rad) = (
-            &self.ka_ambient,
-            self.kd,
-            &self.view,
-            &self.to_light,
-            &self.radiance,
-        );
+        let (ka, kd, l, rad) = (&self.ka_ambient, self.kd, &self.to_light, &self.radiance);
         let lanes = |a: &[f64; 8]| Lanes::new(std::array::from_fn(|k| a[at + k]));
         let mut g = [lanes(&grad[0]), lanes(&grad[1]), lanes(&grad[2])];
-        if let Some([x, y, z]) = &self.to_world {
-            // `m * g` as glam computes it: column x times g.x, plus column y times g.y, plus
-            // column z times g.z (a NaN gradient stays NaN in every axis).
-            g = std::array::from_fn(|i| x[i] * g[0] + y[i] * g[1] + z[i] * g[2]);
+        let mut vanishes = None;
+        if !matches!(self.to_world, ToWorld::None) {
+            // A dataset's gradient vanishes where its largest component in magnitude is at
+            // most `ZERO_GRADIENT` ([`vanishing`]); which of equal components is the largest
+            // does not matter, nor how a NaN is ordered: a gradient with a NaN (or an
+            // infinity) has no normal anyway (its reciprocal length is NaN, or 0).
+            let a = g.map(Lanes::abs);
+            vanishes = Some(
+                a[0].fast_max(a[1].fast_max(a[2]))
+                    .simd_le(Lanes::splat(ZERO_GRADIENT)),
+            );
+            g = match &self.to_world {
+                ToWorld::None => g,
+                // `m * g` as glam computes it: column x times g.x, plus column y times g.y,
+                // plus column z times g.z (a NaN gradient stays NaN in every axis).
+                ToWorld::General([x, y, z]) => {
+                    std::array::from_fn(|i| x[i] * g[0] + y[i] * g[1] + z[i] * g[2])
+                }
+                // (The same lighting: see `ToWorld::Diagonal`.)
+                ToWorld::Diagonal(d) => std::array::from_fn(|i| d[i] * g[i]),
+            };
         }
         // `(-g).try_normalize()`: (−g)·(−g) is g·g, and (−g)·rcp is g·(−rcp), bit for bit
         // (a NaN's sign aside, and a NaN gradient has no normal).
         let rcp = Lanes::ONE / (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
-        // `rcp.is_finite() && rcp > 0.0`: 0 < rcp < ∞ (a NaN fails both).
+        // `rcp.is_finite() && rcp > 0.0`: 0 < rcp < ∞ (a NaN fails both); and no normal where
+        // the gradient vanishes. (Everything below depends on the gradient only through
+        // `valid` where it is false, so such a lane is lit as one given as NaN.)
         let valid = rcp.simd_gt(zero) & rcp.simd_lt(Lanes::splat(f64::INFINITY));
+        let valid = match vanishes {
+            Some(v) => valid & !v,
+            None => valid,
+        };
         // The normal is ±u, its sign left to N·L alone: rounding to nearest is symmetric, so
         // negating a factor of products and sums negates them exactly, and (−u)·x is −(u·x)
         // bit for bit. The normal −u is flipped where −(u·V) < 0, that is where u·V > 0 (a
@@ -736,7 +803,9 @@ impl HeadlitLanes {
             neg
         };
         let ndl = ndl_u ^ sign;
-        let cl = [lanes(&c[0]), lanes(&c[1]), lanes(&c[2])];
+        // The samples' colours as the tables give them, in f32, converted here.
+        let cl: [Lanes; 3] =
+            std::array::from_fn(|ch| Lanes::new(std::array::from_fn(|k| rgb[ch][at + k] as f64)));
         let kdc = cl.map(|x| kd * x);
         let lit = ndl.simd_gt(zero) & valid;
         // `ndl.max(0.0)` (ndl where above 0, else +0: a NaN and −0 included), and 1 where
@@ -876,6 +945,10 @@ pub struct Compiled {
     /// Where every light is directional: each light's direction towards it and radiance (see
     /// [`Headlit`]).
     directional: Option<Vec<(DVec3, DVec3)>>,
+    /// Per object, the lighting lanes of its direct shading (`DirectShading`) where every
+    /// light is directional and there is one ([`HeadlitLanes`]): what [`Headlit::new`] and
+    /// [`HeadlitLanes::new`] would give every ray, but for its view, prepared once.
+    lanes: Vec<Option<HeadlitLanes>>,
     settings: Settings,
     plan: Plan,
 }
@@ -912,14 +985,37 @@ impl Compiled {
                 Light::Point { .. } => None,
             })
             .collect();
-        Compiled {
+        let mut scene = Compiled {
             objects,
             lights,
             directional,
+            lanes: Vec::new(),
             ambient: crate::scene::v3(desc.settings.ambient),
             settings: desc.settings.clone(),
             plan,
-        }
+        };
+        scene.lanes = scene
+            .objects
+            .iter()
+            .map(|o| scene.headlit_lanes(o))
+            .collect();
+        scene
+    }
+
+    /// [`Compiled::lanes`] of `obj`: as the batched march made them for every ray (the view,
+    /// which they do not hold, apart).
+    fn headlit_lanes(&self, obj: &CObj) -> Option<HeadlitLanes> {
+        let s = obj.lean.as_ref()?.direct_shading()?;
+        let [ka, kd, ks, spec] = s.coefficients;
+        let h = Headlit::new(
+            self,
+            obj,
+            DVec3::ZERO,
+            [ka, kd, ks],
+            Specular::of_field(spec),
+        )?;
+        let to_world = obj.object_gradient(9).then_some(obj.grad_to_world);
+        HeadlitLanes::new(&h, obj.flip_normals, to_world)
     }
 
     /// The render plan: which effects this scene calls for.
@@ -1562,24 +1658,26 @@ impl Compiled {
         // The usual program's shaded samples of a run, in order: their compositing weights,
         // colours (then lit colours) and gradients, by axis.
         let (mut weights, mut colours, mut grads) = ([0.0f64; 8], [[0.0f64; 8]; 3], [[0.0; 8]; 3]);
-        // The usual program's coefficients and exponent, examined once per ray, and its
-        // lighting prepared where every light is directional and nothing shadows the object.
-        // (The direct shading itself is held here for the whole ray: its tables per sample
-        // without the program's options unwrapped each time.)
+        // Under the lighting lanes, those samples' colours as the tables give them.
+        let mut rgb32 = [[0.0f32; 8]; 3];
+        // Under a single light, the lighting in lanes across a run's samples (prepared for
+        // the object once: the ray's view apart).
+        let lanes = self.lanes[c.object].as_ref().filter(|_| IN_LANES);
+        let view = (-dir).to_array().map(Lanes::splat);
+        // The usual program's coefficients and exponent, examined once per ray, and, without
+        // the lanes, its lighting prepared where every light is directional and nothing
+        // shadows the object. (The direct shading itself is held here for the whole ray: its
+        // tables per sample without the program's options unwrapped each time.)
         let shading = lean.direct_shading().map(|s| {
             let [ka, kd, ks, spec] = s.coefficients;
             let k = [ka, kd, ks];
             let e = Specular::of_field(spec);
-            (s, k, e, Headlit::new(self, obj, dir, k, e))
+            let headlit = match lanes {
+                Some(_) => None,
+                None => Headlit::new(self, obj, dir, k, e),
+            };
+            (s, k, e, headlit)
         });
-        // Under a single light, the lighting in lanes across a run's samples.
-        let lanes = shading
-            .as_ref()
-            .filter(|_| IN_LANES)
-            .and_then(|(_, _, _, h)| {
-                let to_world = obj.object_gradient(9).then_some(obj.grad_to_world);
-                HeadlitLanes::new(h.as_ref()?, obj.flip_normals, to_world)
-            });
         loop {
             // The run: the next sample to take and those after it in occupied blocks.
             let m = c.next_run(grid, &mut mids, &mut lens);
@@ -1604,67 +1702,88 @@ impl Compiled {
             if let Some((tables, k, e, headlit)) = &shading {
                 // The usual program: opacity and colour straight from the tables, the other
                 // coefficients known (the same numbers as the registers'). In phases over the
-                // run: opacities, transmittance and gradients in order up to where the ray
-                // ends (no sample after that is shaded), under a single light the lighting in
-                // lanes across the samples, then the composite.
+                // run: opacities, transmittance (without the lanes, the lit colours too) in
+                // order up to where the ray ends (no sample after that is shaded); under a
+                // single light, then those samples' gradients and their lighting in lanes
+                // across them; then the composite.
                 let (mut count, mut ends) = (0, false);
-                // Which of the run's cells are interior, for the gradients taken in them.
-                let interior = if same_cells && pass != 0 {
-                    data.interior8(&cells8)
-                } else {
-                    0
-                };
-                while pass != 0 {
-                    let i = pass.trailing_zeros() as usize;
-                    pass &= pass - 1;
-                    let (o, Some(rgb)) = tables.opacity_colour(vs[i]) else {
-                        continue;
-                    };
-                    let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
-                    let c = rgb.map(|x| x as f64);
-                    let p = [ps[0][i], ps[1][i], ps[2][i]];
-                    // The sample's world point, only where a branch below needs it.
-                    let w = || origin + mids[i] * dir;
-                    let c = if lanes.is_some() {
-                        // The normal's gradient now (in object space where it is the dataset's:
-                        // the lanes take it to world space); the rest in lanes below.
-                        let (g, vanishes) = if interior >> i & 1 != 0 {
-                            vanishing(data.trilinear_gradient_in(p, &cells8, i, &mut cache))
-                        } else {
-                            obj.field_gradient_in(w(), p, 9, &mut cache)
+                if let Some(h) = &lanes {
+                    // Under a single light: the opacities, colours and weights first, in
+                    // order up to where the ray ends, noting each shaded sample's place in
+                    // the run; then their gradients, in the same order (through the same
+                    // cache, which nothing else reads); then the lighting in lanes.
+                    let mut at = [0u8; 8];
+                    while pass != 0 {
+                        let i = pass.trailing_zeros() as usize;
+                        pass &= pass - 1;
+                        let (o, Some(rgb)) = tables.opacity_colour_in_range(vs[i]) else {
+                            continue;
                         };
-                        let g = if vanishes {
-                            [f64::NAN; 3]
-                        } else {
-                            g.to_array()
-                        };
-                        for (a, x) in grads.iter_mut().zip(g) {
+                        let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
+                        for (a, x) in rgb32.iter_mut().zip(rgb) {
                             a[count] = x;
                         }
-                        c
+                        at[count] = i as u8;
+                        weights[count] = t * alpha;
+                        count += 1;
+                        t *= 1.0 - alpha;
+                        if t < stop {
+                            ends = true;
+                            break;
+                        }
+                    }
+                    // The normals' gradients (in object space where they are the dataset's:
+                    // the lanes take them to world space, and test the dataset's own for
+                    // vanishing).
+                    // (Which of the run's cells are interior: taken only for runs with a
+                    // sample to shade.)
+                    let interior = if same_cells && count != 0 {
+                        data.interior8(&cells8)
                     } else {
-                        let c = DVec3::from_array(c);
-                        let w = w();
+                        0
+                    };
+                    for (j, &i) in at[..count].iter().enumerate() {
+                        let i = i as usize;
+                        let g = if interior >> i & 1 != 0 {
+                            data.trilinear_gradient_in(&ps, &cells8, i, &mut cache)
+                        } else {
+                            let (p, w) = ([ps[0][i], ps[1][i], ps[2][i]], origin + mids[i] * dir);
+                            match obj.field_gradient_in(w, p, 9, &mut cache) {
+                                (_, true) => [f64::NAN; 3],
+                                (g, false) => g.to_array(),
+                            }
+                        };
+                        for (a, x) in grads.iter_mut().zip(g) {
+                            a[j] = x;
+                        }
+                    }
+                    h.colours(count, &view, &rgb32, &mut colours, &grads);
+                } else {
+                    while pass != 0 {
+                        let i = pass.trailing_zeros() as usize;
+                        pass &= pass - 1;
+                        let (o, Some(rgb)) = tables.opacity_colour(vs[i]) else {
+                            continue;
+                        };
+                        let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
+                        let c = DVec3::from_array(rgb.map(|x| x as f64));
+                        let (p, w) = ([ps[0][i], ps[1][i], ps[2][i]], origin + mids[i] * dir);
                         let normal = || obj.gradient_normal(w, -dir, p, 9, &mut cache);
-                        match headlit {
+                        let c = match headlit {
                             Some(h) => h.colour(c, normal),
                             None => self.illuminate_colour(obj, w, dir, c, *k, *e, normal),
+                        };
+                        for (a, x) in colours.iter_mut().zip(c.to_array()) {
+                            a[count] = x;
                         }
-                        .to_array()
-                    };
-                    for (a, x) in colours.iter_mut().zip(c) {
-                        a[count] = x;
+                        weights[count] = t * alpha;
+                        count += 1;
+                        t *= 1.0 - alpha;
+                        if t < stop {
+                            ends = true;
+                            break;
+                        }
                     }
-                    weights[count] = t * alpha;
-                    count += 1;
-                    t *= 1.0 - alpha;
-                    if t < stop {
-                        ends = true;
-                        break;
-                    }
-                }
-                if let Some(h) = &lanes {
-                    h.colours(count, &mut colours, &grads);
                 }
                 for (j, &w) in weights[..count].iter().enumerate() {
                     col += w * DVec3::new(colours[0][j], colours[1][j], colours[2][j]);
@@ -2426,6 +2545,103 @@ mod tests {
         assert!(Headlit::new(&scene, &scene.objects[0], DVec3::X, k, e).is_none());
     }
 
+    /// The lighting lanes' diagonal form of a matrix whose entries off the diagonal are ±0
+    /// (`ToWorld::Diagonal`) lights every sample as the general product with that matrix
+    /// (`ToWorld::General`, glam's `m * g`), bit for bit: gradients with components of every
+    /// kind (±0, subnormal, tiny, huge, infinite, NaN, random bits), diagonals with negative,
+    /// zero and huge entries, lights and views along the axes and not, flipped or not. And
+    /// the sign of a zero component of a gradient changes no colour, in either form or in
+    /// world space.
+    #[test]
+    fn diagonal_to_world_is_the_matrix_product() {
+        let rng = Xorshift::new(0x9e37_79b9_7f4a_7c15);
+        let (next, unit) = (|| rng.next(), || unit_dir(&|| rng.next()));
+        let comp = || match (next() * 10.0) as usize {
+            0 => 0.0,
+            1 => -0.0,
+            2 => 1e-310,
+            3 => -1e-8,
+            4 => 1e300,
+            5 => f64::INFINITY,
+            6 => f64::NAN,
+            7 => f64::from_bits(rng.bits()),
+            _ => next() - 0.5,
+        };
+        let axis = |v: f64| {
+            let mut d = DVec3::ZERO;
+            d[(next() * 3.0) as usize] = v;
+            d
+        };
+        let mut compared = 0;
+        for round in 0..400 {
+            let to_light = if round % 2 == 0 { axis(1.0) } else { unit() };
+            let scene = lit_scene(
+                vec![Light::Directional {
+                    to_light,
+                    radiance: [1.0, 0.7, 0.3],
+                }],
+                false,
+            );
+            let dir = if round % 3 == 0 { -axis(1.0) } else { unit() };
+            let e = Specular::new([10.0, 1.0, 0.0][round % 3]);
+            let h = Headlit::new(&scene, &scene.objects[0], dir, [0.2, 0.7, 0.3], e).unwrap();
+            let z = || if next() < 0.5 { 0.0 } else { -0.0 };
+            let d = || match (next() * 4.0) as usize {
+                0 => -1.0,
+                1 => 0.0,
+                2 => 1e300,
+                _ => (next() - 0.5) * 300.0,
+            };
+            let m = glam::DMat3::from_cols(
+                DVec3::new(d(), z(), z()),
+                DVec3::new(z(), d(), z()),
+                DVec3::new(z(), z(), d()),
+            );
+            for flip in [false, true] {
+                let diagonal = HeadlitLanes::new(&h, flip, Some(m)).unwrap();
+                assert!(matches!(diagonal.to_world, ToWorld::Diagonal(_)));
+                let mut general = HeadlitLanes::new(&h, flip, Some(m)).unwrap();
+                let splat = |v: DVec3| v.to_array().map(Lanes::splat);
+                general.to_world =
+                    ToWorld::General([splat(m.x_axis), splat(m.y_axis), splat(m.z_axis)]);
+                let mut cs = [[0.0f32; 8]; 3];
+                let mut grads = [[0.0; 8]; 3];
+                for j in 0..8 {
+                    for a in 0..3 {
+                        cs[a][j] = next() as f32;
+                        grads[a][j] = if next() < 0.3 { z() } else { comp() };
+                    }
+                }
+                let view = h.view.to_array().map(Lanes::splat);
+                let (mut a, mut b) = ([[0.0; 8]; 3], [[0.0; 8]; 3]);
+                diagonal.colours(8, &view, &cs, &mut a, &grads);
+                general.colours(8, &view, &cs, &mut b, &grads);
+                assert_eq!(
+                    a.map(|c| c.map(f64::to_bits)),
+                    b.map(|c| c.map(f64::to_bits)),
+                    "{m:?} {grads:?}"
+                );
+                // Nor does the sign of a zero component of the gradient change a colour
+                // (`Dataset::trilinear_gradient_in` may give either), in object space or in
+                // world space.
+                let flipped = grads.map(|a| a.map(|x| if x == 0.0 { -x } else { x }));
+                let mut world = HeadlitLanes::new(&h, flip, None).unwrap();
+                for lanes in [&diagonal, &general, &mut world] {
+                    let (mut a, mut b) = ([[0.0; 8]; 3], [[0.0; 8]; 3]);
+                    lanes.colours(8, &view, &cs, &mut a, &grads);
+                    lanes.colours(8, &view, &cs, &mut b, &flipped);
+                    assert_eq!(
+                        a.map(|c| c.map(f64::to_bits)),
+                        b.map(|c| c.map(f64::to_bits)),
+                        "{grads:?}"
+                    );
+                }
+                compared += 8;
+            }
+        }
+        assert!(compared > 6000);
+    }
+
     /// [`HeadlitLanes`] gives [`Headlit::colour`]'s colour bit for bit, the normal made by
     /// [`normal_of_gradient`] as [`CObj::gradient_normal`] makes it: for runs of 1 to 8
     /// samples, random lights, views and gradients (N·L and R·V of either sign, exactly ±0,
@@ -2464,23 +2680,46 @@ mod tests {
                             };
                             let h = Headlit::new(&scene, obj, dir, k, e).expect("directional");
                             // Gradients in world space, or in object space for the lanes to
-                            // transform (a random matrix, as `CObj::field_gradient` would).
-                            let to_world = (next() < 0.5).then(|| {
-                                glam::DMat3::from_cols(unit() * 3.0, unit(), unit() * 0.1)
-                            });
+                            // transform (a random matrix, as `CObj::field_gradient` would, or
+                            // a diagonal one, a flip or scale along the axes, with +0 and −0
+                            // off the diagonal).
+                            let to_world = match (next() * 4.0) as usize {
+                                0 | 1 => None,
+                                2 => {
+                                    Some(glam::DMat3::from_cols(unit() * 3.0, unit(), unit() * 0.1))
+                                }
+                                _ => {
+                                    let z = || if next() < 0.5 { 0.0 } else { -0.0 };
+                                    let d = || match (next() * 5.0) as usize {
+                                        0 => -1.0,
+                                        1 => 0.0,
+                                        2 => 196.0,
+                                        _ => (next() - 0.5) * 300.0,
+                                    };
+                                    Some(glam::DMat3::from_cols(
+                                        DVec3::new(d(), z(), z()),
+                                        DVec3::new(z(), d(), z()),
+                                        DVec3::new(z(), z(), d()),
+                                    ))
+                                }
+                            };
                             let lanes = HeadlitLanes::new(&h, flip, to_world).expect("one light");
                             let count = 1 + (next() * 8.0) as usize;
-                            let (mut cs, mut grads) = ([[0.0; 8]; 3], [[0.0; 8]; 3]);
+                            let (mut cs, mut grads) = ([[0.0f32; 8]; 3], [[0.0; 8]; 3]);
                             let mut want = Vec::new();
                             for j in 0..count {
+                                // Colours in f32, as the tables give them (the largest, and
+                                // an infinite one, included).
                                 let v = next();
-                                let c = if v < 0.03 {
-                                    DVec3::new(f64::MAX, next(), 0.0)
+                                let c32 = if v < 0.03 {
+                                    [f32::MAX, next() as f32, 0.0]
                                 } else if v < 0.05 {
-                                    DVec3::new(next(), f64::INFINITY, 0.0)
+                                    [next() as f32, f32::INFINITY, 0.0]
                                 } else {
-                                    DVec3::new(next(), next() * 2.0, (next() < 0.8) as u8 as f64)
+                                    let b = (next() < 0.8) as u8 as f32;
+                                    [next() as f32, next() as f32 * 2.0, b]
                                 };
+                                let c = DVec3::from_array(c32.map(f64::from));
                                 let u = next();
                                 let (g, zero) = if u < 0.05 {
                                     (DVec3::ZERO, true)
@@ -2490,13 +2729,35 @@ mod tests {
                                     (DVec3::new(f64::NAN, 1.0, 0.0), false)
                                 } else if u < 0.16 {
                                     (DVec3::new(1e-320, 0.0, 0.0), false)
+                                } else if u < 0.22 {
+                                    // About the threshold of a vanishing gradient.
+                                    let t = ZERO_GRADIENT;
+                                    let tiny = [0.0, -0.0, t, -t, t.next_up(), -t.next_up()];
+                                    let pick = || match (next() * 9.0) as usize {
+                                        k @ 0..6 => tiny[k],
+                                        6 => 1e-320,
+                                        7 => t * next(),
+                                        _ => -t * next(),
+                                    };
+                                    let g = DVec3::new(pick(), pick(), pick());
+                                    (g, vanishing(g.to_array()).1)
                                 } else if u < 0.25 {
-                                    // Along an axis: N·L exactly ±0 or ±1 for the axis light.
-                                    let mut g = DVec3::ZERO;
+                                    // Along an axis: N·L exactly ±0 or ±1 for the axis light
+                                    // (the other components +0 or −0).
+                                    let z = || if next() < 0.5 { 0.0 } else { -0.0 };
+                                    let mut g = DVec3::new(z(), z(), z());
                                     g[(next() * 3.0) as usize] = next() - 0.5;
                                     (g, false)
                                 } else {
                                     (unit() * (0.001 + 100.0 * next()), false)
+                                };
+                                // An object-space gradient is a dataset's: it vanishes as
+                                // `vanishing` finds, and the lanes test that themselves
+                                // (given as it is, or as NaN where it vanishes, as the march
+                                // passes a gradient from `CObj::field_gradient_in`).
+                                let (g, zero, as_it_is) = match to_world {
+                                    Some(_) => (g, vanishing(g.to_array()).1, next() < 0.5),
+                                    None => (g, zero, false),
                                 };
                                 let view = -dir;
                                 let world = to_world.map_or(g, |m| m * g);
@@ -2516,15 +2777,21 @@ mod tests {
                                     Some(_) => 1,
                                 };
                                 seen[case] += 1;
-                                let g = if zero { [f64::NAN; 3] } else { g.to_array() };
+                                let g = if zero && !as_it_is {
+                                    [f64::NAN; 3]
+                                } else {
+                                    g.to_array()
+                                };
                                 for a in 0..3 {
-                                    cs[a][j] = c[a];
+                                    cs[a][j] = c32[a];
                                     grads[a][j] = g[a];
                                 }
                             }
-                            lanes.colours(count, &mut cs, &grads);
+                            let view = h.view.to_array().map(Lanes::splat);
+                            let mut out = [[0.0; 8]; 3];
+                            lanes.colours(count, &view, &cs, &mut out, &grads);
                             for (j, want) in want.iter().enumerate() {
-                                let got = [cs[0][j], cs[1][j], cs[2][j]];
+                                let got = [out[0][j], out[1][j], out[2][j]];
                                 assert_eq!(
                                     got.map(f64::to_bits),
                                     want.to_array().map(f64::to_bits),
