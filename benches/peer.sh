@@ -141,7 +141,7 @@ for name, label in labels.items():
     ms = vlib_ms("mni_512_sd0.5", name)
     if ms is not None:
         print(f"{name:34} {ms:10.1f} {ms/main:9.2f}")
-        first = f" (first frame {vlib_first:.0f} ms)" if name == "shaded" and vlib_first else ""
+        first = f" (first frame {vlib_first:.0f} ms, the median of five fresh loads)" if name == "shaded" and vlib_first else ""
         main_rows.append(f"| {label} | {ms:.0f} ms{first} | {ms/main:.2f} |")
 round_ratios = [v / t for t, v in rounds]
 if round_ratios:

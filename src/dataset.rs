@@ -389,12 +389,21 @@ impl Dataset {
         }
         let (af, bf) = (a as f64, b as f64);
         let norm = |v: f64| ((v - af) / (bf - af)).clamp(0.0, 1.0) as f32;
+        // (On all cores: the values of a large scan are part of its first image's time.)
+        use rayon::prelude::*;
         let values: Vec<f32> = match &raw {
             Voxels::U8(v) => {
                 let lut: Vec<f32> = (0..256).map(|x| norm(x as f64)).collect();
-                v.iter().map(|&x| lut[x as usize]).collect()
+                v.par_iter()
+                    .with_min_len(1 << 16)
+                    .map(|&x| lut[x as usize])
+                    .collect()
             }
-            Voxels::U16(v) => v.iter().map(|&x| norm(x as f64)).collect(),
+            Voxels::U16(v) => v
+                .par_iter()
+                .with_min_len(1 << 16)
+                .map(|&x| norm(x as f64))
+                .collect(),
         };
         let strides = [
             usize::from(dims[0] > 1),
