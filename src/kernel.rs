@@ -248,6 +248,15 @@ impl DirectShading {
         if let Some(oc) = self.pairs.eval(x, b) {
             return oc;
         }
+        self.opacity_colour_general(x)
+    }
+
+    /// [`DirectShading::opacity_colour_of`] where the bucket has no segment pair: the tables'
+    /// general evaluation. Out of line (a few percent of the samples), so that the march's
+    /// loop around the pairs' path keeps its numbers in registers.
+    #[cold]
+    #[inline(never)]
+    fn opacity_colour_general(&self, x: f32) -> (f32, Option<[f32; 3]>) {
         let o = map_value(&self.opacity.0, x, self.opacity.1);
         if o <= 0.0 {
             return (o, None);
