@@ -310,6 +310,13 @@ impl CObj {
         }
     }
 
+    /// [`CObj::segment_transmittance`] of an opacity not above 1 (or NaN): a table's, which
+    /// the clamp keeps in [0, 1]. See [`transmit_at_most_one`].
+    #[inline(always)]
+    fn segment_transmittance_at_most_one(&self, o: f64, len: f64) -> f64 {
+        transmit_at_most_one(o, len * self.inv_ref)
+    }
+
     /// The opacity at world point `w` (inside the boundary), by the lean kernel where it applies.
     #[inline]
     fn opacity_at(&self, w: DVec3) -> f64 {
@@ -537,6 +544,32 @@ fn transmit(t: f64, e: f64) -> f64 {
         t.sqrt().sqrt()
     } else if e == 2.0 {
         t * t
+    } else {
+        t.powf(e)
+    }
+}
+
+/// The transmittance of a segment `e` references long through a medium of opacity `o` not
+/// above 1 (or NaN): `if o >= 1.0 { 0.0 } else { transmit(1.0 - o, e) }`, bit for bit, with
+/// the opaque medium's test only before `powf`. An o of 1 makes 1 − o = +0, whose square
+/// roots and square are +0 already (the common exponents' answer is the 0 of the test), and
+/// any other o fails the test; only `powf` of +0 can be other than +0 (an exponent of 0, below
+/// 0 or NaN). The exponent of a step of half the reference (the usual step, the MNI frame's)
+/// is tested first. (`transmit_at_most_one_is_the_tested_transmit`.)
+#[inline(always)]
+fn transmit_at_most_one(o: f64, e: f64) -> f64 {
+    debug_assert!(o <= 1.0 || o.is_nan(), "{o}");
+    let t = 1.0 - o;
+    if e == 0.5 {
+        t.sqrt()
+    } else if e == 1.0 {
+        t
+    } else if e == 0.25 {
+        t.sqrt().sqrt()
+    } else if e == 2.0 {
+        t * t
+    } else if o >= 1.0 {
+        0.0
     } else {
         t.powf(e)
     }
@@ -1719,7 +1752,7 @@ impl Compiled {
                         let (o, Some(rgb)) = tables.opacity_colour_in_range(vs[i]) else {
                             continue;
                         };
-                        let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
+                        let alpha = 1.0 - obj.segment_transmittance_at_most_one(o as f64, lens[i]);
                         for (a, x) in rgb32.iter_mut().zip(rgb) {
                             a[count] = x;
                         }
@@ -1765,7 +1798,7 @@ impl Compiled {
                         let (o, Some(rgb)) = tables.opacity_colour(vs[i]) else {
                             continue;
                         };
-                        let alpha = 1.0 - obj.segment_transmittance(o as f64, lens[i]);
+                        let alpha = 1.0 - obj.segment_transmittance_at_most_one(o as f64, lens[i]);
                         let c = DVec3::from_array(rgb.map(|x| x as f64));
                         let (p, w) = ([ps[0][i], ps[1][i], ps[2][i]], origin + mids[i] * dir);
                         let normal = || obj.gradient_normal(w, -dir, p, 9, &mut cache);
@@ -3178,6 +3211,85 @@ mod tests {
 
     /// The segment count is ⌈x⌉ clamped as it was, at integers and next to them, in (0, 1),
     /// around 2⁵² and 2⁶⁴, at zeros, negatives, infinities and NaN.
+    /// `transmit_at_most_one` is the tested `transmit` (the old code, verbatim) bit for bit on
+    /// opacities of [0, 1] (±0, subnormal, near 1, 1), below 0, −∞ and NaN, each against the
+    /// common exponents, their neighbours, 0, ±subnormal, negative, huge, ±∞, NaN and random
+    /// exponents; and random opacity bits with the sign of a number not above 1.
+    #[test]
+    fn transmit_at_most_one_is_the_tested_transmit() {
+        let old = |o: f64, e: f64| {
+            if o >= 1.0 {
+                0.0
+            } else {
+                transmit(1.0 - o, e)
+            }
+        };
+        let rng = Xorshift::new(0x2545_f491_4f6c_dd1d);
+        let mut os = vec![
+            0.0,
+            -0.0,
+            1.0,
+            1.0 - f64::EPSILON / 2.0,
+            1.0 - f64::EPSILON,
+            0.5,
+            0.25,
+            1e-310,
+            f64::MIN_POSITIVE,
+            -1e-310,
+            -1.0,
+            -1e300,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            -f64::NAN,
+            f32::MIN_POSITIVE as f64,
+            (1.0f32 - f32::EPSILON / 2.0) as f64,
+        ];
+        os.extend((0..2000).map(|_| rng.next()));
+        os.extend((0..2000).map(|_| rng.next() as f32 as f64));
+        os.extend((0..2000).map(|_| {
+            let o = f64::from_bits(rng.bits());
+            if o > 1.0 {
+                -o
+            } else {
+                o
+            }
+        }));
+        let mut es = vec![
+            0.0,
+            -0.0,
+            1.0,
+            0.5,
+            0.25,
+            2.0,
+            -0.5,
+            -1.0,
+            -2.0,
+            1e-310,
+            -1e-310,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            3.0,
+            0.125,
+        ];
+        for e in [1.0f64, 0.5, 0.25, 2.0] {
+            es.extend([e.next_up(), e.next_down()]);
+        }
+        es.extend((0..40).map(|_| rng.next() * 4.0));
+        es.extend((0..40).map(|_| f64::from_bits(rng.bits())));
+        for &o in &os {
+            for &e in &es {
+                let (a, b) = (transmit_at_most_one(o, e), old(o, e));
+                assert!(
+                    a.to_bits() == b.to_bits(),
+                    "o {o:e} e {e:e}: {a:e} against {b:e}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn segment_count_is_the_rounded_up_span() {
         let reference = |x: f64| {
