@@ -235,11 +235,23 @@ impl DirectShading {
     }
 
     /// [`DirectShading::opacity_colour`] of a value already in [0, 1] (−0 included: a
-    /// trilinear value, which `Dataset::trilinear8` clamps), which the clamp leaves as it is.
+    /// trilinear value, which `Dataset::trilinear8` clamps), which the clamp leaves as it is:
+    /// the segment pair's where the value's bucket has one, else the general evaluation. (The
+    /// batched march takes the two apart, so that its loop over the pairs' samples has no
+    /// call.)
+    #[cfg(test)]
+    fn opacity_colour_in_range(&self, x: f32) -> (f32, Option<[f32; 3]>) {
+        self.pair_in_range(x)
+            .unwrap_or_else(|| self.opacity_colour_general(x))
+    }
+
+    /// [`DirectShading::opacity_colour`] of a value already in [0, 1] (as
+    /// `opacity_colour_in_range`) where the value's bucket has a segment pair; `None` where
+    /// it has not (then [`DirectShading::opacity_colour_general`] gives it).
     #[inline(always)]
-    pub(crate) fn opacity_colour_in_range(&self, x: f32) -> (f32, Option<[f32; 3]>) {
+    pub(crate) fn pair_in_range(&self, x: f32) -> Option<(f32, Option<[f32; 3]>)> {
         debug_assert!((0.0..=1.0).contains(&x), "{x}");
-        self.opacity_colour_of(x, Mapping::bucket_in_range(x))
+        self.pairs.eval(x, Mapping::bucket_in_range(x))
     }
 
     /// [`DirectShading::opacity_colour`] of the clamped value `x` in bucket `b`.
@@ -251,12 +263,13 @@ impl DirectShading {
         self.opacity_colour_general(x)
     }
 
-    /// [`DirectShading::opacity_colour_of`] where the bucket has no segment pair: the tables'
-    /// general evaluation. Out of line (a few percent of the samples), so that the march's
-    /// loop around the pairs' path keeps its numbers in registers.
+    /// [`DirectShading::opacity_colour`] of a value already clamped (in [0, 1]) by the
+    /// tables' general evaluation, which the buckets without a segment pair take (the pairs
+    /// give the same bits). Out of line and cold (a few percent of the samples), so that the
+    /// march's loop around the pairs' path keeps its numbers in registers.
     #[cold]
     #[inline(never)]
-    fn opacity_colour_general(&self, x: f32) -> (f32, Option<[f32; 3]>) {
+    pub(crate) fn opacity_colour_general(&self, x: f32) -> (f32, Option<[f32; 3]>) {
         let o = map_value(&self.opacity.0, x, self.opacity.1);
         if o <= 0.0 {
             return (o, None);
@@ -874,12 +887,17 @@ mod tests {
         inputs.extend((0..200).map(|_| f32::from_bits(rng.bits() as u32 % 0x3f80_0001)));
         for x in inputs.into_iter().filter(|x| (0.0..=1.0).contains(x)) {
             let (o, rgb) = shading.opacity_colour(x);
-            let (o2, rgb2) = shading.opacity_colour_in_range(x);
-            assert_eq!(o.to_bits(), o2.to_bits(), "{x:e}");
-            assert_eq!(
-                rgb.map(|c| c.map(f32::to_bits)),
-                rgb2.map(|c| c.map(f32::to_bits))
-            );
+            // In range; and by the general evaluation alone, whatever the bucket.
+            for (o2, rgb2) in [
+                shading.opacity_colour_in_range(x),
+                shading.opacity_colour_general(x),
+            ] {
+                assert_eq!(o.to_bits(), o2.to_bits(), "{x:e}");
+                assert_eq!(
+                    rgb.map(|c| c.map(f32::to_bits)),
+                    rgb2.map(|c| c.map(f32::to_bits))
+                );
+            }
         }
         // Not taken: no colour table; ka, kd, ks or the exponent written by the dataset or
         // the colour table; a colour field missing or written twice; the general shapes.

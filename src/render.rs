@@ -1746,21 +1746,51 @@ impl Compiled {
                     // the run; then their gradients, in the same order (through the same
                     // cache, which nothing else reads); then the lighting in lanes.
                     let mut at = [0u8; 8];
-                    while pass != 0 {
+                    // A shaded sample (number i, opacity o, colour rgb) noted, its weight
+                    // taken and the transmittance carried on; whether the ray ends there.
+                    macro_rules! shade {
+                        ($i:expr, $o:expr, $rgb:expr) => {{
+                            let (i, o, rgb): (usize, f32, [f32; 3]) = ($i, $o, $rgb);
+                            let alpha =
+                                1.0 - obj.segment_transmittance_at_most_one(o as f64, lens[i]);
+                            for (a, x) in rgb32.iter_mut().zip(rgb) {
+                                a[count] = x;
+                            }
+                            at[count] = i as u8;
+                            weights[count] = t * alpha;
+                            count += 1;
+                            t *= 1.0 - alpha;
+                            t < stop
+                        }};
+                    }
+                    // The samples whose buckets have a segment pair in an inner loop
+                    // without a call; the others (a few percent) by the tables' general
+                    // evaluation, out of line, outside it, so that the inner loop keeps its
+                    // numbers in registers.
+                    'samples: loop {
+                        while pass != 0 {
+                            let i = pass.trailing_zeros() as usize;
+                            let Some(oc) = tables.pair_in_range(vs[i]) else {
+                                break;
+                            };
+                            pass &= pass - 1;
+                            let (o, Some(rgb)) = oc else {
+                                continue;
+                            };
+                            if shade!(i, o, rgb) {
+                                ends = true;
+                                break 'samples;
+                            }
+                        }
+                        if pass == 0 {
+                            break;
+                        }
                         let i = pass.trailing_zeros() as usize;
                         pass &= pass - 1;
-                        let (o, Some(rgb)) = tables.opacity_colour_in_range(vs[i]) else {
+                        let (o, Some(rgb)) = tables.opacity_colour_general(vs[i]) else {
                             continue;
                         };
-                        let alpha = 1.0 - obj.segment_transmittance_at_most_one(o as f64, lens[i]);
-                        for (a, x) in rgb32.iter_mut().zip(rgb) {
-                            a[count] = x;
-                        }
-                        at[count] = i as u8;
-                        weights[count] = t * alpha;
-                        count += 1;
-                        t *= 1.0 - alpha;
-                        if t < stop {
+                        if shade!(i, o, rgb) {
                             ends = true;
                             break;
                         }
