@@ -3239,8 +3239,6 @@ mod tests {
         }
     }
 
-    /// The segment count is ⌈x⌉ clamped as it was, at integers and next to them, in (0, 1),
-    /// around 2⁵² and 2⁶⁴, at zeros, negatives, infinities and NaN.
     /// `transmit_at_most_one` is the tested `transmit` (the old code, verbatim) bit for bit on
     /// opacities of [0, 1] (±0, subnormal, near 1, 1), below 0, −∞ and NaN, each against the
     /// common exponents, their neighbours, 0, ±subnormal, negative, huge, ±∞, NaN and random
@@ -3320,6 +3318,8 @@ mod tests {
         }
     }
 
+    /// The segment count is ⌈x⌉ clamped as it was, at integers and next to them, in (0, 1),
+    /// around 2⁵² and 2⁶⁴, at zeros, negatives, infinities and NaN.
     #[test]
     fn segment_count_is_the_rounded_up_span() {
         let reference = |x: f64| {
