@@ -2114,12 +2114,18 @@ impl Cursor {
                 }
             });
             // `Cursor::end` lane by lane (calling it per lane costs 0.3 % of the frame).
-            let mut b = next.map(|x| at_most(x, self.t1));
-            if last {
-                b[left - 1] = self.t1;
-            }
+            let b = next.map(|x| at_most(x, self.t1));
             *mids = std::array::from_fn(|j| 0.5 * (a[j] + b[j]));
             *lens = std::array::from_fn(|j| b[j] - a[j]);
+            if last {
+                // The last segment ends at t1: its sample made again from its start, a[i]
+                // (k + i is k + (i − 1 + 1), and k + 0 is k), so that `b` stays in registers
+                // (its lane set in memory cost four stores a run).
+                let i = left - 1;
+                let a = self.boundary(k + i as f64);
+                mids[i] = 0.5 * (a + self.t1);
+                lens[i] = self.t1 - a;
+            }
         } else {
             let mut a = self.boundary(k);
             let mut kf = k;
@@ -2162,13 +2168,6 @@ impl Cursor {
         // walk finds it in an occupied block.
         let (mut j, mut until) = (0, self.occupied_until);
         let exit = loop {
-            // The midpoints do not decrease and none is NaN (the cursor's ends are finite,
-            // its step finite and positive): when the run's last lies before `until`, every
-            // one from j on does (one comparison, where the loop below takes five a sample).
-            if mids[left - 1] < until {
-                j = left;
-                break None;
-            }
             while j < left && mids[j] < until {
                 j += 1;
             }
@@ -2179,6 +2178,14 @@ impl Cursor {
                 Err(u) => {
                     until = u;
                     j += 1;
+                    // The midpoints do not decrease and none is NaN (the cursor's ends are
+                    // finite, its step finite and positive): when the run's last lies before
+                    // the block's end, every one from j on does (one comparison, where the
+                    // loop above takes five a sample).
+                    if mids[left - 1] < until {
+                        j = left;
+                        break None;
+                    }
                 }
                 Ok(exit) => break Some(exit),
             }
@@ -3452,6 +3459,94 @@ mod tests {
                 .find(|&j| mids[j].partial_cmp(&c.occupied_until) != Some(std::cmp::Ordering::Less))
                 .unwrap_or(left)
         }
+    }
+
+    /// `Cursor::segments` as it was before its last lane was made apart (the oracle of
+    /// `segments_last_lane_apart_is_the_old_run`), verbatim.
+    fn segments_old(c: &Cursor, mids: &mut [f64; 8], lens: &mut [f64; 8]) -> usize {
+        let left = (c.n - c.k).min(8) as usize; // k < n
+        let last = c.k + left as u64 == c.n; // the run may reach the last segment
+        let k = index_f64(c.k, c.n);
+        if k < (1u64 << 53) as f64 - 16.0 {
+            let next: [f64; 8] = std::array::from_fn(|j| c.boundary(k + (j + 1) as f64));
+            let a: [f64; 8] =
+                std::array::from_fn(|j| if j == 0 { c.boundary(k) } else { next[j - 1] });
+            let mut b = next.map(|x| at_most(x, c.t1));
+            if last {
+                b[left - 1] = c.t1;
+            }
+            *mids = std::array::from_fn(|j| 0.5 * (a[j] + b[j]));
+            *lens = std::array::from_fn(|j| b[j] - a[j]);
+        } else {
+            let mut a = c.boundary(k);
+            let mut kf = k;
+            for j in 0..left {
+                kf += 1.0;
+                let next = c.boundary(kf);
+                let b = c.end(next, last && j + 1 == left);
+                mids[j] = 0.5 * (a + b);
+                lens[j] = b - a;
+                a = next;
+            }
+        }
+        left
+    }
+
+    /// The run's segments with the last lane made apart are the old ones bit for bit: every
+    /// run length, near the start, the end and 2⁵³, for ordinary and awkward ends and steps
+    /// (±0, subnormal, huge, infinite, NaN, random bits).
+    #[test]
+    fn segments_last_lane_apart_is_the_old_run() {
+        let rng = Xorshift::new(0x0dd5_e9e5_1a57_1a9e);
+        let mut values: Vec<f64> = AWKWARD.to_vec();
+        values.extend([0.25, 0.5, 1.0 / 3.0, 7.5, 1e-3]);
+        let mut checked = 0;
+        for case in 0..4000 {
+            let pick = |_: usize| {
+                if case % 3 == 0 {
+                    f64::from_bits(rng.bits())
+                } else {
+                    values[(rng.next() * values.len() as f64) as usize % values.len()]
+                }
+            };
+            let (t0, t1, step) = if case % 2 == 0 {
+                let t0 = rng.next() * 10.0;
+                (t0, t0 + rng.next() * 20.0, 0.01 + rng.next())
+            } else {
+                (pick(0), pick(1), pick(2))
+            };
+            let n = [1u64, 2, 7, 8, 9, 17, 1 << 20, (1 << 53) + 5, u64::MAX][case % 9];
+            for k in [
+                0,
+                n / 2,
+                n.saturating_sub(9),
+                n.saturating_sub(8),
+                n - 1,
+                n.saturating_sub(3),
+            ] {
+                if k >= n {
+                    continue;
+                }
+                let c = cursor(t0, t1, step, n, k, f64::NEG_INFINITY);
+                let (mut m0, mut l0) = ([0.5; 8], [0.5; 8]);
+                let (mut m1, mut l1) = ([0.5; 8], [0.5; 8]);
+                let a = segments_old(&c, &mut m0, &mut l0);
+                let b = c.segments(&mut m1, &mut l1);
+                assert_eq!(a, b);
+                assert_eq!(
+                    m0.map(f64::to_bits),
+                    m1.map(f64::to_bits),
+                    "{t0} {t1} {step} {k}/{n}"
+                );
+                assert_eq!(
+                    l0.map(f64::to_bits),
+                    l1.map(f64::to_bits),
+                    "{t0} {t1} {step} {k}/{n}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 15_000, "{checked}");
     }
 
     /// A run in lanes has the segments of the sample-by-sample cursor, bit for bit, ends
