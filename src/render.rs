@@ -1386,7 +1386,13 @@ impl Compiled {
                                         background: obj.reflect_background,
                                     };
                                     col += ks
-                                        * self.trace_ray(w + eps * r, r, mirror, f64::NEG_INFINITY);
+                                        * self.trace_ray(
+                                            w + eps * r,
+                                            None,
+                                            r,
+                                            mirror,
+                                            f64::NEG_INFINITY,
+                                        );
                                 }
                             }
                             if bends {
@@ -1501,8 +1507,22 @@ impl Compiled {
 
     /// Traces one primary ray whose pixel has the [`EntryMap`] bound `bound` (−∞ without a
     /// map); returns the pixel colour.
-    fn trace(&self, origin: DVec3, dir: DVec3, bound: f64) -> DVec3 {
-        self.trace_ray(origin, dir, Ray::PRIMARY, bound)
+    ///
+    /// `image`: [`Compiled::image_rays`] of `origin` (the same for every ray of an image).
+    fn trace(&self, origin: DVec3, image: &ImageRays, dir: DVec3, bound: f64) -> DVec3 {
+        self.trace_ray(origin, Some(image), dir, Ray::PRIMARY, bound)
+    }
+
+    /// What [`Compiled::trace_ray`] makes of the scene and the ray origin `origin` on every
+    /// primary ray from it, made once per image.
+    fn image_rays(&self, origin: DVec3) -> ImageRays {
+        ImageRays {
+            origin_o: match self.objects.as_slice() {
+                [obj] => obj.object_ray(origin, DVec3::ZERO).0,
+                _ => DVec3::ZERO,
+            },
+            background: crate::scene::v3(self.settings.background),
+        }
     }
 
     /// Traces a ray. DVR objects contribute their samples, DSR objects their surface hits and
@@ -1513,9 +1533,22 @@ impl Compiled {
     /// this parameter (its [`EntryMap`] bound; −∞ when nothing is known): the walk starts
     /// there, and a ray whose bound is +∞ shows the background. Only a primary ray of a scene
     /// of one DVR volume is given a bound.
-    fn trace_ray(&self, origin: DVec3, dir: DVec3, ray: Ray, bound: f64) -> DVec3 {
+    ///
+    /// `image`: what is made of `origin` and the scene once per image where known
+    /// ([`Compiled::image_rays`]; `None`: made here).
+    fn trace_ray(
+        &self,
+        origin: DVec3,
+        image: Option<&ImageRays>,
+        dir: DVec3,
+        ray: Ray,
+        bound: f64,
+    ) -> DVec3 {
         let background = if ray.background {
-            crate::scene::v3(self.settings.background)
+            match image {
+                Some(i) => i.background,
+                None => crate::scene::v3(self.settings.background),
+            }
         } else {
             DVec3::ZERO
         };
@@ -1536,7 +1569,10 @@ impl Compiled {
                         return shown;
                     }
                 }
-                let (o, d) = obj.object_ray(origin, dir);
+                let (o, d) = match image {
+                    Some(i) => (i.origin_o, obj.to_object.transform_vector3(dir)),
+                    None => obj.object_ray(origin, dir),
+                };
                 let Some((t0, t1)) = obj.clip(o, d) else {
                     return background;
                 };
@@ -1609,6 +1645,7 @@ impl Compiled {
                     // Everything behind a refracting surface is seen along the bent ray.
                     let behind = self.trace_ray(
                         from,
+                        None,
                         to,
                         Ray {
                             depth: ray.depth + 1,
@@ -2358,6 +2395,16 @@ fn to_f32(c: DVec3) -> [f32; 3] {
     [f(c.x), f(c.y), f(c.z)]
 }
 
+/// What [`Compiled::trace_ray`] makes of the scene and the origin of an image's primary rays
+/// (the eye) on each of them ([`Compiled::image_rays`]), made once per image: the same numbers.
+struct ImageRays {
+    /// The origin in the coordinates of the scene's object where it has one only
+    /// ([`CObj::object_ray`]; zero, not read, otherwise).
+    origin_o: DVec3,
+    /// The background colour.
+    background: DVec3,
+}
+
 /// Renders the compiled scene to an image of `width × height` pixels whose view plane has the
 /// given width / height `aspect`. Adaptive super-sampling: one ray through each pixel centre,
 /// then pixels that differ from a neighbour by more than [`SUPER_SAMPLE_CONTRAST`] are replaced
@@ -2369,13 +2416,14 @@ pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> R
         let from = |x: u32, y: u32| entry.as_ref().map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
         // What a pixel whose bound is +∞ shows, where that is known without its ray.
         let unbounded = scene.unbounded_colour().map(to_f32);
+        let image = scene.image_rays(view.eye);
         let first = per_pixel(width, height, |x, y| {
             let bound = from(x, y);
             if let (Some(c), true) = (unbounded, bound == f64::INFINITY) {
                 return c;
             }
             let dir = view.ray(x as f64 + 0.5, y as f64 + 0.5);
-            to_f32(scene.trace(view.eye, dir, bound))
+            to_f32(scene.trace(view.eye, &image, dir, bound))
         });
         let n = scene.settings.super_sample.max(1) as u32;
         if n == 1 {
@@ -2405,7 +2453,7 @@ pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> R
                 for i in 0..n {
                     let sx = x as f64 + (i as f64 + 0.5) / n as f64;
                     let sy = y as f64 + (j as f64 + 0.5) / n as f64;
-                    let c = scene.trace(view.eye, view.ray(sx, sy), from(x, y));
+                    let c = scene.trace(view.eye, &image, view.ray(sx, sy), from(x, y));
                     sum += crate::scene::v3(to_f32(c));
                 }
             }
@@ -3202,9 +3250,12 @@ mod tests {
                             None => bg,
                             Some(_) => DVec3::ZERO + 1.0 * bg,
                         };
-                        let got = scene.trace_ray(origin, dir, Ray::PRIMARY, f64::INFINITY);
+                        let got = scene.trace_ray(origin, None, dir, Ray::PRIMARY, f64::INFINITY);
                         let bits = |v: DVec3| v.to_array().map(f64::to_bits);
                         assert_eq!(bits(got), bits(want), "{origin} {dir} {background:?}");
+                        let image = scene.image_rays(origin);
+                        let per_image = scene.trace(origin, &image, dir, f64::INFINITY);
+                        assert_eq!(bits(per_image), bits(want), "{origin} {dir} {background:?}");
                         // The per-pixel loop's answer without the ray, where it has one.
                         if let Some(c) = scene.unbounded_colour() {
                             assert_eq!(bits(c), bits(got), "{origin} {dir} {background:?}");
@@ -3245,9 +3296,13 @@ mod tests {
                 let mut c = Cursor::new(&scene, obj, 0, (o, d), (t0, t1), bound);
                 let (col, t) = scene.march_one(&mut c, origin, dir);
                 let want = col + t * bg;
-                let got = scene.trace_ray(origin, dir, Ray::PRIMARY, bound);
+                let got = scene.trace_ray(origin, None, dir, Ray::PRIMARY, bound);
                 let bits = |v: DVec3| v.to_array().map(f64::to_bits);
                 assert_eq!(bits(got), bits(want), "{origin} {dir} {bound}");
+                // And with the origin and background made once per image (`Compiled::trace`).
+                let image = scene.image_rays(origin);
+                let per_image = scene.trace_ray(origin, Some(&image), dir, Ray::PRIMARY, bound);
+                assert_eq!(bits(per_image), bits(want), "{origin} {dir} {bound}");
                 hits += (t < 1.0) as usize;
                 checked += 1;
             }
