@@ -177,9 +177,9 @@ impl SegmentPairs {
 
     /// The opacity and colour at input `x` (a field value, in [0, 1]) of bucket `bucket` (see
     /// [`Mapping::clamp_and_bucket`]) where the bucket has a pair: [`map_value`] of the opacity
-    /// table, then, if it is above 0, [`map_each`] of the colour table, bit for bit. (Bucket 0, which holds the input 0, where a ramp is 0
-    /// whatever its first segment says, never has a pair: no breakpoint lies below its
-    /// inputs, so they are not between two rows.) The four columns are evaluated together
+    /// table, then, if it is above 0, [`map_each`] of the colour table, bit for bit. (Bucket 0,
+    /// which holds the input 0, where a ramp is 0 whatever its first segment says, never has a
+    /// pair: no breakpoint lies below its inputs, so they are not between two rows.) The four columns are evaluated together
     /// in lanes ([`SegmentPair::values`]); the samples that get here have passed the zero
     /// test, so their opacity is nearly always above 0 and the colour needed.
     #[inline]
@@ -231,7 +231,9 @@ impl DirectShading {
     pub(crate) fn opacity_colour(&self, v: f32) -> (f32, Option<[f32; 3]>) {
         // The dataset writes the clamped value into the source field, which both tables read.
         let (x, b) = Mapping::clamp_and_bucket(v);
-        self.opacity_colour_of(x, b)
+        self.pairs
+            .eval(x, b)
+            .unwrap_or_else(|| self.opacity_colour_general(x))
     }
 
     /// [`DirectShading::opacity_colour`] of a value already in [0, 1] (−0 included: a
@@ -252,15 +254,6 @@ impl DirectShading {
     pub(crate) fn pair_in_range(&self, x: f32) -> Option<(f32, Option<[f32; 3]>)> {
         debug_assert!((0.0..=1.0).contains(&x), "{x}");
         self.pairs.eval(x, Mapping::bucket_in_range(x))
-    }
-
-    /// [`DirectShading::opacity_colour`] of the clamped value `x` in bucket `b`.
-    #[inline(always)]
-    fn opacity_colour_of(&self, x: f32, b: usize) -> (f32, Option<[f32; 3]>) {
-        if let Some(oc) = self.pairs.eval(x, b) {
-            return oc;
-        }
-        self.opacity_colour_general(x)
     }
 
     /// [`DirectShading::opacity_colour`] of a value already clamped (in [0, 1]) by the
@@ -868,7 +861,7 @@ mod tests {
         assert!(coloured > 200, "{coloured}");
         // Of a value in [0, 1] (−0 included), without the clamp: the same bits, at and within
         // 3 ulps of every bucket edge and of the tables' breakpoints, and at random values.
-        let rng = crate::testing::Xorshift::new(0x0c1a_4b5e);
+        let rng = Xorshift::new(0x0c1a_4b5e);
         let mut inputs = vec![-0.0f32, 0.0, 1.0, 1.0f32.next_down()];
         for edge in (0..=Mapping::BUCKET_COUNT)
             .map(|b| b as f32 / 1024.0)
