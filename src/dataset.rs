@@ -150,60 +150,18 @@ impl Bricks {
     }
 }
 
-/// One separable pass of the brick ranges: over grids `min_in`, `max_in` of extents `ext`
-/// (x fastest), the smallest of `min_in` and largest of `max_in` along `axis` over each of
-/// `blocks` spans `span(block, ext[axis])`. Returns the two reduced grids and their extents
-/// (`ext` with `blocks` along `axis`).
-fn reduce_axis(
-    min_in: &[f32],
-    max_in: &[f32],
-    ext: [usize; 3],
-    axis: usize,
-    blocks: usize,
-    span: impl Fn(usize, usize) -> (usize, usize) + Sync,
-) -> (Vec<f32>, Vec<f32>, [usize; 3]) {
-    use rayon::prelude::*;
-    let mut out = ext;
-    out[axis] = blocks;
-    let stride = [1, ext[0], ext[0] * ext[1]];
-    let plane = out[0] * out[1];
-    let n = plane * out[2];
-    let (mut min, mut max) = (vec![0f32; n], vec![0f32; n]);
-    // The output's planes (k) in parallel: each reads the input and writes only its own plane.
-    min.par_chunks_mut(plane)
-        .zip(max.par_chunks_mut(plane))
-        .enumerate()
-        .for_each(|(k, (min, max))| {
-            let mut o = 0;
-            for j in 0..out[1] {
-                for i in 0..out[0] {
-                    let mut at = [i, j, k];
-                    let (lo, hi) = span(at[axis], ext[axis]);
-                    at[axis] = 0;
-                    let base = at[0] + stride[1] * at[1] + stride[2] * at[2];
-                    let s = stride[axis];
-                    let (a, b) = (base + lo * s, base + hi * s);
-                    let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
-                    let (lows, highs) = (&min_in[a..=b], &max_in[a..=b]);
-                    let mut q = 0;
-                    while q < lows.len() && q < highs.len() {
-                        // Plain comparisons: the values are never NaN, and f32::min/max's NaN
-                        // handling costs several instructions per value.
-                        if lows[q] < mn {
-                            mn = lows[q];
-                        }
-                        if highs[q] > mx {
-                            mx = highs[q];
-                        }
-                        q += s;
-                    }
-                    min[o] = mn;
-                    max[o] = mx;
-                    o += 1;
-                }
-            }
-        });
-    (min, max, out)
+/// Lowers each of `min` to the matching value of `lo` where that is smaller, and raises each of
+/// `max` to the matching value of `hi` where that is larger. Plain comparisons: the values are
+/// never NaN, and `f32::min`/`max`'s NaN handling costs several instructions per value.
+fn widen(min: &mut [f32], max: &mut [f32], lo: &[f32], hi: &[f32]) {
+    // (As selects rather than conditional stores, so that they compile to lanes of minps and
+    // maxps.)
+    for (m, &x) in min.iter_mut().zip(lo) {
+        *m = if x < *m { x } else { *m };
+    }
+    for (m, &x) in max.iter_mut().zip(hi) {
+        *m = if x > *m { x } else { *m };
+    }
 }
 
 /// How far below a bound z a trilinear cell's largest node may lie and still count as reaching
@@ -213,6 +171,22 @@ fn reduce_axis(
 /// (1/65535), so the only cells kept needlessly are those whose largest node lies within it
 /// below z.
 const CELL_MASK_MARGIN: f32 = 1.0 / (1 << 18) as f32;
+
+/// The words of a [`CellMask`] one task of its construction fills (64 nodes a word).
+const CELL_MASK_RUN: usize = 1024;
+
+/// Up to 64 flags (each 0 or 1) as the bits of a word, flag b as bit b. Eight at a time: for
+/// bytes x_k ∈ {0, 1} (k = 0 … 7, little-endian), the product of their word with
+/// Σ_k 2^(56 − 7k) holds x_k at bit 56 + k, every other term lying below bit 56 (at distinct
+/// bits, so without carries) or above bit 63.
+fn pack_flags(flags: &[u8]) -> u64 {
+    const SPREAD: u64 = 0x0102_0408_1020_4080;
+    flags.chunks(8).enumerate().fold(0, |w, (b, eight)| {
+        let mut x = [0u8; 8];
+        x[..eight.len()].copy_from_slice(eight);
+        w | (u64::from_le_bytes(x).wrapping_mul(SPREAD) >> 56) << (8 * b)
+    })
+}
 
 /// Which trilinear cells of a dataset may interpolate to a value above a bound z: bit c (c the
 /// node index of the cell's first node) is clear when all of the cell's nodes are at most
@@ -489,35 +463,48 @@ impl Dataset {
         let top = self.top32.map(|t| t as usize);
         let lo = z - CELL_MASK_MARGIN;
         let v = &self.values;
-        // One flag per node, slab by slab in parallel: the largest of the cell's nodes (its
-        // four x-rows' largest at each x, then of two neighbours along x) against the bound.
-        let mut flags = vec![false; v.len()];
-        flags
-            .par_chunks_mut(nx * ny)
+        // A run of words at a time in parallel, each from a flag per node of the run (no flag
+        // per node of the whole grid: a first image pays a page fault per 4 KiB of fresh
+        // memory). Per x-row of nodes that meets the run: the largest of each cell's nodes
+        // (the four x-rows' largest at each x, then of two neighbours along x) against the
+        // bound; nodes that start no cell keep a flag of 0.
+        let mut bits = vec![0u64; v.len().div_ceil(64)];
+        bits.par_chunks_mut(CELL_MASK_RUN)
             .enumerate()
-            .filter(|&(k, _)| k <= top[2])
-            .for_each(|(k, slab)| {
-                let mut m = vec![0f32; nx];
-                for j in 0..=top[1] {
-                    let o = self.node_index([0, j, k]);
-                    let row = |r: usize| &v[r..r + nx];
-                    let (a, b, c, d) = (row(o), row(o + sy), row(o + sz), row(o + sy + sz));
-                    for i in 0..nx {
-                        m[i] = a[i].max(b[i]).max(c[i].max(d[i]));
+            .for_each_init(
+                || (vec![0f32; nx], vec![0u8; CELL_MASK_RUN * 64]),
+                |(m, flags), (c, out)| {
+                    let first = c * CELL_MASK_RUN * 64;
+                    let end = (first + out.len() * 64).min(v.len());
+                    let flags = &mut flags[..end - first];
+                    flags.fill(0);
+                    for r in first / nx..end.div_ceil(nx) {
+                        let (j, k) = (r % ny, r / ny);
+                        if j > top[1] || k > top[2] {
+                            continue;
+                        }
+                        let o = r * nx;
+                        let row = |r: usize| &v[r..r + nx];
+                        let (a, b, c, d) = (row(o), row(o + sy), row(o + sz), row(o + sy + sz));
+                        for i in 0..nx {
+                            m[i] = a[i].max(b[i]).max(c[i].max(d[i]));
+                        }
+                        // The row's cells inside the run: first nodes o + i0 ..= o + i1.
+                        let (i0, i1) = (first.saturating_sub(o), top[0].min(end - 1 - o));
+                        if i0 > i1 {
+                            continue;
+                        }
+                        let here = &mut flags[o + i0 - first..=o + i1 - first];
+                        let pairs = m[i0..=i1].iter().zip(&m[i0 + sx..=i1 + sx]);
+                        for (f, (&p, &q)) in here.iter_mut().zip(pairs) {
+                            *f = u8::from(p.max(q) > lo);
+                        }
                     }
-                    for (i, f) in slab[nx * j..nx * j + top[0] + 1].iter_mut().enumerate() {
-                        *f = m[i].max(m[i + sx]) > lo;
+                    for (w, f) in out.iter_mut().zip(flags.chunks(64)) {
+                        *w = pack_flags(f);
                     }
-                }
-            });
-        let bits = flags
-            .par_chunks(64)
-            .map(|c| {
-                c.iter()
-                    .enumerate()
-                    .fold(0u64, |w, (b, &f)| w | (u64::from(f) << b))
-            })
-            .collect();
+                },
+            );
         CellMask { bits }
     }
 
@@ -535,10 +522,60 @@ impl Dataset {
             let hi = (b * BRICK + BRICK + pad).min(n - 1);
             (lo, hi)
         };
-        // Separable: min/max along x per brick column, then along y, then along z.
-        let (min, max, ext) = reduce_axis(&self.values, &self.values, d, 0, counts[0], span);
-        let (min, max, ext) = reduce_axis(&min, &max, ext, 1, counts[1], span);
-        let (min, max, _) = reduce_axis(&min, &max, ext, 2, counts[2], span);
+        // Per plane of bricks (in parallel), separably: the extremes over the plane's slab of
+        // nodes per (x, y) column, then over each brick row's span of y, then along x. Only
+        // small scratch rows: a first image pays a page fault per 4 KiB of fresh memory, which
+        // whole intermediate grids made a third of the ranges' time.
+        use rayon::prelude::*;
+        let [nx, ny, _] = d;
+        let plane = counts[0] * counts[1];
+        let (mut min, mut max) = (vec![0f32; plane * counts[2]], vec![0f32; plane * counts[2]]);
+        let v = &self.values;
+        let layer = |z: usize| &v[z * nx * ny..(z + 1) * nx * ny];
+        min.par_chunks_mut(plane)
+            .zip(max.par_chunks_mut(plane))
+            .enumerate()
+            .for_each_init(
+                || {
+                    (
+                        vec![0f32; nx * ny],
+                        vec![0f32; nx * ny],
+                        vec![0f32; nx],
+                        vec![0f32; nx],
+                    )
+                },
+                |(zmin, zmax, ymin, ymax), (k, (min, max))| {
+                    let (z0, z1) = span(k, d[2]);
+                    zmin.copy_from_slice(layer(z0));
+                    zmax.copy_from_slice(layer(z0));
+                    for z in z0 + 1..=z1 {
+                        widen(zmin, zmax, layer(z), layer(z));
+                    }
+                    for bj in 0..counts[1] {
+                        let (y0, y1) = span(bj, ny);
+                        ymin.copy_from_slice(&zmin[y0 * nx..(y0 + 1) * nx]);
+                        ymax.copy_from_slice(&zmax[y0 * nx..(y0 + 1) * nx]);
+                        for y in y0 + 1..=y1 {
+                            let r = y * nx..(y + 1) * nx;
+                            widen(ymin, ymax, &zmin[r.clone()], &zmax[r]);
+                        }
+                        for bi in 0..counts[0] {
+                            let (x0, x1) = span(bi, nx);
+                            let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+                            for (&lo, &hi) in ymin[x0..=x1].iter().zip(&ymax[x0..=x1]) {
+                                if lo < mn {
+                                    mn = lo;
+                                }
+                                if hi > mx {
+                                    mx = hi;
+                                }
+                            }
+                            min[bi + counts[0] * bj] = mn;
+                            max[bi + counts[0] * bj] = mx;
+                        }
+                    }
+                },
+            );
         Bricks {
             dims: counts,
             min,
@@ -593,12 +630,14 @@ impl Dataset {
             )
         })?)?;
         header.check_len(bytes.len() as u64)?;
-        Dataset::from_body(&header, &bytes[HEADER_LEN..])
+        Dataset::from_body(&header, bytes[HEADER_LEN..].to_vec())
     }
 
-    fn from_body(h: &Header, body: &[u8]) -> Result<Dataset> {
+    fn from_body(h: &Header, body: Vec<u8>) -> Result<Dataset> {
+        // 8-bit voxels keep the buffer they were read into: a copy of a scan's bytes costs a
+        // page fault per 4 KiB of fresh memory, a measurable part of the first image.
         let raw = if h.bytes == 1 {
-            Voxels::U8(body.to_vec())
+            Voxels::U8(body)
         } else {
             Voxels::U16(
                 body.chunks_exact(2)
@@ -639,7 +678,7 @@ impl Dataset {
         h.check_len(len).map_err(named)?;
         let mut body = vec![0u8; (len - HEADER_LEN as u64) as usize];
         f.read_exact(&mut body).map_err(io)?;
-        Dataset::from_body(&h, &body)
+        Dataset::from_body(&h, body)
     }
 
     /// The `.vlb` encoding of the dataset.
@@ -2031,6 +2070,47 @@ mod tests {
             derivative > 1000,
             "the derivative path was taken {derivative} times"
         );
+    }
+
+    /// A mask built a run of words at a time sets exactly the bits of the cells some node of
+    /// which lies above z − margin, and no bit of a node that starts no cell (the last node
+    /// of an axis): over grids of several runs whose rows straddle the runs' ends.
+    #[test]
+    fn cell_mask_bits_are_the_cells_above_the_bound_across_runs() {
+        let mut rng = Lcg(11);
+        for dims in [[67, 31, 33], [300, 250, 2], [4100, 17, 1]] {
+            let n: usize = dims.iter().product();
+            assert!(n > 64 * CELL_MASK_RUN, "{dims:?} spans several runs");
+            let raw = (0..n).map(|_| (rng.next().powi(4) * 255.0) as u8).collect();
+            let d = Dataset::new(dims, Voxels::U8(raw), 0.0, 255.0).unwrap();
+            let z = 100.0 / 255.0;
+            let mask = d.cells_above(z);
+            let [nx, ny, nz] = dims;
+            let (mut set, mut clear) = (0, 0);
+            for c in 0..n {
+                let (i, j, k) = (c % nx, c / nx % ny, c / (nx * ny));
+                let starts = |x: usize, n: usize| n == 1 || x + 1 < n;
+                let want = starts(i, nx) && starts(j, ny) && starts(k, nz) && {
+                    let at = |x: usize, s: usize, n: usize| (x + s).min(n - 1);
+                    (0..8).any(|e: usize| {
+                        d.node(at(i, e & 1, nx), at(j, e >> 1 & 1, ny), at(k, e >> 2, nz))
+                            > z - CELL_MASK_MARGIN
+                    })
+                };
+                assert_eq!(
+                    mask.bits[c >> 6] >> (c & 63) & 1 != 0,
+                    want,
+                    "{dims:?} node {c}"
+                );
+                if want {
+                    set += 1;
+                } else {
+                    clear += 1;
+                }
+            }
+            assert!(set > 0 && clear > 0, "{dims:?}: {set} set, {clear} clear");
+            assert_eq!(mask.bits.len(), n.div_ceil(64));
+        }
     }
 
     /// A cell mask clears exactly the cells whose nodes are all at most z − margin, and a
