@@ -208,6 +208,23 @@ impl CellMask {
     pub(crate) fn may_reach(&self, c: usize) -> bool {
         reaches(&self.bits, c)
     }
+
+    /// [`CellMask::may_reach`] of the `len` ≤ 64 cells with first nodes `c`, `c` + 1, … as
+    /// the low bits of a word, cell `c` + b at bit b (cells past the mask's end may reach).
+    #[inline]
+    pub(crate) fn run(&self, c: usize, len: usize) -> u64 {
+        debug_assert!(len <= 64);
+        let word = |w: usize| self.bits.get(w).copied().unwrap_or(!0);
+        let (w, shift) = (c >> 6, c & 63);
+        let mut bits = word(w) >> shift;
+        if shift != 0 && shift + len > 64 {
+            bits |= word(w + 1) << (64 - shift);
+        }
+        if len < 64 {
+            bits &= (1 << len) - 1;
+        }
+        bits
+    }
 }
 
 /// [`CellMask::may_reach`] on the mask's bits (a cell past their end may reach the bound, so
@@ -486,8 +503,11 @@ impl Dataset {
                         let o = r * nx;
                         let row = |r: usize| &v[r..r + nx];
                         let (a, b, c, d) = (row(o), row(o + sy), row(o + sz), row(o + sy + sz));
+                        // (Selects, not `f32::max`, whose NaN handling costs several
+                        // instructions a value: the values are never NaN.)
+                        let max = |p: f32, q: f32| if p > q { p } else { q };
                         for i in 0..nx {
-                            m[i] = a[i].max(b[i]).max(c[i].max(d[i]));
+                            m[i] = max(max(a[i], b[i]), max(c[i], d[i]));
                         }
                         // The row's cells inside the run: first nodes o + i0 ..= o + i1.
                         let (i0, i1) = (first.saturating_sub(o), top[0].min(end - 1 - o));
@@ -497,7 +517,7 @@ impl Dataset {
                         let here = &mut flags[o + i0 - first..=o + i1 - first];
                         let pairs = m[i0..=i1].iter().zip(&m[i0 + sx..=i1 + sx]);
                         for (f, (&p, &q)) in here.iter_mut().zip(pairs) {
-                            *f = u8::from(p.max(q) > lo);
+                            *f = u8::from(max(p, q) > lo);
                         }
                     }
                     for (w, f) in out.iter_mut().zip(flags.chunks(64)) {
@@ -2110,6 +2130,17 @@ mod tests {
             }
             assert!(set > 0 && clear > 0, "{dims:?}: {set} set, {clear} clear");
             assert_eq!(mask.bits.len(), n.div_ceil(64));
+            // Runs of cells as words: bit b is cell c + b's, also across words and past the
+            // end (where every cell may reach).
+            for c in (0..n + 70).step_by(13).chain(n - 3..n + 2) {
+                for len in [1, 4, 5, 37, 63, 64] {
+                    let run = mask.run(c, len);
+                    for b in 0..64 {
+                        let want = b < len && mask.may_reach(c + b);
+                        assert_eq!(run >> b & 1 != 0, want, "{dims:?} run {c} {len} bit {b}");
+                    }
+                }
+            }
         }
     }
 

@@ -135,6 +135,37 @@ fn shell(dist: &[u8], dims: [usize; 3]) -> Vec<usize> {
     shell
 }
 
+/// Of the cells [lo, hi) (by their first nodes' indices per axis) of `data`: the lowest and
+/// highest index per axis of those that `mask` lets pass, and whether all pass; `None` when
+/// none does.
+fn passing_in(
+    data: &Dataset,
+    mask: &CellMask,
+    lo: [usize; 3],
+    hi: [usize; 3],
+) -> Option<([usize; 3], [usize; 3], bool)> {
+    let (mut first, mut last, mut all) = ([usize::MAX; 3], [0usize; 3], true);
+    // A row of the group's cells along x at a time, as bits of the mask.
+    let width = hi[0] - lo[0];
+    for k in lo[2]..hi[2] {
+        for j in lo[1]..hi[1] {
+            let row = mask.run(data.node_index([lo[0], j, k]), width);
+            all &= row.count_ones() as usize == width;
+            if row == 0 {
+                continue;
+            }
+            let (a, b) = (row.trailing_zeros(), 63 - row.leading_zeros());
+            first[0] = first[0].min(lo[0] + a as usize);
+            last[0] = last[0].max(lo[0] + b as usize);
+            for (axis, c) in [(1, j), (2, k)] {
+                first[axis] = first[axis].min(c);
+                last[axis] = last[axis].max(c);
+            }
+        }
+    }
+    (first[0] != usize::MAX).then_some((first, last, all))
+}
+
 /// See [`SkipGrid::passing_boxes`].
 fn passing_boxes(data: &Dataset, mask: &CellMask, box_min: DVec3, box_max: DVec3) -> Option<Boxes> {
     let n = data.dims();
@@ -155,24 +186,7 @@ fn passing_boxes(data: &Dataset, mask: &CellMask, box_min: DVec3, box_max: DVec3
                     let g = [gi, gj, gk];
                     let lo = g.map(|v| v * BRICK);
                     let hi = std::array::from_fn::<usize, 3, _>(|a| (lo[a] + BRICK).min(cells[a]));
-                    let (mut first, mut last, mut all) = ([usize::MAX; 3], [0usize; 3], true);
-                    for k in lo[2]..hi[2] {
-                        for j in lo[1]..hi[1] {
-                            for i in lo[0]..hi[0] {
-                                if mask.may_reach(data.node_index([i, j, k])) {
-                                    for (a, c) in [i, j, k].into_iter().enumerate() {
-                                        first[a] = first[a].min(c);
-                                        last[a] = last[a].max(c);
-                                    }
-                                } else {
-                                    all = false;
-                                }
-                            }
-                        }
-                    }
-                    if first[0] != usize::MAX {
-                        layer[gi + groups[0] * gj] = Some((first, last, all));
-                    }
+                    layer[gi + groups[0] * gj] = passing_in(data, mask, lo, hi);
                 }
             }
             layer
@@ -220,6 +234,45 @@ fn passing_boxes(data: &Dataset, mask: &CellMask, box_min: DVec3, box_max: DVec3
     Some(Boxes { corners, unit })
 }
 
+/// The hasher of the skip grid's memo of opacity intervals (keys: a few pairs of f32 bits, one
+/// lookup per block): a multiplicative hash of each word (FxHash's), where the standard
+/// SipHash cost about as much as the block's brick ranges themselves. The keys are the grid's
+/// own numbers, not input an adversary chooses to collide.
+#[derive(Default, Clone, Copy)]
+struct MemoHash;
+
+impl std::hash::BuildHasher for MemoHash {
+    type Hasher = MemoHasher;
+    fn build_hasher(&self) -> MemoHasher {
+        MemoHasher(0)
+    }
+}
+
+/// See [`MemoHash`].
+struct MemoHasher(u64);
+
+impl std::hash::Hasher for MemoHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
+        }
+    }
+    fn write_u32(&mut self, x: u32) {
+        self.write_u64(u64::from(x));
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+    fn write_usize(&mut self, x: usize) {
+        self.write_u64(x as u64);
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
 /// The most blocks a grid may have.
 const MAX_BLOCKS: usize = 1 << 24;
 
@@ -244,8 +297,9 @@ fn dataset_range(d: &Dataset, filter: Filter, overshoot: f64, lo: DVec3, hi: DVe
         for j in j0..=j1 {
             for i in i0..=i1 {
                 let (a, b) = bricks.get(i, j, k);
-                mn = mn.min(a);
-                mx = mx.max(b);
+                // Plain comparisons: brick ranges are never NaN.
+                mn = if a < mn { a } else { mn };
+                mx = if b > mx { b } else { mx };
             }
         }
     }
@@ -347,7 +401,8 @@ impl SkipGrid {
                 // The opacity interval depends on the block only through the datasets' ranges
                 // there, and blocks share few distinct ranges: evaluate the interval program
                 // once per distinct set (per plane).
-                let mut memo: std::collections::HashMap<Vec<(u32, u32)>, bool> = Default::default();
+                let mut memo: std::collections::HashMap<Vec<(u32, u32)>, bool, MemoHash> =
+                    Default::default();
                 let mut key = Vec::with_capacity(data.len());
                 let mut any = false;
                 for j in 0..dims[1] {
@@ -1304,6 +1359,44 @@ mod tests {
             }
         }
         first
+    }
+
+    /// A group's passing cells, read a row of mask bits at a time, are those its cells' own
+    /// bits give: over random masks, groups at the grid's faces and runs crossing words.
+    #[test]
+    fn passing_cells_of_a_group_are_those_of_their_bits() {
+        let mut rng = Rng(0x5eed_0017);
+        for case in 0..12 {
+            let dims = [70 + case, 9 + case % 4, 7];
+            let data = spheres(&mut rng, dims, 1 + case % 3);
+            let mask = data.cells_above(0.3 + 0.05 * (case % 5) as f32);
+            let cells = dims.map(|n| n - 1);
+            for gk in 0..cells[2].div_ceil(BRICK) {
+                for gj in 0..cells[1].div_ceil(BRICK) {
+                    for gi in 0..cells[0].div_ceil(BRICK) {
+                        let lo = [gi, gj, gk].map(|g| g * BRICK);
+                        let hi = std::array::from_fn(|a| (lo[a] + BRICK).min(cells[a]));
+                        let (mut first, mut last, mut all) = ([usize::MAX; 3], [0; 3], true);
+                        for k in lo[2]..hi[2] {
+                            for j in lo[1]..hi[1] {
+                                for i in lo[0]..hi[0] {
+                                    if mask.may_reach(data.node_index([i, j, k])) {
+                                        for (a, c) in [i, j, k].into_iter().enumerate() {
+                                            first[a] = first[a].min(c);
+                                            last[a] = last[a].max(c);
+                                        }
+                                    } else {
+                                        all = false;
+                                    }
+                                }
+                            }
+                        }
+                        let want = (first[0] != usize::MAX).then_some((first, last, all));
+                        assert_eq!(passing_in(&data, &mask, lo, hi), want, "{dims:?} {lo:?}");
+                    }
+                }
+            }
+        }
     }
 
     /// With the boxes of the cells that can pass the zero test, no ray through any pixel
