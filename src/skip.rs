@@ -11,7 +11,7 @@
 //! empty blocks; the remaining samples are exactly the ones that would have been taken, so
 //! skipping never changes a pixel.
 
-use crate::dataset::{bc_abs_sum, CellMask, Dataset, Filter, BRICK};
+use crate::dataset::{bc_abs_sum, Bricks, CellMask, Dataset, Filter, BRICK};
 use crate::program::Instr;
 use crate::types::FIELD_COUNT;
 use glam::{DMat3, DMat4, DVec3};
@@ -276,22 +276,48 @@ impl std::hash::Hasher for MemoHasher {
 /// The most blocks a grid may have.
 const MAX_BLOCKS: usize = 1 << 24;
 
-/// The (min, max) of dataset `d` under `filter` over the object-space box [lo, hi].
-/// `overshoot` is the filter's [`overshoot`].
-fn dataset_range(d: &Dataset, filter: Filter, overshoot: f64, lo: DVec3, hi: DVec3) -> (f32, f32) {
-    let bricks = d.bricks(filter);
-    let dims = d.dims();
-    let idx = |x: f64, axis: usize| -> usize {
-        let n = dims[axis];
-        if n == 1 {
-            return 0;
-        }
-        let u = (x * (n - 1) as f64 / BRICK as f64).floor();
-        u.clamp(0.0, (bricks.dims[axis] - 1) as f64) as usize
-    };
-    let (i0, i1) = (idx(lo.x, 0), idx(hi.x, 0));
-    let (j0, j1) = (idx(lo.y, 1), idx(hi.y, 1));
-    let (k0, k1) = (idx(lo.z, 2), idx(hi.z, 2));
+/// The brick of `d`'s ranges `bricks` that holds object coordinate `x` along `axis` (clamped to
+/// the grid).
+fn brick_at(d: &Dataset, bricks: &Bricks, x: f64, axis: usize) -> usize {
+    let n = d.dims()[axis];
+    if n == 1 {
+        return 0;
+    }
+    let u = crate::num::floor(x * (n - 1) as f64 / BRICK as f64);
+    u.clamp(0.0, (bricks.dims[axis] - 1) as f64) as usize
+}
+
+/// Per axis of the blocks of a skip grid (`dims` blocks of size `cell` from `origin`), the first
+/// and last brick of `d`'s ranges `bricks` that each block's box [lo, lo + cell] meets along
+/// that axis: a block's box is the product of its axes' intervals, so its bricks are too.
+fn brick_spans(
+    d: &Dataset,
+    bricks: &Bricks,
+    origin: DVec3,
+    cell: DVec3,
+    dims: [usize; 3],
+) -> [Vec<(usize, usize)>; 3] {
+    std::array::from_fn(|axis| {
+        (0..dims[axis])
+            .map(|c| {
+                let lo = origin[axis] + c as f64 * cell[axis];
+                let hi = lo + cell[axis];
+                (brick_at(d, bricks, lo, axis), brick_at(d, bricks, hi, axis))
+            })
+            .collect()
+    })
+}
+
+/// The (min, max) of a dataset under `filter` over the bricks `spans` (first and last per axis)
+/// of its ranges `bricks`: its range over any box those bricks cover. `overshoot` is the
+/// filter's [`overshoot`].
+fn bricks_range(
+    bricks: &Bricks,
+    filter: Filter,
+    overshoot: f64,
+    spans: [(usize, usize); 3],
+) -> (f32, f32) {
+    let [(i0, i1), (j0, j1), (k0, k1)] = spans;
     let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
     for k in k0..=k1 {
         for j in j0..=j1 {
@@ -382,18 +408,20 @@ impl SkipGrid {
             },
         );
         let mut dist = vec![0u8; total];
-        let data: Vec<(&Dataset, Filter, f64)> = prefix
+        // The datasets' brick ranges first (each built once, itself in parallel) and the
+        // bricks each block meets along each axis, then the blocks plane by plane in parallel.
+        type Source<'a> = (&'a Bricks, Filter, f64, [Vec<(usize, usize)>; 3]);
+        let data: Vec<Source> = prefix
             .iter()
             .filter_map(|i| match i {
-                Instr::Dataset { data, filter, .. } => Some((&**data, *filter, overshoot(*filter))),
+                Instr::Dataset { data, filter, .. } => {
+                    let bricks = data.bricks(*filter);
+                    let spans = brick_spans(data, bricks, origin, cell, dims);
+                    Some((bricks, *filter, overshoot(*filter), spans))
+                }
                 _ => None,
             })
             .collect();
-        // The datasets' brick ranges first (each built once, itself in parallel), then the
-        // blocks plane by plane in parallel.
-        for (d, f, _) in &data {
-            d.bricks(*f);
-        }
         let any = dist
             .par_chunks_mut(dims[0] * dims[1])
             .enumerate()
@@ -407,11 +435,10 @@ impl SkipGrid {
                 let mut any = false;
                 for j in 0..dims[1] {
                     for i in 0..dims[0] {
-                        let lo = origin + DVec3::new(i as f64, j as f64, k as f64) * cell;
-                        let hi = lo + cell;
                         key.clear();
-                        key.extend(data.iter().map(|(d, f, over)| {
-                            let (a, b) = dataset_range(d, *f, *over, lo, hi);
+                        key.extend(data.iter().map(|(bricks, f, over, spans)| {
+                            let at = [spans[0][i], spans[1][j], spans[2][k]];
+                            let (a, b) = bricks_range(bricks, *f, *over, at);
                             (a.to_bits(), b.to_bits())
                         }));
                         let e = match memo.get(&key) {
