@@ -92,10 +92,13 @@ fn chessboard(dist: &mut [u8], dims: [usize; 3]) {
                     let r = best as usize;
                     let lo = x.saturating_sub(r);
                     let hi = (x + r).min(n - 1);
-                    for (y, &v) in line.iter().enumerate().take(hi + 1).skip(lo) {
-                        let d = (x.abs_diff(y) as u8).max(v);
-                        best = best.min(d);
+                    // The window's two sides apart, each at distances 1, 2, … from x (fewer
+                    // than 256: r is a distance of the map), so that they compile to lanes.
+                    fn side<'a>(best: u8, ys: impl Iterator<Item = &'a u8>) -> u8 {
+                        ys.zip(1u8..).fold(best, |b, (&v, d)| b.min(d.max(v)))
                     }
+                    best = side(best, line[lo..x].iter().rev());
+                    best = side(best, line[x + 1..=hi].iter());
                     *o = best;
                 }
             });
