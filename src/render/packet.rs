@@ -47,6 +47,9 @@ use std::arch::x86_64::*;
 /// Lanes of a packet.
 const W: usize = 8;
 
+/// Whether nodes are read by loads per lane and transpositions (else by gathers).
+const ROWS: bool = true;
+
 /// The lighting of [`Packets`]: unlit (kd and ks 0: the ambient term alone) or a headlight
 /// as [`HeadlitLanes`] holds it, in f32.
 enum Light32 {
@@ -455,8 +458,13 @@ impl<'a> Packets<'a> {
         stat(3, 1);
         // The eight nodes and the trilinear value (`trilinear_rows`' lerps).
         let cell = Nodes::new(self.values, base, 1 + sy + sz);
-        let ((n000, n100), (n010, n110)) = (cell.pair(0), cell.pair(sy));
-        let ((n001, n101), (n011, n111)) = (cell.pair(sz), cell.pair(sy + sz));
+        let ((n000, n100), (n010, n110), (n001, n101), (n011, n111)) = if ROWS {
+            let [a, b, c, d] = cell.pairs2(0, sy);
+            let [e, f, g, h] = cell.pairs2(sz, sy + sz);
+            ((a, b), (c, d), (e, f), (g, h))
+        } else {
+            (cell.pair(0), cell.pair(sy), cell.pair(sz), cell.pair(sy + sz))
+        };
         let lerp = |a: __m256, b: __m256, t: __m256| {
             _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), t))
         };
@@ -629,13 +637,33 @@ impl<'a> Packets<'a> {
             // The neighbourhood's first node: the cell's less (1, 1, 1).
             let lo = _mm256_sub_epi32(base, _mm256_set1_epi32(1 + sy + sz));
             let hood = Nodes::new(self.values, lo, 3 + 3 * sy + 3 * sz);
-            let at = |i: i32, j: i32, k: i32| hood.gather(i + j * sy + k * sz);
-            let pair = |j: i32, k: i32| hood.pair(1 + j * sy + k * sz);
-            // The nodes beside the cell: along y and z as x-pairs (the cell's two x nodes).
-            let ym = [pair(0, 1), pair(0, 2)];
-            let yp = [pair(3, 1), pair(3, 2)];
-            let zm = [pair(1, 0), pair(2, 0)];
-            let zp = [pair(1, 3), pair(2, 3)];
+            let o = |j: i32, k: i32| 1 + j * sy + k * sz;
+            // The nodes beside the cell: along y and z as x-pairs (the cell's two x nodes),
+            // along x the first and last of the cell's rows of four.
+            let (ym, yp, zm, zp, xm, xp);
+            if ROWS {
+                let two = |j0: i32, k0: i32, j1: i32, k1: i32| {
+                    let [a, b, c, d] = hood.pairs2(o(j0, k0), o(j1, k1));
+                    [(a, b), (c, d)]
+                };
+                ym = two(0, 1, 0, 2);
+                yp = two(3, 1, 3, 2);
+                zm = two(1, 0, 2, 0);
+                zp = two(1, 3, 2, 3);
+                let r = |b: i32, c: i32| hood.row4(o(1 + b, 1 + c) - 1);
+                let rows = [r(0, 0), r(1, 0), r(0, 1), r(1, 1)];
+                xm = rows.map(|r| r[0]);
+                xp = rows.map(|r| r[3]);
+            } else {
+                let pair = |j: i32, k: i32| hood.pair(o(j, k));
+                ym = [pair(0, 1), pair(0, 2)];
+                yp = [pair(3, 1), pair(3, 2)];
+                zm = [pair(1, 0), pair(2, 0)];
+                zp = [pair(1, 3), pair(2, 3)];
+                let at = |i: i32, j: i32, k: i32| hood.gather(i + j * sy + k * sz);
+                xm = [at(0, 1, 1), at(0, 2, 1), at(0, 1, 2), at(0, 2, 2)];
+                xp = [at(3, 1, 1), at(3, 2, 1), at(3, 1, 2), at(3, 2, 2)];
+            }
             let pick = |p: (__m256, __m256), a: i32| if a == 0 { p.0 } else { p.1 };
             let [fx, fy, fz] = *f;
             let (gx, gy, gz) = (
@@ -651,10 +679,11 @@ impl<'a> Packets<'a> {
                 let node = |a: i32, b: i32, cc: i32| nodes[(a + 2 * b + 4 * cc) as usize];
                 // Central differences along x, y and z at corner (a, b, cc): the node on the
                 // far side minus the node on the near side, one of them a cell node.
+                let row = (b + 2 * cc) as usize;
                 let dx = if a == 0 {
-                    _mm256_sub_ps(node(1, b, cc), at(0, 1 + b, 1 + cc))
+                    _mm256_sub_ps(node(1, b, cc), xm[row])
                 } else {
-                    _mm256_sub_ps(at(3, 1 + b, 1 + cc), node(0, b, cc))
+                    _mm256_sub_ps(xp[row], node(0, b, cc))
                 };
                 let dy = if b == 0 {
                     _mm256_sub_ps(node(a, 1, cc), pick(ym[cc as usize], a))
@@ -1026,6 +1055,74 @@ impl<'a> Nodes<'a> {
             _mm256_shuffle_ps::<0xDD>(a, b),
         )
     }
+}
+
+impl Nodes<'_> {
+    /// `values[at + off + k]` for k in 0..4, per lane, as four registers (register k holds
+    /// the k-th of each lane's four): a 16-byte load per lane, then a transposition.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn row4(&self, off: i32) -> [__m256; 4] {
+        assert!(off >= 0 && off + 3 <= self.span);
+        let at = self.indices();
+        let p = self.values.as_ptr();
+        let lane = |i: usize| {
+            // SAFETY: `at[i]` is in [0, len − 1 − span] (`Nodes::new`) and
+            // 0 ≤ off ≤ span − 3, so the four f32 at `at[i] + off` lie inside `values`.
+            unsafe { _mm_loadu_ps(p.add((at[i] + off) as usize)) }
+        };
+        transpose(std::array::from_fn(|i| _mm256_set_m128(lane(i + 4), lane(i))))
+    }
+
+    /// `values[at + a]`, `values[at + a + 1]`, `values[at + b]`, `values[at + b + 1]` per
+    /// lane, as four registers: two 8-byte loads per lane, then a transposition.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn pairs2(&self, a: i32, b: i32) -> [__m256; 4] {
+        assert!(a >= 0 && b >= 0 && a < self.span && b < self.span);
+        let at = self.indices();
+        let p = self.values.as_ptr();
+        let lane = |i: usize| {
+            // SAFETY: `at[i]` is in [0, len − 1 − span] and 0 ≤ a, b < span, so the two
+            // f32 at `at[i] + a` and the two at `at[i] + b` lie inside `values`; the loads
+            // have no alignment requirement.
+            unsafe {
+                let lo = _mm_castpd_ps(_mm_load_sd(p.add((at[i] + a) as usize) as *const f64));
+                _mm_castpd_ps(_mm_loadh_pd(
+                    _mm_castps_pd(lo),
+                    p.add((at[i] + b) as usize) as *const f64,
+                ))
+            }
+        };
+        transpose(std::array::from_fn(|i| _mm256_set_m128(lane(i + 4), lane(i))))
+    }
+
+    /// The lanes of `at` as an array.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn indices(&self) -> [i32; W] {
+        let mut a = [0i32; W];
+        // SAFETY: `a` is 8 i32, 32 writable bytes; the store has no alignment requirement.
+        unsafe { _mm256_storeu_si256(a.as_mut_ptr() as *mut __m256i, self.at) };
+        a
+    }
+}
+
+/// Four registers of lanes (i, i + 4) in their halves, four numbers each, transposed: register
+/// k holds number k of lanes 0 to 7.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn transpose(y: [__m256; 4]) -> [__m256; 4] {
+    let t0 = _mm256_unpacklo_ps(y[0], y[1]);
+    let t1 = _mm256_unpackhi_ps(y[0], y[1]);
+    let t2 = _mm256_unpacklo_ps(y[2], y[3]);
+    let t3 = _mm256_unpackhi_ps(y[2], y[3]);
+    [
+        _mm256_shuffle_ps::<0x44>(t0, t2),
+        _mm256_shuffle_ps::<0xEE>(t0, t2),
+        _mm256_shuffle_ps::<0x44>(t1, t3),
+        _mm256_shuffle_ps::<0xEE>(t1, t3),
+    ]
 }
 
 /// `data[idx]` per lane, each index first clamped to `[0, data.len() − 1]` (`data` not
