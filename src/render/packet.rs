@@ -292,6 +292,7 @@ impl<'a> Packets<'a> {
                                     st.ro[ch][i] = c.o[ch];
                                     st.rd[ch][i] = c.d[ch];
                                 }
+                                stat(8, 1);
                                 lanes[i] = Some(LaneRay {
                                     cursor: c,
                                     mids: [0.0; 8],
@@ -309,6 +310,7 @@ impl<'a> Packets<'a> {
                     }
                     let lane = lanes[i].as_mut().expect("a ray");
                     if lane.j == lane.m {
+                        stat(9, 1);
                         lane.m = lane.cursor.next_run(grid, &mut lane.mids, &mut lane.lens);
                         lane.j = 0;
                         if lane.m == 0 {
@@ -463,7 +465,12 @@ impl<'a> Packets<'a> {
             let [e, f, g, h] = cell.pairs2(sz, sy + sz);
             ((a, b), (c, d), (e, f), (g, h))
         } else {
-            (cell.pair(0), cell.pair(sy), cell.pair(sz), cell.pair(sy + sz))
+            (
+                cell.pair(0),
+                cell.pair(sy),
+                cell.pair(sz),
+                cell.pair(sy + sz),
+            )
         };
         let lerp = |a: __m256, b: __m256, t: __m256| {
             _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), t))
@@ -1071,7 +1078,9 @@ impl Nodes<'_> {
             // 0 ≤ off ≤ span − 3, so the four f32 at `at[i] + off` lie inside `values`.
             unsafe { _mm_loadu_ps(p.add((at[i] + off) as usize)) }
         };
-        transpose(std::array::from_fn(|i| _mm256_set_m128(lane(i + 4), lane(i))))
+        transpose(std::array::from_fn(|i| {
+            _mm256_set_m128(lane(i + 4), lane(i))
+        }))
     }
 
     /// `values[at + a]`, `values[at + a + 1]`, `values[at + b]`, `values[at + b + 1]` per
@@ -1094,7 +1103,9 @@ impl Nodes<'_> {
                 ))
             }
         };
-        transpose(std::array::from_fn(|i| _mm256_set_m128(lane(i + 4), lane(i))))
+        transpose(std::array::from_fn(|i| {
+            _mm256_set_m128(lane(i + 4), lane(i))
+        }))
     }
 
     /// The lanes of `at` as an array.
@@ -1186,8 +1197,8 @@ fn ldd(a: &[f64; W], h: usize) -> __m256d {
     unsafe { _mm256_loadu_pd(q.as_ptr()) }
 }
 
-static STATS: [std::sync::atomic::AtomicU64; 8] =
-    [const { std::sync::atomic::AtomicU64::new(0) }; 8];
+static STATS: [std::sync::atomic::AtomicU64; 10] =
+    [const { std::sync::atomic::AtomicU64::new(0) }; 10];
 const COUNT: bool = false;
 fn stat(i: usize, n: u64) {
     if COUNT {
