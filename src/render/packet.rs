@@ -269,6 +269,7 @@ impl<'a> Packets<'a> {
         loop {
             // Each lane's next sample; a lane whose ray has ended takes the next ray.
             let mut active = 0u32;
+            #[allow(clippy::needless_range_loop)] // (lane i's state is in several arrays)
             for i in 0..W {
                 loop {
                     if lanes[i].is_none() {
@@ -459,6 +460,8 @@ impl<'a> Packets<'a> {
         }
         stat(3, 1);
         // The eight nodes and the trilinear value (`trilinear_rows`' lerps).
+        // (Lanes whose cell cannot pass read node 0 instead: no memory traffic for them.)
+        let base = _mm256_and_si256(base, _mm256_castps_si256(lanes_mask(pass)));
         let cell = Nodes::new(self.values, base, 1 + sy + sz);
         let ((n000, n100), (n010, n110), (n001, n101), (n011, n111)) = if ROWS {
             let [a, b, c, d] = cell.pairs2(0, sy);
@@ -643,6 +646,7 @@ impl<'a> Packets<'a> {
             let (sy, sz) = (self.sy, self.sz);
             // The neighbourhood's first node: the cell's less (1, 1, 1).
             let lo = _mm256_sub_epi32(base, _mm256_set1_epi32(1 + sy + sz));
+            let lo = _mm256_and_si256(lo, _mm256_castps_si256(lanes_mask(inner)));
             let hood = Nodes::new(self.values, lo, 3 + 3 * sy + 3 * sz);
             let o = |j: i32, k: i32| 1 + j * sy + k * sz;
             // The nodes beside the cell: along y and z as x-pairs (the cell's two x nodes),
@@ -681,8 +685,8 @@ impl<'a> Packets<'a> {
             let wx = [gx, fx];
             let wy = [gy, fy];
             let wz = [gz, fz];
-            for k in 0..8 {
-                let (a, b, cc) = ((k & 1) as i32, (k >> 1 & 1) as i32, (k >> 2) as i32);
+            for k in 0..8i32 {
+                let (a, b, cc) = (k & 1, k >> 1 & 1, k >> 2);
                 let node = |a: i32, b: i32, cc: i32| nodes[(a + 2 * b + 4 * cc) as usize];
                 // Central differences along x, y and z at corner (a, b, cc): the node on the
                 // far side minus the node on the near side, one of them a cell node.
