@@ -12,14 +12,20 @@
 //! the scalar march's: a lane's samples are exactly the segments [`Cursor::next_run`] gives
 //! (the same midpoints, lengths and empty-space skipping, the same start at the
 //! [`EntryMap`] bound). Every iteration takes each lane's next sample and evaluates the eight
-//! together: the cells, the cell mask and the eight nodes by gathers (`vgatherdps`), the
-//! trilinear value (the scalar code's f32 lerps, unfused, so the same bits and the same zero
-//! test), opacity and colour from the two tables' segment pairs (one gather of the pair's
-//! number per lane, then its numbers, in f32), the opacity correction, the gradient (the
-//! trilinear interpolation of the nodes' central differences, again by gathers, only where a
-//! lane's sample has opacity), the headlight's Phong lighting and the front-to-back composite.
-//! A lane whose ray ends (it leaves the volume or its transmittance falls below the
-//! termination bound) takes the tile's next ray.
+//! together: the object points and cells, the cell mask (one gather), the eight nodes (per-lane
+//! 8-byte loads and a transposition, [`Nodes::pairs2`]; gathers were slower on the measured
+//! host, see `docs/performance.md`), the trilinear value (the scalar code's f32 lerps,
+//! unfused, so the same bits and the same zero test), opacity and colour (the two tables as at
+//! most eight linear pieces in registers, [`Segments`]; tables of more rows by their segment
+//! pairs, gathered), the opacity correction, the gradient (the trilinear interpolation of the
+//! nodes' central differences, its nodes again by per-lane loads, only where a lane's sample
+//! has opacity), the headlight's Phong lighting and the front-to-back composite. A lane whose
+//! ray ends (it leaves the volume or its transmittance falls below the termination bound)
+//! takes the tile's next ray.
+//!
+//! Experimental and off by default (`Optimise::packets`): about 1.1–1.25× the scalar march
+//! on the measured host, where 1.5× was asked of it (`docs/performance.md`, "The packet march
+//! (AVX2), measured").
 //!
 //! **Arithmetic.** The trilinear value and the gradient's sums are the scalar code's f32
 //! operations in the same order, without fused multiply-adds, so the same bits. The tables,
@@ -31,11 +37,12 @@
 //! neighbourhood is not inside the grid (`Dataset::gradient_cached`), a segment whose
 //! opacity-correction exponent is not the step's common one (`transmit_at_most_one`).
 //!
-//! **Safety.** The only `unsafe` code of the crate is here: the gathers and the loads and
-//! stores of `[f32; 8]` / `[f64; 4]` arrays, and the calls of the `#[target_feature]`
-//! function, made only after `is_x86_feature_detected!` found AVX2 and FMA. Every gather
-//! index is clamped into the slice it reads (see [`Nodes`] and [`gather`]), so every lane
-//! reads inside it whatever the ray.
+//! **Safety.** The only `unsafe` code of the crate is here: the gathers, the per-lane loads of
+//! nodes, the loads and stores of `[f32; 8]` / `[f64; 4]` / `[i32; 8]` arrays, and the call of
+//! the `#[target_feature]` tile function, made only by a [`Packets`], which exists only after
+//! `is_x86_feature_detected!` found AVX2 and FMA. Every node index is clamped so that it and
+//! the whole span read from it lie inside the values ([`Nodes`]), every table index into its
+//! table ([`gather`]), so every lane reads inside the slice whatever the ray.
 
 use super::*;
 use crate::dataset::Filter;
@@ -850,8 +857,8 @@ impl<'a> Packets<'a> {
 }
 
 /// A transfer function's output column as linear pieces, by the number k of breakpoints
-/// below the input (the segment [`Mapping::locate`] finds): Φ(v) = base[k] + (v −
-/// start[k])·slope[k] for v in (0, 1] (the pieces of [`Mapping::eval_at`], in f32; an
+/// below the input (the segment [`Mapping::locate`] finds): `Φ(v) = base[k] + (v −
+/// start[k])·slope[k]` for v in (0, 1] (the pieces of [`Mapping::eval_at`], in f32; an
 /// input of 0 never gets here: it fails the zero test), then clamped as a field value.
 struct Segs {
     a: Vec<f32>,
