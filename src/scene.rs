@@ -202,8 +202,9 @@ pub struct Optimise {
     /// Trace the primary rays of a scanned volume eight at a time in SIMD lanes (AVX2, where
     /// the processor has it; see `docs/performance.md`, "The packet march (AVX2),
     /// measured"). Experimental, off by default: the images differ from the scalar march's
-    /// in the last bits of f32 arithmetic, and on the measured host it gains about
-    /// 1.1–1.25×, short of what was asked of it. Off, every ray takes the scalar march.
+    /// in the last bits of f32 arithmetic, and on the measured host it gains about 1.1×
+    /// shaded and 1.25× unshaded, short of what was asked of it. Off, every ray takes the
+    /// scalar march.
     pub packets: bool,
 }
 

@@ -23,9 +23,9 @@
 //! ray ends (it leaves the volume or its transmittance falls below the termination bound)
 //! takes the tile's next ray.
 //!
-//! Experimental and off by default (`Optimise::packets`): about 1.1–1.25× the scalar march
-//! on the measured host, where 1.5× was asked of it (`docs/performance.md`, "The packet march
-//! (AVX2), measured").
+//! Experimental and off by default (`Optimise::packets`): about 1.1× the scalar march's speed
+//! shaded and 1.25× unshaded on the measured host, where 1.5× was asked of it
+//! (`docs/performance.md`, "The packet march (AVX2), measured").
 //!
 //! **Arithmetic.** The trilinear value and the gradient's sums are the scalar code's f32
 //! operations in the same order, without fused multiply-adds, so the same bits. The tables,
