@@ -74,6 +74,7 @@ fn bench(c: &mut Criterion) {
                 early_termination,
                 termination,
                 lean_kernel,
+                ..Optimise::default()
             },
         );
         g.bench_function(name, |b| {

@@ -203,6 +203,12 @@ pub(crate) struct CellMask {
 type CellMasks = Vec<(u32, std::sync::Arc<CellMask>)>;
 
 impl CellMask {
+    /// The mask's bits: bit `c & 63` of word `c >> 6` for the cell with first node `c` (a
+    /// cell past their end may reach the bound). For the packet march (`render::packet`).
+    pub(crate) fn bits(&self) -> &[u64] {
+        &self.bits
+    }
+
     /// Whether the cell with first node `c` may reach the bound.
     #[inline]
     pub(crate) fn may_reach(&self, c: usize) -> bool {
@@ -456,6 +462,12 @@ impl Dataset {
             rows.map(|r| r.map(wide::f32x8::splat)),
         );
         self
+    }
+
+    /// The normalised node values (x fastest), the node strides (1, nx, nx·ny; 0 along an axis
+    /// of one node) and 0.5·(n − 1) per axis: what the packet march (`render::packet`) reads.
+    pub(crate) fn packet_parts(&self) -> (&[f32], [usize; 3], [f64; 3]) {
+        (&self.values, self.strides, self.half_last)
     }
 
     /// The brick ranges for `filter` (computed once per dataset and reach, then shared).

@@ -256,6 +256,46 @@ impl DirectShading {
         self.pairs.eval(x, Mapping::bucket_in_range(x))
     }
 
+    /// The opacity table and its column, and the colour table and its columns of r, g and b
+    /// (for the packet march, `render::packet`).
+    pub(crate) fn tables(&self) -> ((&Mapping, usize), (&Mapping, [usize; 3])) {
+        ((&self.opacity.0, self.opacity.1), (&self.colour, self.rgb))
+    }
+
+    /// The segment pairs for the packet march (`render::packet`): per input bucket (see
+    /// [`Mapping::clamp_and_bucket`]) its pair's number, or −1 where it has none; per pair its
+    /// numbers as f32, `[start (o), start (colour), base (o, r, g, b), slope (o, r, g, b)]`
+    /// (the starts are f32 breakpoints, exact; the bases and slopes rounded to f32).
+    pub(crate) fn pairs_f32(&self) -> (Vec<i32>, Vec<[f32; 10]>) {
+        let p = &self.pairs;
+        let index = p
+            .index
+            .iter()
+            .map(|&i| {
+                if (i as usize) < p.pairs.len() {
+                    i as i32
+                } else {
+                    -1
+                }
+            })
+            .collect();
+        let pairs = p
+            .pairs
+            .iter()
+            .map(|q| {
+                let mut a = [0f32; 10];
+                a[0] = q.start[0] as f32;
+                a[1] = q.start[1] as f32;
+                for j in 0..4 {
+                    a[2 + j] = q.base[j] as f32;
+                    a[6 + j] = q.slope[j] as f32;
+                }
+                a
+            })
+            .collect();
+        (index, pairs)
+    }
+
     /// [`DirectShading::opacity_colour`] of a value already clamped (in [0, 1]) by the
     /// tables' general evaluation, which the buckets without a segment pair take (the pairs
     /// give the same bits). Out of line and cold (a few percent of the samples), so that the

@@ -160,9 +160,13 @@ impl Mapping {
     }
 
     /// The input points a_1 < … < a_n.
-    #[cfg(test)]
     pub(crate) fn breakpoints(&self) -> &[f32] {
         &self.a
+    }
+
+    /// Output `j` of row `i` (both counted from 0): b_{i+1, j+1}.
+    pub(crate) fn output(&self, i: usize, j: usize) -> f32 {
+        self.b(i, j)
     }
 
     fn b(&self, i: usize, j: usize) -> f32 {

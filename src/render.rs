@@ -43,6 +43,9 @@ const ZERO_GRADIENT: f64 = 1e-7;
 /// Side of the square pixel tiles traced in parallel.
 const TILE: u32 = 16;
 
+#[cfg(target_arch = "x86_64")]
+mod packet;
+
 /// A rendered image: linear RGB in [0, 1], row-major, top row first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
@@ -2352,17 +2355,29 @@ fn per_pixel<F>(width: u32, height: u32, f: F) -> Vec<[f32; 3]>
 where
     F: Fn(u32, u32) -> [f32; 3] + Sync,
 {
+    per_tile(width, height, |(tx, ty, tw, th)| {
+        let mut out = Vec::with_capacity((tw * th) as usize);
+        for y in ty..ty + th {
+            for x in tx..tx + tw {
+                out.push(f(x, y));
+            }
+        }
+        out
+    })
+}
+
+/// Evaluates `f` for every tile (x, y, width, height), which gives its pixels row by row, in
+/// parallel over tiles, deterministically.
+fn per_tile<F>(width: u32, height: u32, f: F) -> Vec<[f32; 3]>
+where
+    F: Fn((u32, u32, u32, u32)) -> Vec<[f32; 3]> + Sync,
+{
     type Tile = ((u32, u32), Vec<[f32; 3]>);
     let results: Vec<Tile> = tiles(width, height)
         .into_par_iter()
         .map(|(tx, ty)| {
-            let mut out = Vec::with_capacity((TILE * TILE) as usize);
-            for y in ty..(ty + TILE).min(height) {
-                for x in tx..(tx + TILE).min(width) {
-                    out.push(f(x, y));
-                }
-            }
-            ((tx, ty), out)
+            let (tw, th) = ((tx + TILE).min(width) - tx, (ty + TILE).min(height) - ty);
+            ((tx, ty), f((tx, ty, tw, th)))
         })
         .collect();
     let mut pixels = vec![[0.0f32; 3]; (width * height) as usize];
@@ -2410,6 +2425,15 @@ pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> R
         // What a pixel whose bound is +∞ shows, where that is known without its ray.
         let unbounded = scene.unbounded_colour().map(to_f32);
         let image = scene.image_rays(view.eye);
+        // Eight rays at a time in SIMD lanes, where that applies (one ray per pixel).
+        #[cfg(target_arch = "x86_64")]
+        if let Some(p) = packet::Packets::new(scene) {
+            let r = per_tile(width, height, |tile| {
+                p.tile(&view, entry.as_ref(), &image, unbounded, tile)
+            });
+            packet::print_stats();
+            return r;
+        }
         let first = per_pixel(width, height, |x, y| {
             let bound = from(x, y);
             if let (Some(c), true) = (unbounded, bound == f64::INFINITY) {

@@ -1,0 +1,1228 @@
+//! The packet march: primary rays of a scanned volume traced eight at a time, one ray per
+//! lane of AVX2 registers (x86-64 only, detected at run time).
+//!
+//! Where it applies (see [`Packets::new`]): one visible DVR volume whose lean program is the
+//! direct-shading form (a dataset read trilinearly, an opacity table, a colour table writing
+//! r, g and b, constant coefficients) with no normal functions, lit as [`HeadlitLanes`] lights
+//! it (one directional light, an integer specular exponent, no shadows) or not lit at all
+//! (kd and ks 0: the unshaded scene), one ray per pixel. Everything else is traced by the
+//! scalar march, unchanged.
+//!
+//! Each lane has its own ray, [`Cursor`] and state (transmittance, colour). The cursors are
+//! the scalar march's: a lane's samples are exactly the segments [`Cursor::next_run`] gives
+//! (the same midpoints, lengths and empty-space skipping, the same start at the
+//! [`EntryMap`] bound). Every iteration takes each lane's next sample and evaluates the eight
+//! together: the object points and cells, the cell mask (one gather), the eight nodes (per-lane
+//! 8-byte loads and a transposition, [`Nodes::pairs2`]; gathers were slower on the measured
+//! host, see `docs/performance.md`), the trilinear value (the scalar code's f32 lerps,
+//! unfused, so the same bits and the same zero test), opacity and colour (the two tables as at
+//! most eight linear pieces in registers, [`Segments`]; tables of more rows by their segment
+//! pairs, gathered), the opacity correction, the gradient (the trilinear interpolation of the
+//! nodes' central differences, its nodes again by per-lane loads, only where a lane's sample
+//! has opacity), the headlight's Phong lighting and the front-to-back composite. A lane whose
+//! ray ends (it leaves the volume or its transmittance falls below the termination bound)
+//! takes the tile's next ray.
+//!
+//! Experimental and off by default (`Optimise::packets`): about 1.1× the scalar march's speed
+//! shaded and 1.25× unshaded on the measured host, where 1.5× was asked of it
+//! (`docs/performance.md`, "The packet march (AVX2), measured").
+//!
+//! **Arithmetic.** The trilinear value and the gradient's sums are the scalar code's f32
+//! operations in the same order, without fused multiply-adds, so the same bits. The tables,
+//! the lighting and the composite are in f32 (the scalar march has f64 there) and use fused
+//! multiply-adds where they save instructions: images differ from the scalar march's in the
+//! last bits of a colour, far below an 8-bit level (`packets_are_the_scalar_march`).
+//! Rare cases go lane by lane through the scalar code: a value whose table bucket has no
+//! segment pair (`DirectShading::opacity_colour_general`), a gradient in a cell whose 4³
+//! neighbourhood is not inside the grid (`Dataset::gradient_cached`), a segment whose
+//! opacity-correction exponent is not the step's common one (`transmit_at_most_one`).
+//!
+//! **Safety.** The only `unsafe` code of the crate is here: the gathers, the per-lane loads of
+//! nodes, the loads and stores of `[f32; 8]` / `[f64; 4]` / `[i32; 8]` arrays, and the call of
+//! the `#[target_feature]` tile function, made only by a [`Packets`], which exists only after
+//! `is_x86_feature_detected!` found AVX2 and FMA. Every node index is clamped so that it and
+//! the whole span read from it lie inside the values ([`Nodes`]), every table index into its
+//! table ([`gather`]), so every lane reads inside the slice whatever the ray.
+
+use super::*;
+use crate::dataset::Filter;
+use crate::kernel::DirectShading;
+use crate::mapping::Mapping;
+use crate::types::MappingType;
+use std::arch::x86_64::*;
+
+/// Lanes of a packet.
+const W: usize = 8;
+
+/// Whether nodes are read by loads per lane and transpositions (else by gathers).
+const ROWS: bool = true;
+
+/// The lighting of [`Packets`]: unlit (kd and ks 0: the ambient term alone) or a headlight
+/// as [`HeadlitLanes`] holds it, in f32.
+enum Light32 {
+    Unlit {
+        ka_ambient: [f32; 3],
+    },
+    Lit {
+        ka_ambient: [f32; 3],
+        kd: f32,
+        ks: Option<f32>,
+        e: u32,
+        to_light: [f32; 3],
+        radiance: [f32; 3],
+        flip: bool,
+        /// Object-space gradients to world space: the matrix's columns (by column and row).
+        to_world: [[f32; 3]; 3],
+        diagonal: bool,
+    },
+}
+
+/// The packet march of a scene, prepared once per image where it applies.
+pub(super) struct Packets<'a> {
+    scene: &'a Compiled,
+    obj: &'a CObj,
+    data: &'a Dataset,
+    tables: &'a DirectShading,
+    values: &'a [f32],
+    /// The cell mask's bits as 32-bit words (empty: no mask).
+    mask: Vec<u32>,
+    z: f32,
+    /// The two tables as segments in registers, where each has at most seven rows.
+    segments: Option<Segments>,
+    /// Per table bucket, its segment pair's number or −1.
+    bucket_pair: Vec<i32>,
+    /// Per pair, by number: [start (o), start (colour), base (o, r, g, b), slope (o, r, g, b)].
+    pairs: [Vec<f32>; 10],
+    light: Light32,
+    inv_ref: f64,
+    /// The exponent of a whole step (step / reference) where it is one the vector path
+    /// handles (0.5, 1, 0.25, 2), else NaN (every sample then takes the scalar correction).
+    common: f64,
+    stop: f32,
+    /// n − 1, max(n − 2, 0) and n − 2 per axis, as f32; the strides; 0.5·(n − 1) as f32.
+    last: [f32; 3],
+    top: [f32; 3],
+    inner: [f32; 3],
+    sy: i32,
+    sz: i32,
+    half_last: [f32; 3],
+}
+
+impl<'a> Packets<'a> {
+    /// The packet march of `scene`, where it applies and the processor has AVX2 and FMA;
+    /// `None` otherwise (the scalar march then traces every ray).
+    pub(super) fn new(scene: &'a Compiled) -> Option<Packets<'a>> {
+        if !scene.settings.optimise.packets || scene.settings.super_sample > 1 {
+            return None;
+        }
+        if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+            return None;
+        }
+        let [obj] = scene.objects.as_slice() else {
+            return None;
+        };
+        if !(obj.seen_by(Ray::PRIMARY) && obj.render_type == RenderType::Dvr) {
+            return None;
+        }
+        let lean = obj.lean.as_ref()?;
+        let (data, z) = lean.value_head()?;
+        if !obj.normals.is_empty() {
+            return None;
+        }
+        let tables = lean.direct_shading()?;
+        let (values, strides, half_last) = data.packet_parts();
+        let dims = data.dims();
+        // Every axis at least 4 nodes (so interior cells exist and the clamps below have room),
+        // every index an i32.
+        if dims.iter().any(|&n| n < 4) || values.len() >= i32::MAX as usize / 2 {
+            return None;
+        }
+        let [ka, kd, ks, spec] = tables.coefficients;
+        let light = match scene.lanes[0].as_ref() {
+            Some(h) => {
+                // The gradient must be this very dataset's, trilinear (as the batched march's
+                // `same_cells`), in object space.
+                match &obj.f_dataset {
+                    Some((d, Filter::Trilinear)) if std::ptr::eq(Arc::as_ptr(d), data) => {}
+                    _ => return None,
+                }
+                let f = |v: &Lanes| v.to_array()[0] as f32;
+                let (to_world, diagonal) = match &h.to_world {
+                    ToWorld::None => return None,
+                    ToWorld::General(m) => (m.map(|c| c.each_ref().map(f)), false),
+                    ToWorld::Diagonal(d) => {
+                        let mut m = [[0f32; 3]; 3];
+                        for (i, x) in d.iter().enumerate() {
+                            m[i][i] = f(x);
+                        }
+                        (m, true)
+                    }
+                };
+                Light32::Lit {
+                    ka_ambient: h.ka_ambient.each_ref().map(f),
+                    kd: f(&h.kd),
+                    ks: h.ks.as_ref().map(f),
+                    e: h.e,
+                    to_light: h.to_light.each_ref().map(f),
+                    radiance: h.radiance.each_ref().map(f),
+                    flip: h.flip,
+                    to_world,
+                    diagonal,
+                }
+            }
+            None => {
+                let h = Headlit::new(
+                    scene,
+                    obj,
+                    DVec3::ZERO,
+                    [ka, kd, ks],
+                    Specular::of_field(spec),
+                )?;
+                if !h.lights.is_empty() {
+                    return None;
+                }
+                Light32::Unlit {
+                    ka_ambient: h.ka_ambient.to_array().map(|x| x as f32),
+                }
+            }
+        };
+        let mask = match obj.cells.as_deref() {
+            Some(m) => m
+                .bits()
+                .iter()
+                .flat_map(|&w| [w as u32, (w >> 32) as u32])
+                .collect(),
+            None => Vec::new(),
+        };
+        if mask.len() >= i32::MAX as usize {
+            return None;
+        }
+        let (bucket_pair, pair_list) = tables.pairs_f32();
+        if pair_list.is_empty() || pair_list.len() >= i32::MAX as usize {
+            return None;
+        }
+        let pairs = std::array::from_fn(|k| pair_list.iter().map(|p| p[k]).collect());
+        let ((om, oj), (cm, cj)) = tables.tables();
+        let segments = match (
+            Segs::new(om, oj),
+            Segs::new(cm, cj[0]),
+            Segs::new(cm, cj[1]),
+            Segs::new(cm, cj[2]),
+        ) {
+            (Some(o), Some(r), Some(g), Some(b)) => Some(Segments { o, rgb: [r, g, b] }),
+            _ => None,
+        };
+        let common = obj.step * obj.inv_ref;
+        let common = if [0.5, 1.0, 0.25, 2.0].contains(&common) {
+            common
+        } else {
+            f64::NAN
+        };
+        Some(Packets {
+            scene,
+            obj,
+            data,
+            tables,
+            values,
+            mask,
+            z,
+            segments,
+            bucket_pair,
+            pairs,
+            light,
+            inv_ref: obj.inv_ref,
+            common,
+            stop: scene.settings.optimise.stop_below() as f32,
+            last: dims.map(|n| (n - 1) as f32),
+            top: dims.map(|n| (n - 2) as f32),
+            inner: dims.map(|n| (n - 2) as f32),
+            sy: strides[1] as i32,
+            sz: strides[2] as i32,
+            half_last: half_last.map(|x| x as f32),
+        })
+    }
+
+    /// The pixels of the tile of `width × height` pixels at (tx, ty), row by row, as
+    /// [`render_image`]'s per-pixel loop gives them for one ray per pixel.
+    pub(super) fn tile(
+        &self,
+        view: &Pinhole,
+        entry: Option<&EntryMap>,
+        image: &ImageRays,
+        unbounded: Option<[f32; 3]>,
+        (tx, ty, tw, th): (u32, u32, u32, u32),
+    ) -> Vec<[f32; 3]> {
+        // SAFETY: `Packets::new` (the only way to make `self`) found AVX2 and FMA.
+        unsafe { self.tile_avx2(view, entry, image, unbounded, (tx, ty, tw, th)) }
+    }
+
+    #[target_feature(enable = "avx2,fma")]
+    fn tile_avx2(
+        &self,
+        view: &Pinhole,
+        entry: Option<&EntryMap>,
+        image: &ImageRays,
+        unbounded: Option<[f32; 3]>,
+        (tx, ty, tw, th): (u32, u32, u32, u32),
+    ) -> Vec<[f32; 3]> {
+        let obj = self.obj;
+        let grid = obj.skip.as_deref();
+        let background = image.background;
+        let mut out = vec![[0f32; 3]; (tw * th) as usize];
+        let mut next_pixel = 0usize;
+        let mut lanes: [Option<LaneRay>; W] = Default::default();
+        let mut st = State::default();
+        let mut cache = CellGradients::default();
+        loop {
+            // Each lane's next sample; a lane whose ray has ended takes the next ray.
+            let mut active = 0u32;
+            #[allow(clippy::needless_range_loop)] // (lane i's state is in several arrays)
+            for i in 0..W {
+                loop {
+                    if lanes[i].is_none() {
+                        let Some(px) = (next_pixel < out.len()).then_some(next_pixel) else {
+                            break;
+                        };
+                        next_pixel += 1;
+                        let (x, y) = (tx + px as u32 % tw, ty + px as u32 / tw);
+                        let bound = entry.map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
+                        if let (Some(c), true) = (unbounded, bound == f64::INFINITY) {
+                            out[px] = c;
+                            continue;
+                        }
+                        let dir = view.ray(x as f64 + 0.5, y as f64 + 0.5);
+                        match self.start(image, dir, bound) {
+                            Ok(c) => {
+                                st.t[i] = 1.0;
+                                for ch in 0..3 {
+                                    st.col[ch][i] = 0.0;
+                                    st.view[ch][i] = -dir[ch] as f32;
+                                    st.ro[ch][i] = c.o[ch];
+                                    st.rd[ch][i] = c.d[ch];
+                                }
+                                stat(8, 1);
+                                lanes[i] = Some(LaneRay {
+                                    cursor: c,
+                                    mids: [0.0; 8],
+                                    lens: [0.0; 8],
+                                    j: 0,
+                                    m: 0,
+                                    px,
+                                });
+                            }
+                            Err(c) => {
+                                out[px] = to_f32(c);
+                                continue;
+                            }
+                        }
+                    }
+                    let lane = lanes[i].as_mut().expect("a ray");
+                    if lane.j == lane.m {
+                        stat(9, 1);
+                        lane.m = lane.cursor.next_run(grid, &mut lane.mids, &mut lane.lens);
+                        lane.j = 0;
+                        if lane.m == 0 {
+                            let px = lane.px;
+                            lanes[i] = None;
+                            out[px] = self.finish(&st, i, background);
+                            continue;
+                        }
+                    }
+                    st.mid[i] = lane.mids[lane.j];
+                    st.len[i] = lane.lens[lane.j];
+                    lane.j += 1;
+                    active |= 1 << i;
+                    break;
+                }
+            }
+            if active == 0 {
+                break;
+            }
+            let ended = self.step(&mut st, active, &mut cache);
+            for (i, lane) in lanes.iter_mut().enumerate() {
+                if ended >> i & 1 != 0 {
+                    let px = lane.take().expect("a ray").px;
+                    st.t[i] = 0.0;
+                    out[px] = self.finish(&st, i, background);
+                }
+            }
+        }
+        out
+    }
+
+    /// [`Compiled::trace_ray`]'s one-volume path up to its march: the ray's cursor, started
+    /// at `bound`, or the colour where the ray takes no sample.
+    fn start(
+        &self,
+        image: &ImageRays,
+        dir: DVec3,
+        bound: f64,
+    ) -> std::result::Result<Cursor, DVec3> {
+        let obj = self.obj;
+        let background = image.background;
+        let unsampled = || DVec3::ZERO + 1.0 * background;
+        if bound == f64::INFINITY {
+            let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+            let shown = unsampled();
+            if bits(shown) == bits(background) {
+                return Err(shown);
+            }
+        }
+        let (o, d) = (image.origin_o, obj.to_object.transform_vector3(dir));
+        let Some((t0, t1)) = obj.clip(o, d) else {
+            return Err(background);
+        };
+        if bound >= t1 {
+            return Err(unsampled());
+        }
+        let mut c = Cursor::unstarted(obj, 0, (o, d), (t0, t1));
+        c.start(self.scene, obj, bound);
+        Ok(c)
+    }
+
+    /// Lane `i`'s pixel: its colour plus its transmittance times the background.
+    fn finish(&self, st: &State, i: usize, background: DVec3) -> [f32; 3] {
+        let col = DVec3::new(
+            st.col[0][i] as f64,
+            st.col[1][i] as f64,
+            st.col[2][i] as f64,
+        );
+        to_f32(col + st.t[i] as f64 * background)
+    }
+
+    /// One sample of each lane in `active` (at `st.mid`, `st.len`): shaded and composited
+    /// into the lane's state. Returns the lanes whose rays end there (transmittance below the
+    /// termination bound).
+    #[target_feature(enable = "avx2,fma")]
+    fn step(&self, st: &mut State, active: u32, cache: &mut CellGradients) -> u32 {
+        stat(0, 1);
+        stat(1, active.count_ones() as u64);
+        let zero = _mm256_setzero_ps();
+        let one = _mm256_set1_ps(1.0);
+        // The lanes with a sample of positive length (`pass_bits`: a NaN length passes).
+        let mut live = active;
+        for i in 0..W {
+            if st.len[i] <= 0.0 {
+                live &= !(1 << i);
+            }
+        }
+        if live == 0 {
+            return 0;
+        }
+        // Object points (f64, then rounded to f32 as `ray_point`).
+        let mut p = [zero; 3];
+        for (axis, pa) in p.iter_mut().enumerate() {
+            let half = |h: usize| {
+                let m = ldd(&st.mid, h);
+                let o = ldd(&st.ro[axis], h);
+                let d = ldd(&st.rd[axis], h);
+                _mm256_cvtpd_ps(_mm256_add_pd(o, _mm256_mul_pd(m, d)))
+            };
+            *pa = _mm256_set_m128(half(1), half(0));
+        }
+        // The cells, as `Dataset::trilinear8` finds them.
+        let mut u = [zero; 3];
+        let mut f = [zero; 3];
+        let mut c = [_mm256_setzero_si256(); 3];
+        let mut interior = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_EQ_OQ>(zero, zero));
+        for axis in 0..3 {
+            let l = _mm256_set1_ps(self.last[axis]);
+            let ua = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(p[axis], l), zero), l);
+            let cu = _mm256_min_ps(ua, _mm256_set1_ps(self.top[axis]));
+            let ci = _mm256_cvttps_epi32(cu);
+            f[axis] = _mm256_sub_ps(ua, _mm256_cvtepi32_ps(ci));
+            u[axis] = ua;
+            c[axis] = ci;
+            let inside = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GE_OQ>(cu, one),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(cu, _mm256_set1_ps(self.inner[axis])),
+            );
+            interior = _mm256_and_si256(interior, _mm256_castps_si256(inside));
+        }
+        let (sy, sz) = (self.sy, self.sz);
+        let base = _mm256_add_epi32(
+            c[0],
+            _mm256_add_epi32(
+                _mm256_mullo_epi32(c[1], _mm256_set1_epi32(sy)),
+                _mm256_mullo_epi32(c[2], _mm256_set1_epi32(sz)),
+            ),
+        );
+        // The cell mask.
+        let mut pass = live;
+        if !self.mask.is_empty() {
+            let word = _mm256_srli_epi32::<5>(base);
+            let words = gather_u32(&self.mask, word);
+            let bit = _mm256_and_si256(
+                _mm256_srlv_epi32(words, _mm256_and_si256(base, _mm256_set1_epi32(31))),
+                _mm256_set1_epi32(1),
+            );
+            // A cell past the mask's end may reach the bound.
+            let past = _mm256_cmpgt_epi32(word, _mm256_set1_epi32(self.mask.len() as i32 - 1));
+            let reach = _mm256_or_si256(_mm256_cmpeq_epi32(bit, _mm256_set1_epi32(1)), past);
+            pass &= _mm256_movemask_ps(_mm256_castsi256_ps(reach)) as u32;
+        }
+        stat(2, pass.count_ones() as u64);
+        if pass == 0 {
+            return 0;
+        }
+        stat(3, 1);
+        // The eight nodes and the trilinear value (`trilinear_rows`' lerps).
+        // (Lanes whose cell cannot pass read node 0 instead: no memory traffic for them.)
+        let base = _mm256_and_si256(base, _mm256_castps_si256(lanes_mask(pass)));
+        let cell = Nodes::new(self.values, base, 1 + sy + sz);
+        let ((n000, n100), (n010, n110), (n001, n101), (n011, n111)) = if ROWS {
+            let [a, b, c, d] = cell.pairs2(0, sy);
+            let [e, f, g, h] = cell.pairs2(sz, sy + sz);
+            ((a, b), (c, d), (e, f), (g, h))
+        } else {
+            (
+                cell.pair(0),
+                cell.pair(sy),
+                cell.pair(sz),
+                cell.pair(sy + sz),
+            )
+        };
+        let lerp = |a: __m256, b: __m256, t: __m256| {
+            _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), t))
+        };
+        let [fx, fy, fz] = f;
+        let c00 = lerp(n000, n100, fx);
+        let c10 = lerp(n010, n110, fx);
+        let c01 = lerp(n001, n101, fx);
+        let c11 = lerp(n011, n111, fx);
+        let v = lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz);
+        let v = _mm256_min_ps(_mm256_max_ps(v, zero), one);
+        // The zero test.
+        let above = _mm256_cmp_ps::<_CMP_GT_OQ>(v, _mm256_set1_ps(self.z));
+        pass &= _mm256_movemask_ps(above) as u32;
+        if pass == 0 {
+            return 0;
+        }
+        let (o, rgb) = match &self.segments {
+            Some(t) => t.eval(v),
+            None => self.pairs_eval(v, pass),
+        };
+        // The samples with opacity.
+        let shown = pass & _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(o, zero)) as u32;
+        if shown == 0 {
+            return 0;
+        }
+        stat(6, shown.count_ones() as u64);
+        stat(7, 1);
+        // The opacity correction: 1 − (1 − o)^(len / reference).
+        let mut common = 0u32;
+        for h in 0..2 {
+            let e = _mm256_mul_pd(ldd(&st.len, h), _mm256_set1_pd(self.inv_ref));
+            let eq = _mm256_cmp_pd::<_CMP_EQ_OQ>(e, _mm256_set1_pd(self.common));
+            common |= (_mm256_movemask_pd(eq) as u32) << (4 * h);
+        }
+        let tr1 = _mm256_sub_ps(one, o);
+        let mut tr = if self.common == 0.5 {
+            _mm256_sqrt_ps(tr1)
+        } else if self.common == 1.0 {
+            tr1
+        } else if self.common == 0.25 {
+            _mm256_sqrt_ps(_mm256_sqrt_ps(tr1))
+        } else {
+            _mm256_mul_ps(tr1, tr1)
+        };
+        let odd = shown & !common;
+        if odd != 0 {
+            let mut oa = [0f32; W];
+            let mut ta = [0f32; W];
+            st8(&mut oa, o);
+            st8(&mut ta, tr);
+            for i in 0..W {
+                if odd >> i & 1 != 0 {
+                    ta[i] = transmit_at_most_one(oa[i] as f64, st.len[i] * self.inv_ref) as f32;
+                }
+            }
+            tr = ld8(&ta);
+        }
+        let shown_v = lanes_mask(shown);
+        let alpha = _mm256_and_ps(_mm256_sub_ps(one, tr), shown_v);
+        // The lit colour.
+        let col = match &self.light {
+            Light32::Unlit { ka_ambient } => finite(std::array::from_fn(|ch| {
+                _mm256_mul_ps(_mm256_set1_ps(ka_ambient[ch]), rgb[ch])
+            })),
+            Light32::Lit { .. } => {
+                let g = self.gradient(
+                    st,
+                    &p,
+                    &u,
+                    &f,
+                    base,
+                    interior,
+                    shown,
+                    cache,
+                    [n000, n100, n010, n110, n001, n101, n011, n111],
+                );
+                self.lit(st, g, rgb)
+            }
+        };
+        // Front to back.
+        let mut t = ld8(&st.t);
+        let w = _mm256_mul_ps(t, alpha);
+        for (ch, x) in col.into_iter().enumerate() {
+            let acc = ld8(&st.col[ch]);
+            st8(&mut st.col[ch], _mm256_fmadd_ps(w, x, acc));
+        }
+        t = _mm256_mul_ps(t, _mm256_sub_ps(one, alpha));
+        st8(&mut st.t, t);
+        let below = _mm256_cmp_ps::<_CMP_LT_OQ>(t, _mm256_set1_ps(self.stop));
+        shown & _mm256_movemask_ps(below) as u32
+    }
+
+    /// Opacity and colour of values `v` from the tables' segment pairs (gathers), the lanes
+    /// of `pass` whose bucket has none by the tables' general evaluation.
+    #[target_feature(enable = "avx2,fma")]
+    fn pairs_eval(&self, v: __m256, pass: u32) -> (__m256, [__m256; 3]) {
+        let zero = _mm256_setzero_ps();
+        let one = _mm256_set1_ps(1.0);
+        let bucket = _mm256_cvttps_epi32(_mm256_mul_ps(v, _mm256_set1_ps(1024.0)));
+        let pair = gather_i32(&self.bucket_pair, bucket);
+        stat(4, pass.count_ones() as u64);
+        stat(5, 1);
+        let general = pass
+            & _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(
+                _mm256_setzero_si256(),
+                pair,
+            ))) as u32;
+        let q = |k: usize| gather(&self.pairs[k], pair);
+        let clamp = |x: __m256| _mm256_min_ps(_mm256_max_ps(x, zero), one);
+        let dxo = _mm256_sub_ps(v, q(0));
+        let dxc = _mm256_sub_ps(v, q(1));
+        let mut o = clamp(_mm256_fmadd_ps(dxo, q(6), q(2)));
+        let mut rgb = [
+            clamp(_mm256_fmadd_ps(dxc, q(7), q(3))),
+            clamp(_mm256_fmadd_ps(dxc, q(8), q(4))),
+            clamp(_mm256_fmadd_ps(dxc, q(9), q(5))),
+        ];
+        if general != 0 {
+            let mut vs = [0f32; W];
+            st8(&mut vs, v);
+            let mut oa = [0f32; W];
+            let mut ca = [[0f32; W]; 3];
+            st8(&mut oa, o);
+            for ch in 0..3 {
+                st8(&mut ca[ch], rgb[ch]);
+            }
+            for i in 0..W {
+                if general >> i & 1 != 0 {
+                    let (oi, ci) = self.tables.opacity_colour_general(vs[i]);
+                    oa[i] = oi;
+                    let ci = ci.unwrap_or([0.0; 3]);
+                    for ch in 0..3 {
+                        ca[ch][i] = ci[ch];
+                    }
+                }
+            }
+            o = ld8(&oa);
+            for ch in 0..3 {
+                rgb[ch] = ld8(&ca[ch]);
+            }
+        }
+        (o, rgb)
+    }
+
+    /// The object-space gradients of the lanes in `shown` (at points `p`, cells `base` with
+    /// weights `f`, `interior` as `Dataset::interior8`, cell nodes `nodes`): in interior
+    /// cells by gathers, with `Dataset::trilinear_gradient_at`'s f32 operations in its order;
+    /// in the others by `Dataset::gradient_cached`. The scale 0.5·(n − 1) applied; where a
+    /// gradient vanishes, NaN.
+    #[allow(clippy::too_many_arguments)]
+    #[target_feature(enable = "avx2,fma")]
+    fn gradient(
+        &self,
+        _st: &State,
+        p: &[__m256; 3],
+        _u: &[__m256; 3],
+        f: &[__m256; 3],
+        base: __m256i,
+        interior: __m256i,
+        shown: u32,
+        cache: &mut CellGradients,
+        nodes: [__m256; 8],
+    ) -> [__m256; 3] {
+        let zero = _mm256_setzero_ps();
+        let one = _mm256_set1_ps(1.0);
+        let inner = shown & _mm256_movemask_ps(_mm256_castsi256_ps(interior)) as u32;
+        let mut g = [zero; 3];
+        if inner != 0 {
+            let (sy, sz) = (self.sy, self.sz);
+            // The neighbourhood's first node: the cell's less (1, 1, 1).
+            let lo = _mm256_sub_epi32(base, _mm256_set1_epi32(1 + sy + sz));
+            let lo = _mm256_and_si256(lo, _mm256_castps_si256(lanes_mask(inner)));
+            let hood = Nodes::new(self.values, lo, 3 + 3 * sy + 3 * sz);
+            let o = |j: i32, k: i32| 1 + j * sy + k * sz;
+            // The nodes beside the cell: along y and z as x-pairs (the cell's two x nodes),
+            // along x the first and last of the cell's rows of four.
+            let (ym, yp, zm, zp, xm, xp);
+            if ROWS {
+                let two = |j0: i32, k0: i32, j1: i32, k1: i32| {
+                    let [a, b, c, d] = hood.pairs2(o(j0, k0), o(j1, k1));
+                    [(a, b), (c, d)]
+                };
+                ym = two(0, 1, 0, 2);
+                yp = two(3, 1, 3, 2);
+                zm = two(1, 0, 2, 0);
+                zp = two(1, 3, 2, 3);
+                let r = |b: i32, c: i32| hood.row4(o(1 + b, 1 + c) - 1);
+                let rows = [r(0, 0), r(1, 0), r(0, 1), r(1, 1)];
+                xm = rows.map(|r| r[0]);
+                xp = rows.map(|r| r[3]);
+            } else {
+                let pair = |j: i32, k: i32| hood.pair(o(j, k));
+                ym = [pair(0, 1), pair(0, 2)];
+                yp = [pair(3, 1), pair(3, 2)];
+                zm = [pair(1, 0), pair(2, 0)];
+                zp = [pair(1, 3), pair(2, 3)];
+                let at = |i: i32, j: i32, k: i32| hood.gather(i + j * sy + k * sz);
+                xm = [at(0, 1, 1), at(0, 2, 1), at(0, 1, 2), at(0, 2, 2)];
+                xp = [at(3, 1, 1), at(3, 2, 1), at(3, 1, 2), at(3, 2, 2)];
+            }
+            let pick = |p: (__m256, __m256), a: i32| if a == 0 { p.0 } else { p.1 };
+            let [fx, fy, fz] = *f;
+            let (gx, gy, gz) = (
+                _mm256_sub_ps(one, fx),
+                _mm256_sub_ps(one, fy),
+                _mm256_sub_ps(one, fz),
+            );
+            let wx = [gx, fx];
+            let wy = [gy, fy];
+            let wz = [gz, fz];
+            for k in 0..8i32 {
+                let (a, b, cc) = (k & 1, k >> 1 & 1, k >> 2);
+                let node = |a: i32, b: i32, cc: i32| nodes[(a + 2 * b + 4 * cc) as usize];
+                // Central differences along x, y and z at corner (a, b, cc): the node on the
+                // far side minus the node on the near side, one of them a cell node.
+                let row = (b + 2 * cc) as usize;
+                let dx = if a == 0 {
+                    _mm256_sub_ps(node(1, b, cc), xm[row])
+                } else {
+                    _mm256_sub_ps(xp[row], node(0, b, cc))
+                };
+                let dy = if b == 0 {
+                    _mm256_sub_ps(node(a, 1, cc), pick(ym[cc as usize], a))
+                } else {
+                    _mm256_sub_ps(pick(yp[cc as usize], a), node(a, 0, cc))
+                };
+                let dz = if cc == 0 {
+                    _mm256_sub_ps(node(a, b, 1), pick(zm[b as usize], a))
+                } else {
+                    _mm256_sub_ps(pick(zp[b as usize], a), node(a, b, 0))
+                };
+                // The weight (wx·wy)·wz, as the scalar lanes take it.
+                let w = _mm256_mul_ps(
+                    _mm256_mul_ps(wx[a as usize], wy[b as usize]),
+                    wz[cc as usize],
+                );
+                let d = [dx, dy, dz];
+                for axis in 0..3 {
+                    let prod = _mm256_mul_ps(w, d[axis]);
+                    g[axis] = if k == 0 {
+                        prod
+                    } else {
+                        _mm256_add_ps(g[axis], prod)
+                    };
+                }
+            }
+            for (axis, ga) in g.iter_mut().enumerate() {
+                *ga = _mm256_mul_ps(*ga, _mm256_set1_ps(self.half_last[axis]));
+            }
+        }
+        let outer = shown & !inner;
+        if outer != 0 {
+            let mut pa = [[0f32; W]; 3];
+            let mut ga = [[0f32; W]; 3];
+            for axis in 0..3 {
+                st8(&mut pa[axis], p[axis]);
+                st8(&mut ga[axis], g[axis]);
+            }
+            for i in 0..W {
+                if outer >> i & 1 != 0 {
+                    let pi = [pa[0][i], pa[1][i], pa[2][i]];
+                    let gi = self.data.gradient_cached(pi, Filter::Trilinear, cache);
+                    for axis in 0..3 {
+                        ga[axis][i] = gi[axis] as f32;
+                    }
+                }
+            }
+            for axis in 0..3 {
+                g[axis] = ld8(&ga[axis]);
+            }
+        }
+        g
+    }
+
+    /// The lit colours of samples of colours `rgb` and object-space gradients `g`:
+    /// [`HeadlitLanes::colours_at`]'s operations in f32.
+    #[target_feature(enable = "avx2,fma")]
+    fn lit(&self, st: &State, g: [__m256; 3], rgb: [__m256; 3]) -> [__m256; 3] {
+        let Light32::Lit {
+            ka_ambient,
+            kd,
+            ks,
+            e,
+            to_light,
+            radiance,
+            flip,
+            to_world,
+            diagonal,
+        } = &self.light
+        else {
+            unreachable!("lit lanes")
+        };
+        let zero = _mm256_setzero_ps();
+        let one = _mm256_set1_ps(1.0);
+        let neg = _mm256_set1_ps(-0.0);
+        let s = |x: f32| _mm256_set1_ps(x);
+        // Vanishing: the largest component in magnitude at most `ZERO_GRADIENT`.
+        let abs = |x: __m256| _mm256_andnot_ps(neg, x);
+        let a = _mm256_max_ps(abs(g[0]), _mm256_max_ps(abs(g[1]), abs(g[2])));
+        let vanishes = _mm256_cmp_ps::<_CMP_LE_OQ>(a, s(ZERO_GRADIENT as f32));
+        let g: [__m256; 3] = if *diagonal {
+            std::array::from_fn(|i| _mm256_mul_ps(s(to_world[i][i]), g[i]))
+        } else {
+            let [x, y, z] = to_world;
+            std::array::from_fn(|i| {
+                _mm256_fmadd_ps(
+                    s(z[i]),
+                    g[2],
+                    _mm256_fmadd_ps(s(y[i]), g[1], _mm256_mul_ps(s(x[i]), g[0])),
+                )
+            })
+        };
+        let dot = |a: &[__m256; 3], b: &[__m256; 3]| {
+            _mm256_fmadd_ps(
+                a[2],
+                b[2],
+                _mm256_fmadd_ps(a[1], b[1], _mm256_mul_ps(a[0], b[0])),
+            )
+        };
+        let rcp = _mm256_div_ps(one, _mm256_sqrt_ps(dot(&g, &g)));
+        let valid = _mm256_andnot_ps(
+            vanishes,
+            _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GT_OQ>(rcp, zero),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(rcp, s(f32::INFINITY)),
+            ),
+        );
+        let un: [__m256; 3] = std::array::from_fn(|i| _mm256_mul_ps(g[i], rcp));
+        let l = to_light.map(s);
+        let view = [ld8(&st.view[0]), ld8(&st.view[1]), ld8(&st.view[2])];
+        let ndl_u = dot(&un, &l);
+        let sign = if *flip {
+            let front = _mm256_cmp_ps::<_CMP_GT_OQ>(dot(&un, &view), zero);
+            _mm256_andnot_ps(front, neg)
+        } else {
+            neg
+        };
+        let ndl = _mm256_xor_ps(ndl_u, sign);
+        let lit = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(ndl, zero), valid);
+        let m = _mm256_or_ps(_mm256_and_ps(ndl, lit), _mm256_andnot_ps(valid, one));
+        let mut term: [__m256; 3] =
+            std::array::from_fn(|ch| _mm256_mul_ps(_mm256_mul_ps(s(*kd), rgb[ch]), m));
+        if let Some(ks) = ks {
+            let two = _mm256_add_ps(ndl_u, ndl_u);
+            let r: [__m256; 3] = std::array::from_fn(|i| _mm256_fmsub_ps(two, un[i], l[i]));
+            let rv = dot(&r, &view);
+            let spec = _mm256_and_ps(lit, _mm256_cmp_ps::<_CMP_GT_OQ>(rv, zero));
+            if _mm256_movemask_ps(spec) != 0 {
+                // rv^e by binary exponentiation.
+                let (mut x, mut k, mut pw) = (rv, *e, one);
+                loop {
+                    if k & 1 != 0 {
+                        pw = _mm256_mul_ps(pw, x);
+                    }
+                    k >>= 1;
+                    if k == 0 {
+                        break;
+                    }
+                    x = _mm256_mul_ps(x, x);
+                }
+                let p = _mm256_and_ps(_mm256_mul_ps(s(*ks), pw), spec);
+                term = term.map(|x| _mm256_add_ps(x, p));
+            }
+        }
+        finite(std::array::from_fn(|ch| {
+            _mm256_fmadd_ps(
+                s(radiance[ch]),
+                term[ch],
+                _mm256_mul_ps(s(ka_ambient[ch]), rgb[ch]),
+            )
+        }))
+    }
+}
+
+/// A transfer function's output column as linear pieces, by the number k of breakpoints
+/// below the input (the segment [`Mapping::locate`] finds): `Φ(v) = base[k] + (v −
+/// start[k])·slope[k]` for v in (0, 1] (the pieces of [`Mapping::eval_at`], in f32; an
+/// input of 0 never gets here: it fails the zero test), then clamped as a field value.
+struct Segs {
+    a: Vec<f32>,
+    start: [f32; 8],
+    base: [f32; 8],
+    slope: [f32; 8],
+}
+
+impl Segs {
+    /// The pieces of column `j` of `m`, where it has at most seven rows.
+    fn new(m: &Mapping, j: usize) -> Option<Segs> {
+        let a = m.breakpoints();
+        let n = a.len();
+        if n > 7 {
+            return None;
+        }
+        let (mut start, mut base, mut slope) = ([0f32; 8], [0f32; 8], [0f32; 8]);
+        let b = |i: usize| m.output(i, j) as f64;
+        for k in 0..=n {
+            let (s0, b0, sl) = match m.kind() {
+                MappingType::Lookup => (0.0, if k == 0 || k == n { 0.0 } else { b(k) }, 0.0),
+                MappingType::Ramp if k == 0 => {
+                    // 0 < v ≤ a_1: v·b_1/a_1 (a_1 > 0 there).
+                    let a1 = a[0] as f64;
+                    (0.0, 0.0, if a1 > 0.0 { b(0) / a1 } else { 0.0 })
+                }
+                MappingType::Ramp if k == n => {
+                    // a_n < v ≤ 1: towards (1, 1).
+                    let an = a[n - 1] as f64;
+                    let s = if an < 1.0 {
+                        (1.0 - b(n - 1)) / (1.0 - an)
+                    } else {
+                        0.0
+                    };
+                    (an, b(n - 1), s)
+                }
+                MappingType::Ramp => {
+                    let (a0, a1) = (a[k - 1] as f64, a[k] as f64);
+                    (a0, b(k - 1), (b(k) - b(k - 1)) / (a1 - a0))
+                }
+            };
+            start[k] = s0 as f32;
+            base[k] = b0 as f32;
+            slope[k] = sl as f32;
+        }
+        Some(Segs {
+            a: a.to_vec(),
+            start,
+            base,
+            slope,
+        })
+    }
+}
+
+/// The opacity and colour tables as [`Segs`].
+struct Segments {
+    o: Segs,
+    rgb: [Segs; 3],
+}
+
+impl Segments {
+    /// Opacity and colour of values `v` (in [0, 1]), each clamped to [0, 1].
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn eval(&self, v: __m256) -> (__m256, [__m256; 3]) {
+        let zero = _mm256_setzero_ps();
+        let one = _mm256_set1_ps(1.0);
+        let count = |a: &[f32]| {
+            let mut k = _mm256_setzero_si256();
+            for &x in a {
+                let below = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_set1_ps(x), v);
+                k = _mm256_sub_epi32(k, _mm256_castps_si256(below));
+            }
+            k
+        };
+        let piece = |s: &Segs, k: __m256i| {
+            let at = |t: &[f32; 8]| _mm256_permutevar8x32_ps(ld8(t), k);
+            let x = _mm256_fmadd_ps(_mm256_sub_ps(v, at(&s.start)), at(&s.slope), at(&s.base));
+            _mm256_min_ps(_mm256_max_ps(x, zero), one)
+        };
+        let ko = count(&self.o.a);
+        let kc = count(&self.rgb[0].a);
+        (
+            piece(&self.o, ko),
+            [
+                piece(&self.rgb[0], kc),
+                piece(&self.rgb[1], kc),
+                piece(&self.rgb[2], kc),
+            ],
+        )
+    }
+}
+
+/// A lane's ray: its cursor and the run of segments it is taking.
+struct LaneRay {
+    cursor: Cursor,
+    mids: [f64; 8],
+    lens: [f64; 8],
+    /// The next segment of the run, and the run's length.
+    j: usize,
+    m: usize,
+    /// The pixel, in the tile.
+    px: usize,
+}
+
+/// The lanes' state, by lane: the ray in object coordinates (`o + t·d`), the view direction
+/// (towards the eye), the sample being taken (its segment's midpoint and length), the
+/// transmittance and the colour so far.
+#[derive(Default)]
+#[repr(C, align(32))]
+struct State {
+    ro: [[f64; W]; 3],
+    rd: [[f64; W]; 3],
+    mid: [f64; W],
+    len: [f64; W],
+    view: [[f32; W]; 3],
+    t: [f32; W],
+    col: [[f32; W]; 3],
+}
+
+/// Lane `i` of the result all ones where bit `i` of `bits` is set, else zero.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn lanes_mask(bits: u32) -> __m256 {
+    let b = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    let m = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits as i32), b), b);
+    _mm256_castsi256_ps(m)
+}
+
+/// The colour, each lane zero where one of its channels is not finite (`Headlit::colour`):
+/// `((x·0 + y)·0 + z)·0` is ±0 where all three are finite, else NaN.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn finite(col: [__m256; 3]) -> [__m256; 3] {
+    let zero = _mm256_setzero_ps();
+    let m = _mm256_mul_ps(
+        _mm256_add_ps(
+            _mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(col[0], zero), col[1]), zero),
+            col[2],
+        ),
+        zero,
+    );
+    let ok = _mm256_cmp_ps::<_CMP_EQ_OQ>(m, zero);
+    col.map(|x| _mm256_and_ps(x, ok))
+}
+
+/// Eight node indices into `values`, each clamped so that it and every index up to `span`
+/// past it lie inside the slice: [`Nodes::gather`] of an offset in `0..=span` and
+/// [`Nodes::pair`] of one in `0..span` then read inside it in every lane.
+struct Nodes<'a> {
+    values: &'a [f32],
+    at: __m256i,
+    /// `at` in the lane order (0, 1, 4, 5, 2, 3, 6, 7), for [`Nodes::pair`].
+    at_pairs: __m256i,
+    span: i32,
+}
+
+impl<'a> Nodes<'a> {
+    /// `at` clamped to `[0, values.len() − 1 − span]` (`values.len() > span`, which
+    /// [`Packets::new`] ensures: every axis has at least 4 nodes; asserted all the same).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn new(values: &'a [f32], at: __m256i, span: i32) -> Nodes<'a> {
+        assert!(span >= 0 && (span as usize) < values.len() && values.len() <= i32::MAX as usize);
+        let hi = _mm256_set1_epi32((values.len() - 1) as i32 - span);
+        let at = _mm256_min_epi32(_mm256_max_epi32(at, _mm256_setzero_si256()), hi);
+        let order = _mm256_setr_epi32(0, 1, 4, 5, 2, 3, 6, 7);
+        Nodes {
+            values,
+            at,
+            at_pairs: _mm256_permutevar8x32_epi32(at, order),
+            span,
+        }
+    }
+
+    /// `values[at + off]` per lane.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn gather(&self, off: i32) -> __m256 {
+        assert!((0..=self.span).contains(&off));
+        let idx = _mm256_add_epi32(self.at, _mm256_set1_epi32(off));
+        // SAFETY: each lane of `at` is in [0, len − 1 − span] (`Nodes::new`) and
+        // 0 ≤ off ≤ span, so each index is in [0, len − 1]: every lane reads an element of
+        // `values`. Scale 4 is the size of an f32.
+        unsafe { _mm256_i32gather_ps::<4>(self.values.as_ptr(), idx) }
+    }
+
+    /// `(values[at + off], values[at + off + 1])` per lane, by 64-bit gathers of the two
+    /// neighbours together (two of four lanes each: about the cost of one gather of eight
+    /// f32, for twice the numbers), then split.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn pair(&self, off: i32) -> (__m256, __m256) {
+        assert!((0..self.span).contains(&off));
+        let idx = _mm256_add_epi32(self.at_pairs, _mm256_set1_epi32(off));
+        let p = self.values.as_ptr() as *const f64;
+        // SAFETY: each lane of `at_pairs` is a lane of `at`, in [0, len − 1 − span], and
+        // 0 ≤ off < span, so each index i has i + 1 ≤ len − 1: every lane reads the 8 bytes
+        // of `values[i]` and `values[i + 1]`, inside the slice. (Scale 4: the index counts
+        // f32; a gather has no alignment requirement.)
+        let (a, b) = unsafe {
+            (
+                _mm256_i32gather_pd::<4>(p, _mm256_castsi256_si128(idx)),
+                _mm256_i32gather_pd::<4>(p, _mm256_extracti128_si256::<1>(idx)),
+            )
+        };
+        // a holds lanes 0, 1, 4, 5 and b lanes 2, 3, 6, 7, each as (first, second): the
+        // in-lane shuffles put the firsts (and the seconds) back in lane order.
+        let (a, b) = (_mm256_castpd_ps(a), _mm256_castpd_ps(b));
+        (
+            _mm256_shuffle_ps::<0x88>(a, b),
+            _mm256_shuffle_ps::<0xDD>(a, b),
+        )
+    }
+}
+
+impl Nodes<'_> {
+    /// `values[at + off + k]` for k in 0..4, per lane, as four registers (register k holds
+    /// the k-th of each lane's four): a 16-byte load per lane, then a transposition.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn row4(&self, off: i32) -> [__m256; 4] {
+        assert!(off >= 0 && off + 3 <= self.span);
+        let at = self.indices();
+        let p = self.values.as_ptr();
+        let lane = |i: usize| {
+            // SAFETY: `at[i]` is in [0, len − 1 − span] (`Nodes::new`) and
+            // 0 ≤ off ≤ span − 3, so the four f32 at `at[i] + off` lie inside `values`.
+            unsafe { _mm_loadu_ps(p.add((at[i] + off) as usize)) }
+        };
+        transpose(std::array::from_fn(|i| {
+            _mm256_set_m128(lane(i + 4), lane(i))
+        }))
+    }
+
+    /// `values[at + a]`, `values[at + a + 1]`, `values[at + b]`, `values[at + b + 1]` per
+    /// lane, as four registers: two 8-byte loads per lane, then a transposition.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn pairs2(&self, a: i32, b: i32) -> [__m256; 4] {
+        assert!(a >= 0 && b >= 0 && a < self.span && b < self.span);
+        let at = self.indices();
+        let p = self.values.as_ptr();
+        let lane = |i: usize| {
+            // SAFETY: `at[i]` is in [0, len − 1 − span] and 0 ≤ a, b < span, so the two
+            // f32 at `at[i] + a` and the two at `at[i] + b` lie inside `values`; the loads
+            // have no alignment requirement.
+            unsafe {
+                let lo = _mm_castpd_ps(_mm_load_sd(p.add((at[i] + a) as usize) as *const f64));
+                _mm_castpd_ps(_mm_loadh_pd(
+                    _mm_castps_pd(lo),
+                    p.add((at[i] + b) as usize) as *const f64,
+                ))
+            }
+        };
+        transpose(std::array::from_fn(|i| {
+            _mm256_set_m128(lane(i + 4), lane(i))
+        }))
+    }
+
+    /// The lanes of `at` as an array.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn indices(&self) -> [i32; W] {
+        let mut a = [0i32; W];
+        // SAFETY: `a` is 8 i32, 32 writable bytes; the store has no alignment requirement.
+        unsafe { _mm256_storeu_si256(a.as_mut_ptr() as *mut __m256i, self.at) };
+        a
+    }
+}
+
+/// Four registers of lanes (i, i + 4) in their halves, four numbers each, transposed: register
+/// k holds number k of lanes 0 to 7.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn transpose(y: [__m256; 4]) -> [__m256; 4] {
+    let t0 = _mm256_unpacklo_ps(y[0], y[1]);
+    let t1 = _mm256_unpackhi_ps(y[0], y[1]);
+    let t2 = _mm256_unpacklo_ps(y[2], y[3]);
+    let t3 = _mm256_unpackhi_ps(y[2], y[3]);
+    [
+        _mm256_shuffle_ps::<0x44>(t0, t2),
+        _mm256_shuffle_ps::<0xEE>(t0, t2),
+        _mm256_shuffle_ps::<0x44>(t1, t3),
+        _mm256_shuffle_ps::<0xEE>(t1, t3),
+    ]
+}
+
+/// `data[idx]` per lane, each index first clamped to `[0, data.len() − 1]` (`data` not
+/// empty, at most `i32::MAX` long).
+#[inline]
+#[target_feature(enable = "avx2")]
+fn gather(data: &[f32], idx: __m256i) -> __m256 {
+    assert!(!data.is_empty() && data.len() <= i32::MAX as usize);
+    let hi = _mm256_set1_epi32((data.len() - 1) as i32);
+    let idx = _mm256_min_epi32(_mm256_max_epi32(idx, _mm256_setzero_si256()), hi);
+    // SAFETY: every index is in [0, data.len() − 1] (the clamp above), so every lane reads an
+    // element of `data`.
+    unsafe { _mm256_i32gather_ps::<4>(data.as_ptr(), idx) }
+}
+
+/// [`gather`] of i32 numbers.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn gather_i32(data: &[i32], idx: __m256i) -> __m256i {
+    assert!(!data.is_empty() && data.len() <= i32::MAX as usize);
+    let hi = _mm256_set1_epi32((data.len() - 1) as i32);
+    let idx = _mm256_min_epi32(_mm256_max_epi32(idx, _mm256_setzero_si256()), hi);
+    // SAFETY: as in `gather`: every index is in [0, data.len() − 1].
+    unsafe { _mm256_i32gather_epi32::<4>(data.as_ptr(), idx) }
+}
+
+/// [`gather`] of u32 words (as i32 lanes).
+#[inline]
+#[target_feature(enable = "avx2")]
+fn gather_u32(data: &[u32], idx: __m256i) -> __m256i {
+    assert!(!data.is_empty() && data.len() <= i32::MAX as usize);
+    let hi = _mm256_set1_epi32((data.len() - 1) as i32);
+    let idx = _mm256_min_epi32(_mm256_max_epi32(idx, _mm256_setzero_si256()), hi);
+    // SAFETY: as in `gather`: every index is in [0, data.len() − 1]; u32 and i32 have the
+    // same size and alignment.
+    unsafe { _mm256_i32gather_epi32::<4>(data.as_ptr() as *const i32, idx) }
+}
+
+/// The eight f32 of `a` as a register.
+#[inline]
+#[target_feature(enable = "avx")]
+fn ld8(a: &[f32; W]) -> __m256 {
+    // SAFETY: `a` is 8 f32, 32 readable bytes; the load has no alignment requirement.
+    unsafe { _mm256_loadu_ps(a.as_ptr()) }
+}
+
+/// Stores the register `v` into the eight f32 of `a`.
+#[inline]
+#[target_feature(enable = "avx")]
+fn st8(a: &mut [f32; W], v: __m256) {
+    // SAFETY: `a` is 8 f32, 32 writable bytes; the store has no alignment requirement.
+    unsafe { _mm256_storeu_ps(a.as_mut_ptr(), v) }
+}
+
+/// Lanes `4h .. 4h + 4` of `a` (h is 0 or 1) as a register.
+#[inline]
+#[target_feature(enable = "avx")]
+fn ldd(a: &[f64; W], h: usize) -> __m256d {
+    let q: &[f64; 4] = a[4 * h..4 * h + 4].try_into().expect("four lanes");
+    // SAFETY: `q` is 4 f64, 32 readable bytes; the load has no alignment requirement.
+    unsafe { _mm256_loadu_pd(q.as_ptr()) }
+}
+
+static STATS: [std::sync::atomic::AtomicU64; 10] =
+    [const { std::sync::atomic::AtomicU64::new(0) }; 10];
+const COUNT: bool = false;
+fn stat(i: usize, n: u64) {
+    if COUNT {
+        STATS[i].fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+    }
+}
+pub(super) fn print_stats() {
+    if COUNT {
+        eprintln!(
+            "{:?}",
+            STATS
+                .each_ref()
+                .map(|a| a.load(std::sync::atomic::Ordering::Relaxed))
+        );
+    }
+}
