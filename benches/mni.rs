@@ -54,6 +54,7 @@ fn bench(c: &mut Criterion) {
         ),
         ("shaded_neither", true, false, false, true, t_min),
         ("shaded_no_lean_kernel", true, true, true, false, t_min),
+        ("shaded_scalar", true, true, true, true, t_min),
         (
             "shaded_vtk_termination",
             true,
@@ -74,7 +75,8 @@ fn bench(c: &mut Criterion) {
                 early_termination,
                 termination,
                 lean_kernel,
-                ..Optimise::default()
+                // ("shaded_scalar": every ray by the scalar march, not the packet march.)
+                packets: name != "shaded_scalar",
             },
         );
         g.bench_function(name, |b| {

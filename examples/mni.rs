@@ -4,7 +4,7 @@
 //! ```text
 //! target/release/vlconvert nifti ../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz out/mni.vlb
 //! cargo run --release --example mni -- out/mni.vlb out/mni.png [step] [--unshaded] [--size=N] \
-//!     [--cubic] [--ss=N] [--termination=T] [--frames=N] [--packets]
+//!     [--cubic] [--ss=N] [--termination=T] [--frames=N] [--no-packets]
 //! ```
 //!
 //! `--cubic` samples the dataset with the Catmull–Rom filter instead of trilinear, `--ss=N` turns
@@ -13,7 +13,7 @@
 //! transmittance T instead of 1/512 (`Optimise::termination`; VTK's is 255/32767).
 //! `--frames=N` first renders N more frames of the same scene to memory and prints the fastest
 //! and the median of their times (the steady frame, without loading and precomputation).
-//! `--packets` traces the rays eight at a time in AVX2 lanes (`Optimise::packets`, experimental).
+//! `--no-packets` traces every ray by the scalar march (`Optimise::packets` off).
 
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
@@ -45,7 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ss: i32 = flag(&all, "--ss=", 1)?;
     let termination: f64 = flag(&all, "--termination=", vlib::render::T_MIN)?;
     let frames: usize = flag(&all, "--frames=", 0)?;
-    let packets = all.iter().any(|a| a == "--packets");
+    let packets = !all.iter().any(|a| a == "--no-packets");
     let start = Instant::now();
     let mut vl = vlib::Library::new();
     vl.load(mni_scene::BRAIN, vlb)?;

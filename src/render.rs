@@ -2428,11 +2428,9 @@ pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> R
         // Eight rays at a time in SIMD lanes, where that applies (one ray per pixel).
         #[cfg(target_arch = "x86_64")]
         if let Some(p) = packet::Packets::new(scene) {
-            let r = per_tile(width, height, |tile| {
+            return per_tile(width, height, |tile| {
                 p.tile(&view, entry.as_ref(), &image, unbounded, tile)
             });
-            packet::print_stats();
-            return r;
         }
         let first = per_pixel(width, height, |x, y| {
             let bound = from(x, y);

@@ -375,6 +375,8 @@ fn mni_brain_renders_identically_with_and_without_skipping() {
             skip_empty: skip,
             early_termination: true,
             lean_kernel,
+            // (The scalar march both ways: the general interpreter has no packet march.)
+            packets: false,
             ..Optimise::default()
         })
         .unwrap();
@@ -516,6 +518,8 @@ fn lean_kernel_changes_no_pixel() {
         vl.scene().unwrap();
         vl.set_optimise(Optimise {
             lean_kernel,
+            // (The scalar march both ways: the general interpreter has no packet march.)
+            packets: false,
             ..Optimise::default()
         })
         .unwrap();

@@ -23,9 +23,9 @@
 //! ray ends (it leaves the volume or its transmittance falls below the termination bound)
 //! takes the tile's next ray.
 //!
-//! Experimental and off by default (`Optimise::packets`): about 1.1× the scalar march's speed
-//! shaded and 1.25× unshaded on the measured host, where 1.5× was asked of it
-//! (`docs/performance.md`, "The packet march (AVX2), measured").
+//! On by default where it applies (`Optimise::packets` switches it off): about 1.1× the
+//! scalar march's speed shaded and 1.25× unshaded on the measured host (`docs/performance.md`,
+//! "The packet march (AVX2), measured").
 //!
 //! **Arithmetic.** The trilinear value and the gradient's sums are the scalar code's f32
 //! operations in the same order, without fused multiply-adds, so the same bits. The tables,
@@ -53,9 +53,6 @@ use std::arch::x86_64::*;
 
 /// Lanes of a packet.
 const W: usize = 8;
-
-/// Whether nodes are read by loads per lane and transpositions (else by gathers).
-const ROWS: bool = true;
 
 /// The lighting of [`Packets`]: unlit (kd and ks 0: the ambient term alone) or a headlight
 /// as [`HeadlitLanes`] holds it, in f32.
@@ -300,7 +297,6 @@ impl<'a> Packets<'a> {
                                     st.ro[ch][i] = c.o[ch];
                                     st.rd[ch][i] = c.d[ch];
                                 }
-                                stat(8, 1);
                                 lanes[i] = Some(LaneRay {
                                     cursor: c,
                                     mids: [0.0; 8],
@@ -318,7 +314,6 @@ impl<'a> Packets<'a> {
                     }
                     let lane = lanes[i].as_mut().expect("a ray");
                     if lane.j == lane.m {
-                        stat(9, 1);
                         lane.m = lane.cursor.next_run(grid, &mut lane.mids, &mut lane.lens);
                         lane.j = 0;
                         if lane.m == 0 {
@@ -395,8 +390,6 @@ impl<'a> Packets<'a> {
     /// termination bound).
     #[target_feature(enable = "avx2,fma")]
     fn step(&self, st: &mut State, active: u32, cache: &mut CellGradients) -> u32 {
-        stat(0, 1);
-        stat(1, active.count_ones() as u64);
         let zero = _mm256_setzero_ps();
         let one = _mm256_set1_ps(1.0);
         // The lanes with a sample of positive length (`pass_bits`: a NaN length passes).
@@ -461,27 +454,15 @@ impl<'a> Packets<'a> {
             let reach = _mm256_or_si256(_mm256_cmpeq_epi32(bit, _mm256_set1_epi32(1)), past);
             pass &= _mm256_movemask_ps(_mm256_castsi256_ps(reach)) as u32;
         }
-        stat(2, pass.count_ones() as u64);
         if pass == 0 {
             return 0;
         }
-        stat(3, 1);
         // The eight nodes and the trilinear value (`trilinear_rows`' lerps).
         // (Lanes whose cell cannot pass read node 0 instead: no memory traffic for them.)
         let base = _mm256_and_si256(base, _mm256_castps_si256(lanes_mask(pass)));
         let cell = Nodes::new(self.values, base, 1 + sy + sz);
-        let ((n000, n100), (n010, n110), (n001, n101), (n011, n111)) = if ROWS {
-            let [a, b, c, d] = cell.pairs2(0, sy);
-            let [e, f, g, h] = cell.pairs2(sz, sy + sz);
-            ((a, b), (c, d), (e, f), (g, h))
-        } else {
-            (
-                cell.pair(0),
-                cell.pair(sy),
-                cell.pair(sz),
-                cell.pair(sy + sz),
-            )
-        };
+        let [n000, n100, n010, n110] = cell.pairs2(0, sy);
+        let [n001, n101, n011, n111] = cell.pairs2(sz, sy + sz);
         let lerp = |a: __m256, b: __m256, t: __m256| {
             _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), t))
         };
@@ -507,8 +488,6 @@ impl<'a> Packets<'a> {
         if shown == 0 {
             return 0;
         }
-        stat(6, shown.count_ones() as u64);
-        stat(7, 1);
         // The opacity correction: 1 − (1 − o)^(len / reference).
         let mut common = 0u32;
         for h in 0..2 {
@@ -548,9 +527,7 @@ impl<'a> Packets<'a> {
             })),
             Light32::Lit { .. } => {
                 let g = self.gradient(
-                    st,
                     &p,
-                    &u,
                     &f,
                     base,
                     interior,
@@ -582,8 +559,6 @@ impl<'a> Packets<'a> {
         let one = _mm256_set1_ps(1.0);
         let bucket = _mm256_cvttps_epi32(_mm256_mul_ps(v, _mm256_set1_ps(1024.0)));
         let pair = gather_i32(&self.bucket_pair, bucket);
-        stat(4, pass.count_ones() as u64);
-        stat(5, 1);
         let general = pass
             & _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(
                 _mm256_setzero_si256(),
@@ -628,16 +603,14 @@ impl<'a> Packets<'a> {
 
     /// The object-space gradients of the lanes in `shown` (at points `p`, cells `base` with
     /// weights `f`, `interior` as `Dataset::interior8`, cell nodes `nodes`): in interior
-    /// cells by gathers, with `Dataset::trilinear_gradient_at`'s f32 operations in its order;
+    /// cells by per-lane loads (`Nodes`), with `Dataset::trilinear_gradient_at`'s f32 operations in its order;
     /// in the others by `Dataset::gradient_cached`. The scale 0.5·(n − 1) applied; where a
     /// gradient vanishes, NaN.
     #[allow(clippy::too_many_arguments)]
     #[target_feature(enable = "avx2,fma")]
     fn gradient(
         &self,
-        _st: &State,
         p: &[__m256; 3],
-        _u: &[__m256; 3],
         f: &[__m256; 3],
         base: __m256i,
         interior: __m256i,
@@ -658,30 +631,15 @@ impl<'a> Packets<'a> {
             let o = |j: i32, k: i32| 1 + j * sy + k * sz;
             // The nodes beside the cell: along y and z as x-pairs (the cell's two x nodes),
             // along x the first and last of the cell's rows of four.
-            let (ym, yp, zm, zp, xm, xp);
-            if ROWS {
-                let two = |j0: i32, k0: i32, j1: i32, k1: i32| {
-                    let [a, b, c, d] = hood.pairs2(o(j0, k0), o(j1, k1));
-                    [(a, b), (c, d)]
-                };
-                ym = two(0, 1, 0, 2);
-                yp = two(3, 1, 3, 2);
-                zm = two(1, 0, 2, 0);
-                zp = two(1, 3, 2, 3);
-                let r = |b: i32, c: i32| hood.row4(o(1 + b, 1 + c) - 1);
-                let rows = [r(0, 0), r(1, 0), r(0, 1), r(1, 1)];
-                xm = rows.map(|r| r[0]);
-                xp = rows.map(|r| r[3]);
-            } else {
-                let pair = |j: i32, k: i32| hood.pair(o(j, k));
-                ym = [pair(0, 1), pair(0, 2)];
-                yp = [pair(3, 1), pair(3, 2)];
-                zm = [pair(1, 0), pair(2, 0)];
-                zp = [pair(1, 3), pair(2, 3)];
-                let at = |i: i32, j: i32, k: i32| hood.gather(i + j * sy + k * sz);
-                xm = [at(0, 1, 1), at(0, 2, 1), at(0, 1, 2), at(0, 2, 2)];
-                xp = [at(3, 1, 1), at(3, 2, 1), at(3, 1, 2), at(3, 2, 2)];
-            }
+            let two = |j0: i32, k0: i32, j1: i32, k1: i32| {
+                let [a, b, c, d] = hood.pairs2(o(j0, k0), o(j1, k1));
+                [(a, b), (c, d)]
+            };
+            let (ym, yp) = (two(0, 1, 0, 2), two(3, 1, 3, 2));
+            let (zm, zp) = (two(1, 0, 2, 0), two(1, 3, 2, 3));
+            let r = |b: i32, c: i32| hood.row4(o(1 + b, 1 + c) - 1);
+            let rows = [r(0, 0), r(1, 0), r(0, 1), r(1, 1)];
+            let (xm, xp) = (rows.map(|r| r[0]), rows.map(|r| r[3]));
             let pick = |p: (__m256, __m256), a: i32| if a == 0 { p.0 } else { p.1 };
             let [fx, fy, fz] = *f;
             let (gx, gy, gz) = (
@@ -1006,13 +964,11 @@ fn finite(col: [__m256; 3]) -> [__m256; 3] {
 }
 
 /// Eight node indices into `values`, each clamped so that it and every index up to `span`
-/// past it lie inside the slice: [`Nodes::gather`] of an offset in `0..=span` and
-/// [`Nodes::pair`] of one in `0..span` then read inside it in every lane.
+/// past it lie inside the slice: [`Nodes::row4`] and [`Nodes::pairs2`] of offsets within
+/// `0..=span` then read inside it in every lane.
 struct Nodes<'a> {
     values: &'a [f32],
     at: __m256i,
-    /// `at` in the lane order (0, 1, 4, 5, 2, 3, 6, 7), for [`Nodes::pair`].
-    at_pairs: __m256i,
     span: i32,
 }
 
@@ -1025,53 +981,7 @@ impl<'a> Nodes<'a> {
         assert!(span >= 0 && (span as usize) < values.len() && values.len() <= i32::MAX as usize);
         let hi = _mm256_set1_epi32((values.len() - 1) as i32 - span);
         let at = _mm256_min_epi32(_mm256_max_epi32(at, _mm256_setzero_si256()), hi);
-        let order = _mm256_setr_epi32(0, 1, 4, 5, 2, 3, 6, 7);
-        Nodes {
-            values,
-            at,
-            at_pairs: _mm256_permutevar8x32_epi32(at, order),
-            span,
-        }
-    }
-
-    /// `values[at + off]` per lane.
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    fn gather(&self, off: i32) -> __m256 {
-        assert!((0..=self.span).contains(&off));
-        let idx = _mm256_add_epi32(self.at, _mm256_set1_epi32(off));
-        // SAFETY: each lane of `at` is in [0, len − 1 − span] (`Nodes::new`) and
-        // 0 ≤ off ≤ span, so each index is in [0, len − 1]: every lane reads an element of
-        // `values`. Scale 4 is the size of an f32.
-        unsafe { _mm256_i32gather_ps::<4>(self.values.as_ptr(), idx) }
-    }
-
-    /// `(values[at + off], values[at + off + 1])` per lane, by 64-bit gathers of the two
-    /// neighbours together (two of four lanes each: about the cost of one gather of eight
-    /// f32, for twice the numbers), then split.
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    fn pair(&self, off: i32) -> (__m256, __m256) {
-        assert!((0..self.span).contains(&off));
-        let idx = _mm256_add_epi32(self.at_pairs, _mm256_set1_epi32(off));
-        let p = self.values.as_ptr() as *const f64;
-        // SAFETY: each lane of `at_pairs` is a lane of `at`, in [0, len − 1 − span], and
-        // 0 ≤ off < span, so each index i has i + 1 ≤ len − 1: every lane reads the 8 bytes
-        // of `values[i]` and `values[i + 1]`, inside the slice. (Scale 4: the index counts
-        // f32; a gather has no alignment requirement.)
-        let (a, b) = unsafe {
-            (
-                _mm256_i32gather_pd::<4>(p, _mm256_castsi256_si128(idx)),
-                _mm256_i32gather_pd::<4>(p, _mm256_extracti128_si256::<1>(idx)),
-            )
-        };
-        // a holds lanes 0, 1, 4, 5 and b lanes 2, 3, 6, 7, each as (first, second): the
-        // in-lane shuffles put the firsts (and the seconds) back in lane order.
-        let (a, b) = (_mm256_castpd_ps(a), _mm256_castpd_ps(b));
-        (
-            _mm256_shuffle_ps::<0x88>(a, b),
-            _mm256_shuffle_ps::<0xDD>(a, b),
-        )
+        Nodes { values, at, span }
     }
 }
 
@@ -1206,23 +1116,4 @@ fn ldd(a: &[f64; W], h: usize) -> __m256d {
     let q: &[f64; 4] = a[4 * h..4 * h + 4].try_into().expect("four lanes");
     // SAFETY: `q` is 4 f64, 32 readable bytes; the load has no alignment requirement.
     unsafe { _mm256_loadu_pd(q.as_ptr()) }
-}
-
-static STATS: [std::sync::atomic::AtomicU64; 10] =
-    [const { std::sync::atomic::AtomicU64::new(0) }; 10];
-const COUNT: bool = false;
-fn stat(i: usize, n: u64) {
-    if COUNT {
-        STATS[i].fetch_add(n, std::sync::atomic::Ordering::Relaxed);
-    }
-}
-pub(super) fn print_stats() {
-    if COUNT {
-        eprintln!(
-            "{:?}",
-            STATS
-                .each_ref()
-                .map(|a| a.load(std::sync::atomic::Ordering::Relaxed))
-        );
-    }
 }
