@@ -69,6 +69,9 @@ struct Case {
     at: [f32; 3],
     step: f32,
     shaded: bool,
+    /// An opacity table of ten rows (more than the packet march holds in registers: its
+    /// segment pairs are gathered per lane) instead of four.
+    many_rows: bool,
     optimise: Optimise,
 }
 
@@ -79,14 +82,16 @@ fn render(case: &Case, packets: bool, threads: usize) -> Vec<[f32; 3]> {
     let mut vl = Library::new();
     vl.add_dataset(1, data).unwrap();
     // An opacity ramp that is 0 up to 0.3 (the zero test), a colour ramp.
-    vl.mapping(
-        1,
-        MappingType::Ramp,
-        4,
-        1,
-        &[0.3, 0.0, 0.5, 0.2, 0.7, 0.6, 0.95, 0.9],
-    )
-    .unwrap();
+    let opacity: &[f32] = if case.many_rows {
+        &[
+            0.3, 0.0, 0.38, 0.1, 0.45, 0.05, 0.52, 0.3, 0.6, 0.25, 0.67, 0.5, 0.74, 0.45, 0.8, 0.7,
+            0.88, 0.65, 0.95, 0.9,
+        ]
+    } else {
+        &[0.3, 0.0, 0.5, 0.2, 0.7, 0.6, 0.95, 0.9]
+    };
+    vl.mapping(1, MappingType::Ramp, opacity.len() as i32 / 2, 1, opacity)
+        .unwrap();
     vl.mapping(
         2,
         MappingType::Ramp,
@@ -189,6 +194,7 @@ fn cases() -> Vec<Case> {
             at,
             step,
             shaded: n % 2 == 0,
+            many_rows: n % 3 == 0,
             optimise,
         });
     }
