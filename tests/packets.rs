@@ -72,6 +72,9 @@ struct Case {
     /// An opacity table of ten rows (more than the packet march holds in registers: its
     /// segment pairs are gathered per lane) instead of four.
     many_rows: bool,
+    /// The volume turned about its centre (gradients to world space by a general matrix, not
+    /// a diagonal one).
+    turned: bool,
     optimise: Optimise,
 }
 
@@ -120,6 +123,13 @@ fn render(case: &Case, packets: bool, threads: usize) -> Vec<[f32; 3]> {
     vl.step_size(case.step, 1.0).unwrap();
     vl.object().unwrap();
     let ext = case.dims.map(|n| (n - 1) as f32);
+    if case.turned {
+        vl.translate(ext[0] / 2.0, ext[1] / 2.0, ext[2] / 2.0)
+            .unwrap();
+        vl.rotate(20.0, -35.0, 10.0).unwrap();
+        vl.translate(-ext[0] / 2.0, -ext[1] / 2.0, -ext[2] / 2.0)
+            .unwrap();
+    }
     vl.scale(ext[0], ext[1], ext[2]).unwrap();
     vl.dataset(Fields::F, 1).unwrap();
     vl.map(Fields::O, Fields::F, 1, 1).unwrap();
@@ -195,6 +205,7 @@ fn cases() -> Vec<Case> {
             step,
             shaded: n % 2 == 0,
             many_rows: n % 3 == 0,
+            turned: n % 5 >= 3,
             optimise,
         });
     }
