@@ -275,6 +275,18 @@ impl<'a> Packets<'a> {
             let mut active = 0u32;
             #[allow(clippy::needless_range_loop)] // (lane i's state is in several arrays)
             for i in 0..W {
+                // The common case: the lane's run has a next segment.
+                if let Some(lane) = &mut lanes[i] {
+                    if lane.j < lane.m {
+                        // (j < m ≤ 8: the mask only spares the bounds check.)
+                        let j = lane.j & (W - 1);
+                        st.mid[i] = lane.mids[j];
+                        st.len[i] = lane.lens[j];
+                        lane.j += 1;
+                        active |= 1 << i;
+                        continue;
+                    }
+                }
                 loop {
                     if lanes[i].is_none() {
                         let Some(px) = (next_pixel < out.len()).then_some(next_pixel) else {
@@ -323,8 +335,10 @@ impl<'a> Packets<'a> {
                             continue;
                         }
                     }
-                    st.mid[i] = lane.mids[lane.j];
-                    st.len[i] = lane.lens[lane.j];
+                    // (j < m ≤ 8: the mask only spares the bounds check.)
+                    let j = lane.j & (W - 1);
+                    st.mid[i] = lane.mids[j];
+                    st.len[i] = lane.lens[j];
                     lane.j += 1;
                     active |= 1 << i;
                     break;
@@ -334,6 +348,9 @@ impl<'a> Packets<'a> {
                 break;
             }
             let ended = self.step(&mut st, active, &mut cache);
+            if ended == 0 {
+                continue;
+            }
             for (i, lane) in lanes.iter_mut().enumerate() {
                 if ended >> i & 1 != 0 {
                     let px = lane.take().expect("a ray").px;
@@ -393,12 +410,12 @@ impl<'a> Packets<'a> {
         let zero = _mm256_setzero_ps();
         let one = _mm256_set1_ps(1.0);
         // The lanes with a sample of positive length (`pass_bits`: a NaN length passes).
-        let mut live = active;
-        for i in 0..W {
-            if st.len[i] <= 0.0 {
-                live &= !(1 << i);
-            }
+        let mut empty = 0u32;
+        for h in 0..2 {
+            let le = _mm256_cmp_pd::<_CMP_LE_OQ>(ldd(&st.len, h), _mm256_setzero_pd());
+            empty |= (_mm256_movemask_pd(le) as u32) << (4 * h);
         }
+        let live = active & !empty;
         if live == 0 {
             return 0;
         }
