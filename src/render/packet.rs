@@ -1014,7 +1014,7 @@ impl Nodes<'_> {
         let lane = |i: usize| {
             // SAFETY: `at[i]` is in [0, len − 1 − span] (`Nodes::new`) and
             // 0 ≤ off ≤ span − 3, so the four f32 at `at[i] + off` lie inside `values`.
-            unsafe { _mm_loadu_ps(p.add((at[i] + off) as usize)) }
+            unsafe { _mm_loadu_ps(p.add(at[i] + off as usize)) }
         };
         transpose(std::array::from_fn(|i| {
             _mm256_set_m128(lane(i + 4), lane(i))
@@ -1034,10 +1034,10 @@ impl Nodes<'_> {
             // f32 at `at[i] + a` and the two at `at[i] + b` lie inside `values`; the loads
             // have no alignment requirement.
             unsafe {
-                let lo = _mm_castpd_ps(_mm_load_sd(p.add((at[i] + a) as usize) as *const f64));
+                let lo = _mm_castpd_ps(_mm_load_sd(p.add(at[i] + a as usize) as *const f64));
                 _mm_castpd_ps(_mm_loadh_pd(
                     _mm_castps_pd(lo),
-                    p.add((at[i] + b) as usize) as *const f64,
+                    p.add(at[i] + b as usize) as *const f64,
                 ))
             }
         };
@@ -1046,14 +1046,15 @@ impl Nodes<'_> {
         }))
     }
 
-    /// The lanes of `at` as an array.
+    /// The lanes of `at` as an array of indices (each in [0, len − 1 − span], `Nodes::new`;
+    /// as usize, so that an offset is added without a sign extension per load).
     #[inline]
     #[target_feature(enable = "avx2")]
-    fn indices(&self) -> [i32; W] {
+    fn indices(&self) -> [usize; W] {
         let mut a = [0i32; W];
         // SAFETY: `a` is 8 i32, 32 writable bytes; the store has no alignment requirement.
         unsafe { _mm256_storeu_si256(a.as_mut_ptr() as *mut __m256i, self.at) };
-        a
+        a.map(|x| x as u32 as usize)
     }
 }
 
