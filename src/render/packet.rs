@@ -24,8 +24,9 @@
 //! takes the tile's next ray.
 //!
 //! On by default where it applies (`Optimise::packets` switches it off): about 1.1× the
-//! scalar march's speed shaded and 1.25× unshaded on the measured host (`docs/performance.md`,
-//! "The packet march (AVX2), measured").
+//! scalar march's speed shaded and 1.25× unshaded on the measured host as first measured,
+//! 1.15–1.25× shaded after the second round's cheaper loads and bookkeeping
+//! (`docs/performance.md`, "The packet march (AVX2), measured" and the paragraphs after it).
 //!
 //! **Arithmetic.** The trilinear value and the gradient's sums are the scalar code's f32
 //! operations in the same order, without fused multiply-adds, so the same bits. The tables,
