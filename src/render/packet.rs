@@ -1076,15 +1076,23 @@ fn transpose(y: [__m256; 4]) -> [__m256; 4] {
     ]
 }
 
+/// `idx` with each lane clamped to `[0, len − 1]` (`len` not 0, at most `i32::MAX`): the
+/// indices every gather below reads through.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn clamped(len: usize, idx: __m256i) -> __m256i {
+    assert!(len != 0 && len <= i32::MAX as usize);
+    let hi = _mm256_set1_epi32((len - 1) as i32);
+    _mm256_min_epi32(_mm256_max_epi32(idx, _mm256_setzero_si256()), hi)
+}
+
 /// `data[idx]` per lane, each index first clamped to `[0, data.len() − 1]` (`data` not
 /// empty, at most `i32::MAX` long).
 #[inline]
 #[target_feature(enable = "avx2")]
 fn gather(data: &[f32], idx: __m256i) -> __m256 {
-    assert!(!data.is_empty() && data.len() <= i32::MAX as usize);
-    let hi = _mm256_set1_epi32((data.len() - 1) as i32);
-    let idx = _mm256_min_epi32(_mm256_max_epi32(idx, _mm256_setzero_si256()), hi);
-    // SAFETY: every index is in [0, data.len() − 1] (the clamp above), so every lane reads an
+    let idx = clamped(data.len(), idx);
+    // SAFETY: every index is in [0, data.len() − 1] (`clamped`), so every lane reads an
     // element of `data`.
     unsafe { _mm256_i32gather_ps::<4>(data.as_ptr(), idx) }
 }
@@ -1093,9 +1101,7 @@ fn gather(data: &[f32], idx: __m256i) -> __m256 {
 #[inline]
 #[target_feature(enable = "avx2")]
 fn gather_i32(data: &[i32], idx: __m256i) -> __m256i {
-    assert!(!data.is_empty() && data.len() <= i32::MAX as usize);
-    let hi = _mm256_set1_epi32((data.len() - 1) as i32);
-    let idx = _mm256_min_epi32(_mm256_max_epi32(idx, _mm256_setzero_si256()), hi);
+    let idx = clamped(data.len(), idx);
     // SAFETY: as in `gather`: every index is in [0, data.len() − 1].
     unsafe { _mm256_i32gather_epi32::<4>(data.as_ptr(), idx) }
 }
@@ -1104,9 +1110,7 @@ fn gather_i32(data: &[i32], idx: __m256i) -> __m256i {
 #[inline]
 #[target_feature(enable = "avx2")]
 fn gather_u32(data: &[u32], idx: __m256i) -> __m256i {
-    assert!(!data.is_empty() && data.len() <= i32::MAX as usize);
-    let hi = _mm256_set1_epi32((data.len() - 1) as i32);
-    let idx = _mm256_min_epi32(_mm256_max_epi32(idx, _mm256_setzero_si256()), hi);
+    let idx = clamped(data.len(), idx);
     // SAFETY: as in `gather`: every index is in [0, data.len() − 1]; u32 and i32 have the
     // same size and alignment.
     unsafe { _mm256_i32gather_epi32::<4>(data.as_ptr() as *const i32, idx) }
