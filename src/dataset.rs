@@ -197,16 +197,25 @@ fn pack_flags(flags: &[u8]) -> u64 {
 #[derive(Debug)]
 pub(crate) struct CellMask {
     bits: Vec<u64>,
+    /// The bits as 32-bit words (word w holds bits 32w … 32w + 31), for the packet march's
+    /// gathers: made on first use, then shared by every image that uses the mask.
+    words32: std::sync::OnceLock<Vec<u32>>,
 }
 
 /// The cell masks of a dataset, each with the bits of its bound.
 type CellMasks = Vec<(u32, std::sync::Arc<CellMask>)>;
 
 impl CellMask {
-    /// The mask's bits: bit `c & 63` of word `c >> 6` for the cell with first node `c` (a
-    /// cell past their end may reach the bound). For the packet march (`render::packet`).
-    pub(crate) fn bits(&self) -> &[u64] {
-        &self.bits
+    /// The mask's bits as 32-bit words: bit `c & 31` of word `c >> 5` for the cell with first
+    /// node `c` (a cell past their end may reach the bound). For the packet march
+    /// (`render::packet`), made once per mask.
+    pub(crate) fn words32(&self) -> &[u32] {
+        self.words32.get_or_init(|| {
+            self.bits
+                .iter()
+                .flat_map(|&w| [w as u32, (w >> 32) as u32])
+                .collect()
+        })
     }
 
     /// Whether the cell with first node `c` may reach the bound.
@@ -548,7 +557,10 @@ impl Dataset {
                     }
                 },
             );
-        CellMask { bits }
+        CellMask {
+            bits,
+            words32: Default::default(),
+        }
     }
 
     fn compute_bricks(&self, reach: usize) -> Bricks {
@@ -2559,7 +2571,10 @@ mod tests {
             let count = batch % 9;
             let got = values8(d, &by_axis, count, None);
             // A mask of no bits lets every cell through, as no mask does.
-            let empty = CellMask { bits: Vec::new() };
+            let empty = CellMask {
+                bits: Vec::new(),
+                words32: Default::default(),
+            };
             let unmasked = values8(d, &by_axis, count, Some(&empty));
             for (i, (p, got)) in ps.iter().zip(got).enumerate() {
                 let want = if i < count { d.trilinear(*p) } else { 0.0 };

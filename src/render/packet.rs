@@ -83,7 +83,7 @@ pub(super) struct Packets<'a> {
     tables: &'a DirectShading,
     values: &'a [f32],
     /// The cell mask's bits as 32-bit words (empty: no mask).
-    mask: Vec<u32>,
+    mask: &'a [u32],
     z: f32,
     /// The two tables as segments in registers, where each has at most seven rows.
     segments: Option<Segments>,
@@ -184,14 +184,7 @@ impl<'a> Packets<'a> {
                 }
             }
         };
-        let mask = match obj.cells.as_deref() {
-            Some(m) => m
-                .bits()
-                .iter()
-                .flat_map(|&w| [w as u32, (w >> 32) as u32])
-                .collect(),
-            None => Vec::new(),
-        };
+        let mask = obj.cells.as_deref().map_or(&[][..], |m| m.words32());
         if mask.len() >= i32::MAX as usize {
             return None;
         }
@@ -462,7 +455,7 @@ impl<'a> Packets<'a> {
         let mut pass = live;
         if !self.mask.is_empty() {
             let word = _mm256_srli_epi32::<5>(base);
-            let words = gather_u32(&self.mask, word);
+            let words = gather_u32(self.mask, word);
             let bit = _mm256_and_si256(
                 _mm256_srlv_epi32(words, _mm256_and_si256(base, _mm256_set1_epi32(31))),
                 _mm256_set1_epi32(1),
