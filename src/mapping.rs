@@ -165,11 +165,7 @@ impl Mapping {
     }
 
     /// Output `j` of row `i` (both counted from 0): b_{i+1, j+1}.
-    pub(crate) fn output(&self, i: usize, j: usize) -> f32 {
-        self.b(i, j)
-    }
-
-    fn b(&self, i: usize, j: usize) -> f32 {
+    pub(crate) fn b(&self, i: usize, j: usize) -> f32 {
         self.b[i * self.outputs + j]
     }
 
@@ -244,7 +240,7 @@ impl Mapping {
 
     /// Segment `i` of the ramp: a_i, then (b_{i,j}, slope) per output j.
     #[inline]
-    fn segment(&self, i: usize) -> &[f64] {
+    pub(crate) fn segment(&self, i: usize) -> &[f64] {
         let stride = 1 + 2 * self.outputs;
         &self.segments[i * stride..(i + 1) * stride]
     }

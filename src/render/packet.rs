@@ -845,7 +845,7 @@ impl Segs {
             return None;
         }
         let (mut start, mut base, mut slope) = ([0f32; 8], [0f32; 8], [0f32; 8]);
-        let b = |i: usize| m.output(i, j) as f64;
+        let b = |i: usize| m.b(i, j) as f64;
         for k in 0..=n {
             let (s0, b0, sl) = match m.kind() {
                 MappingType::Lookup => (0.0, if k == 0 || k == n { 0.0 } else { b(k) }, 0.0),
@@ -865,8 +865,9 @@ impl Segs {
                     (an, b(n - 1), s)
                 }
                 MappingType::Ramp => {
-                    let (a0, a1) = (a[k - 1] as f64, a[k] as f64);
-                    (a0, b(k - 1), (b(k) - b(k - 1)) / (a1 - a0))
+                    // Between rows k − 1 and k: the mapping's own segment (a, b, slope).
+                    let seg = m.segment(k - 1);
+                    (seg[0], seg[1 + 2 * j], seg[2 + 2 * j])
                 }
             };
             start[k] = s0 as f32;
