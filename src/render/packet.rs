@@ -11,8 +11,11 @@
 //! Each lane has its own ray, [`Cursor`] and state (transmittance, colour). The cursors are
 //! the scalar march's: a lane's samples are exactly the segments [`Cursor::next_run`] gives
 //! (the same midpoints, lengths and empty-space skipping, the same start at the
-//! [`EntryMap`] bound). Every iteration takes each lane's next sample and evaluates the eight
-//! together: the object points and cells, the cell mask (one gather), the eight nodes (per-lane
+//! [`EntryMap`] bound), except those a lane need not take: each run's eight samples are first
+//! tested against the cell mask together ([`Packets::to_take`], one gather a run), and a
+//! sample in a cell that cannot reach the zero test's bound (it would add nothing) takes no
+//! lane. Every iteration takes each lane's next sample to take and evaluates the eight
+//! together: the object points and cells, the eight nodes (per-lane
 //! 8-byte loads and a transposition, [`Nodes::pairs2`]; gathers were slower on the measured
 //! host, see `docs/performance.md`), the trilinear value (the scalar code's f32 lerps,
 //! unfused, so the same bits and the same zero test), opacity and colour (the two tables as at
@@ -25,8 +28,9 @@
 //!
 //! On by default where it applies (`Optimise::packets` switches it off): about 1.1× the
 //! scalar march's speed shaded and 1.25× unshaded on the measured host as first measured,
-//! 1.15–1.25× shaded after the second round's cheaper loads and bookkeeping
-//! (`docs/performance.md`, "The packet march (AVX2), measured" and the paragraphs after it).
+//! 1.15–1.25× shaded after the second round's cheaper loads and bookkeeping, about 1.45×
+//! shaded and 1.5× unshaded since samples in masked cells take no lane (`docs/performance.md`,
+//! "The packet march (AVX2), measured" and the paragraphs after it).
 //!
 //! **Arithmetic.** The trilinear value and the gradient's sums are the scalar code's f32
 //! operations in the same order, without fused multiply-adds, so the same bits. The tables,
@@ -269,14 +273,10 @@ impl<'a> Packets<'a> {
             let mut active = 0u32;
             #[allow(clippy::needless_range_loop)] // (lane i's state is in several arrays)
             for i in 0..W {
-                // The common case: the lane's run has a next segment.
+                // The common case: the lane's run has a next segment to take.
                 if let Some(lane) = &mut lanes[i] {
-                    if lane.j < lane.m {
-                        // (j < m ≤ 8: the mask only spares the bounds check.)
-                        let j = lane.j & (W - 1);
-                        st.mid[i] = lane.mids[j];
-                        st.len[i] = lane.lens[j];
-                        lane.j += 1;
+                    if lane.keep != 0 {
+                        lane.take(&mut st, i);
                         active |= 1 << i;
                         continue;
                     }
@@ -307,8 +307,7 @@ impl<'a> Packets<'a> {
                                     cursor: c,
                                     mids: [0.0; 8],
                                     lens: [0.0; 8],
-                                    j: 0,
-                                    m: 0,
+                                    keep: 0,
                                     px,
                                 });
                             }
@@ -319,21 +318,23 @@ impl<'a> Packets<'a> {
                         }
                     }
                     let lane = lanes[i].as_mut().expect("a ray");
-                    if lane.j == lane.m {
-                        lane.m = lane.cursor.next_run(grid, &mut lane.mids, &mut lane.lens);
-                        lane.j = 0;
-                        if lane.m == 0 {
-                            let px = lane.px;
-                            lanes[i] = None;
-                            out[px] = self.finish(&st, i, background);
-                            continue;
+                    // The next run with a segment to take (runs of none are passed over).
+                    let mut ends = false;
+                    while lane.keep == 0 {
+                        let m = lane.cursor.next_run(grid, &mut lane.mids, &mut lane.lens);
+                        if m == 0 {
+                            ends = true;
+                            break;
                         }
+                        lane.keep = self.to_take(&lane.cursor, &lane.mids, &lane.lens, m);
                     }
-                    // (j < m ≤ 8: the mask only spares the bounds check.)
-                    let j = lane.j & (W - 1);
-                    st.mid[i] = lane.mids[j];
-                    st.len[i] = lane.lens[j];
-                    lane.j += 1;
+                    if ends {
+                        let px = lane.px;
+                        lanes[i] = None;
+                        out[px] = self.finish(&st, i, background);
+                        continue;
+                    }
+                    lane.take(&mut st, i);
                     active |= 1 << i;
                     break;
                 }
@@ -424,50 +425,11 @@ impl<'a> Packets<'a> {
             };
             *pa = _mm256_set_m128(half(1), half(0));
         }
-        // The cells, as `Dataset::trilinear8` finds them.
-        let mut u = [zero; 3];
-        let mut f = [zero; 3];
-        let mut c = [_mm256_setzero_si256(); 3];
-        let mut interior = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_EQ_OQ>(zero, zero));
-        for axis in 0..3 {
-            let l = _mm256_set1_ps(self.last[axis]);
-            let ua = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(p[axis], l), zero), l);
-            let cu = _mm256_min_ps(ua, _mm256_set1_ps(self.top[axis]));
-            let ci = _mm256_cvttps_epi32(cu);
-            f[axis] = _mm256_sub_ps(ua, _mm256_cvtepi32_ps(ci));
-            u[axis] = ua;
-            c[axis] = ci;
-            let inside = _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GE_OQ>(cu, one),
-                _mm256_cmp_ps::<_CMP_LT_OQ>(cu, _mm256_set1_ps(self.inner[axis])),
-            );
-            interior = _mm256_and_si256(interior, _mm256_castps_si256(inside));
-        }
-        let (sy, sz) = (self.sy, self.sz);
-        let base = _mm256_add_epi32(
-            c[0],
-            _mm256_add_epi32(
-                _mm256_mullo_epi32(c[1], _mm256_set1_epi32(sy)),
-                _mm256_mullo_epi32(c[2], _mm256_set1_epi32(sz)),
-            ),
-        );
-        // The cell mask.
+        // The cells (every sample here lies in one that may reach the bound: `to_take`).
+        let (f, base, interior) = self.cells(&p);
+        let sy = self.sy;
+        let sz = self.sz;
         let mut pass = live;
-        if !self.mask.is_empty() {
-            let word = _mm256_srli_epi32::<5>(base);
-            let words = gather_u32(self.mask, word);
-            let bit = _mm256_and_si256(
-                _mm256_srlv_epi32(words, _mm256_and_si256(base, _mm256_set1_epi32(31))),
-                _mm256_set1_epi32(1),
-            );
-            // A cell past the mask's end may reach the bound.
-            let past = _mm256_cmpgt_epi32(word, _mm256_set1_epi32(self.mask.len() as i32 - 1));
-            let reach = _mm256_or_si256(_mm256_cmpeq_epi32(bit, _mm256_set1_epi32(1)), past);
-            pass &= _mm256_movemask_ps(_mm256_castsi256_ps(reach)) as u32;
-        }
-        if pass == 0 {
-            return 0;
-        }
         // The eight nodes and the trilinear value (`trilinear_rows`' lerps).
         // (Lanes whose cell cannot pass read node 0 instead: no memory traffic for them.)
         let base = _mm256_and_si256(base, _mm256_castps_si256(lanes_mask(pass)));
@@ -560,6 +522,76 @@ impl<'a> Packets<'a> {
         st8(&mut st.t, t);
         let below = _mm256_cmp_ps::<_CMP_LT_OQ>(t, _mm256_set1_ps(self.stop));
         shown & _mm256_movemask_ps(below) as u32
+    }
+
+    /// The cells of object points `p`, as `Dataset::trilinear8` finds them: the weights
+    /// within the cell, the cell's first node's index and, per lane, whether the cell's 4³
+    /// neighbourhood lies inside the grid (`Dataset::interior8`).
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn cells(&self, p: &[__m256; 3]) -> ([__m256; 3], __m256i, __m256i) {
+        let zero = _mm256_setzero_ps();
+        let one = _mm256_set1_ps(1.0);
+        let mut f = [zero; 3];
+        let mut c = [_mm256_setzero_si256(); 3];
+        let mut interior = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_EQ_OQ>(zero, zero));
+        for axis in 0..3 {
+            let l = _mm256_set1_ps(self.last[axis]);
+            let ua = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(p[axis], l), zero), l);
+            let cu = _mm256_min_ps(ua, _mm256_set1_ps(self.top[axis]));
+            let ci = _mm256_cvttps_epi32(cu);
+            f[axis] = _mm256_sub_ps(ua, _mm256_cvtepi32_ps(ci));
+            c[axis] = ci;
+            let inside = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GE_OQ>(cu, one),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(cu, _mm256_set1_ps(self.inner[axis])),
+            );
+            interior = _mm256_and_si256(interior, _mm256_castps_si256(inside));
+        }
+        let base = _mm256_add_epi32(
+            c[0],
+            _mm256_add_epi32(
+                _mm256_mullo_epi32(c[1], _mm256_set1_epi32(self.sy)),
+                _mm256_mullo_epi32(c[2], _mm256_set1_epi32(self.sz)),
+            ),
+        );
+        (f, base, interior)
+    }
+
+    /// The segments of a run (`m` of them, 1 to 8, at midpoints `mids` with lengths `lens`
+    /// on the ray of cursor `c`) that [`Packets::step`] must take, by bit: those of positive
+    /// length (or NaN) whose sample lies in a cell the cell mask says may reach the bound.
+    /// Every other segment adds nothing to its ray (the scalar march drops it too), so it
+    /// needs no lane: in the measured frame about half of the segments the block walk gives.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn to_take(&self, c: &Cursor, mids: &[f64; 8], lens: &[f64; 8], m: usize) -> u32 {
+        let mut keep = (1u32 << m) - 1;
+        for h in 0..2 {
+            let le = _mm256_cmp_pd::<_CMP_LE_OQ>(ldd(lens, h), _mm256_setzero_pd());
+            keep &= !((_mm256_movemask_pd(le) as u32) << (4 * h));
+        }
+        if self.mask.is_empty() || keep == 0 {
+            return keep;
+        }
+        // The object points, as `Packets::step` makes them.
+        let p: [__m256; 3] = std::array::from_fn(|axis| {
+            let o = _mm256_set1_pd(c.o[axis]);
+            let d = _mm256_set1_pd(c.d[axis]);
+            let half = |h: usize| _mm256_cvtpd_ps(_mm256_add_pd(o, _mm256_mul_pd(ldd(mids, h), d)));
+            _mm256_set_m128(half(1), half(0))
+        });
+        let (_, base, _) = self.cells(&p);
+        let word = _mm256_srli_epi32::<5>(base);
+        let words = gather_u32(self.mask, word);
+        let bit = _mm256_and_si256(
+            _mm256_srlv_epi32(words, _mm256_and_si256(base, _mm256_set1_epi32(31))),
+            _mm256_set1_epi32(1),
+        );
+        // A cell past the mask's end may reach the bound.
+        let past = _mm256_cmpgt_epi32(word, _mm256_set1_epi32(self.mask.len() as i32 - 1));
+        let reach = _mm256_or_si256(_mm256_cmpeq_epi32(bit, _mm256_set1_epi32(1)), past);
+        keep & _mm256_movemask_ps(_mm256_castsi256_ps(reach)) as u32
     }
 
     /// Opacity and colour of values `v` from the tables' segment pairs (gathers), the lanes
@@ -927,11 +959,23 @@ struct LaneRay {
     cursor: Cursor,
     mids: [f64; 8],
     lens: [f64; 8],
-    /// The next segment of the run, and the run's length.
-    j: usize,
-    m: usize,
+    /// The run's segments still to take, by bit ([`Packets::to_take`]).
+    keep: u32,
     /// The pixel, in the tile.
     px: usize,
+}
+
+impl LaneRay {
+    /// Puts the run's next segment to take (there is one: `keep` is not 0) into lane `i` of
+    /// `st` and passes it.
+    #[inline]
+    fn take(&mut self, st: &mut State, i: usize) {
+        // (A bit of `keep` is below 8: the mask only spares the bounds check.)
+        let j = self.keep.trailing_zeros() as usize & (W - 1);
+        self.keep &= self.keep - 1;
+        st.mid[i] = self.mids[j];
+        st.len[i] = self.lens[j];
+    }
 }
 
 /// The lanes' state, by lane: the ray in object coordinates (`o + t·d`), the view direction
