@@ -123,6 +123,17 @@ pub fn bc_kernel(x: f64, b: f64, c: f64) -> f64 {
     }
 }
 
+/// The normalisation of raw voxel values to node values, `(v − a)/(b − a)` clamped to [0, 1],
+/// in f64 and then rounded to f32: the node values ([`Dataset::new`]) and the brick ranges
+/// found from raw extremes ([`Dataset::bricks`]) both come from it. Monotone in v
+/// (non-decreasing for b > a, non-increasing for b < a): each step (a subtraction, a division
+/// by a constant, a clamp, a rounding) is, so the extremes of the node values over any set of
+/// nodes are the normalised extremes of their raw values.
+fn normaliser(a: f32, b: f32) -> impl Fn(f64) -> f32 + Copy + Sync {
+    let (af, bf) = (a as f64, b as f64);
+    move |v: f64| ((v - af) / (bf - af)).clamp(0.0, 1.0) as f32
+}
+
 /// Nodes per side of a brick, the unit of empty-space skipping.
 pub const BRICK: usize = 4;
 
@@ -153,7 +164,7 @@ impl Bricks {
 /// Lowers each of `min` to the matching value of `lo` where that is smaller, and raises each of
 /// `max` to the matching value of `hi` where that is larger. Plain comparisons: the values are
 /// never NaN, and `f32::min`/`max`'s NaN handling costs several instructions per value.
-fn widen(min: &mut [f32], max: &mut [f32], lo: &[f32], hi: &[f32]) {
+fn widen<T: Copy + PartialOrd>(min: &mut [T], max: &mut [T], lo: &[T], hi: &[T]) {
     // (As selects rather than conditional stores, so that they compile to lanes of minps and
     // maxps.)
     for (m, &x) in min.iter_mut().zip(lo) {
@@ -393,8 +404,7 @@ impl Dataset {
                 format!("dataset normalisation a = {a}, b = {b}: both finite and different"),
             );
         }
-        let (af, bf) = (a as f64, b as f64);
-        let norm = |v: f64| ((v - af) / (bf - af)).clamp(0.0, 1.0) as f32;
+        let norm = normaliser(a, b);
         // (On all cores: the values of a large scan are part of its first image's time.)
         use rayon::prelude::*;
         // Chunks of a zeroed buffer filled in plain loops: a parallel `collect` spent about
@@ -506,22 +516,95 @@ impl Dataset {
     }
 
     fn compute_cell_mask(&self, z: f32) -> CellMask {
+        // Over the raw voxels, like the brick ranges: `normaliser` is monotone, so a cell's
+        // largest node value is the normalised largest raw voxel of its nodes (smallest, where
+        // the normalisation decreases), and "normalised above the bound" is a threshold on raw
+        // voxels.
+        let lo = z - CELL_MASK_MARGIN;
+        let bits = match (&self.raw, self.b > self.a) {
+            (Voxels::U8(v), true) => self.raw_cell_bits::<_, true>(v, lo),
+            (Voxels::U8(v), false) => self.raw_cell_bits::<_, false>(v, lo),
+            (Voxels::U16(v), true) => self.raw_cell_bits::<_, true>(v, lo),
+            (Voxels::U16(v), false) => self.raw_cell_bits::<_, false>(v, lo),
+        };
+        CellMask {
+            bits,
+            words32: Default::default(),
+        }
+    }
+
+    /// The bits of [`CellMask`] for bound `lo` (a cell's bit is set where its largest node
+    /// value is above `lo`), from the raw voxels `v`; `UP`: the normalisation increases
+    /// (b > a). (A constant, so that each loop below compiles to plain minima or maxima.)
+    fn raw_cell_bits<T, const UP: bool>(&self, v: &[T], lo: f32) -> Vec<u64>
+    where
+        T: Copy + PartialOrd + TryFrom<u32> + Send + Sync,
+    {
         use rayon::prelude::*;
+        debug_assert_eq!(UP, self.b > self.a);
+        let norm = normaliser(self.a, self.b);
+        // Raw voxels are 0 ..= top. The voxels whose value is above `lo` are those from the
+        // threshold t up (increasing normalisation) or up to it (decreasing): the first such
+        // voxel from that end, found by bisection on the monotone test; `None` where none is.
+        let top = if std::mem::size_of::<T>() == 1 {
+            255u32
+        } else {
+            65535
+        };
+        let above = |x: u32| norm(x as f64) > lo;
+        // (from the passing end: `at(0)` is top where increasing, 0 where decreasing)
+        let at = |i: u32| if UP { top - i } else { i };
+        let threshold = if !above(at(0)) {
+            None
+        } else {
+            // The largest i with above(at(i)): above(at(0)) holds, and at(i) moves away from
+            // the passing end as i grows.
+            let (mut ok, mut bad) = (0u32, top + 1);
+            while bad - ok > 1 {
+                let mid = ok + (bad - ok) / 2;
+                if above(at(mid)) {
+                    ok = mid;
+                } else {
+                    bad = mid;
+                }
+            }
+            Some(at(ok))
+        };
+        let mut bits = vec![0u64; v.len().div_ceil(64)];
+        let Some(t) = threshold else {
+            return bits;
+        };
+        let t = T::try_from(t).ok().expect("a raw voxel value");
         let [nx, ny, _] = self.dims;
         let [sx, sy, sz] = self.strides;
         let top = self.top32.map(|t| t as usize);
-        let lo = z - CELL_MASK_MARGIN;
-        let v = &self.values;
+        // The extreme that decides a cell: the largest raw voxel where increasing, the
+        // smallest where decreasing. `t` is moved into the test: captured by reference, it was
+        // loaded again for every cell (the flags written might have been it, for all the
+        // compiler knew), and the loop did not compile to lanes.
+        let pick = |p: T, q: T| {
+            if UP {
+                if p > q {
+                    p
+                } else {
+                    q
+                }
+            } else if p < q {
+                p
+            } else {
+                q
+            }
+        };
+        let passes = move |x: T| if UP { x >= t } else { x <= t };
         // A run of words at a time in parallel, each from a flag per node of the run (no flag
         // per node of the whole grid: a first image pays a page fault per 4 KiB of fresh
-        // memory). Per x-row of nodes that meets the run: the largest of each cell's nodes
-        // (the four x-rows' largest at each x, then of two neighbours along x) against the
-        // bound; nodes that start no cell keep a flag of 0.
-        let mut bits = vec![0u64; v.len().div_ceil(64)];
+        // memory). Per x-row of nodes that meets the run: the extreme of each cell's nodes
+        // (the four x-rows' extreme at each x, then of two neighbours along x) against the
+        // threshold; nodes that start no cell keep a flag of 0.
         bits.par_chunks_mut(CELL_MASK_RUN)
             .enumerate()
             .for_each_init(
-                || (vec![0f32; nx], vec![0u8; CELL_MASK_RUN * 64]),
+                || (vec![t; nx], vec![0u8; CELL_MASK_RUN * 64]),
                 |(m, flags), (c, out)| {
                     let first = c * CELL_MASK_RUN * 64;
                     let end = (first + out.len() * 64).min(v.len());
@@ -535,21 +618,21 @@ impl Dataset {
                         let o = r * nx;
                         let row = |r: usize| &v[r..r + nx];
                         let (a, b, c, d) = (row(o), row(o + sy), row(o + sz), row(o + sy + sz));
-                        // (Selects, not `f32::max`, whose NaN handling costs several
-                        // instructions a value: the values are never NaN.)
-                        let max = |p: f32, q: f32| if p > q { p } else { q };
-                        for i in 0..nx {
-                            m[i] = max(max(a[i], b[i]), max(c[i], d[i]));
+                        let rows = a.iter().zip(b).zip(c.iter().zip(d));
+                        for (m, ((&a, &b), (&c, &d))) in m.iter_mut().zip(rows) {
+                            *m = pick(pick(a, b), pick(c, d));
                         }
                         // The row's cells inside the run: first nodes o + i0 ..= o + i1.
                         let (i0, i1) = (first.saturating_sub(o), top[0].min(end - 1 - o));
                         if i0 > i1 {
                             continue;
                         }
-                        let here = &mut flags[o + i0 - first..=o + i1 - first];
-                        let pairs = m[i0..=i1].iter().zip(&m[i0 + sx..=i1 + sx]);
-                        for (f, (&p, &q)) in here.iter_mut().zip(pairs) {
-                            *f = u8::from(max(p, q) > lo);
+                        // (Slices of one length: the loop then compiles to lanes.)
+                        let len = i1 - i0 + 1;
+                        let here = &mut flags[o + i0 - first..][..len];
+                        let (p, q) = (&m[i0..][..len], &m[i0 + sx..][..len]);
+                        for (f, (&p, &q)) in here.iter_mut().zip(p.iter().zip(q)) {
+                            *f = u8::from(passes(pick(p, q)));
                         }
                     }
                     for (w, f) in out.iter_mut().zip(flags.chunks(64)) {
@@ -557,15 +640,56 @@ impl Dataset {
                     }
                 },
             );
-        CellMask {
-            bits,
-            words32: Default::default(),
-        }
+        bits
     }
 
     fn compute_bricks(&self, reach: usize) -> Bricks {
+        // Over the raw voxels (a quarter or half of the node values' memory, compared a byte
+        // or two at a time), then normalised: `normaliser` is monotone, so the normalised
+        // raw extremes are the extremes of the node values, the same numbers.
+        let (min, max) = match &self.raw {
+            Voxels::U8(v) => self.normalised(self.raw_brick_extremes(v, reach)),
+            Voxels::U16(v) => self.normalised(self.raw_brick_extremes(v, reach)),
+        };
+        Bricks {
+            dims: self.brick_counts(),
+            min,
+            max,
+        }
+    }
+
+    /// The node-value ranges of raw ranges `(lo, hi)`: each end normalised, the two swapped
+    /// where the normalisation decreases (b < a).
+    fn normalised<T: Copy + Into<f64>>(&self, (lo, hi): (Vec<T>, Vec<T>)) -> (Vec<f32>, Vec<f32>) {
+        let norm = normaliser(self.a, self.b);
+        let up = self.b > self.a;
+        lo.iter()
+            .zip(&hi)
+            .map(|(&l, &h)| {
+                let (l, h) = (norm(l.into()), norm(h.into()));
+                if up {
+                    (l, h)
+                } else {
+                    (h, l)
+                }
+            })
+            .unzip()
+    }
+
+    /// Bricks per axis.
+    fn brick_counts(&self) -> [usize; 3] {
+        self.dims
+            .map(|n| (n.saturating_sub(1)).div_ceil(BRICK).max(1))
+    }
+
+    /// The smallest and largest raw voxel of each brick's padded span of nodes (see
+    /// [`Bricks`]), x fastest, from the raw voxels `v`.
+    fn raw_brick_extremes<T>(&self, v: &[T], reach: usize) -> (Vec<T>, Vec<T>)
+    where
+        T: Copy + PartialOrd + Default + Send + Sync,
+    {
         let d = self.dims;
-        let counts = d.map(|n| (n.saturating_sub(1)).div_ceil(BRICK).max(1));
+        let counts = self.brick_counts();
         // Along each axis, a point of brick b has its continuous index u in [4b, 4b + 4], or a
         // rounding error outside. Trilinear (reach 1) reads nodes floor(u) and floor(u) + 1, so
         // [4b − 1, 4b + 5] covers u from just below 4b to just above 4b + 4; nearest reads
@@ -584,8 +708,8 @@ impl Dataset {
         use rayon::prelude::*;
         let [nx, ny, _] = d;
         let plane = counts[0] * counts[1];
-        let (mut min, mut max) = (vec![0f32; plane * counts[2]], vec![0f32; plane * counts[2]]);
-        let v = &self.values;
+        let zero = T::default();
+        let (mut min, mut max) = (vec![zero; plane * counts[2]], vec![zero; plane * counts[2]]);
         let layer = |z: usize| &v[z * nx * ny..(z + 1) * nx * ny];
         min.par_chunks_mut(plane)
             .zip(max.par_chunks_mut(plane))
@@ -593,10 +717,10 @@ impl Dataset {
             .for_each_init(
                 || {
                     (
-                        vec![0f32; nx * ny],
-                        vec![0f32; nx * ny],
-                        vec![0f32; nx],
-                        vec![0f32; nx],
+                        vec![zero; nx * ny],
+                        vec![zero; nx * ny],
+                        vec![zero; nx],
+                        vec![zero; nx],
                     )
                 },
                 |(zmin, zmax, ymin, ymax), (k, (min, max))| {
@@ -616,7 +740,7 @@ impl Dataset {
                         }
                         for bi in 0..counts[0] {
                             let (x0, x1) = span(bi, nx);
-                            let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+                            let (mut mn, mut mx) = (ymin[x0], ymax[x0]);
                             for (&lo, &hi) in ymin[x0..=x1].iter().zip(&ymax[x0..=x1]) {
                                 if lo < mn {
                                     mn = lo;
@@ -631,11 +755,7 @@ impl Dataset {
                     }
                 },
             );
-        Bricks {
-            dims: counts,
-            min,
-            max,
-        }
+        (min, max)
     }
 
     /// Dimensions (nx, ny, nz).
@@ -1804,13 +1924,28 @@ mod tests {
 
     #[test]
     fn brick_ranges_are_the_extremes_of_their_padded_spans() {
-        for (dims, seed) in [([13, 9, 11], 5), ([2, 17, 6], 6), ([9, 1, 5], 7)] {
-            // Unclamped values (a = 0, b = 255), so that the extremes differ between spans.
+        // 8- and 16-bit voxels, normalisations that increase and decrease, unclamped (so
+        // that the extremes differ between spans) and clamped (plateaus at 0 and 1): the
+        // ranges come from the raw extremes, and must still be the node values' extremes.
+        let cases = [
+            ([13, 9, 11], 5, false, (0.0, 255.0)),
+            ([2, 17, 6], 6, false, (0.0, 255.0)),
+            ([9, 1, 5], 7, false, (0.0, 255.0)),
+            ([13, 9, 11], 8, false, (200.0, 40.0)),
+            ([11, 10, 9], 9, false, (90.0, 130.0)),
+            ([13, 9, 11], 10, true, (-5000.0, 70000.0)),
+            ([10, 12, 7], 11, true, (66000.0, -100.0)),
+            ([10, 12, 7], 12, true, (30000.0, 36000.0)),
+        ];
+        for (dims, seed, wide, (na, nb)) in cases {
             let mut rng = Lcg(seed);
-            let raw = (0..dims.iter().product())
-                .map(|_| (rng.next() * 256.0) as u8)
-                .collect();
-            let d = Dataset::new(dims, Voxels::U8(raw), 0.0, 255.0).unwrap();
+            let n: usize = dims.iter().product();
+            let raw = if wide {
+                Voxels::U16((0..n).map(|_| (rng.next() * 65536.0) as u16).collect())
+            } else {
+                Voxels::U8((0..n).map(|_| (rng.next() * 256.0) as u8).collect())
+            };
+            let d = Dataset::new(dims, raw, na, nb).unwrap();
             for (filter, pad) in [
                 (Filter::Trilinear, 1),
                 (Filter::Cubic { b: 0.0, c: 0.5 }, 2),
@@ -1837,7 +1972,8 @@ mod tests {
                             }
                         }
                     }
-                    assert_eq!(b.get(bi, bj, bk), (mn, mx), "{dims:?} brick {bi} {bj} {bk}");
+                    let at = format!("{dims:?} a {na} b {nb} brick {bi} {bj} {bk}");
+                    assert_eq!(b.get(bi, bj, bk), (mn, mx), "{at}");
                 }
             }
         }
@@ -2174,6 +2310,51 @@ mod tests {
                         let want = b < len && mask.may_reach(c + b);
                         assert_eq!(run >> b & 1 != 0, want, "{dims:?} run {c} {len} bit {b}");
                     }
+                }
+            }
+        }
+    }
+
+    /// Masks built from raw voxels are the node values' test: for 8- and 16-bit voxels,
+    /// normalisations that increase and decrease, clamped and not, bounds that some, none and
+    /// all cells pass, on a grid of several runs of words; each bit is brute-forced from the
+    /// node values.
+    #[test]
+    fn cell_masks_from_raw_voxels_are_the_node_values_test() {
+        let mut rng = Lcg(23);
+        let dims = [67, 31, 33];
+        let n: usize = dims.iter().product();
+        assert!(n > 64 * CELL_MASK_RUN);
+        let bytes: Vec<u8> = (0..n).map(|_| (rng.next() * 256.0) as u8).collect();
+        let shorts: Vec<u16> = (0..n).map(|_| (rng.next() * 65536.0) as u16).collect();
+        let cases = [
+            (Voxels::U8(bytes.clone()), (220.0, 10.0)),
+            (Voxels::U8(bytes), (0.0, 255.0)),
+            (Voxels::U16(shorts.clone()), (30000.0, 36000.0)),
+            (Voxels::U16(shorts), (66000.0, -100.0)),
+        ];
+        for (raw, (a, b)) in cases {
+            let d = Dataset::new(dims, raw, a, b).unwrap();
+            let [nx, ny, nz] = dims;
+            for z in [0.0, 0.3, 0.77, 0.999, 1.0, 2.0] {
+                let mask = d.cells_above(z);
+                let mut set = 0;
+                for c in 0..n {
+                    let (i, j, k) = (c % nx, c / nx % ny, c / (nx * ny));
+                    let want = i + 1 < nx && j + 1 < ny && k + 1 < nz && {
+                        (0..8).any(|e: usize| {
+                            d.node(i + (e & 1), j + (e >> 1 & 1), k + (e >> 2))
+                                > z - CELL_MASK_MARGIN
+                        })
+                    };
+                    assert_eq!(mask.may_reach(c), want, "a {a} b {b} z {z} node {c}");
+                    set += usize::from(want);
+                }
+                let cells = (nx - 1) * (ny - 1) * (nz - 1);
+                match z {
+                    0.0 => assert_eq!(set, cells, "a {a} b {b}: every cell"),
+                    2.0 => assert_eq!(set, 0, "a {a} b {b}: none"),
+                    _ => {}
                 }
             }
         }

@@ -169,6 +169,51 @@ fn passing_in(
     (first[0] != usize::MAX).then_some((first, last, all))
 }
 
+/// A group's passing cells as [`passing_in`] gives them, in 16 bits: each axis's lowest and
+/// highest passing cell as offsets (0 … 3) from the group's first cell, two bits each, and
+/// whether all pass (bit 12); [`GroupCode::NONE`] where none does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct GroupCode(u16);
+
+// Offsets within a group fit in two bits.
+const _: () = assert!(BRICK <= 4);
+
+impl GroupCode {
+    const NONE: GroupCode = GroupCode(u16::MAX);
+
+    /// The code of `passing` (cells within `BRICK` of `lo`, the group's first cell).
+    fn new(lo: [usize; 3], passing: Option<([usize; 3], [usize; 3], bool)>) -> GroupCode {
+        let Some((first, last, all)) = passing else {
+            return GroupCode::NONE;
+        };
+        let mut c = u16::from(all) << 12;
+        for a in 0..3 {
+            debug_assert!(first[a] >= lo[a] && last[a] < lo[a] + BRICK && first[a] <= last[a]);
+            c |= ((first[a] - lo[a]) as u16) << (2 * a);
+            c |= ((last[a] - lo[a]) as u16) << (6 + 2 * a);
+        }
+        GroupCode(c)
+    }
+
+    /// Whether all the group's cells pass.
+    fn all(self) -> bool {
+        self != GroupCode::NONE && self.0 >> 12 & 1 != 0
+    }
+
+    /// The passing cells again, for the group whose first cell is `lo`.
+    fn get(self, lo: [usize; 3]) -> Option<([usize; 3], [usize; 3], bool)> {
+        if self == GroupCode::NONE {
+            return None;
+        }
+        let at = |shift: usize, a: usize| lo[a] + (self.0 >> shift & 3) as usize;
+        Some((
+            std::array::from_fn(|a| at(2 * a, a)),
+            std::array::from_fn(|a| at(6 + 2 * a, a)),
+            self.0 >> 12 & 1 != 0,
+        ))
+    }
+}
+
 /// See [`SkipGrid::passing_boxes`].
 fn passing_boxes(data: &Dataset, mask: &CellMask, box_min: DVec3, box_max: DVec3) -> Option<Boxes> {
     let n = data.dims();
@@ -177,32 +222,35 @@ fn passing_boxes(data: &Dataset, mask: &CellMask, box_min: DVec3, box_max: DVec3
     }
     let cells = n.map(|k| k - 1);
     let groups = cells.map(|c| c.div_ceil(BRICK));
-    // Per group: the lowest and highest passing cell per axis, and whether all pass; in
-    // parallel over layers of groups.
+    // Per group: the lowest and highest passing cell per axis, and whether all pass
+    // ([`GroupCode`]: two bytes a group, where the decoded form took 56 and its 7.5 MB of fresh
+    // memory for the MNI scan cost more than the cells' bits); in parallel over layers of
+    // groups.
     type Group = Option<([usize; 3], [usize; 3], bool)>;
-    let layers: Vec<Vec<Group>> = (0..groups[2])
+    let layers: Vec<Vec<GroupCode>> = (0..groups[2])
         .into_par_iter()
         .map(|gk| {
-            let mut layer = vec![None; groups[0] * groups[1]];
+            let mut layer = vec![GroupCode::NONE; groups[0] * groups[1]];
             for gj in 0..groups[1] {
                 for gi in 0..groups[0] {
                     let g = [gi, gj, gk];
                     let lo = g.map(|v| v * BRICK);
                     let hi = std::array::from_fn::<usize, 3, _>(|a| (lo[a] + BRICK).min(cells[a]));
-                    layer[gi + groups[0] * gj] = passing_in(data, mask, lo, hi);
+                    layer[gi + groups[0] * gj] = GroupCode::new(lo, passing_in(data, mask, lo, hi));
                 }
             }
             layer
         })
         .collect();
-    let group = |g: [i64; 3]| -> Group {
+    let code = |g: [i64; 3]| -> GroupCode {
         if (0..3).all(|a| (0..groups[a] as i64).contains(&g[a])) {
             layers[g[2] as usize][g[0] as usize + groups[0] * g[1] as usize]
         } else {
-            None
+            GroupCode::NONE
         }
     };
-    let full = |g: [i64; 3]| matches!(group(g), Some((_, _, true)));
+    let group = |g: [i64; 3]| -> Group { code(g).get(g.map(|v| v as usize * BRICK)) };
+    let full = |g: [i64; 3]| code(g).all();
     let mut corners = Vec::new();
     for gk in 0..groups[2] as i64 {
         for gj in 0..groups[1] as i64 {
@@ -290,9 +338,26 @@ fn brick_at(d: &Dataset, bricks: &Bricks, x: f64, axis: usize) -> usize {
     u.clamp(0.0, (bricks.dims[axis] - 1) as f64) as usize
 }
 
+/// Half the spacing of `d`'s nodes along `axis` in object coordinates (0 for an axis of one
+/// node, which has one brick).
+fn half_node(d: &Dataset, axis: usize) -> f64 {
+    let n = d.dims()[axis];
+    if n == 1 {
+        0.0
+    } else {
+        0.5 / (n - 1) as f64
+    }
+}
+
 /// Per axis of the blocks of a skip grid (`dims` blocks of size `cell` from `origin`), the first
-/// and last brick of `d`'s ranges `bricks` that each block's box [lo, lo + cell] meets along
-/// that axis: a block's box is the product of its axes' intervals, so its bricks are too.
+/// and last brick of `d`'s ranges `bricks` whose ranges hold every value a sample in the
+/// block's box [lo, lo + cell] along that axis can read: a block's box is the product of its
+/// axes' intervals, so its bricks are too. Those are the bricks that [lo + h, lo + cell − h]
+/// meets, h half a node: a brick's range covers every node a point up to a whole node outside
+/// its box reads ([`Bricks`]: padded spans), so the points of the box within h of its ends are
+/// covered by the bricks next to them. (The box itself meets the next brick at its end, a
+/// brick of four nodes more: its range would widen the block's needlessly, and a block that
+/// could be empty would not be.)
 fn brick_spans(
     d: &Dataset,
     bricks: &Bricks,
@@ -305,7 +370,11 @@ fn brick_spans(
             .map(|c| {
                 let lo = origin[axis] + c as f64 * cell[axis];
                 let hi = lo + cell[axis];
-                (brick_at(d, bricks, lo, axis), brick_at(d, bricks, hi, axis))
+                let h = half_node(d, axis).min(0.25 * cell[axis]);
+                (
+                    brick_at(d, bricks, lo + h, axis),
+                    brick_at(d, bricks, hi - h, axis),
+                )
             })
             .collect()
     })
@@ -1427,6 +1496,50 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A group's code gives back every passing-cells triple a group can have (each axis's
+    /// lowest and highest passing cell within `BRICK` of its first cell, all or not), and
+    /// none where none passes; codes of different triples differ.
+    #[test]
+    fn group_codes_give_back_their_groups() {
+        let pairs: Vec<(usize, usize)> = (0..BRICK)
+            .flat_map(|f| (f..BRICK).map(move |l| (f, l)))
+            .collect();
+        let mut seen = std::collections::HashSet::new();
+        for (n, lo) in [
+            [0, 0, 0],
+            [4, 8, 12],
+            [196, 232, 188],
+            [1 << 30, 4, 1 << 40],
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            assert_eq!(GroupCode::new(lo, None).get(lo), None);
+            assert!(!GroupCode::NONE.all());
+            for &x in &pairs {
+                for &y in &pairs {
+                    for &z in &pairs {
+                        for all in [false, true] {
+                            let g = (
+                                [lo[0] + x.0, lo[1] + y.0, lo[2] + z.0],
+                                [lo[0] + x.1, lo[1] + y.1, lo[2] + z.1],
+                                all,
+                            );
+                            let code = GroupCode::new(lo, Some(g));
+                            assert_ne!(code, GroupCode::NONE);
+                            assert_eq!(code.get(lo), Some(g), "{lo:?}");
+                            assert_eq!(code.all(), all);
+                            if n == 0 {
+                                assert!(seen.insert(code.0), "{g:?}");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(seen.len(), 2 * pairs.len().pow(3));
     }
 
     /// With the boxes of the cells that can pass the zero test, no ray through any pixel
