@@ -180,6 +180,11 @@ mod tests {
 
     #[test]
     fn a_panic_becomes_vl_internal_and_a_poisoned_state_is_recovered() {
+        // The state is global: held against the other tests that use it (one of them, run
+        // at the same time, once left it initialised between the panic and the check), and
+        // uninitialised here, so that what the check sees is what the panic left.
+        let _serial = crate::tests::common::serial();
+        *lock_state() = None;
         let v = boundary(7, || -> Result<i32> {
             let _state = lock_state();
             panic!("boom");
