@@ -192,11 +192,21 @@ const CELL_MASK_RUN: usize = 1024;
 /// bits, so without carries) or above bit 63.
 fn pack_flags(flags: &[u8]) -> u64 {
     const SPREAD: u64 = 0x0102_0408_1020_4080;
-    flags.chunks(8).enumerate().fold(0, |w, (b, eight)| {
+    let byte = |x: u64, b: usize| (x.wrapping_mul(SPREAD) >> 56) << (8 * b);
+    // Whole words of eight flags read as they are; the last, shorter group padded with zeros
+    // (apart: padding every group cost a copy per eight flags).
+    let mut eights = flags.chunks_exact(8);
+    let mut w = 0;
+    for (b, eight) in (&mut eights).enumerate() {
+        w |= byte(u64::from_le_bytes(eight.try_into().expect("eight")), b);
+    }
+    let rest = eights.remainder();
+    if !rest.is_empty() {
         let mut x = [0u8; 8];
-        x[..eight.len()].copy_from_slice(eight);
-        w | (u64::from_le_bytes(x).wrapping_mul(SPREAD) >> 56) << (8 * b)
-    })
+        x[..rest.len()].copy_from_slice(rest);
+        w |= byte(u64::from_le_bytes(x), flags.len() / 8);
+    }
+    w
 }
 
 /// Which trilinear cells of a dataset may interpolate to a value above a bound z: bit c (c the
@@ -2311,6 +2321,23 @@ mod tests {
                         assert_eq!(run >> b & 1 != 0, want, "{dims:?} run {c} {len} bit {b}");
                     }
                 }
+            }
+        }
+    }
+
+    /// Flags packed into a word are the word of their bits, for every length up to 64
+    /// (whole groups of eight and a shorter last one).
+    #[test]
+    fn packed_flags_are_their_bits() {
+        let mut rng = Lcg(31);
+        for len in 0..=64 {
+            for _ in 0..20 {
+                let flags: Vec<u8> = (0..len).map(|_| u8::from(rng.next() < 0.5)).collect();
+                let want = flags
+                    .iter()
+                    .enumerate()
+                    .fold(0u64, |w, (b, &f)| w | u64::from(f) << b);
+                assert_eq!(pack_flags(&flags), want, "{flags:?}");
             }
         }
     }

@@ -138,9 +138,73 @@ fn shell(dist: &[u8], dims: [usize; 3]) -> Vec<usize> {
     shell
 }
 
+/// The [`GroupCode`]s of the row of groups (gi, gj, gk), gi = 0, 1, …, of `data`'s cells
+/// (`cells` per axis, in groups of `BRICK` per axis): each group's lowest and highest passing
+/// cell per axis and whether all pass (`passing_in`, the tests' oracle), found together. Each
+/// of the groups' rows of cells is read from `mask` 64 cells at a time and split among the
+/// groups (whole groups to a word: 64 is a multiple of `BRICK`), where reading each group's rows
+/// apart cost a node index and a run of the mask per row and group: most of the passing boxes'
+/// instructions.
+fn passing_groups_row(
+    data: &Dataset,
+    mask: &CellMask,
+    cells: [usize; 3],
+    (gj, gk): (usize, usize),
+    out: &mut [GroupCode],
+) {
+    const _: () = assert!(64 % BRICK == 0);
+    let groups = cells[0].div_ceil(BRICK);
+    debug_assert_eq!(out.len(), groups);
+    // Per group: lowest and highest passing offset per axis (u8::MAX / 0: none yet), all.
+    let mut first = vec![[u8::MAX; 3]; groups];
+    let mut last = vec![[0u8; 3]; groups];
+    let mut all = vec![true; groups];
+    // The rows of cells along y and z that the groups cover.
+    let lo = [gj * BRICK, gk * BRICK];
+    let hi = [(lo[0] + BRICK).min(cells[1]), (lo[1] + BRICK).min(cells[2])];
+    for k in lo[1]..hi[1] {
+        for j in lo[0]..hi[0] {
+            let row = data.node_index([0, j, k]);
+            let (dj, dk) = ((j - lo[0]) as u8, (k - lo[1]) as u8);
+            for (w, x0) in (0..cells[0]).step_by(64).enumerate() {
+                let width = (cells[0] - x0).min(64);
+                let word = mask.run(row + x0, width);
+                for g in 64 / BRICK * w..(64 / BRICK * (w + 1)).min(groups) {
+                    let at = g * BRICK - x0;
+                    let n = (width - at).min(BRICK);
+                    let ones = (1u64 << n) - 1;
+                    let bits = word >> at & ones;
+                    // (All n set: a comparison, where `count_ones` is a software population
+                    // count on the x86-64 baseline.)
+                    all[g] &= bits == ones;
+                    if bits == 0 {
+                        continue;
+                    }
+                    let (a, b) = (bits.trailing_zeros() as u8, 63 - bits.leading_zeros() as u8);
+                    let (f, l) = (&mut first[g], &mut last[g]);
+                    for (axis, c) in [(0, a), (1, dj), (2, dk)] {
+                        f[axis] = f[axis].min(c);
+                    }
+                    for (axis, c) in [(0, b), (1, dj), (2, dk)] {
+                        l[axis] = l[axis].max(c);
+                    }
+                }
+            }
+        }
+    }
+    for (g, code) in out.iter_mut().enumerate() {
+        *code = if first[g][0] == u8::MAX {
+            GroupCode::NONE
+        } else {
+            GroupCode::of_offsets(first[g], last[g], all[g])
+        };
+    }
+}
+
 /// Of the cells [lo, hi) (by their first nodes' indices per axis) of `data`: the lowest and
 /// highest index per axis of those that `mask` lets pass, and whether all pass; `None` when
-/// none does.
+/// none does. (The oracle of [`passing_groups_row`].)
+#[cfg(test)]
 fn passing_in(
     data: &Dataset,
     mask: &CellMask,
@@ -169,7 +233,7 @@ fn passing_in(
     (first[0] != usize::MAX).then_some((first, last, all))
 }
 
-/// A group's passing cells as [`passing_in`] gives them, in 16 bits: each axis's lowest and
+/// A group's passing cells ([`passing_groups_row`]) in 16 bits: each axis's lowest and
 /// highest passing cell as offsets (0 … 3) from the group's first cell, two bits each, and
 /// whether all pass (bit 12); [`GroupCode::NONE`] where none does.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -182,15 +246,23 @@ impl GroupCode {
     const NONE: GroupCode = GroupCode(u16::MAX);
 
     /// The code of `passing` (cells within `BRICK` of `lo`, the group's first cell).
+    #[cfg(test)]
     fn new(lo: [usize; 3], passing: Option<([usize; 3], [usize; 3], bool)>) -> GroupCode {
         let Some((first, last, all)) = passing else {
             return GroupCode::NONE;
         };
+        let offsets = |c: [usize; 3]| std::array::from_fn(|a| (c[a] - lo[a]) as u8);
+        GroupCode::of_offsets(offsets(first), offsets(last), all)
+    }
+
+    /// The code of a group whose passing cells lie between offsets `first` and `last` (each
+    /// below `BRICK`) from its first cell per axis, all of its cells passing or not.
+    fn of_offsets(first: [u8; 3], last: [u8; 3], all: bool) -> GroupCode {
         let mut c = u16::from(all) << 12;
         for a in 0..3 {
-            debug_assert!(first[a] >= lo[a] && last[a] < lo[a] + BRICK && first[a] <= last[a]);
-            c |= ((first[a] - lo[a]) as u16) << (2 * a);
-            c |= ((last[a] - lo[a]) as u16) << (6 + 2 * a);
+            debug_assert!(first[a] <= last[a] && (last[a] as usize) < BRICK);
+            c |= u16::from(first[a]) << (2 * a);
+            c |= u16::from(last[a]) << (6 + 2 * a);
         }
         GroupCode(c)
     }
@@ -231,13 +303,8 @@ fn passing_boxes(data: &Dataset, mask: &CellMask, box_min: DVec3, box_max: DVec3
         .into_par_iter()
         .map(|gk| {
             let mut layer = vec![GroupCode::NONE; groups[0] * groups[1]];
-            for gj in 0..groups[1] {
-                for gi in 0..groups[0] {
-                    let g = [gi, gj, gk];
-                    let lo = g.map(|v| v * BRICK);
-                    let hi = std::array::from_fn::<usize, 3, _>(|a| (lo[a] + BRICK).min(cells[a]));
-                    layer[gi + groups[0] * gj] = GroupCode::new(lo, passing_in(data, mask, lo, hi));
-                }
+            for (gj, row) in layer.chunks_exact_mut(groups[0]).enumerate() {
+                passing_groups_row(data, mask, cells, (gj, gk), row);
             }
             layer
         })
@@ -1496,6 +1563,48 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A row of groups' codes, read from the mask a word at a time, are their groups' passing
+    /// cells found group by group (`passing_in`): rows of cells shorter and longer than a
+    /// word, multiples of the group and of the word and neither, sparse and dense masks.
+    #[test]
+    fn rows_of_groups_are_their_groups() {
+        let mut rng = Rng(0x5eed_0031);
+        let mut seen = [0usize; 3]; // none, some, all of a group's cells pass
+        for (case, nx) in [2, 5, 17, 61, 64, 65, 66, 129, 130, 200]
+            .into_iter()
+            .enumerate()
+        {
+            let dims = [nx, 6 + case % 3, 5 + case % 4];
+            let data = spheres(&mut rng, dims, 1 + case % 3);
+            for z in [0.0, 0.05, 0.3, 0.6] {
+                let mask = data.cells_above(z);
+                let cells = dims.map(|n| n - 1);
+                let groups = cells.map(|c| c.div_ceil(BRICK));
+                for gk in 0..groups[2] {
+                    for gj in 0..groups[1] {
+                        let mut row = vec![GroupCode(0); groups[0]];
+                        passing_groups_row(&data, &mask, cells, (gj, gk), &mut row);
+                        for (gi, &code) in row.iter().enumerate() {
+                            let lo = [gi, gj, gk].map(|g| g * BRICK);
+                            let hi = std::array::from_fn(|a| (lo[a] + BRICK).min(cells[a]));
+                            let want = passing_in(&data, &mask, lo, hi);
+                            assert_eq!(code, GroupCode::new(lo, want), "{dims:?} z {z} {lo:?}");
+                            seen[match want {
+                                None => 0,
+                                Some((_, _, false)) => 1,
+                                Some((_, _, true)) => 2,
+                            }] += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            seen.iter().all(|&n| n > 20),
+            "every kind of group: {seen:?}"
+        );
     }
 
     /// A group's code gives back every passing-cells triple a group can have (each axis's
