@@ -266,21 +266,32 @@ impl<'a> Packets<'a> {
         let mut out = vec![[0f32; 3]; (tw * th) as usize];
         let mut next_pixel = 0usize;
         let mut lanes: [Option<LaneRay>; W] = Default::default();
+        // Per lane: its run's segments, and those still to take by bit (`to_take`; 0 for a
+        // lane without a ray). Apart from the rays, so that the common case below reads a
+        // word, two numbers and nothing else of the lane.
+        let mut runs = [Run::default(); W];
+        let mut keeps = [0u32; W];
         let mut st = State::default();
         let mut cache = CellGradients::default();
         loop {
-            // Each lane's next sample; a lane whose ray has ended takes the next ray.
+            // The common case: a lane's run has a next segment to take.
             let mut active = 0u32;
-            #[allow(clippy::needless_range_loop)] // (lane i's state is in several arrays)
-            for i in 0..W {
-                // The common case: the lane's run has a next segment to take.
-                if let Some(lane) = &mut lanes[i] {
-                    if lane.keep != 0 {
-                        lane.take(&mut st, i);
-                        active |= 1 << i;
-                        continue;
-                    }
+            for (i, (keep, run)) in keeps.iter_mut().zip(&runs).enumerate() {
+                if *keep != 0 {
+                    // (A bit of `keep` is below 8: the mask only spares the bounds check.)
+                    let j = keep.trailing_zeros() as usize & (W - 1);
+                    *keep &= *keep - 1;
+                    st.mid[i] = run.mids[j];
+                    st.len[i] = run.lens[j];
+                    active |= 1 << i;
                 }
+            }
+            // The other lanes: the next run of their ray with a segment to take, or a new ray
+            // where their ray has ended.
+            let mut idle = !active & ((1 << W) - 1);
+            while idle != 0 {
+                let i = idle.trailing_zeros() as usize & (W - 1);
+                idle &= idle - 1;
                 loop {
                     if lanes[i].is_none() {
                         let Some(px) = (next_pixel < out.len()).then_some(next_pixel) else {
@@ -303,13 +314,7 @@ impl<'a> Packets<'a> {
                                     st.ro[ch][i] = c.o[ch];
                                     st.rd[ch][i] = c.d[ch];
                                 }
-                                lanes[i] = Some(LaneRay {
-                                    cursor: c,
-                                    mids: [0.0; 8],
-                                    lens: [0.0; 8],
-                                    keep: 0,
-                                    px,
-                                });
+                                lanes[i] = Some(LaneRay { cursor: c, px });
                             }
                             Err(c) => {
                                 out[px] = to_f32(c);
@@ -319,14 +324,15 @@ impl<'a> Packets<'a> {
                     }
                     let lane = lanes[i].as_mut().expect("a ray");
                     // The next run with a segment to take (runs of none are passed over).
+                    let (run, keep) = (&mut runs[i], &mut keeps[i]);
                     let mut ends = false;
-                    while lane.keep == 0 {
-                        let m = lane.cursor.next_run(grid, &mut lane.mids, &mut lane.lens);
+                    while *keep == 0 {
+                        let m = lane.cursor.next_run(grid, &mut run.mids, &mut run.lens);
                         if m == 0 {
                             ends = true;
                             break;
                         }
-                        lane.keep = self.to_take(&lane.cursor, &lane.mids, &lane.lens, m);
+                        *keep = self.to_take(&lane.cursor, &run.mids, &run.lens, m);
                     }
                     if ends {
                         let px = lane.px;
@@ -334,7 +340,10 @@ impl<'a> Packets<'a> {
                         out[px] = self.finish(&st, i, background);
                         continue;
                     }
-                    lane.take(&mut st, i);
+                    let j = keep.trailing_zeros() as usize & (W - 1);
+                    *keep &= *keep - 1;
+                    st.mid[i] = run.mids[j];
+                    st.len[i] = run.lens[j];
                     active |= 1 << i;
                     break;
                 }
@@ -346,9 +355,10 @@ impl<'a> Packets<'a> {
             if ended == 0 {
                 continue;
             }
-            for (i, lane) in lanes.iter_mut().enumerate() {
+            for (i, (lane, keep)) in lanes.iter_mut().zip(&mut keeps).enumerate() {
                 if ended >> i & 1 != 0 {
                     let px = lane.take().expect("a ray").px;
+                    *keep = 0;
                     st.t[i] = 0.0;
                     out[px] = self.finish(&st, i, background);
                 }
@@ -954,28 +964,17 @@ impl Segments {
     }
 }
 
-/// A lane's ray: its cursor and the run of segments it is taking.
+/// A lane's ray: its cursor and its pixel (in the tile).
 struct LaneRay {
     cursor: Cursor,
-    mids: [f64; 8],
-    lens: [f64; 8],
-    /// The run's segments still to take, by bit ([`Packets::to_take`]).
-    keep: u32,
-    /// The pixel, in the tile.
     px: usize,
 }
 
-impl LaneRay {
-    /// Puts the run's next segment to take (there is one: `keep` is not 0) into lane `i` of
-    /// `st` and passes it.
-    #[inline]
-    fn take(&mut self, st: &mut State, i: usize) {
-        // (A bit of `keep` is below 8: the mask only spares the bounds check.)
-        let j = self.keep.trailing_zeros() as usize & (W - 1);
-        self.keep &= self.keep - 1;
-        st.mid[i] = self.mids[j];
-        st.len[i] = self.lens[j];
-    }
+/// The run of segments a lane is taking: midpoints and lengths ([`Cursor::next_run`]).
+#[derive(Clone, Copy, Default)]
+struct Run {
+    mids: [f64; 8],
+    lens: [f64; 8],
 }
 
 /// The lanes' state, by lane: the ray in object coordinates (`o + t·d`), the view direction
