@@ -1107,11 +1107,16 @@ impl Walk {
 
     /// If the sample at parameter `t` lies in an empty block, `Ok` with the parameter at which
     /// that block (and the empty blocks right after it) is left; else `Err` with the parameter
-    /// up to which samples stay in the same occupied block (and must all be taken).
+    /// up to which samples stay in occupied blocks (and must all be taken): the exit of the
+    /// sample's block, or, where the caller has samples up to `horizon` (≥ t) to place, of
+    /// the last of the occupied blocks that follow it along the ray up to the first block
+    /// leaving which passes `horizon` (∞ where the ray leaves the grid first). The blocks
+    /// after the first are walked here rather than one question each: the same answer for
+    /// every later sample, since each lies in an occupied block either way.
     /// Calls must come with non-decreasing `t`. Always inlined: from `Cursor::next_run` the
     /// compiler left it a call per question.
     #[inline(always)]
-    pub(crate) fn skip_until(&mut self, grid: &SkipGrid, t: f64) -> Result<f64, f64> {
+    pub(crate) fn skip_until(&mut self, grid: &SkipGrid, t: f64, horizon: f64) -> Result<f64, f64> {
         while !self.done && self.left_before(t) {
             self.advance(grid);
         }
@@ -1119,7 +1124,20 @@ impl Walk {
             return Err(f64::INFINITY);
         }
         if grid.distance(self.cell) == 0 {
-            return Err(self.exit());
+            // (The exit of an occupied block whose samples end before the horizon: the next
+            // block is the one a later sample would have asked about.)
+            let mut exit = self.exit();
+            while exit <= horizon {
+                self.advance(grid);
+                if self.done {
+                    return Err(f64::INFINITY);
+                }
+                if grid.distance(self.cell) != 0 {
+                    break;
+                }
+                exit = self.exit();
+            }
+            return Err(exit);
         }
         // Leave this and every following empty block at once.
         loop {

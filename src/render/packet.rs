@@ -98,7 +98,8 @@ pub(super) struct Packets<'a> {
     light: Light32,
     inv_ref: f64,
     /// The exponent of a whole step (step / reference) where it is one the vector path
-    /// handles (0.5, 1, 0.25, 2), else NaN (every sample then takes the scalar correction).
+    /// handles (0.5, 1, 0.25, 2, 0.125, 4), else NaN (every sample then takes the scalar
+    /// correction).
     common: f64,
     stop: f32,
     /// n − 1, max(n − 2, 0) and n − 2 per axis, as f32; the strides; 0.5·(n − 1) as f32.
@@ -208,7 +209,7 @@ impl<'a> Packets<'a> {
             _ => None,
         };
         let common = obj.step * obj.inv_ref;
-        let common = if [0.5, 1.0, 0.25, 2.0].contains(&common) {
+        let common = if [0.5, 1.0, 0.25, 2.0, 0.125, 4.0].contains(&common) {
             common
         } else {
             f64::NAN
@@ -478,16 +479,7 @@ impl<'a> Packets<'a> {
             let eq = _mm256_cmp_pd::<_CMP_EQ_OQ>(e, _mm256_set1_pd(self.common));
             common |= (_mm256_movemask_pd(eq) as u32) << (4 * h);
         }
-        let tr1 = _mm256_sub_ps(one, o);
-        let mut tr = if self.common == 0.5 {
-            _mm256_sqrt_ps(tr1)
-        } else if self.common == 1.0 {
-            tr1
-        } else if self.common == 0.25 {
-            _mm256_sqrt_ps(_mm256_sqrt_ps(tr1))
-        } else {
-            _mm256_mul_ps(tr1, tr1)
-        };
+        let mut tr = transmit_lanes(self.common, _mm256_sub_ps(one, o));
         let odd = shown & !common;
         if odd != 0 {
             let mut oa = [0f32; W];
@@ -992,6 +984,27 @@ struct State {
     col: [[f32; W]; 3],
 }
 
+/// `t^e` in each lane for a common exponent `e` (0.5, 1, 0.25, 2, 0.125 or 4: any other
+/// gives t⁴), by square roots and products in f32: `transmit_common`'s operations.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn transmit_lanes(e: f64, t: __m256) -> __m256 {
+    if e == 0.5 {
+        _mm256_sqrt_ps(t)
+    } else if e == 1.0 {
+        t
+    } else if e == 0.25 {
+        _mm256_sqrt_ps(_mm256_sqrt_ps(t))
+    } else if e == 2.0 {
+        _mm256_mul_ps(t, t)
+    } else if e == 0.125 {
+        _mm256_sqrt_ps(_mm256_sqrt_ps(_mm256_sqrt_ps(t)))
+    } else {
+        let t2 = _mm256_mul_ps(t, t);
+        _mm256_mul_ps(t2, t2)
+    }
+}
+
 /// Lane `i` of the result all ones where bit `i` of `bits` is set, else zero.
 #[inline]
 #[target_feature(enable = "avx2")]
@@ -1176,4 +1189,37 @@ fn ldd(a: &[f64; W], h: usize) -> __m256d {
     let q: &[f64; 4] = a[4 * h..4 * h + 4].try_into().expect("four lanes");
     // SAFETY: `q` is 4 f64, 32 readable bytes; the load has no alignment requirement.
     unsafe { _mm256_loadu_pd(q.as_ptr()) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lanes' opacity correction is `t^e` for every exponent `Packets::new` admits, within
+    /// the f32 rounding of its square roots and products (a few units in the last place of
+    /// f32: each rounds once, and a square root halves the relative error it is given).
+    #[test]
+    fn transmit_lanes_are_the_powers() {
+        if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+            return;
+        }
+        for e in [0.5, 1.0, 0.25, 2.0, 0.125, 4.0] {
+            for i in 0..=1000 {
+                let t: [f32; W] = std::array::from_fn(|k| (i * W + k) as f32 / (1000 * W) as f32);
+                let mut got = [0f32; W];
+                // SAFETY: AVX2 was detected above.
+                unsafe { st8(&mut got, transmit_lanes(e, ld8(&t))) };
+                for k in 0..W {
+                    let want = (t[k] as f64).powf(e);
+                    let tol = 4.0 * f32::EPSILON as f64 * want;
+                    assert!(
+                        (got[k] as f64 - want).abs() <= tol,
+                        "{}^{e}: {} against {want}",
+                        t[k],
+                        got[k]
+                    );
+                }
+            }
+        }
+    }
 }
