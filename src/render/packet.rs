@@ -442,7 +442,7 @@ impl<'a> Packets<'a> {
         let sz = self.sz;
         let mut pass = live;
         // The eight nodes and the trilinear value (`trilinear_rows`' lerps).
-        // (Lanes whose cell cannot pass read node 0 instead: no memory traffic for them.)
+        // (Lanes without a sample read node 0 instead: no memory traffic for them.)
         let base = _mm256_and_si256(base, _mm256_castps_si256(lanes_mask(pass)));
         let cell = Nodes::new(self.values, base, 1 + sy + sz);
         let [n000, n100, n010, n110] = cell.pairs2(0, sy);
