@@ -6,16 +6,9 @@ use vlib::dataset::{Dataset, Filter, Voxels};
 use vlib::scene::Optimise;
 use vlib::{Camera, Fields, Interpolation, Library, MappingType};
 
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+#[path = "common/lcg.rs"]
+mod lcg;
+use lcg::Lcg;
 
 /// A 40×36×32 volume of a few Gaussian blobs over an empty background, 8-bit.
 fn blobs() -> Dataset {

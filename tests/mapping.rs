@@ -5,17 +5,9 @@
 use vlib::mapping::Mapping;
 use vlib::MappingType;
 
-/// A small deterministic generator (64-bit LCG, top bits), so the test needs no crates.
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+#[path = "common/lcg.rs"]
+mod lcg;
+use lcg::Lcg;
 
 /// Φ_t of the paper: 0 if v ≤ a_1 or v > a_n; b_{i+1,j} if a_i < v ≤ a_{i+1}.
 fn phi_t(a: &[f64], b: &[Vec<f64>], v: f64, j: usize) -> f64 {

@@ -19,16 +19,9 @@ use vlib::dataset::{Dataset, Voxels};
 use vlib::scene::Optimise;
 use vlib::{Camera, Fields, Library, MappingType};
 
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+#[path = "common/lcg.rs"]
+mod lcg;
+use lcg::Lcg;
 
 /// A random volume of `dims` nodes: a few blobs and noise, 8-bit.
 fn volume(rng: &mut Lcg, dims: [usize; 3]) -> Dataset {
@@ -78,6 +71,34 @@ struct Case {
     /// a diagonal one).
     turned: bool,
     optimise: Optimise,
+}
+
+/// The direct-shading program both tests give their object: dataset 1 into F, table 1 into
+/// opacity, table 2's three columns into r, g and b; lit with coefficients `[ka, kd, ks]`, or
+/// unlit (ka 1 alone).
+fn colour_program(vl: &mut Library, lit: Option<[f32; 3]>) {
+    vl.dataset(Fields::F, 1).unwrap();
+    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+    vl.map(Fields::R, Fields::F, 2, 1).unwrap();
+    vl.map(Fields::G, Fields::F, 2, 2).unwrap();
+    vl.map(Fields::B, Fields::F, 2, 3).unwrap();
+    match lit {
+        Some([ka, kd, ks]) => {
+            vl.set(Fields::KA, ka).unwrap();
+            vl.set(Fields::KD, kd).unwrap();
+            vl.set(Fields::KS, ks).unwrap();
+        }
+        None => vl.set(Fields::KA, 1.0).unwrap(),
+    }
+}
+
+/// `render` run on a pool of `threads` threads.
+fn on_threads<T: Send>(threads: usize, render: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(render)
 }
 
 /// The image of `case` (packets on or off) as f32 pixels, rendered on `threads` threads.
@@ -133,26 +154,13 @@ fn render(case: &Case, packets: bool, threads: usize) -> Vec<[f32; 3]> {
             .unwrap();
     }
     vl.scale(ext[0], ext[1], ext[2]).unwrap();
-    vl.dataset(Fields::F, 1).unwrap();
-    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
-    vl.map(Fields::R, Fields::F, 2, 1).unwrap();
-    vl.map(Fields::G, Fields::F, 2, 2).unwrap();
-    vl.map(Fields::B, Fields::F, 2, 3).unwrap();
+    colour_program(&mut vl, case.shaded.then_some([0.2, 0.7, 0.3]));
     if case.shaded {
-        vl.set(Fields::KA, 0.2).unwrap();
-        vl.set(Fields::KD, 0.7).unwrap();
-        vl.set(Fields::KS, 0.3).unwrap();
         vl.set(Fields::N, vlib::types::specular_to_field(12.0))
             .unwrap();
-    } else {
-        vl.set(Fields::KA, 1.0).unwrap();
     }
     vl.end().unwrap();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap();
-    let image = pool.install(|| vl.render_preview(48, 40, 1.2)).unwrap();
+    let image = on_threads(threads, || vl.render_preview(48, 40, 1.2)).unwrap();
     (0..40)
         .flat_map(|y| (0..48).map(move |x| (x, y)))
         .map(|(x, y)| image.pixel(x, y))
@@ -388,24 +396,9 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                     let _ = vl.rotate(rotate[0], rotate[1], rotate[2]);
                     let _ = vl.scale(scale[0], scale[1], scale[2]);
                     let _ = vl.translate(-0.5, -0.5, -0.5);
-                    vl.dataset(Fields::F, 1).unwrap();
-                    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
-                    vl.map(Fields::R, Fields::F, 2, 1).unwrap();
-                    vl.map(Fields::G, Fields::F, 2, 2).unwrap();
-                    vl.map(Fields::B, Fields::F, 2, 3).unwrap();
-                    if shaded {
-                        vl.set(Fields::KA, 0.3).unwrap();
-                        vl.set(Fields::KD, 0.6).unwrap();
-                        vl.set(Fields::KS, 0.4).unwrap();
-                    } else {
-                        vl.set(Fields::KA, 1.0).unwrap();
-                    }
+                    colour_program(&mut vl, shaded.then_some([0.3, 0.6, 0.4]));
                     vl.end().unwrap();
-                    let pool = rayon::ThreadPoolBuilder::new()
-                        .num_threads(threads)
-                        .build()
-                        .unwrap();
-                    pool.install(|| vl.render_preview(6, 5, 1.2)).unwrap()
+                    on_threads(threads, || vl.render_preview(6, 5, 1.2)).unwrap()
                 };
                 let (packets, two, scalar) = (render(true, 1), render(true, 2), render(false, 1));
                 let flat = |i: &vlib::render::Image| -> Vec<f32> {
