@@ -162,11 +162,10 @@ impl Bricks {
 }
 
 /// Lowers each of `min` to the matching value of `lo` where that is smaller, and raises each of
-/// `max` to the matching value of `hi` where that is larger. Plain comparisons: the values are
-/// never NaN, and `f32::min`/`max`'s NaN handling costs several instructions per value.
+/// `max` to the matching value of `hi` where that is larger (raw voxels: no NaN among them).
 fn widen<T: Copy + PartialOrd>(min: &mut [T], max: &mut [T], lo: &[T], hi: &[T]) {
-    // (As selects rather than conditional stores, so that they compile to lanes of minps and
-    // maxps.)
+    // (As selects rather than conditional stores, so that they compile to lanes of minima and
+    // maxima.)
     for (m, &x) in min.iter_mut().zip(lo) {
         *m = if x < *m { x } else { *m };
     }

@@ -437,7 +437,7 @@ fn brick_spans(
             .map(|c| {
                 let lo = origin[axis] + c as f64 * cell[axis];
                 let hi = lo + cell[axis];
-                let h = half_node(d, axis).min(0.25 * cell[axis]);
+                let h = half_node(d, axis);
                 (
                     brick_at(d, bricks, lo + h, axis),
                     brick_at(d, bricks, hi - h, axis),
