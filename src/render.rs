@@ -3626,6 +3626,67 @@ mod tests {
         assert!(checked > 15_000, "{checked}");
     }
 
+    /// The packet march's segments in lanes are the cursor's, bit for bit, on the cases of
+    /// `segments_last_lane_apart_is_the_old_run` (every run length, near the start, the end
+    /// and 2⁵³, ordinary and awkward ends and steps). A NaN is any NaN: which operand's NaN
+    /// an addition passes on depends on the order the compiler gives its operands (it may
+    /// swap them), and a march's ends and step are never NaN.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn lanes_segments_are_the_cursors() {
+        if !is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let rng = Xorshift::new(0x5e9_3e47_1a9e_5eed);
+        let mut values: Vec<f64> = AWKWARD.to_vec();
+        values.extend([0.25, 0.5, 1.0 / 3.0, 7.5, 1e-3]);
+        let mut checked = 0;
+        for case in 0..4000 {
+            let pick = |_: usize| {
+                if case % 3 == 0 {
+                    f64::from_bits(rng.bits())
+                } else {
+                    values[(rng.next() * values.len() as f64) as usize % values.len()]
+                }
+            };
+            let (t0, t1, step) = if case % 2 == 0 {
+                let t0 = rng.next() * 10.0;
+                (t0, t0 + rng.next() * 20.0, 0.01 + rng.next())
+            } else {
+                (pick(0), pick(1), pick(2))
+            };
+            let n = [1u64, 2, 7, 8, 9, 17, 1 << 20, (1 << 53) + 5, u64::MAX][case % 9];
+            for k in [
+                0,
+                n / 2,
+                n.saturating_sub(17),
+                n.saturating_sub(9),
+                n.saturating_sub(8),
+                n - 1,
+                n.saturating_sub(3),
+                ((1u64 << 53) - 17).min(n - 1),
+            ] {
+                let c = cursor(t0, t1, step, n, k, f64::NEG_INFINITY);
+                let (mut m0, mut l0) = ([0.5; 8], [0.5; 8]);
+                let (mut m1, mut l1) = ([0.5; 8], [0.5; 8]);
+                let a = c.segments(&mut m0, &mut l0);
+                // SAFETY: AVX2 was detected above.
+                let b = unsafe { packet::segments_lanes(&c, &mut m1, &mut l1) };
+                assert_eq!(a, b);
+                let bits = |x: &[f64; 8]| {
+                    x[..a]
+                        .iter()
+                        .map(|v| if v.is_nan() { u64::MAX } else { v.to_bits() })
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(bits(&m0), bits(&m1), "{t0} {t1} {step} {k}/{n}");
+                assert_eq!(bits(&l0), bits(&l1), "{t0} {t1} {step} {k}/{n}");
+                checked += 1;
+            }
+        }
+        assert!(checked > 30_000, "{checked}");
+    }
+
     /// A run in lanes has the segments of the sample-by-sample cursor, bit for bit, ends
     /// at the first sample past the occupied block, and never passes the last segment: near the
     /// start, the end and 2⁵³ (where the boundary numbers stop being exact and the run goes

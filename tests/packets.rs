@@ -57,8 +57,42 @@ fn volume(rng: &mut Lcg, dims: [usize; 3]) -> Dataset {
     Dataset::new(dims, Voxels::U8(raw), 0.0, 255.0).unwrap()
 }
 
+/// A volume of hard-edged boxes of `dims` nodes: a few solid boxes (values 200 to 255) of one
+/// to six nodes a side on noise below the opacity table's zero (under 60 of 255). Where the
+/// blobs of [`volume`] rise over several nodes, these boxes start at a node next to empty
+/// ones, so a march that skips one sample too many where empty space ends misses them.
+fn hard_volume(rng: &mut Lcg, dims: [usize; 3]) -> Dataset {
+    let boxes: Vec<([usize; 3], [usize; 3], u8)> = (0..4)
+        .map(|_| {
+            let lo: [usize; 3] = std::array::from_fn(|a| (rng.next() * dims[a] as f64) as usize);
+            let hi = std::array::from_fn(|a| lo[a] + 1 + (rng.next() * 6.0) as usize);
+            (lo, hi, 200 + (rng.next() * 55.0) as u8)
+        })
+        .collect();
+    let mut raw = Vec::new();
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                let inside = boxes.iter().find(|(lo, hi, _)| {
+                    [i, j, k]
+                        .iter()
+                        .enumerate()
+                        .all(|(a, &x)| lo[a] <= x && x < hi[a])
+                });
+                raw.push(match inside {
+                    Some((_, _, v)) => *v,
+                    None => (rng.next() * 60.0) as u8,
+                });
+            }
+        }
+    }
+    Dataset::new(dims, Voxels::U8(raw), 0.0, 255.0).unwrap()
+}
+
 struct Case {
     dims: [usize; 3],
+    /// Hard-edged boxes ([`hard_volume`]) instead of blobs.
+    hard: bool,
     seed: u64,
     eye: [f32; 3],
     at: [f32; 3],
@@ -101,10 +135,18 @@ fn on_threads<T: Send>(threads: usize, render: impl FnOnce() -> T + Send) -> T {
         .install(render)
 }
 
+/// The tests' image size.
+const W: u32 = 48;
+const H: u32 = 40;
+
 /// The image of `case` (packets on or off) as f32 pixels, rendered on `threads` threads.
 fn render(case: &Case, packets: bool, threads: usize) -> Vec<[f32; 3]> {
     let mut rng = Lcg(case.seed);
-    let data = volume(&mut rng, case.dims);
+    let data = if case.hard {
+        hard_volume(&mut rng, case.dims)
+    } else {
+        volume(&mut rng, case.dims)
+    };
     let mut vl = Library::new();
     vl.add_dataset(1, data).unwrap();
     // An opacity ramp that is 0 up to 0.3 (the zero test), a colour ramp.
@@ -160,9 +202,9 @@ fn render(case: &Case, packets: bool, threads: usize) -> Vec<[f32; 3]> {
             .unwrap();
     }
     vl.end().unwrap();
-    let image = on_threads(threads, || vl.render_preview(48, 40, 1.2)).unwrap();
-    (0..40)
-        .flat_map(|y| (0..48).map(move |x| (x, y)))
+    let image = on_threads(threads, || vl.render_preview(W, H, 1.2)).unwrap();
+    (0..H)
+        .flat_map(|y| (0..W).map(move |x| (x, y)))
         .map(|(x, y)| image.pixel(x, y))
         .collect()
 }
@@ -170,11 +212,14 @@ fn render(case: &Case, packets: bool, threads: usize) -> Vec<[f32; 3]> {
 fn cases() -> Vec<Case> {
     let mut rng = Lcg(7);
     let mut cases = Vec::new();
-    for n in 0..24 {
+    for n in 0..36 {
+        // The last twelve: hard-edged boxes in larger volumes (more blocks to leap over).
+        let hard = n >= 24;
+        let (least, spread) = if hard { (12.0, 28.0) } else { (4.0, 20.0) };
         let dims = [
-            4 + (rng.next() * 20.0) as usize,
-            4 + (rng.next() * 20.0) as usize,
-            4 + (rng.next() * 20.0) as usize,
+            (least + rng.next() * spread) as usize,
+            (least + rng.next() * spread) as usize,
+            (least + rng.next() * spread) as usize,
         ];
         let centre = dims.map(|d| (d - 1) as f32 / 2.0);
         let size = dims.iter().map(|&d| d as f32).fold(0.0, f32::max);
@@ -209,6 +254,7 @@ fn cases() -> Vec<Case> {
         };
         cases.push(Case {
             dims,
+            hard,
             seed: 100 + n as u64,
             eye,
             at,

@@ -8,23 +8,26 @@
 //! (kd and ks 0: the unshaded scene), one ray per pixel. Everything else is traced by the
 //! scalar march, unchanged.
 //!
-//! Each lane has its own ray, [`Cursor`] and state (transmittance, colour). The cursors are
-//! the scalar march's: a lane's samples are exactly the segments [`Cursor::next_run`] gives
-//! (the same midpoints, lengths and empty-space skipping, the same start at the
-//! [`EntryMap`] bound), except those a lane need not take: each run's eight samples are first
-//! tested against the cell mask together ([`Packets::to_take`], one gather a run), and a
-//! sample in a cell that cannot reach the zero test's bound (it would add nothing) takes no
-//! lane. Every iteration takes each lane's next sample to take and evaluates the eight
-//! together: the object points and cells, the eight nodes (per-lane
-//! 8-byte loads and a transposition, [`Nodes::pairs2`]; gathers were slower on the measured
-//! host, see `docs/performance.md`), the trilinear value (the scalar code's f32 lerps,
+//! Each lane has its own ray, [`Cursor`] and state (transmittance, colour). The cursors are the
+//! scalar march's (the same segments, midpoints and lengths, the same start at the [`EntryMap`]
+//! bound), but a lane takes only the samples that can count: each run of eight segments (in lanes,
+//! [`segments_lanes`]) is tested against the cell mask together ([`Packets::to_take`], one gather
+//! a run), and a sample in a cell that cannot reach the zero test's bound (it would add nothing)
+//! takes no lane. The mask alone decides which samples are taken, so that is exact wherever the
+//! walk is; the block walk is asked only after a run of which nothing is taken, past the occupied
+//! blocks it last reported, and leaps over empty blocks ([`Packets::next_taken`]): the scalar
+//! march asks it about every run. The samples taken are the scalar march's samples that the mask
+//! passes, and those are all its samples that can count. Every iteration takes each lane's next
+//! sample to take and evaluates the eight together: the object points and cells, the eight nodes
+//! (per-lane 8-byte loads and a transposition, [`Nodes::pairs2`]; gathers were slower on the
+//! measured host, see `docs/performance.md`), the trilinear value (the scalar code's f32 lerps,
 //! unfused, so the same bits and the same zero test), opacity and colour (the two tables as at
 //! most eight linear pieces in registers, [`Segments`]; tables of more rows by their segment
 //! pairs, gathered), the opacity correction, the gradient (the trilinear interpolation of the
-//! nodes' central differences, its nodes again by per-lane loads, only where a lane's sample
-//! has opacity), the headlight's Phong lighting and the front-to-back composite. A lane whose
-//! ray ends (it leaves the volume or its transmittance falls below the termination bound)
-//! takes the tile's next ray.
+//! nodes' central differences, its nodes again by per-lane loads, only where a lane's sample has
+//! opacity), the headlight's Phong lighting and the front-to-back composite. A lane whose ray ends
+//! (it leaves the volume or its transmittance falls below the termination bound) takes the tile's
+//! next ray.
 //!
 //! On by default where it applies (`Optimise::packets` switches it off): about 1.1× the
 //! scalar march's speed shaded and 1.25× unshaded on the measured host as first measured,
@@ -326,16 +329,8 @@ impl<'a> Packets<'a> {
                     let lane = lanes[i].as_mut().expect("a ray");
                     // The next run with a segment to take (runs of none are passed over).
                     let (run, keep) = (&mut runs[i], &mut keeps[i]);
-                    let mut ends = false;
-                    while *keep == 0 {
-                        let m = lane.cursor.next_run(grid, &mut run.mids, &mut run.lens);
-                        if m == 0 {
-                            ends = true;
-                            break;
-                        }
-                        *keep = self.to_take(&lane.cursor, &run.mids, &run.lens, m);
-                    }
-                    if ends {
+                    *keep = self.next_taken(&mut lane.cursor, grid, run);
+                    if *keep == 0 {
                         let px = lane.px;
                         lanes[i] = None;
                         out[px] = self.finish(&st, i, background);
@@ -558,6 +553,49 @@ impl<'a> Packets<'a> {
             ),
         );
         (f, base, interior)
+    }
+
+    /// The next run of cursor `c`'s ray with a segment to take, as [`Packets::to_take`]'s
+    /// bits (0: the ray has no sample left), its segments in `run`. Every run of segments
+    /// is tested against the cell mask, which alone decides what is taken (exact, as the
+    /// block walk is); the walk is asked only after a run of which nothing is taken, and
+    /// only where the ray is past the occupied blocks it last reported, to leap over empty
+    /// blocks.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn next_taken(&self, c: &mut Cursor, grid: Option<&SkipGrid>, run: &mut Run) -> u32 {
+        loop {
+            if c.k >= c.n {
+                return 0;
+            }
+            let (m, keep) = self.run_at(c, run);
+            c.k += m as u64;
+            if keep != 0 {
+                return keep;
+            }
+            if c.k >= c.n {
+                return 0;
+            }
+            let next = c.mid(c.k);
+            if next >= c.occupied_until {
+                if let (Some(grid), Some(walk)) = (grid, c.walk.as_mut()) {
+                    let horizon = next + W as f64 * c.step;
+                    match walk.skip_until(grid, next, horizon) {
+                        Ok(exit) => c.pass_before(exit),
+                        Err(until) => c.occupied_until = until,
+                    }
+                }
+            }
+        }
+    }
+
+    /// Cursor `c`'s next segments, up to eight (there is one), written into `run`
+    /// ([`segments_lanes`]), and those [`Packets::to_take`] takes: their number and the bits.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn run_at(&self, c: &Cursor, run: &mut Run) -> (usize, u32) {
+        let m = segments_lanes(c, &mut run.mids, &mut run.lens);
+        (m, self.to_take(c, &run.mids, &run.lens, m))
     }
 
     /// The segments of a run (`m` of them, 1 to 8, at midpoints `mids` with lengths `lens`
@@ -956,6 +994,48 @@ impl Segments {
     }
 }
 
+/// [`Cursor::segments`] in lanes: the cursor's next segments (there is one), up to eight,
+/// their midpoints and lengths written into `mids` and `lens`, the same numbers bit for bit
+/// (`lanes_segments_are_the_cursors`); their number returned. Boundary j of the run is
+/// `t0 + (k + j)·step` (k + j exact in f64: k below 2⁵³ − 16, else the cursor's own loop), a
+/// segment ends at the next boundary where that is below t1 and at t1 otherwise, and the
+/// cursor's last segment at t1.
+#[inline]
+#[target_feature(enable = "avx2")]
+pub(super) fn segments_lanes(c: &Cursor, mids: &mut [f64; W], lens: &mut [f64; W]) -> usize {
+    let k = index_f64(c.k, c.n);
+    if k >= (1u64 << 53) as f64 - 16.0 {
+        return c.segments(mids, lens);
+    }
+    let t0 = _mm256_set1_pd(c.t0);
+    let t1 = _mm256_set1_pd(c.t1);
+    let step = _mm256_set1_pd(c.step);
+    // The count as f64: exact up to 2⁵³; above, every k + j + 1 here is below it.
+    let n = _mm256_set1_pd(index_f64(c.n, c.n));
+    let one = _mm256_set1_pd(1.0);
+    for h in 0..2 {
+        let first = (4 * h) as f64;
+        let j = _mm256_add_pd(
+            _mm256_set1_pd(k),
+            _mm256_setr_pd(first, first + 1.0, first + 2.0, first + 3.0),
+        );
+        let a = _mm256_add_pd(t0, _mm256_mul_pd(j, step));
+        let j1 = _mm256_add_pd(j, one);
+        let next = _mm256_add_pd(t0, _mm256_mul_pd(j1, step));
+        // `at_most` (minpd gives its second operand unless the first is below it), then t1
+        // for the cursor's last segment (and the meaningless lanes past it).
+        let b = _mm256_min_pd(next, t1);
+        let b = _mm256_blendv_pd(b, t1, _mm256_cmp_pd::<_CMP_GE_OQ>(j1, n));
+        std8d(
+            mids,
+            h,
+            _mm256_mul_pd(_mm256_set1_pd(0.5), _mm256_add_pd(a, b)),
+        );
+        std8d(lens, h, _mm256_sub_pd(b, a));
+    }
+    (c.n - c.k).min(W as u64) as usize
+}
+
 /// A lane's ray: its cursor and its pixel (in the tile).
 struct LaneRay {
     cursor: Cursor,
@@ -1180,6 +1260,15 @@ fn ld8(a: &[f32; W]) -> __m256 {
 fn st8(a: &mut [f32; W], v: __m256) {
     // SAFETY: `a` is 8 f32, 32 writable bytes; the store has no alignment requirement.
     unsafe { _mm256_storeu_ps(a.as_mut_ptr(), v) }
+}
+
+/// Stores the register `v` into lanes `4h .. 4h + 4` of `a` (h is 0 or 1).
+#[inline]
+#[target_feature(enable = "avx")]
+fn std8d(a: &mut [f64; W], h: usize, v: __m256d) {
+    let q: &mut [f64; 4] = (&mut a[4 * h..4 * h + 4]).try_into().expect("four lanes");
+    // SAFETY: `q` is 4 f64, 32 writable bytes; the store has no alignment requirement.
+    unsafe { _mm256_storeu_pd(q.as_mut_ptr(), v) }
 }
 
 /// Lanes `4h .. 4h + 4` of `a` (h is 0 or 1) as a register.
