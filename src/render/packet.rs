@@ -278,18 +278,8 @@ impl<'a> Packets<'a> {
         let mut st = State::default();
         let mut cache = CellGradients::default();
         loop {
-            // The common case: a lane's run has a next segment to take.
-            let mut active = 0u32;
-            for (i, (keep, run)) in keeps.iter_mut().zip(&runs).enumerate() {
-                if *keep != 0 {
-                    // (A bit of `keep` is below 8: the mask only spares the bounds check.)
-                    let j = keep.trailing_zeros() as usize & (W - 1);
-                    *keep &= *keep - 1;
-                    st.mid[i] = run.mids[j];
-                    st.len[i] = run.lens[j];
-                    active |= 1 << i;
-                }
-            }
+            // The common case: a lane's run has a next segment to take (all lanes at once).
+            let mut active = next_segments(&mut keeps, &runs, &mut st);
             // The other lanes: the next run of their ray with a segment to take, or a new ray
             // where their ray has ended.
             let mut idle = !active & ((1 << W) - 1);
@@ -1036,6 +1026,63 @@ pub(super) fn segments_lanes(c: &Cursor, mids: &mut [f64; W], lens: &mut [f64; W
     (c.n - c.k).min(W as u64) as usize
 }
 
+/// For every lane whose run has a segment left to take (a bit of its `keeps` word): that
+/// segment's midpoint and length into `st` (the lowest bit's segment of its run), and the bit
+/// cleared. Returns those lanes. In lanes: the lowest bit of each word by `x & −x`, its index
+/// from the exponent of that power of two as f32, the segments by gathers from the runs.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn next_segments(keeps: &mut [u32; W], runs: &[Run; W], st: &mut State) -> u32 {
+    // SAFETY: `keeps` is 8 u32, 32 readable and writable bytes; no alignment requirement.
+    let k = unsafe { _mm256_loadu_si256(keeps.as_ptr() as *const __m256i) };
+    let zero = _mm256_setzero_si256();
+    let has = _mm256_cmpeq_epi32(k, zero);
+    let active = !(_mm256_movemask_ps(_mm256_castsi256_ps(has)) as u32) & 0xff;
+    if active == 0 {
+        return 0;
+    }
+    // Every bit is below 8 (runs of at most eight segments), so the lowest as f32 is exact
+    // and its exponent field is 127 + its index; a word of 0 gives index 7 & (0 − 127): in
+    // range, and its lane is not active.
+    let low = _mm256_and_si256(k, _mm256_sub_epi32(zero, k));
+    let e = _mm256_srli_epi32::<23>(_mm256_castps_si256(_mm256_cvtepi32_ps(low)));
+    let j = _mm256_and_si256(
+        _mm256_sub_epi32(e, _mm256_set1_epi32(127)),
+        _mm256_set1_epi32(7),
+    );
+    let rest = _mm256_and_si256(k, _mm256_add_epi32(k, _mm256_set1_epi32(-1)));
+    // SAFETY: as above.
+    unsafe { _mm256_storeu_si256(keeps.as_mut_ptr() as *mut __m256i, rest) };
+    // Lane i's segment j: f64 number 16·i + j of the runs (its midpoints), + 8 (its lengths).
+    const RUN: i32 = (std::mem::size_of::<Run>() / std::mem::size_of::<f64>()) as i32;
+    let at = _mm256_add_epi32(
+        _mm256_mullo_epi32(
+            _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+            _mm256_set1_epi32(RUN),
+        ),
+        j,
+    );
+    let base = runs.as_ptr() as *const f64;
+    for h in 0..2 {
+        let idx = if h == 0 {
+            _mm256_castsi256_si128(at)
+        } else {
+            _mm256_extracti128_si256::<1>(at)
+        };
+        // SAFETY: `Run` is two arrays of 8 f64 (`repr(C)`), so f64 number 16·i + j and
+        // 16·i + 8 + j (i, j in 0..8) lie inside the 8 runs; gathers need no alignment.
+        let (mid, len) = unsafe {
+            (
+                _mm256_i32gather_pd::<8>(base, idx),
+                _mm256_i32gather_pd::<8>(base.add(8), idx),
+            )
+        };
+        std8d(&mut st.mid, h, mid);
+        std8d(&mut st.len, h, len);
+    }
+    active
+}
+
 /// A lane's ray: its cursor and its pixel (in the tile).
 struct LaneRay {
     cursor: Cursor,
@@ -1044,6 +1091,7 @@ struct LaneRay {
 
 /// The run of segments a lane is taking: midpoints and lengths ([`Cursor::next_run`]).
 #[derive(Clone, Copy, Default)]
+#[repr(C)]
 struct Run {
     mids: [f64; 8],
     lens: [f64; 8],
