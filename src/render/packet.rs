@@ -84,10 +84,11 @@ enum Light32 {
 
 /// The packet march of a scene, prepared once per image where it applies.
 pub(super) struct Packets<'a> {
-    scene: &'a Compiled,
     obj: &'a CObj,
     data: &'a Dataset,
     tables: &'a DirectShading,
+    /// The object's skip grid where empty-space skipping is on.
+    grid: Option<&'a SkipGrid>,
     values: &'a [f32],
     /// The cell mask's bits as 32-bit words (empty: no mask).
     mask: &'a [u32],
@@ -218,10 +219,13 @@ impl<'a> Packets<'a> {
             f64::NAN
         };
         Some(Packets {
-            scene,
             obj,
             data,
             tables,
+            grid: obj
+                .skip
+                .as_deref()
+                .filter(|_| scene.settings.optimise.skip_empty),
             values,
             mask,
             z,
@@ -264,8 +268,6 @@ impl<'a> Packets<'a> {
         unbounded: Option<[f32; 3]>,
         (tx, ty, tw, th): (u32, u32, u32, u32),
     ) -> Vec<[f32; 3]> {
-        let obj = self.obj;
-        let grid = obj.skip.as_deref();
         let background = image.background;
         let mut out = vec![[0f32; 3]; (tw * th) as usize];
         let mut next_pixel = 0usize;
@@ -299,7 +301,7 @@ impl<'a> Packets<'a> {
                             continue;
                         }
                         let dir = view.ray(x as f64 + 0.5, y as f64 + 0.5);
-                        match self.start(image, dir, bound) {
+                        match self.start(&mut lanes[i], image, dir, bound, px) {
                             Ok(c) => {
                                 st.t[i] = 1.0;
                                 for ch in 0..3 {
@@ -308,7 +310,6 @@ impl<'a> Packets<'a> {
                                     st.ro[ch][i] = c.o[ch];
                                     st.rd[ch][i] = c.d[ch];
                                 }
-                                lanes[i] = Some(LaneRay { cursor: c, px });
                             }
                             Err(c) => {
                                 out[px] = to_f32(c);
@@ -319,7 +320,7 @@ impl<'a> Packets<'a> {
                     let lane = lanes[i].as_mut().expect("a ray");
                     // The next run with a segment to take (runs of none are passed over).
                     let (run, keep) = (&mut runs[i], &mut keeps[i]);
-                    *keep = self.next_taken(&mut lane.cursor, grid, run);
+                    *keep = self.next_taken(&mut lane.cursor, run);
                     if *keep == 0 {
                         let px = lane.px;
                         lanes[i] = None;
@@ -353,14 +354,19 @@ impl<'a> Packets<'a> {
         out
     }
 
-    /// [`Compiled::trace_ray`]'s one-volume path up to its march: the ray's cursor, started
-    /// at `bound`, or the colour where the ray takes no sample.
-    fn start(
+    /// [`Compiled::trace_ray`]'s one-volume path up to its march: the ray of pixel `px` in
+    /// `slot` (built there: a cursor is a few hundred bytes), its cursor at the first segment
+    /// whose midpoint is not before `bound`, or the colour where the ray takes no sample. The
+    /// cursor's block walk is not started: [`Packets::next_taken`] starts it where it first
+    /// needs it.
+    fn start<'s>(
         &self,
+        slot: &'s mut Option<LaneRay>,
         image: &ImageRays,
         dir: DVec3,
         bound: f64,
-    ) -> std::result::Result<Cursor, DVec3> {
+        px: usize,
+    ) -> std::result::Result<&'s Cursor, DVec3> {
         let obj = self.obj;
         let background = image.background;
         let unsampled = || DVec3::ZERO + 1.0 * background;
@@ -378,9 +384,14 @@ impl<'a> Packets<'a> {
         if bound >= t1 {
             return Err(unsampled());
         }
-        let mut c = Cursor::unstarted(obj, 0, (o, d), (t0, t1));
-        c.start(self.scene, obj, bound);
-        Ok(c)
+        let lane = slot.insert(LaneRay {
+            cursor: Cursor::unstarted(obj, 0, (o, d), (t0, t1)),
+            px,
+        });
+        if self.grid.is_some() {
+            lane.cursor.start_at(bound.max(t0));
+        }
+        Ok(&lane.cursor)
     }
 
     /// Lane `i`'s pixel: its colour plus its transmittance times the background.
@@ -553,7 +564,7 @@ impl<'a> Packets<'a> {
     /// blocks.
     #[inline]
     #[target_feature(enable = "avx2,fma")]
-    fn next_taken(&self, c: &mut Cursor, grid: Option<&SkipGrid>, run: &mut Run) -> u32 {
+    fn next_taken(&self, c: &mut Cursor, run: &mut Run) -> u32 {
         loop {
             if c.k >= c.n {
                 return 0;
@@ -568,7 +579,11 @@ impl<'a> Packets<'a> {
             }
             let next = c.mid(c.k);
             if next >= c.occupied_until {
-                if let (Some(grid), Some(walk)) = (grid, c.walk.as_mut()) {
+                if let Some(grid) = self.grid {
+                    let walk = match c.walk.as_mut() {
+                        Some(w) => w,
+                        None => grid.walk_into(&mut c.walk, c.o, c.d, next),
+                    };
                     let horizon = next + W as f64 * c.step;
                     match walk.skip_until(grid, next, horizon) {
                         Ok(exit) => c.pass_before(exit),
