@@ -5,15 +5,18 @@
 //! seed) the hard cases of issue #7 for scanned volumes. Every pixel within a small
 //! tolerance, none NaN or infinite, and the same bytes for one and two threads.
 //!
-//! The tolerance: the packet march takes exactly the scalar march's samples (its cursors) and
-//! the same trilinear values (the scalar code's f32 operations), so the zero test and the cell
-//! mask decide alike; it differs in the f32 rounding of the tables (slopes rounded to f32), the
-//! opacity correction, the lighting (a normal from an f32 gradient, `rv^e` with e ≤ 12
-//! multiplying a relative error by e) and the composite (a sum of up to a few hundred terms):
-//! relative errors of about 10⁻⁶ per sample, 10⁻⁴ over a ray (measured: at most 4·10⁻⁷, root mean square 2·10⁻⁸). Where a ray's transmittance
-//! lands within that of the termination bound, the two marches may stop one sample apart:
-//! at most the bound (1/512) times a colour. So 1/255 (one 8-bit level) per channel, and a
-//! root mean square far below it.
+//! The tolerance: the packet march takes exactly the scalar march's samples (its cursors) and,
+//! from node values, the same trilinear values (the scalar code's f32 operations), so the zero
+//! test and the cell mask decide alike; from 8-bit voxels whose normalisation never clamps it
+//! interpolates the voxels and normalises once, a relative 10⁻⁷ from the node values' rounding (a
+//! sample that close to the zero test's bound has an opacity that close to 0). It differs in the
+//! f32 rounding of the tables (slopes rounded to f32), the opacity correction, the lighting (a
+//! normal from an f32 gradient, `rv^e` with e ≤ 12 multiplying a relative error by e) and the
+//! composite (a sum of up to a few hundred terms): relative errors of about 10⁻⁶ per sample, 10⁻⁴
+//! over a ray (measured: at most 4·10⁻⁷, root mean square 2·10⁻⁸). Where a ray's transmittance
+//! lands within that of the termination bound, the two marches may stop one sample apart: at most
+//! the bound (1/512) times a colour. So 1/255 (one 8-bit level) per channel, and a root mean
+//! square far below it.
 
 use vlib::dataset::{Dataset, Voxels};
 use vlib::scene::Optimise;

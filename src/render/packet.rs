@@ -19,13 +19,15 @@
 //! march asks it about every run. The samples taken are the scalar march's samples that the mask
 //! passes, and those are all its samples that can count. Every iteration takes each lane's next
 //! sample to take and evaluates the eight together: the object points and cells, the eight nodes
-//! (per-lane 8-byte loads and a transposition, [`Nodes::pairs2`]; gathers were slower on the
-//! measured host, see `docs/performance.md`), the trilinear value (the scalar code's f32 lerps,
-//! unfused, so the same bits and the same zero test), opacity and colour (the two tables as at
-//! most eight linear pieces in registers, [`Segments`]; tables of more rows by their segment
-//! pairs, gathered), the opacity correction, the gradient (the trilinear interpolation of the
-//! nodes' central differences, its nodes again by per-lane loads, only where a lane's sample has
-//! opacity), the headlight's Phong lighting and the front-to-back composite. A lane whose ray ends
+//! (per-lane 8-byte loads and a transposition, [`Nodes::pairs2`]; for 8-bit voxels whose
+//! normalisation never clamps, the voxels themselves, four to a lane by one gather a row of the
+//! cell, [`Raw8`]), the trilinear value (the scalar code's f32 lerps, unfused, so the same bits
+//! and the same zero test from node values; from voxels, normalised once), opacity and colour
+//! (the two tables as at most eight linear pieces in registers, [`Segments`]; tables of more rows
+//! by their segment pairs, gathered), the opacity correction, the gradient (the trilinear
+//! interpolation of the nodes' central differences, its nodes again by per-lane loads or by eight
+//! more gathers of voxels, only where a lane's sample has opacity), the headlight's Phong
+//! lighting and the front-to-back composite. A lane whose ray ends
 //! (it leaves the volume or its transmittance falls below the termination bound) takes the tile's
 //! next ray.
 //!
@@ -35,8 +37,10 @@
 //! shaded and 1.5× unshaded since samples in masked cells take no lane (`docs/performance.md`,
 //! "The packet march (AVX2), measured" and the paragraphs after it).
 //!
-//! **Arithmetic.** The trilinear value and the gradient's sums are the scalar code's f32
-//! operations in the same order, without fused multiply-adds, so the same bits. The tables,
+//! **Arithmetic.** From node values, the trilinear value and the gradient's sums are the scalar
+//! code's f32 operations in the same order, without fused multiply-adds, so the same bits; from
+//! 8-bit voxels the same operations on the voxels (the differences exact integers), then one
+//! normalisation, which rounds differently from the node values' own (a relative 10⁻⁷). The tables,
 //! the lighting and the composite are in f32 (the scalar march has f64 there) and use fused
 //! multiply-adds where they save instructions: images differ from the scalar march's in the
 //! last bits of a colour, far below an 8-bit level (`packets_are_the_scalar_march`).
@@ -53,7 +57,7 @@
 //! table ([`gather`]), so every lane reads inside the slice whatever the ray.
 
 use super::*;
-use crate::dataset::Filter;
+use crate::dataset::{Filter, Voxels};
 use crate::kernel::DirectShading;
 use crate::mapping::Mapping;
 use crate::types::MappingType;
@@ -90,6 +94,9 @@ pub(super) struct Packets<'a> {
     /// The object's skip grid where empty-space skipping is on.
     grid: Option<&'a SkipGrid>,
     values: &'a [f32],
+    /// The dataset's 8-bit voxels, read instead of `values` where its normalisation is
+    /// linear over every byte ([`Raw8::of`]).
+    raw8: Option<Raw8<'a>>,
     /// The cell mask's bits as 32-bit words (empty: no mask).
     mask: &'a [u32],
     z: f32,
@@ -227,6 +234,7 @@ impl<'a> Packets<'a> {
                 .as_deref()
                 .filter(|_| scene.settings.optimise.skip_empty),
             values,
+            raw8: Raw8::of(data),
             mask,
             z,
             segments,
@@ -440,18 +448,33 @@ impl<'a> Packets<'a> {
         // The eight nodes and the trilinear value (`trilinear_rows`' lerps).
         // (Lanes without a sample read node 0 instead: no memory traffic for them.)
         let base = _mm256_and_si256(base, _mm256_castps_si256(lanes_mask(pass)));
-        let cell = Nodes::new(self.values, base, 1 + sy + sz);
-        let [n000, n100, n010, n110] = cell.pairs2(0, sy);
-        let [n001, n101, n011, n111] = cell.pairs2(sz, sy + sz);
+        let (nodes, rows) = match &self.raw8 {
+            Some(r8) => {
+                let rows = r8.central_rows(base, pass, sy, sz);
+                (rows.cell_nodes(), Some(rows))
+            }
+            None => {
+                let cell = Nodes::new(self.values, base, 1 + sy + sz);
+                let [n000, n100, n010, n110] = cell.pairs2(0, sy);
+                let [n001, n101, n011, n111] = cell.pairs2(sz, sy + sz);
+                ([n000, n100, n010, n110, n001, n101, n011, n111], None)
+            }
+        };
         let lerp = |a: __m256, b: __m256, t: __m256| {
             _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), t))
         };
         let [fx, fy, fz] = f;
+        let [n000, n100, n010, n110, n001, n101, n011, n111] = nodes;
         let c00 = lerp(n000, n100, fx);
         let c10 = lerp(n010, n110, fx);
         let c01 = lerp(n001, n101, fx);
         let c11 = lerp(n011, n111, fx);
         let v = lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz);
+        // (Raw voxels: the value normalised once, `raw·scale + offset`.)
+        let v = match &self.raw8 {
+            Some(r8) => _mm256_fmadd_ps(v, _mm256_set1_ps(r8.scale), _mm256_set1_ps(r8.offset)),
+            None => v,
+        };
         let v = _mm256_min_ps(_mm256_max_ps(v, zero), one);
         // The zero test.
         let above = _mm256_cmp_ps::<_CMP_GT_OQ>(v, _mm256_set1_ps(self.z));
@@ -497,15 +520,7 @@ impl<'a> Packets<'a> {
                 _mm256_mul_ps(_mm256_set1_ps(ka_ambient[ch]), rgb[ch])
             })),
             Light32::Lit { .. } => {
-                let g = self.gradient(
-                    &p,
-                    &f,
-                    base,
-                    interior,
-                    shown,
-                    cache,
-                    [n000, n100, n010, n110, n001, n101, n011, n111],
-                );
+                let g = self.gradient(&p, &f, base, interior, shown, cache, &nodes, rows.as_ref());
                 self.lit(st, g, rgb)
             }
         };
@@ -704,31 +719,21 @@ impl<'a> Packets<'a> {
         interior: __m256i,
         shown: u32,
         cache: &mut CellGradients,
-        nodes: [__m256; 8],
+        nodes: &[__m256; 8],
+        rows: Option<&Rows>,
     ) -> [__m256; 3] {
         let zero = _mm256_setzero_ps();
         let one = _mm256_set1_ps(1.0);
         let inner = shown & _mm256_movemask_ps(_mm256_castsi256_ps(interior)) as u32;
         let mut g = [zero; 3];
         if inner != 0 {
-            let (sy, sz) = (self.sy, self.sz);
-            // The neighbourhood's first node: the cell's less (1, 1, 1).
-            let lo = _mm256_sub_epi32(base, _mm256_set1_epi32(1 + sy + sz));
-            let lo = _mm256_and_si256(lo, _mm256_castps_si256(lanes_mask(inner)));
-            let hood = Nodes::new(self.values, lo, 3 + 3 * sy + 3 * sz);
-            let o = |j: i32, k: i32| 1 + j * sy + k * sz;
-            // The nodes beside the cell: along y and z as x-pairs (the cell's two x nodes),
-            // along x the first and last of the cell's rows of four.
-            let two = |j0: i32, k0: i32, j1: i32, k1: i32| {
-                let [a, b, c, d] = hood.pairs2(o(j0, k0), o(j1, k1));
-                [(a, b), (c, d)]
+            let (d, scale) = match (&self.raw8, rows) {
+                (Some(r8), Some(rows)) => (
+                    r8.differences(rows, base, inner, self.sy, self.sz),
+                    r8.scale,
+                ),
+                _ => (self.differences(base, inner, nodes), 1.0),
             };
-            let (ym, yp) = (two(0, 1, 0, 2), two(3, 1, 3, 2));
-            let (zm, zp) = (two(1, 0, 2, 0), two(1, 3, 2, 3));
-            let r = |b: i32, c: i32| hood.row4(o(1 + b, 1 + c) - 1);
-            let rows = [r(0, 0), r(1, 0), r(0, 1), r(1, 1)];
-            let (xm, xp) = (rows.map(|r| r[0]), rows.map(|r| r[3]));
-            let pick = |p: (__m256, __m256), a: i32| if a == 0 { p.0 } else { p.1 };
             let [fx, fy, fz] = *f;
             let (gx, gy, gz) = (
                 _mm256_sub_ps(one, fx),
@@ -738,33 +743,10 @@ impl<'a> Packets<'a> {
             let wx = [gx, fx];
             let wy = [gy, fy];
             let wz = [gz, fz];
-            for k in 0..8i32 {
+            for (k, d) in d.iter().enumerate() {
                 let (a, b, cc) = (k & 1, k >> 1 & 1, k >> 2);
-                let node = |a: i32, b: i32, cc: i32| nodes[(a + 2 * b + 4 * cc) as usize];
-                // Central differences along x, y and z at corner (a, b, cc): the node on the
-                // far side minus the node on the near side, one of them a cell node.
-                let row = (b + 2 * cc) as usize;
-                let dx = if a == 0 {
-                    _mm256_sub_ps(node(1, b, cc), xm[row])
-                } else {
-                    _mm256_sub_ps(xp[row], node(0, b, cc))
-                };
-                let dy = if b == 0 {
-                    _mm256_sub_ps(node(a, 1, cc), pick(ym[cc as usize], a))
-                } else {
-                    _mm256_sub_ps(pick(yp[cc as usize], a), node(a, 0, cc))
-                };
-                let dz = if cc == 0 {
-                    _mm256_sub_ps(node(a, b, 1), pick(zm[b as usize], a))
-                } else {
-                    _mm256_sub_ps(pick(zp[b as usize], a), node(a, b, 0))
-                };
                 // The weight (wx·wy)·wz, as the scalar lanes take it.
-                let w = _mm256_mul_ps(
-                    _mm256_mul_ps(wx[a as usize], wy[b as usize]),
-                    wz[cc as usize],
-                );
-                let d = [dx, dy, dz];
+                let w = _mm256_mul_ps(_mm256_mul_ps(wx[a], wy[b]), wz[cc]);
                 for axis in 0..3 {
                     let prod = _mm256_mul_ps(w, d[axis]);
                     g[axis] = if k == 0 {
@@ -775,7 +757,13 @@ impl<'a> Packets<'a> {
                 }
             }
             for (axis, ga) in g.iter_mut().enumerate() {
-                *ga = _mm256_mul_ps(*ga, _mm256_set1_ps(self.half_last[axis]));
+                // (Raw differences: times the normalisation's scale too, in one product.)
+                let s = if scale == 1.0 {
+                    self.half_last[axis]
+                } else {
+                    self.half_last[axis] * scale
+                };
+                *ga = _mm256_mul_ps(*ga, _mm256_set1_ps(s));
             }
         }
         let outer = shown & !inner;
@@ -800,6 +788,55 @@ impl<'a> Packets<'a> {
             }
         }
         g
+    }
+
+    /// The central differences along x, y and z at the eight corners (a + 2b + 4c) of the
+    /// cells whose first nodes are `base`, for the lanes of `inner` (whose 4³ neighbourhoods
+    /// lie inside the grid), from the node values (cell nodes `nodes`, the others by per-lane
+    /// loads): the node on the far side minus the node on the near side, one of them a cell
+    /// node.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn differences(&self, base: __m256i, inner: u32, nodes: &[__m256; 8]) -> [[__m256; 3]; 8] {
+        let (sy, sz) = (self.sy, self.sz);
+        // The neighbourhood's first node: the cell's less (1, 1, 1).
+        let lo = _mm256_sub_epi32(base, _mm256_set1_epi32(1 + sy + sz));
+        let lo = _mm256_and_si256(lo, _mm256_castps_si256(lanes_mask(inner)));
+        let hood = Nodes::new(self.values, lo, 3 + 3 * sy + 3 * sz);
+        let o = |j: i32, k: i32| 1 + j * sy + k * sz;
+        // The nodes beside the cell: along y and z as x-pairs (the cell's two x nodes),
+        // along x the first and last of the cell's rows of four.
+        let two = |j0: i32, k0: i32, j1: i32, k1: i32| {
+            let [a, b, c, d] = hood.pairs2(o(j0, k0), o(j1, k1));
+            [(a, b), (c, d)]
+        };
+        let (ym, yp) = (two(0, 1, 0, 2), two(3, 1, 3, 2));
+        let (zm, zp) = (two(1, 0, 2, 0), two(1, 3, 2, 3));
+        let r = |b: i32, c: i32| hood.row4(o(1 + b, 1 + c) - 1);
+        let rows = [r(0, 0), r(1, 0), r(0, 1), r(1, 1)];
+        let (xm, xp) = (rows.map(|r| r[0]), rows.map(|r| r[3]));
+        let pick = |p: (__m256, __m256), a: usize| if a == 0 { p.0 } else { p.1 };
+        std::array::from_fn(|k| {
+            let (a, b, cc) = (k & 1, k >> 1 & 1, k >> 2);
+            let node = |a: usize, b: usize, cc: usize| nodes[a + 2 * b + 4 * cc];
+            let row = b + 2 * cc;
+            let dx = if a == 0 {
+                _mm256_sub_ps(node(1, b, cc), xm[row])
+            } else {
+                _mm256_sub_ps(xp[row], node(0, b, cc))
+            };
+            let dy = if b == 0 {
+                _mm256_sub_ps(node(a, 1, cc), pick(ym[cc], a))
+            } else {
+                _mm256_sub_ps(pick(yp[cc], a), node(a, 0, cc))
+            };
+            let dz = if cc == 0 {
+                _mm256_sub_ps(node(a, b, 1), pick(zm[b], a))
+            } else {
+                _mm256_sub_ps(pick(zp[b], a), node(a, b, 0))
+            };
+            [dx, dy, dz]
+        })
     }
 
     /// The lit colours of samples of colours `rgb` and object-space gradients `g`:
@@ -1096,6 +1133,221 @@ fn next_segments(keeps: &mut [u32; W], runs: &[Run; W], st: &mut State) -> u32 {
         std8d(&mut st.len, h, len);
     }
     active
+}
+
+/// A dataset's 8-bit voxels, where its normalisation `(v − a)/(b − a)` maps every byte into
+/// [0, 1] (so it never clamps, and is linear): the packet march reads the voxels themselves,
+/// four to a 32-bit lane by gathers, a quarter of the node values' memory, and normalises a
+/// sample's interpolated value once (`raw·scale + offset`) and its gradient by `scale`
+/// (the differences of bytes are exact integers). The node values are the voxels'
+/// normalisations in f64 rounded to f32, so a sample's value differs from the value
+/// interpolated from those by f32 rounding: relative errors of a few 10⁻⁷ (the packet march's
+/// tolerance against the scalar march, `tests/packets.rs`).
+struct Raw8<'a> {
+    raw: &'a [u8],
+    scale: f32,
+    offset: f32,
+}
+
+impl<'a> Raw8<'a> {
+    /// The voxels of `data`, where they are 8-bit and its normalisation maps 0 and 255 into
+    /// [0, 1] (every byte between, then: the normalisation is monotone).
+    fn of(data: &'a Dataset) -> Option<Raw8<'a>> {
+        let Voxels::U8(raw) = data.raw() else {
+            return None;
+        };
+        let (a, b) = data.range();
+        let (a, b) = (a as f64, b as f64);
+        let norm = |v: f64| (v - a) / (b - a);
+        let inside = |x: f64| (0.0..=1.0).contains(&x);
+        if !(inside(norm(0.0)) && inside(norm(255.0))) || raw.len() >= i32::MAX as usize / 2 {
+            return None;
+        }
+        Some(Raw8 {
+            raw,
+            scale: (1.0 / (b - a)) as f32,
+            offset: (-a / (b - a)) as f32,
+        })
+    }
+
+    /// The central rows of the cells whose first nodes are `base`, for the lanes of `live`:
+    /// for (b, c) in (0, 0), (1, 0), (0, 1), (1, 1), the four voxels x0 − 1 … x0 + 2 of row
+    /// y0 + b, z0 + c, one per byte (the lowest first). A lane whose row reaches past either
+    /// end of the voxels (the very first cell, or the last) is read voxel by voxel, with 0
+    /// past the end (only interior cells, whose rows lie inside, read the outer two).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn central_rows(&self, base: __m256i, live: u32, sy: i32, sz: i32) -> Rows {
+        let span = sy + sz + 3;
+        let first = _mm256_sub_epi32(base, _mm256_set1_epi32(1));
+        let hi = _mm256_set1_epi32(self.raw.len() as i32 - 1 - span);
+        let at = _mm256_min_epi32(_mm256_max_epi32(first, _mm256_setzero_si256()), hi);
+        let kept = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(at, first)));
+        if !(kept as u32) & live != 0 {
+            return self.rows_one_by_one(first, [0, sy, sz, sy + sz]);
+        }
+        let mut r = [at; 4];
+        for (w, off) in r.iter_mut().zip([0, sy, sz, sy + sz]) {
+            *w = gather_bytes(self.raw, _mm256_add_epi32(at, _mm256_set1_epi32(off)));
+        }
+        Rows { r }
+    }
+
+    /// [`Raw8::central_rows`] voxel by voxel: the four voxels from `first + off` per lane
+    /// and offset, 0 where one lies outside.
+    #[cold]
+    #[inline(never)]
+    #[target_feature(enable = "avx2")]
+    fn rows_one_by_one(&self, first: __m256i, offs: [i32; 4]) -> Rows {
+        let mut at = [0i32; W];
+        st8i(&mut at, first);
+        let byte = |i: i64| -> u32 {
+            usize::try_from(i)
+                .ok()
+                .and_then(|i| self.raw.get(i))
+                .map_or(0, |&v| v as u32)
+        };
+        Rows {
+            r: offs.map(|off| {
+                let words: [i32; W] = std::array::from_fn(|lane| {
+                    let i = at[lane] as i64 + off as i64;
+                    (0..4).fold(0u32, |w, k| w | byte(i + k) << (8 * k)) as i32
+                });
+                ld8i(&words)
+            }),
+        }
+    }
+
+    /// The central differences along x, y and z at the eight corners (a + 2b + 4c) of the
+    /// cells whose first nodes are `base` and central rows `rows`, for the lanes of `inner`
+    /// (whose 4³ neighbourhoods lie inside the grid), in raw voxels: exact integers, as f32.
+    /// The rows beside the cell along y and z by eight more gathers (two voxels of each).
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn differences(
+        &self,
+        rows: &Rows,
+        base: __m256i,
+        inner: u32,
+        sy: i32,
+        sz: i32,
+    ) -> [[__m256; 3]; 8] {
+        let base = _mm256_and_si256(base, _mm256_castps_si256(lanes_mask(inner)));
+        let hi = _mm256_set1_epi32(self.raw.len() as i32 - 4);
+        let zero = _mm256_setzero_si256();
+        let mut side = [zero; 8];
+        // Rows y0 − 1 and y0 + 2 at z0 + c, rows z0 − 1 and z0 + 2 at y0 + b (from x0): the
+        // index clamped (a no-op for an interior cell's lane).
+        for (w, off) in side.iter_mut().zip([
+            -sy,
+            -sy + sz,
+            2 * sy,
+            2 * sy + sz,
+            -sz,
+            sy - sz,
+            2 * sz,
+            sy + 2 * sz,
+        ]) {
+            let at = _mm256_add_epi32(base, _mm256_set1_epi32(off));
+            *w = gather_bytes(self.raw, _mm256_min_epi32(_mm256_max_epi32(at, zero), hi));
+        }
+        let [ym0, ym1, yp0, yp1, zm0, zm1, zp0, zp1] = side;
+        let (ym, yp, zm, zp) = ([ym0, ym1], [yp0, yp1], [zm0, zm1], [zp0, zp1]);
+        let r = &rows.r;
+        // Byte k of a row as i32: node x0 + a is byte 1 + a of a central row, byte a of a
+        // side row.
+        let b = |w: &[__m256i; 4], i: usize| -> [__m256i; 4] {
+            let x = w[i];
+            [byte::<0>(x), byte::<1>(x), byte::<2>(x), byte::<3>(x)]
+        };
+        let rb = [b(r, 0), b(r, 1), b(r, 2), b(r, 3)];
+        let two = |w: __m256i| [byte::<0>(w), byte::<1>(w)];
+        let (ym, yp, zm, zp) = (ym.map(two), yp.map(two), zm.map(two), zp.map(two));
+        let mut d = [[_mm256_setzero_ps(); 3]; 8];
+        for (k, dk) in d.iter_mut().enumerate() {
+            let (a, b, c) = (k & 1, k >> 1 & 1, k >> 2);
+            let row = &rb[b + 2 * c];
+            let dx = _mm256_sub_epi32(row[2 + a], row[a]);
+            let dy = if b == 0 {
+                _mm256_sub_epi32(rb[1 + 2 * c][1 + a], ym[c][a])
+            } else {
+                _mm256_sub_epi32(yp[c][a], rb[2 * c][1 + a])
+            };
+            let dz = if c == 0 {
+                _mm256_sub_epi32(rb[b + 2][1 + a], zm[b][a])
+            } else {
+                _mm256_sub_epi32(zp[b][a], rb[b][1 + a])
+            };
+            *dk = [
+                _mm256_cvtepi32_ps(dx),
+                _mm256_cvtepi32_ps(dy),
+                _mm256_cvtepi32_ps(dz),
+            ];
+        }
+        d
+    }
+}
+
+/// The central rows of eight cells ([`Raw8::central_rows`]): four voxels a lane, in its bytes.
+struct Rows {
+    r: [__m256i; 4],
+}
+
+impl Rows {
+    /// The eight cell nodes (a + 2b + 4c: x0 + a of row (b, c), its byte 1 + a) as f32.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn cell_nodes(&self) -> [__m256; 8] {
+        let r = &self.r;
+        std::array::from_fn(|k| {
+            let w = r[k >> 1];
+            _mm256_cvtepi32_ps(if k & 1 == 0 {
+                byte::<1>(w)
+            } else {
+                byte::<2>(w)
+            })
+        })
+    }
+}
+
+/// Byte `K` of each 32-bit lane of `w`.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn byte<const K: i32>(w: __m256i) -> __m256i {
+    let shifted = match K {
+        0 => w,
+        1 => _mm256_srli_epi32::<8>(w),
+        2 => _mm256_srli_epi32::<16>(w),
+        _ => return _mm256_srli_epi32::<24>(w),
+    };
+    _mm256_and_si256(shifted, _mm256_set1_epi32(0xff))
+}
+
+/// The four bytes of `raw` from `at` in each lane, as one 32-bit word (the lowest first), by
+/// a gather; every lane of `at` must be in `[0, raw.len() − 4]` (asserted per call for the
+/// bounds, not per lane: the callers clamp).
+#[inline]
+#[target_feature(enable = "avx2")]
+fn gather_bytes(raw: &[u8], at: __m256i) -> __m256i {
+    // SAFETY: every lane of `at` is in [0, raw.len() − 4] (the callers clamp to it), so the
+    // four bytes each lane reads lie inside `raw`; a gather of scale 1 reads unaligned words.
+    unsafe { _mm256_i32gather_epi32::<1>(raw.as_ptr() as *const i32, at) }
+}
+
+/// The eight i32 of `a` as a register.
+#[inline]
+#[target_feature(enable = "avx")]
+fn ld8i(a: &[i32; W]) -> __m256i {
+    // SAFETY: `a` is 8 i32, 32 readable bytes; the load has no alignment requirement.
+    unsafe { _mm256_loadu_si256(a.as_ptr() as *const __m256i) }
+}
+
+/// Stores the register `v` into the eight i32 of `a`.
+#[inline]
+#[target_feature(enable = "avx")]
+fn st8i(a: &mut [i32; W], v: __m256i) {
+    // SAFETY: `a` is 8 i32, 32 writable bytes; the store has no alignment requirement.
+    unsafe { _mm256_storeu_si256(a.as_mut_ptr() as *mut __m256i, v) }
 }
 
 /// A lane's ray: its cursor and its pixel (in the tile).
