@@ -336,8 +336,11 @@ pub struct Dataset {
     a: f32,
     b: f32,
     raw: Voxels,
-    /// Normalised node values, x fastest.
-    values: Vec<f32>,
+    /// Normalised node values, x fastest: computed on first use ([`Dataset::values`]). A
+    /// render that reads only the raw voxels (the packet march of 8-bit voxels, the brick
+    /// ranges, the cell masks) never makes them: for a scan, four times its voxels' memory,
+    /// and a large part of its first image's time.
+    values: std::sync::OnceLock<Vec<f32>>,
     /// Brick ranges, computed on first use: for reach 1 (nearest, trilinear) and 2 (cubic).
     bricks: [std::sync::OnceLock<Bricks>; 2],
     /// Cell masks built so far, by the bits of their bound (see [`Dataset::cells_above`]).
@@ -413,34 +416,6 @@ impl Dataset {
                 format!("dataset normalisation a = {a}, b = {b}: both finite and different"),
             );
         }
-        let norm = normaliser(a, b);
-        // (On all cores: the values of a large scan are part of its first image's time.)
-        use rayon::prelude::*;
-        // Chunks of a zeroed buffer filled in plain loops: a parallel `collect` spent about
-        // fourteen instructions a voxel on its plumbing.
-        let mut values = vec![0f32; raw.len()];
-        const CHUNK: usize = 1 << 16;
-        match &raw {
-            Voxels::U8(v) => {
-                let lut: [f32; 256] = std::array::from_fn(|x| norm(x as f64));
-                values
-                    .par_chunks_mut(CHUNK)
-                    .zip(v.par_chunks(CHUNK))
-                    .for_each(|(out, v)| {
-                        for (o, &x) in out.iter_mut().zip(v) {
-                            *o = lut[x as usize];
-                        }
-                    });
-            }
-            Voxels::U16(v) => values
-                .par_chunks_mut(CHUNK)
-                .zip(v.par_chunks(CHUNK))
-                .for_each(|(out, v)| {
-                    for (o, &x) in out.iter_mut().zip(v) {
-                        *o = norm(x as f64);
-                    }
-                }),
-        }
         let strides = [
             usize::from(dims[0] > 1),
             if dims[1] > 1 { dims[0] } else { 0 },
@@ -450,7 +425,6 @@ impl Dataset {
             dims,
             a,
             b,
-            raw,
             bricks: Default::default(),
             cell_masks: Default::default(),
             last: dims.map(|n| (n - 1) as f64),
@@ -468,9 +442,10 @@ impl Dataset {
                 ]
             }),
             strides,
-            index_lanes: (values.len() <= 1 << 24).then(|| strides.map(|s| s as f32)),
+            index_lanes: (raw.len() <= 1 << 24).then(|| strides.map(|s| s as f32)),
             splats: Default::default(),
-            values,
+            values: std::sync::OnceLock::new(),
+            raw,
         }
         .with_splats())
     }
@@ -492,10 +467,10 @@ impl Dataset {
         self
     }
 
-    /// The normalised node values (x fastest), the node strides (1, nx, nx·ny; 0 along an axis
-    /// of one node) and 0.5·(n − 1) per axis: what the packet march (`render::packet`) reads.
-    pub(crate) fn packet_parts(&self) -> (&[f32], [usize; 3], [f64; 3]) {
-        (&self.values, self.strides, self.half_last)
+    /// The node strides (1, nx, nx·ny; 0 along an axis of one node) and 0.5·(n − 1) per axis:
+    /// what the packet march (`render::packet`) reads besides the values or voxels.
+    pub(crate) fn packet_parts(&self) -> ([usize; 3], [f64; 3]) {
+        (self.strides, self.half_last)
     }
 
     /// The brick ranges for `filter` (computed once per dataset and reach, then shared).
@@ -782,10 +757,16 @@ impl Dataset {
         &self.raw
     }
 
-    /// The normalised value of node (i, j, k).
+    /// The normalised value of node (i, j, k): from the node values where they have been
+    /// made, else from its voxel (the same number: the values are the voxels' normalisations),
+    /// so that a read of a few nodes does not make all of them.
     #[inline]
     pub fn node(&self, i: usize, j: usize, k: usize) -> f32 {
-        self.values[self.node_index([i, j, k])]
+        let at = self.node_index([i, j, k]);
+        match self.values.get() {
+            Some(v) => v[at],
+            None => normaliser(self.a, self.b)(self.raw.get(at)),
+        }
     }
 
     /// The position of node (i, j, k) in the node arrays (x fastest).
@@ -794,9 +775,47 @@ impl Dataset {
         i + self.dims[0] * (j + self.dims[1] * k)
     }
 
-    /// The normalised node values, x fastest.
+    /// The normalised node values, x fastest: made on first use (in parallel), then kept.
     pub fn values(&self) -> &[f32] {
-        &self.values
+        self.values.get_or_init(|| self.compute_values())
+    }
+
+    /// Whether the node values have been made ([`Dataset::values`]): a render that reads only
+    /// the voxels leaves them unmade.
+    pub fn values_made(&self) -> bool {
+        self.values.get().is_some()
+    }
+
+    /// The node values of the raw voxels ([`normaliser`]), on as many threads as rayon's pool
+    /// has, but threads of their own: made from inside a render's parallel loop (a first
+    /// read there), a rayon job that waits for its parts may run another part of the render
+    /// meanwhile, which would ask for the values again, in the thread that is making them.
+    fn compute_values(&self) -> Vec<f32> {
+        let norm = normaliser(self.a, self.b);
+        let mut values = vec![0f32; self.raw.len()];
+        let threads = rayon::current_num_threads().clamp(1, 64);
+        let chunk = self.raw.len().div_ceil(threads).max(1 << 16);
+        let lut: [f32; 256] = std::array::from_fn(|x| norm(x as f64));
+        std::thread::scope(|scope| {
+            for (k, out) in values.chunks_mut(chunk).enumerate() {
+                let from = k * chunk;
+                let raw = &self.raw;
+                let lut = &lut;
+                scope.spawn(move || match raw {
+                    Voxels::U8(v) => {
+                        for (o, &x) in out.iter_mut().zip(&v[from..]) {
+                            *o = lut[x as usize];
+                        }
+                    }
+                    Voxels::U16(v) => {
+                        for (o, &x) in out.iter_mut().zip(&v[from..]) {
+                            *o = norm(x as f64);
+                        }
+                    }
+                });
+            }
+        });
+        values
     }
 
     /// The raw value of node (i, j, k) before normalisation.
@@ -867,8 +886,7 @@ impl Dataset {
 
     /// The `.vlb` encoding of the dataset.
     pub fn to_vlb_bytes(&self) -> Vec<u8> {
-        let mut out =
-            Vec::with_capacity(HEADER_LEN + self.values.len() * self.raw.width() as usize);
+        let mut out = Vec::with_capacity(HEADER_LEN + self.raw.len() * self.raw.width() as usize);
         out.extend_from_slice(MAGIC);
         for d in self.dims {
             out.extend_from_slice(&(d as u32).to_le_bytes());
@@ -916,11 +934,13 @@ impl Dataset {
             self.index(p[1], 1),
             self.index(p[2], 2),
         ];
+        let values = self.values();
+        let node = |i, j, k| values[self.node_index([i, j, k])] as f64;
         let v = match filter {
             Filter::Cubic { b, c } => self
                 .cubic_interior(u, b as f64, c as f64)
-                .unwrap_or_else(|| self.filter(u, filter, |i, j, k| self.node(i, j, k) as f64)),
-            _ => self.filter(u, filter, |i, j, k| self.node(i, j, k) as f64),
+                .unwrap_or_else(|| self.filter(u, filter, node)),
+            _ => self.filter(u, filter, node),
         };
         (v as f32).clamp(0.0, 1.0)
     }
@@ -932,7 +952,7 @@ impl Dataset {
     fn cubic_interior(&self, u: [f64; 3], b: f64, c: f64) -> Option<f64> {
         let (i0, w) = self.cubic_taps(u, b, c, None)?;
         self.cubic_sum(i0, w, |o| {
-            let r: [f32; 4] = self.values.get(o..o + 4)?.try_into().ok()?;
+            let r: [f32; 4] = self.values().get(o..o + 4)?.try_into().ok()?;
             Some(r.map(f64::from))
         })
     }
@@ -947,11 +967,11 @@ impl Dataset {
         let (i0, w) = self.cubic_taps(u, b, c, Some(axis))?;
         let [nx, ny, _] = self.dims;
         let stride = [1, nx, nx * ny][axis];
-        let row = |o: usize| -> Option<[f32; 4]> { self.values.get(o..o + 4)?.try_into().ok() };
+        let row = |o: usize| -> Option<[f32; 4]> { self.values().get(o..o + 4)?.try_into().ok() };
         self.cubic_sum(i0, w, |o| {
             // The taps' neighbours below and above along `axis`.
             let (lo, hi) = if axis == 0 {
-                let r: [f32; 6] = self.values.get(o - 1..o + 5)?.try_into().ok()?;
+                let r: [f32; 6] = self.values().get(o - 1..o + 5)?.try_into().ok()?;
                 ([r[0], r[1], r[2], r[3]], [r[2], r[3], r[4], r[5]])
             } else {
                 (row(o - stride)?, row(o + stride)?)
@@ -1320,7 +1340,7 @@ impl Dataset {
         f: [f32; 3],
         unit_x: bool,
     ) -> Option<f32> {
-        let v = &self.values;
+        let v = self.values();
         if unit_x {
             // Four rows of two nodes along x, in the span [base, base + sz + sy + 2): the
             // first and last two nodes of its first sy + 2 and of its last sy + 2. Where base
@@ -1420,7 +1440,7 @@ impl Dataset {
                 self.strides[2] as u32 as usize,
             );
             let lo = u32::try_from(lo).ok()? as usize;
-            let v = &self.values[..];
+            let v = self.values();
             if lo + 3 * sy + 3 * sz + 4 > v.len() {
                 return None;
             }
@@ -1769,6 +1789,53 @@ mod tests {
         Dataset::new(dims, Voxels::U8(raw), 10.0, 240.0).unwrap()
     }
 
+    /// Node values are made on first use, by any number of threads the same, and a node read
+    /// before then (from its voxel) is the node value made after: for 8- and 16-bit voxels,
+    /// normalisations that increase, decrease and clamp, sizes below and above a thread's
+    /// share (65 536 voxels).
+    #[test]
+    fn node_values_are_made_on_first_use_the_same_on_any_threads() {
+        let mut rng = Lcg(99);
+        for (case, dims) in [[7, 5, 3], [61, 47, 29], [2, 1, 1]].into_iter().enumerate() {
+            let n: usize = dims.iter().product();
+            for (a, b) in [(0.0, 255.0), (240.0, 10.0), (1000.0, 60000.0), (-5.0, 3.0)] {
+                let raw = if case % 2 == 0 {
+                    Voxels::U8((0..n).map(|_| (rng.next() * 256.0) as u8).collect())
+                } else {
+                    Voxels::U16((0..n).map(|_| (rng.next() * 65536.0) as u16).collect())
+                };
+                let d = Dataset::new(dims, raw, a, b).unwrap();
+                assert!(!d.values_made());
+                let norm = normaliser(a, b);
+                let before: Vec<u32> = (0..n)
+                    .map(|at| {
+                        let [i, j, k] = [
+                            at % dims[0],
+                            at / dims[0] % dims[1],
+                            at / (dims[0] * dims[1]),
+                        ];
+                        d.node(i, j, k).to_bits()
+                    })
+                    .collect();
+                assert!(!d.values_made(), "reading a node made the values");
+                let want: Vec<u32> = (0..n).map(|at| norm(d.raw.get(at)).to_bits()).collect();
+                assert_eq!(before, want);
+                let made = |threads: usize| {
+                    let e = d.clone();
+                    rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .unwrap()
+                        .install(|| e.values().iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+                };
+                assert_eq!(made(1), want);
+                assert_eq!(made(3), want);
+                assert_eq!(d.values().len(), n);
+                assert!(d.values_made());
+            }
+        }
+    }
+
     /// [`CellGradients`] as it was before the differences were stored in the order (y, z, x).
     struct OldCellGradients {
         lo: usize,
@@ -1786,7 +1853,7 @@ mod tests {
     ) -> Option<[f64; 3]> {
         if cache.lo != lo {
             let (sy, sz) = (d.strides[1], d.strides[2]);
-            let v = &d.values[..];
+            let v = d.values();
             let last = v.len().checked_sub(4)?;
             let row = |j: usize, k: usize| -> Option<[f32; 4]> {
                 let o = lo + j * sy + k * sz;
@@ -1870,18 +1937,20 @@ mod tests {
             if bits {
                 // Any f32 at all, to check the lanes' operations, not only the dataset's
                 // values in [0, 1].
-                let n = d.values.len();
-                d.values = (0..n)
-                    .map(|i| match i % 13 {
-                        0 => -0.0,
-                        1 => f32::NAN,
-                        2 => f32::INFINITY,
-                        3 => f32::NEG_INFINITY,
-                        4 => f32::from_bits(rng.bits() as u32 & 0x807f_ffff),
-                        5 => f32::MAX,
-                        _ => f32::from_bits(rng.bits() as u32),
-                    })
-                    .collect();
+                let n = d.raw.len();
+                d.values = std::sync::OnceLock::from(
+                    (0..n)
+                        .map(|i| match i % 13 {
+                            0 => -0.0,
+                            1 => f32::NAN,
+                            2 => f32::INFINITY,
+                            3 => f32::NEG_INFINITY,
+                            4 => f32::from_bits(rng.bits() as u32 & 0x807f_ffff),
+                            5 => f32::MAX,
+                            _ => f32::from_bits(rng.bits() as u32),
+                        })
+                        .collect::<Vec<f32>>(),
+                );
             }
             let (mut new, mut old) = (
                 CellGradients::default(),
@@ -1890,12 +1959,12 @@ mod tests {
                     diffs: [[0.0; 4]; 8],
                 },
             );
-            for lo in 0..d.values.len() + 3 {
+            for lo in 0..d.raw.len() + 3 {
                 for _ in 0..3 {
                     let f = [weight(&rng), weight(&rng), weight(&rng)];
                     let got = d.trilinear_gradient_at::<true>(lo, f, &mut new);
                     let (sy, sz) = (d.strides[1], d.strides[2]);
-                    let inside = lo + 3 * sy + 3 * sz + 4 <= d.values.len();
+                    let inside = lo + 3 * sy + 3 * sz + 4 <= d.raw.len();
                     assert_eq!(got.is_some(), inside, "{dims:?} lo {lo}");
                     // (The old read where the new one reads, the same cache traffic.)
                     let want = if inside {

@@ -144,13 +144,20 @@ impl<'a> Packets<'a> {
             return None;
         }
         let tables = lean.direct_shading()?;
-        let (values, strides, half_last) = data.packet_parts();
+        let (strides, half_last) = data.packet_parts();
         let dims = data.dims();
         // Every axis at least 4 nodes (so interior cells exist and the clamps below have room),
         // every index an i32.
-        if dims.iter().any(|&n| n < 4) || values.len() >= i32::MAX as usize / 2 {
+        if dims.iter().any(|&n| n < 4) || dims.iter().product::<usize>() >= i32::MAX as usize / 2 {
             return None;
         }
+        // The node values only where the voxels are not read instead (made on first use).
+        let raw8 = Raw8::of(data);
+        let values = if raw8.is_some() {
+            &[][..]
+        } else {
+            data.values()
+        };
         let [ka, kd, ks, spec] = tables.coefficients;
         let light = match scene.lanes[0].as_ref() {
             Some(h) => {
@@ -234,7 +241,7 @@ impl<'a> Packets<'a> {
                 .as_deref()
                 .filter(|_| scene.settings.optimise.skip_empty),
             values,
-            raw8: Raw8::of(data),
+            raw8,
             mask,
             z,
             segments,
