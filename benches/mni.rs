@@ -77,6 +77,7 @@ fn bench(c: &mut Criterion) {
                 lean_kernel,
                 // ("shaded_scalar": every ray by the scalar march, not the packet march.)
                 packets: name != "shaded_scalar",
+                ..Optimise::default()
             },
         );
         g.bench_function(name, |b| {

@@ -20,7 +20,7 @@
 
 use vlib::dataset::{Dataset, Voxels};
 use vlib::scene::Optimise;
-use vlib::{Camera, Fields, Library, MappingType};
+use vlib::{Camera, Feature, Fields, Library, MappingType};
 
 #[path = "common/lcg.rs"]
 mod lcg;
@@ -107,6 +107,8 @@ struct Case {
     /// The volume turned about its centre (gradients to world space by a general matrix, not
     /// a diagonal one).
     turned: bool,
+    /// Normals flipped towards the eye (`Feature::FlipNormals`).
+    flip: bool,
     optimise: Optimise,
 }
 
@@ -194,6 +196,7 @@ fn render_made(case: &Case, packets: bool, threads: usize) -> (Vec<[f32; 3]>, bo
     vl.directional_light([0.3, -1.0, 0.2], [1.0, 0.95, 0.9], 1.0)
         .unwrap();
     vl.step_size(case.step, 1.0).unwrap();
+    vl.toggle(Feature::FlipNormals, case.flip).unwrap();
     vl.object().unwrap();
     let ext = case.dims.map(|n| (n - 1) as f32);
     if case.turned {
@@ -271,6 +274,7 @@ fn cases() -> Vec<Case> {
             shaded: n % 2 == 0,
             many_rows: n % 3 == 0,
             turned: n % 5 >= 3,
+            flip: n % 4 == 0,
             optimise,
         });
     }
@@ -284,16 +288,35 @@ fn packets_are_the_scalar_march() {
         eprintln!("no AVX2 and FMA: the packet march never runs here");
         return;
     }
+    if !is_x86_feature_detected!("avx512f") {
+        eprintln!("no AVX-512: sixteen lanes never run here, the wide and narrow images are one");
+    }
     let (mut worst, mut sum, mut count, mut differ) = (0.0f32, 0.0f64, 0usize, 0usize);
     for (n, case) in cases().iter().enumerate() {
         let scalar = render(case, false, 1);
         let packets = render(case, true, 1);
         let two = render(case, true, 2);
+        let narrow = render(
+            &Case {
+                optimise: Optimise {
+                    wide_lanes: false,
+                    ..case.optimise
+                },
+                ..*case
+            },
+            true,
+            1,
+        );
         let bits = |v: &[[f32; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(
             bits(&packets),
             bits(&two),
             "case {n}: 1 and 2 threads differ"
+        );
+        assert_eq!(
+            bits(&packets),
+            bits(&narrow),
+            "case {n}: sixteen and eight lanes differ"
         );
         if bits(&packets) != bits(&scalar) {
             differ += 1;
@@ -441,7 +464,7 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                 }
                 .unwrap();
                 let size = scale.iter().fold(0.0f32, |m, v| m.max(*v));
-                let render = |packets: bool, threads: usize| {
+                let render = |packets: bool, threads: usize, wide_lanes: bool| {
                     let mut vl = Library::new();
                     vl.add_dataset(1, data.clone()).unwrap();
                     let (a1, an) = (
@@ -461,6 +484,7 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                     vl.scene().unwrap();
                     vl.set_optimise(Optimise {
                         packets,
+                        wide_lanes,
                         ..Optimise::default()
                     })
                     .unwrap();
@@ -482,7 +506,14 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                     vl.end().unwrap();
                     on_threads(threads, || vl.render_preview(6, 5, 1.2)).unwrap()
                 };
-                let (packets, two, scalar) = (render(true, 1), render(true, 2), render(false, 1));
+                let (packets, two, scalar) = (
+                    render(true, 1, true),
+                    render(true, 2, true),
+                    render(false, 1, true),
+                );
+                // Sixteen lanes a step (where the processor has AVX-512) or eight: the same
+                // image bit for bit.
+                let narrow = render(true, 1, false);
                 let flat = |i: &vlib::render::Image| -> Vec<f32> {
                     i.pixels.iter().flatten().copied().collect()
                 };
@@ -494,6 +525,13 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                 prop_assert_eq!(
                     p.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
                     flat(&two).iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                );
+                prop_assert_eq!(
+                    p.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                    flat(&narrow)
+                        .iter()
+                        .map(|v| v.to_bits())
+                        .collect::<Vec<_>>()
                 );
                 for (a, b) in p.iter().zip(&s) {
                     prop_assert!((a - b).abs() <= 1.0 / 255.0, "{a} against {b}");

@@ -576,7 +576,7 @@ fn vlb_bytes(input: &mut Input) -> Vec<u8> {
     let mut v = b"VLB1".to_vec();
     let dims = match kind {
         1 => [dims[0], 0, dims[2]],
-        2 if dims[0] % 2 == 0 => [100_000, 100_000, 100_000],
+        2 if dims[0].is_multiple_of(2) => [100_000, 100_000, 100_000],
         2 => [1 << 22, 1 << 22, 1 << 22], // the product wraps to 0 in u64
         _ => dims,
     };
@@ -598,7 +598,7 @@ fn vlb_bytes(input: &mut Input) -> Vec<u8> {
         6 => v.push(0),
         _ => {}
     }
-    if input.u8() % 16 == 0 {
+    if input.u8().is_multiple_of(16) {
         v[0] = b'X';
     }
     v
@@ -1131,7 +1131,7 @@ impl<'d> Driver<'d> {
             31 => {
                 let mut m = [0.0f32; 16];
                 for (i, v) in m.iter_mut().enumerate() {
-                    *v = if input.u8() % 4 == 0 {
+                    *v = if input.u8().is_multiple_of(4) {
                         input.pick(&MATRIX)
                     } else if i % 5 == 0 {
                         1.0

@@ -1,5 +1,7 @@
 //! The packet march: primary rays of a scanned volume traced eight at a time, one ray per
-//! lane of AVX2 registers (x86-64 only, detected at run time).
+//! lane of AVX2 registers (x86-64 only, detected at run time), or sixteen at a time in
+//! AVX-512 registers where the processor has them and the scene fits ([`wide`]: the same
+//! image bit for bit).
 //!
 //! Where it applies (see [`Packets::new`]): one visible DVR volume whose lean program is the
 //! direct-shading form (a dataset read trilinearly, an opacity table, a colour table writing
@@ -63,6 +65,8 @@ use crate::mapping::Mapping;
 use crate::types::MappingType;
 use std::arch::x86_64::*;
 
+mod wide;
+
 /// Lanes of a packet.
 const W: usize = 8;
 
@@ -120,6 +124,8 @@ pub(super) struct Packets<'a> {
     sy: i32,
     sz: i32,
     half_last: [f32; 3],
+    /// Sixteen lanes a step ([`wide`]): the processor has AVX-512 and the scene fits it.
+    wide: bool,
 }
 
 impl<'a> Packets<'a> {
@@ -153,6 +159,7 @@ impl<'a> Packets<'a> {
         }
         // The node values only where the voxels are not read instead (made on first use).
         let raw8 = Raw8::of(data);
+        let raw8_fits = raw8.is_some();
         let values = if raw8.is_some() {
             &[][..]
         } else {
@@ -226,6 +233,7 @@ impl<'a> Packets<'a> {
             (Some(o), Some(r), Some(g), Some(b)) => Some(Segments { o, rgb: [r, g, b] }),
             _ => None,
         };
+        let segments_fit = segments.is_some();
         let common = obj.step * obj.inv_ref;
         let common = if [0.5, 1.0, 0.25, 2.0, 0.125, 4.0].contains(&common) {
             common
@@ -257,6 +265,10 @@ impl<'a> Packets<'a> {
             sy: strides[1] as i32,
             sz: strides[2] as i32,
             half_last: half_last.map(|x| x as f32),
+            wide: scene.settings.optimise.wide_lanes
+                && raw8_fits
+                && segments_fit
+                && wide::detected(),
         })
     }
 
@@ -270,6 +282,11 @@ impl<'a> Packets<'a> {
         unbounded: Option<[f32; 3]>,
         (tx, ty, tw, th): (u32, u32, u32, u32),
     ) -> Vec<[f32; 3]> {
+        if self.wide {
+            // SAFETY: `Packets::new` set `wide` only where `wide::detected` found every
+            // feature `tile_avx512` enables (and AVX2 and FMA before it).
+            return unsafe { self.tile_avx512(view, entry, image, unbounded, (tx, ty, tw, th)) };
+        }
         // SAFETY: `Packets::new` (the only way to make `self`) found AVX2 and FMA.
         unsafe { self.tile_avx2(view, entry, image, unbounded, (tx, ty, tw, th)) }
     }
