@@ -3687,6 +3687,90 @@ mod tests {
         assert!(checked > 30_000, "{checked}");
     }
 
+    /// The sixteen-lane march's runs of sixteen segments are the cursor's, bit for bit: two
+    /// runs of eight from k and k + 8, on `lanes_segments_are_the_cursors`' cases (a NaN is
+    /// any NaN, as there), every starting segment below 2⁵³ − 32.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn wide_segments_are_the_cursors() {
+        if !packet::wide::detected() {
+            return;
+        }
+        let rng = Xorshift::new(0x51de_5e9e_a11e_0016);
+        let mut values: Vec<f64> = AWKWARD.to_vec();
+        values.extend([0.25, 0.5, 1.0 / 3.0, 7.5, 1e-3]);
+        let mut checked = 0;
+        for case in 0..4000 {
+            let pick = |_: usize| {
+                if case % 3 == 0 {
+                    f64::from_bits(rng.bits())
+                } else {
+                    values[(rng.next() * values.len() as f64) as usize % values.len()]
+                }
+            };
+            let (t0, t1, step) = if case % 2 == 0 {
+                let t0 = rng.next() * 10.0;
+                (t0, t0 + rng.next() * 20.0, 0.01 + rng.next())
+            } else {
+                (pick(0), pick(1), pick(2))
+            };
+            let n = [
+                1u64,
+                2,
+                7,
+                8,
+                9,
+                16,
+                17,
+                33,
+                1 << 20,
+                (1 << 53) + 5,
+                u64::MAX,
+            ][case % 11];
+            for k in [
+                0,
+                n / 2,
+                n.saturating_sub(17),
+                n.saturating_sub(16),
+                n.saturating_sub(9),
+                n - 1,
+                ((1u64 << 53) - 33).min(n - 1),
+            ] {
+                if k as f64 >= (1u64 << 53) as f64 - 32.0 {
+                    continue;
+                }
+                let c = cursor(t0, t1, step, n, k, f64::NEG_INFINITY);
+                let mut run = packet::wide::Run16::default();
+                // SAFETY: every feature the function enables was detected above.
+                let m = unsafe { packet::wide::segments16(&c, &mut run) };
+                assert_eq!(m, (n - k).min(16) as usize);
+                let nan_any = |x: f64| if x.is_nan() { u64::MAX } else { x.to_bits() };
+                for (h, from) in [(0, k), (8, k + 8)] {
+                    if from >= n {
+                        continue;
+                    }
+                    let c = cursor(t0, t1, step, n, from, f64::NEG_INFINITY);
+                    let (mut mids, mut lens) = ([0.5; 8], [0.5; 8]);
+                    let a = c.segments(&mut mids, &mut lens);
+                    for j in 0..a {
+                        assert_eq!(
+                            nan_any(run.mids[h + j]),
+                            nan_any(mids[j]),
+                            "{t0} {t1} {step} {k}+{h}+{j}/{n}"
+                        );
+                        assert_eq!(
+                            nan_any(run.lens[h + j]),
+                            nan_any(lens[j]),
+                            "{t0} {t1} {step} {k}+{h}+{j}/{n}"
+                        );
+                    }
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 20_000, "{checked}");
+    }
+
     /// A run in lanes has the segments of the sample-by-sample cursor, bit for bit, ends
     /// at the first sample past the occupied block, and never passes the last segment: near the
     /// start, the end and 2⁵³ (where the boundary numbers stop being exact and the run goes

@@ -65,7 +65,7 @@ use crate::mapping::Mapping;
 use crate::types::MappingType;
 use std::arch::x86_64::*;
 
-mod wide;
+pub(super) mod wide;
 
 /// Lanes of a packet.
 const W: usize = 8;
@@ -616,18 +616,26 @@ impl<'a> Packets<'a> {
             if c.k >= c.n {
                 return 0;
             }
-            let next = c.mid(c.k);
-            if next >= c.occupied_until {
-                if let Some(grid) = self.grid {
-                    let walk = match c.walk.as_mut() {
-                        Some(w) => w,
-                        None => grid.walk_into(&mut c.walk, c.o, c.d, next),
-                    };
-                    let horizon = next + W as f64 * c.step;
-                    match walk.skip_until(grid, next, horizon) {
-                        Ok(exit) => c.pass_before(exit),
-                        Err(until) => c.occupied_until = until,
-                    }
+            self.after_nothing_taken(c);
+        }
+    }
+
+    /// After a run of cursor `c` of which nothing was taken (and with a segment left): where
+    /// its next sample is past the occupied blocks the walk last reported, asks the walk (made
+    /// here on first use), and passes over the empty blocks it reports.
+    #[inline]
+    fn after_nothing_taken(&self, c: &mut Cursor) {
+        let next = c.mid(c.k);
+        if next >= c.occupied_until {
+            if let Some(grid) = self.grid {
+                let walk = match c.walk.as_mut() {
+                    Some(w) => w,
+                    None => grid.walk_into(&mut c.walk, c.o, c.d, next),
+                };
+                let horizon = next + W as f64 * c.step;
+                match walk.skip_until(grid, next, horizon) {
+                    Ok(exit) => c.pass_before(exit),
+                    Err(until) => c.occupied_until = until,
                 }
             }
         }
@@ -665,17 +673,24 @@ impl<'a> Packets<'a> {
             let half = |h: usize| _mm256_cvtpd_ps(_mm256_add_pd(o, _mm256_mul_pd(ldd(mids, h), d)));
             _mm256_set_m128(half(1), half(0))
         });
-        let (_, base, _) = self.cells(&p);
+        keep & self.mask_bits(&p)
+    }
+
+    /// By bit, the object points `p` whose cell the cell mask says may reach the bound (a
+    /// cell past the mask's end may); the mask is not empty.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn mask_bits(&self, p: &[__m256; 3]) -> u32 {
+        let (_, base, _) = self.cells(p);
         let word = _mm256_srli_epi32::<5>(base);
         let words = gather_u32(self.mask, word);
         let bit = _mm256_and_si256(
             _mm256_srlv_epi32(words, _mm256_and_si256(base, _mm256_set1_epi32(31))),
             _mm256_set1_epi32(1),
         );
-        // A cell past the mask's end may reach the bound.
         let past = _mm256_cmpgt_epi32(word, _mm256_set1_epi32(self.mask.len() as i32 - 1));
         let reach = _mm256_or_si256(_mm256_cmpeq_epi32(bit, _mm256_set1_epi32(1)), past);
-        keep & _mm256_movemask_ps(_mm256_castsi256_ps(reach)) as u32
+        _mm256_movemask_ps(_mm256_castsi256_ps(reach)) as u32
     }
 
     /// Opacity and colour of values `v` from the tables' segment pairs (gathers), the lanes

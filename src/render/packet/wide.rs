@@ -18,12 +18,20 @@ use super::*;
 const V: usize = 16;
 
 /// The AVX-512 features the wide march uses (with AVX2 and FMA for the runs it shares).
-pub(super) fn detected() -> bool {
+pub(in crate::render) fn detected() -> bool {
     is_x86_feature_detected!("avx512f")
         && is_x86_feature_detected!("avx512dq")
         && is_x86_feature_detected!("avx512bw")
         && is_x86_feature_detected!("avx512vl")
         && is_x86_feature_detected!("avx512cd")
+}
+
+/// The run of segments a wide lane is taking: up to sixteen midpoints and lengths.
+#[derive(Clone, Copy, Default)]
+#[repr(C)]
+pub(in crate::render) struct Run16 {
+    pub(in crate::render) mids: [f64; V],
+    pub(in crate::render) lens: [f64; V],
 }
 
 /// The lanes' state, by lane (as the eight-lane `State`).
@@ -54,7 +62,7 @@ impl Packets<'_> {
         let mut out = vec![[0f32; 3]; (tw * th) as usize];
         let mut next_pixel = 0usize;
         let mut lanes: [Option<LaneRay>; V] = Default::default();
-        let mut runs = [Run::default(); V];
+        let mut runs = [Run16::default(); V];
         let mut keeps = [0u32; V];
         let mut st = State16::default();
         let mut cache = CellGradients::default();
@@ -95,14 +103,14 @@ impl Packets<'_> {
                     }
                     let lane = lanes[i].as_mut().expect("a ray");
                     let (run, keep) = (&mut runs[i], &mut keeps[i]);
-                    *keep = self.next_taken(&mut lane.cursor, run);
+                    *keep = self.next_taken16(&mut lane.cursor, run);
                     if *keep == 0 {
                         let px = lane.px;
                         lanes[i] = None;
                         out[px] = finish16(&st, i, background);
                         continue;
                     }
-                    let j = keep.trailing_zeros() as usize & (W - 1);
+                    let j = keep.trailing_zeros() as usize & (V - 1);
                     *keep &= *keep - 1;
                     st.mid[i] = run.mids[j];
                     st.len[i] = run.lens[j];
@@ -127,6 +135,72 @@ impl Packets<'_> {
             }
         }
         out
+    }
+
+    /// [`Packets::next_taken`] with runs of sixteen segments ([`Packets::run16`]): the same
+    /// samples taken in the same order (a run of sixteen is two runs of eight, tested
+    /// together: the cell mask's latency paid once for both).
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
+    fn next_taken16(&self, c: &mut Cursor, run: &mut Run16) -> u32 {
+        loop {
+            if c.k >= c.n {
+                return 0;
+            }
+            let (m, keep) = self.run16(c, run);
+            c.k += m as u64;
+            if keep != 0 {
+                return keep;
+            }
+            if c.k >= c.n {
+                return 0;
+            }
+            self.after_nothing_taken(c);
+        }
+    }
+
+    /// Cursor `c`'s next segments, up to sixteen (there is one), into `run`
+    /// ([`segments16`]), and by bit those [`Packets::to_take`] would take: their number and
+    /// the bits. A cursor near 2⁵³ segments, or without a mask, takes runs of eight.
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
+    fn run16(&self, c: &Cursor, run: &mut Run16) -> (usize, u32) {
+        let k = index_f64(c.k, c.n);
+        if k >= (1u64 << 53) as f64 - 32.0 || self.mask.is_empty() {
+            let mut eight = Run::default();
+            let (m, keep) = self.run_at(c, &mut eight);
+            run.mids[..W].copy_from_slice(&eight.mids);
+            run.lens[..W].copy_from_slice(&eight.lens);
+            return (m, keep);
+        }
+        let m = segments16(c, run);
+        let (mid0, mid1) = (ld8d(&run.mids, 0), ld8d(&run.mids, 1));
+        let short = |h: usize| {
+            _mm512_cmp_pd_mask::<_CMP_LE_OQ>(ld8d(&run.lens, h), _mm512_setzero_pd()) as u32
+        };
+        let keep = (((1u64 << m) - 1) as u32) & !(short(0) | short(1) << 8);
+        if keep == 0 {
+            return (m, 0);
+        }
+        // The object points, as `Packets::step` makes them (f64, rounded to f32).
+        let p: [__m512; 3] = std::array::from_fn(|axis| {
+            let o = _mm512_set1_pd(c.o[axis]);
+            let d = _mm512_set1_pd(c.d[axis]);
+            let f = |mid: __m512d| _mm512_cvtpd_ps(_mm512_add_pd(o, _mm512_mul_pd(mid, d)));
+            _mm512_insertf32x8::<1>(_mm512_castps256_ps512(f(mid0)), f(mid1))
+        });
+        let (_, base, _) = self.cells16(&p);
+        let word = _mm512_srli_epi32::<5>(base);
+        let last = _mm512_set1_epi32(self.mask.len() as i32 - 1);
+        let words = gather_words16(
+            self.mask,
+            _mm512_min_epi32(_mm512_max_epi32(word, _mm512_setzero_si512()), last),
+        );
+        let bit = _mm512_srlv_epi32(words, _mm512_and_si512(base, _mm512_set1_epi32(31)));
+        // A cell past the mask's end may reach the bound.
+        let reach =
+            _mm512_test_epi32_mask(bit, _mm512_set1_epi32(1)) | _mm512_cmpgt_epi32_mask(word, last);
+        (m, keep & reach as u32)
     }
 
     /// [`Packets::step`] in sixteen lanes (voxels, tables in registers).
@@ -579,10 +653,55 @@ impl Raw8<'_> {
     }
 }
 
+/// Cursor `c`'s next segments, up to sixteen (there is one, and its index is below 2⁵³ − 32),
+/// their midpoints and lengths written into `run` (the entries past their number are
+/// meaningless), their number returned: [`Cursor::segments`]' numbers bit for bit, as
+/// [`segments_lanes`] makes them, eight to a register of f64
+/// (`wide_segments_are_the_cursors`).
+#[inline]
+#[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
+pub(in crate::render) fn segments16(c: &Cursor, run: &mut Run16) -> usize {
+    let k = index_f64(c.k, c.n);
+    debug_assert!(k < (1u64 << 53) as f64 - 32.0);
+    let t0 = _mm512_set1_pd(c.t0);
+    let t1 = _mm512_set1_pd(c.t1);
+    let step = _mm512_set1_pd(c.step);
+    let n = _mm512_set1_pd(index_f64(c.n, c.n));
+    for h in 0..2 {
+        let first = (8 * h) as f64;
+        let j = _mm512_add_pd(
+            _mm512_set1_pd(k),
+            _mm512_setr_pd(
+                first,
+                first + 1.0,
+                first + 2.0,
+                first + 3.0,
+                first + 4.0,
+                first + 5.0,
+                first + 6.0,
+                first + 7.0,
+            ),
+        );
+        let a = _mm512_add_pd(t0, _mm512_mul_pd(j, step));
+        let j1 = _mm512_add_pd(j, _mm512_set1_pd(1.0));
+        let next = _mm512_add_pd(t0, _mm512_mul_pd(j1, step));
+        // `at_most`, then t1 for the cursor's last segment (see `segments_lanes`).
+        let b = _mm512_min_pd(next, t1);
+        let b = _mm512_mask_blend_pd(_mm512_cmp_pd_mask::<_CMP_GE_OQ>(j1, n), b, t1);
+        st8d(
+            &mut run.mids,
+            h,
+            _mm512_mul_pd(_mm512_set1_pd(0.5), _mm512_add_pd(a, b)),
+        );
+        st8d(&mut run.lens, h, _mm512_sub_pd(b, a));
+    }
+    (c.n - c.k).min(V as u64) as usize
+}
+
 /// [`next_segments`] in sixteen lanes: the lowest bit's index as 31 − its leading zeros.
 #[inline]
 #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
-fn next_segments16(keeps: &mut [u32; V], runs: &[Run; V], st: &mut State16) -> u32 {
+fn next_segments16(keeps: &mut [u32; V], runs: &[Run16; V], st: &mut State16) -> u32 {
     // SAFETY: `keeps` is 16 u32, 64 readable and writable bytes; no alignment requirement.
     let k = unsafe { _mm512_loadu_si512(keeps.as_ptr() as *const _) };
     let active = _mm512_test_epi32_mask(k, k);
@@ -593,12 +712,12 @@ fn next_segments16(keeps: &mut [u32; V], runs: &[Run; V], st: &mut State16) -> u
     let low = _mm512_and_si512(k, _mm512_sub_epi32(zero, k));
     let j = _mm512_and_si512(
         _mm512_sub_epi32(_mm512_set1_epi32(31), _mm512_lzcnt_epi32(low)),
-        _mm512_set1_epi32(7),
+        _mm512_set1_epi32(15),
     );
     let rest = _mm512_and_si512(k, _mm512_add_epi32(k, _mm512_set1_epi32(-1)));
     // SAFETY: as above.
     unsafe { _mm512_storeu_si512(keeps.as_mut_ptr() as *mut _, rest) };
-    const RUN: i32 = (std::mem::size_of::<Run>() / std::mem::size_of::<f64>()) as i32;
+    const RUN: i32 = (std::mem::size_of::<Run16>() / std::mem::size_of::<f64>()) as i32;
     let lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     let at = _mm512_add_epi32(_mm512_mullo_epi32(lane, _mm512_set1_epi32(RUN)), j);
     let base = runs.as_ptr() as *const f64;
@@ -608,13 +727,12 @@ fn next_segments16(keeps: &mut [u32; V], runs: &[Run; V], st: &mut State16) -> u
         } else {
             _mm512_extracti64x4_epi64::<1>(at)
         };
-        // SAFETY: `Run` is two arrays of 8 f64 (`repr(C)`), so f64 number 16·i + j and
-        // 16·i + 8 + j (i in 0..16, j in 0..8) lie inside the 16 runs; gathers need no
-        // alignment.
+        // SAFETY: `Run16` is two arrays of 16 f64 (`repr(C)`), so f64 number 32·i + j and
+        // 32·i + 16 + j (i, j in 0..16) lie inside the 16 runs; gathers need no alignment.
         let (mid, len) = unsafe {
             (
                 _mm512_i32gather_pd::<8>(idx, base),
-                _mm512_i32gather_pd::<8>(idx, base.add(8)),
+                _mm512_i32gather_pd::<8>(idx, base.add(V)),
             )
         };
         st8d(&mut st.mid, h, mid);
@@ -680,6 +798,14 @@ fn byte16<const K: i32>(w: __m512i) -> __m512i {
         _ => return _mm512_srli_epi32::<24>(w),
     };
     _mm512_and_si512(shifted, _mm512_set1_epi32(0xff))
+}
+
+/// `mask[at]` per lane (every lane of `at` in `[0, mask.len() − 1]`: the caller clamps).
+#[inline]
+#[target_feature(enable = "avx512f")]
+fn gather_words16(mask: &[u32], at: __m512i) -> __m512i {
+    // SAFETY: every lane of `at` is in [0, mask.len() − 1] (the caller clamps to it).
+    unsafe { _mm512_i32gather_epi32::<4>(at, mask.as_ptr() as *const i32) }
 }
 
 /// [`gather_bytes`] in sixteen lanes; every lane of `at` must be in `[0, raw.len() − 4]`.
