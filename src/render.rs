@@ -3211,6 +3211,18 @@ mod tests {
                 let bits = |r: Option<(f64, f64)>| r.map(|(a, b)| (a.to_bits(), b.to_bits()));
                 let got = obj.clip(o, d);
                 assert_eq!(bits(got), bits(clip_reference(min, max, o, d)), "{o} {d}");
+                // The packet march's clip in lanes, the same numbers.
+                #[cfg(target_arch = "x86_64")]
+                if is_x86_feature_detected!("avx2") {
+                    // SAFETY: AVX2 was detected.
+                    let lanes = unsafe {
+                        use std::arch::x86_64::_mm256_set1_pd as splat;
+                        let (t0, t1, ok) =
+                            packet::clip_lanes(o, &[splat(d.x), splat(d.y), splat(d.z)], min, max);
+                        (ok & 1 != 0).then(|| (packet::st4d(t0)[0], packet::st4d(t1)[0]))
+                    };
+                    assert_eq!(bits(lanes), bits(got), "lanes: {o} {d}");
+                }
                 if got.is_some() {
                     some += 1;
                 } else {
@@ -3243,6 +3255,139 @@ mod tests {
             }
         }
         assert!(some > 10_000 && none > 10_000, "{some} / {none}");
+    }
+
+    /// The packet march's ray starts in lanes are the scalar ones, bit for bit: the directions
+    /// of `Pinhole::ray` and their object-space directions (random cameras and placements,
+    /// every pixel of small images), segment counts of `segment_count` (where the lanes give
+    /// one), and first segments of `Cursor::start_at` (where the lanes give one: at bounds
+    /// before, on and between midpoints, past the end, at awkward values).
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn ray_start_lanes_are_the_scalar_starts() {
+        use std::arch::x86_64::*;
+        if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+            return;
+        }
+        let rng = Xorshift::new(0x5a77_1e5f_0ca5_7e11);
+        let next = || rng.next();
+        // Directions.
+        for case in 0..200 {
+            let (w, h) = (5 + (next() * 40.0) as u32, 3 + (next() * 30.0) as u32);
+            let view = Pinhole {
+                eye: DVec3::ZERO,
+                forward: unit_dir(&next) * (0.5 + next() * 3.0),
+                right: unit_dir(&next) * (0.1 + next()),
+                up: unit_dir(&next) * (0.1 + next()),
+                width: w,
+                height: h,
+            };
+            let to_object = glam::DMat4::from_cols_array(&std::array::from_fn(|i| {
+                if i % 5 == 0 || case % 3 != 0 {
+                    next() * 4.0 - 2.0
+                } else {
+                    0.0
+                }
+            }));
+            for y in 0..h {
+                for x0 in (0..w).step_by(4) {
+                    // SAFETY: AVX2 was detected above.
+                    let (dir, d) = unsafe { packet::ray_lanes(&view, &to_object, x0, y) };
+                    let (dir, d) =
+                        unsafe { (dir.map(|v| packet::st4d(v)), d.map(|v| packet::st4d(v))) };
+                    for l in 0..4 {
+                        let want = view.ray((x0 + l as u32) as f64 + 0.5, y as f64 + 0.5);
+                        let want_d = to_object.transform_vector3(want);
+                        for c in 0..3 {
+                            assert_eq!(
+                                dir[c][l].to_bits(),
+                                want[c].to_bits(),
+                                "{case} {x0}+{l} {y}"
+                            );
+                            assert_eq!(
+                                d[c][l].to_bits(),
+                                want_d[c].to_bits(),
+                                "{case} {x0}+{l} {y}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        // Counts and first segments.
+        let mut values: Vec<f64> = AWKWARD.to_vec();
+        values.extend([0.25, 0.5, 1.0 / 3.0, 7.5, 1e-3, 1e-12, 3e15]);
+        let (mut counted, mut found, mut searched) = (0, 0, 0);
+        for case in 0..20_000 {
+            let pick = || values[(next() * values.len() as f64) as usize % values.len()];
+            // A cursor's span and step are finite and positive (`CObj::clip`, the state's
+            // checks); here its segments below 2⁴⁰ and its step resolvable at its ends (a
+            // step below their spacing of numbers has no midpoints to search among, and
+            // the cursor's own search walks them one by one).
+            let (t0, len, step) = if case % 4 == 0 {
+                let (t0, len, step) = (pick().abs(), pick().abs(), pick().abs());
+                if !(t0.is_finite() && len > 0.0 && step > 0.0 && (t0 + len).is_finite())
+                    || len / step >= (1u64 << 40) as f64
+                    || step < (t0 + len) * 1e-9
+                {
+                    continue;
+                }
+                (t0, len, step)
+            } else {
+                let step = [0.5, 1.0 / 3.0, 0.01, 2.0, 1e-9][case % 5] * (0.5 + next());
+                (next() * 50.0, next() * [1.0, 100.0, 1e-6][case % 3], step)
+            };
+            let t1 = t0 + len;
+            let lanes = |x: [f64; 4]| unsafe { _mm256_loadu_pd(x.as_ptr()) };
+            let n_scalar = segment_count((t1 - t0) / step);
+            // SAFETY: AVX2 was detected above.
+            let n = unsafe { packet::count_lanes(lanes([t0; 4]), lanes([t1; 4]), step) };
+            if n[0] != 0 {
+                assert_eq!(n[0], n_scalar, "{t0} {t1} {step}");
+                counted += 1;
+            }
+            let c = cursor(t0, t1, step, n_scalar, 0, f64::NEG_INFINITY);
+            let mid = |k: u64| c.mid(k.min(n_scalar - 1));
+            let k = (next() * n_scalar.min(1 << 20) as f64) as u64;
+            let ts = [
+                t0 - 1.0,
+                mid(k),
+                mid(k) + step * 0.25,
+                mid(k + 1) - step * 1e-9,
+                t1 + step,
+                pick(),
+                f64::NEG_INFINITY,
+                t0 + (next() - 0.2) * len * 1.3,
+            ];
+            for chunk in ts.chunks(4) {
+                let t: [f64; 4] = chunk.try_into().unwrap();
+                // SAFETY: AVX2 was detected above.
+                let got = unsafe {
+                    packet::first_segments(
+                        lanes([t0; 4]),
+                        lanes([t1; 4]),
+                        step,
+                        [n[0]; 4],
+                        lanes(t),
+                    )
+                };
+                for (l, &t) in t.iter().enumerate() {
+                    let mut want = cursor(t0, t1, step, n_scalar, 0, f64::NEG_INFINITY);
+                    want.start_at(t);
+                    match got[l] {
+                        Some(k) => {
+                            assert_eq!(k, want.k, "{t0} {t1} {step} n {n_scalar} t {t}");
+                            found += 1;
+                        }
+                        None => searched += 1,
+                    }
+                }
+            }
+        }
+        assert!(
+            counted > 15_000 && found > 80_000,
+            "{counted} {found} {searched}"
+        );
     }
 
     /// A ray whose entry bound is +∞ shows the background as the clip and march would give

@@ -60,7 +60,15 @@ impl Packets<'_> {
     ) -> Vec<[f32; 3]> {
         let background = image.background;
         let mut out = vec![[0f32; 3]; (tw * th) as usize];
-        let mut next_pixel = 0usize;
+        let tile = TileRays {
+            view,
+            entry,
+            image,
+            unbounded,
+            origin: (tx, ty),
+            size: (tw, th),
+        };
+        let mut starts = Starts::default();
         let mut lanes: [Option<LaneRay>; V] = Default::default();
         let mut runs = [Run16::default(); V];
         let mut keeps = [0u32; V];
@@ -74,31 +82,17 @@ impl Packets<'_> {
                 idle &= idle - 1;
                 loop {
                     if lanes[i].is_none() {
-                        let Some(px) = (next_pixel < out.len()).then_some(next_pixel) else {
+                        let Some((c, view)) =
+                            self.next_ray(&mut starts, &mut lanes[i], &tile, &mut out)
+                        else {
                             break;
                         };
-                        next_pixel += 1;
-                        let (x, y) = (tx + px as u32 % tw, ty + px as u32 / tw);
-                        let bound = entry.map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
-                        if let (Some(c), true) = (unbounded, bound == f64::INFINITY) {
-                            out[px] = c;
-                            continue;
-                        }
-                        let dir = view.ray(x as f64 + 0.5, y as f64 + 0.5);
-                        match self.start(&mut lanes[i], image, dir, bound, px) {
-                            Ok(c) => {
-                                st.t[i] = 1.0;
-                                for ch in 0..3 {
-                                    st.col[ch][i] = 0.0;
-                                    st.view[ch][i] = -dir[ch] as f32;
-                                    st.ro[ch][i] = c.o[ch];
-                                    st.rd[ch][i] = c.d[ch];
-                                }
-                            }
-                            Err(c) => {
-                                out[px] = to_f32(c);
-                                continue;
-                            }
+                        st.t[i] = 1.0;
+                        for (ch, &v) in view.iter().enumerate() {
+                            st.col[ch][i] = 0.0;
+                            st.view[ch][i] = v;
+                            st.ro[ch][i] = c.o[ch];
+                            st.rd[ch][i] = c.d[ch];
                         }
                     }
                     let lane = lanes[i].as_mut().expect("a ray");
