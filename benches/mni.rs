@@ -55,6 +55,7 @@ fn bench(c: &mut Criterion) {
         ("shaded_neither", true, false, false, true, t_min),
         ("shaded_no_lean_kernel", true, true, true, false, t_min),
         ("shaded_scalar", true, true, true, true, t_min),
+        ("shaded_eight_lanes", true, true, true, true, t_min),
         (
             "shaded_vtk_termination",
             true,
@@ -75,8 +76,11 @@ fn bench(c: &mut Criterion) {
                 early_termination,
                 termination,
                 lean_kernel,
-                // ("shaded_scalar": every ray by the scalar march, not the packet march.)
+                // ("shaded_scalar": every ray by the scalar march, not the packet march;
+                // "shaded_eight_lanes": the packet march in AVX2's eight lanes, not AVX-512's
+                // sixteen.)
                 packets: name != "shaded_scalar",
+                wide_lanes: name != "shaded_eight_lanes",
                 ..Optimise::default()
             },
         );

@@ -129,12 +129,13 @@ print(f"\nVTK main (shaded, sd 0.5): median {main:.1f} ms, first frame {vtk_firs
 print(f"{'vlib variant (sd 0.5)':34} {'median ms':>10} {'vlib/VTK':>9}")
 main_rows = [f"| VTK `vtkFixedPointVolumeRayCastMapper` | {main:.0f} ms (first frame {vtk_first:.0f} ms) | — |"]
 labels = {
-    "shaded": "vlib, skipping + early termination + lean kernel + packet march",
+    "shaded": "vlib, skipping + early termination + lean kernel + packet march (sixteen lanes where AVX-512)",
     "shaded_no_skipping": "vlib, no empty-space skipping",
     "shaded_no_early_termination": "vlib, no early termination",
     "shaded_neither": "vlib, neither skipping nor early termination",
     "shaded_no_lean_kernel": "vlib, general interpreter instead of the lean kernel",
-    "shaded_scalar": "vlib, scalar march instead of the AVX2 packet march",
+    "shaded_scalar": "vlib, scalar march instead of the packet march",
+    "shaded_eight_lanes": "vlib, packet march in eight AVX2 lanes instead of sixteen AVX-512 lanes",
     "shaded_vtk_termination": "vlib, rays stopped at VTK's threshold (transmittance 255/32767, not 1/512)",
     "unshaded": "vlib, unshaded (against VTK shaded)",
 }
