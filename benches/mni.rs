@@ -81,7 +81,6 @@ fn bench(c: &mut Criterion) {
                 // sixteen.)
                 packets: name != "shaded_scalar",
                 wide_lanes: name != "shaded_eight_lanes",
-                ..Optimise::default()
             },
         );
         g.bench_function(name, |b| {

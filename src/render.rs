@@ -2389,15 +2389,22 @@ where
             ((tx, ty), f((tx, ty, tw, th)))
         })
         .collect();
+    // The tiles come in row-major order: each band of TILE rows is a row of tiles, copied
+    // into place in parallel, a tile row at a time.
+    let per_row = width.div_ceil(TILE) as usize;
     let mut pixels = vec![[0.0f32; 3]; (width * height) as usize];
-    for ((tx, ty), out) in results {
-        let mut it = out.into_iter();
-        for y in ty..(ty + TILE).min(height) {
-            for x in tx..(tx + TILE).min(width) {
-                pixels[(y * width + x) as usize] = it.next().expect("tile size");
+    pixels
+        .par_chunks_mut((width * TILE) as usize)
+        .zip(results.par_chunks(per_row))
+        .for_each(|(band, row)| {
+            for ((tx, _), out) in row {
+                let tw = ((tx + TILE).min(width) - tx) as usize;
+                for (y, src) in out.chunks(tw).enumerate() {
+                    let at = y * width as usize + *tx as usize;
+                    band[at..at + tw].copy_from_slice(src);
+                }
             }
-        }
-    }
+        });
     pixels
 }
 

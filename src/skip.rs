@@ -949,12 +949,15 @@ impl EntryMap {
                 band.push(i as u32);
             }
         }
-        let mut bound = vec![f64::INFINITY; w * h];
+        // (Zeroed memory from the allocator, each band filled with +∞ by its own task: a
+        // first touch of fresh pages, in parallel.)
+        let mut bound = vec![0.0f64; w * h];
         bound
             .par_chunks_mut(ENTRY_BAND * w)
             .zip(&in_band)
             .enumerate()
             .for_each(|(band, (rows, in_band))| {
+                rows.fill(f64::INFINITY);
                 let first = band * ENTRY_BAND;
                 let last = first + rows.len() / w - 1;
                 for m in in_band.iter().map(|&i| &marks[i as usize]) {
