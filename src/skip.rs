@@ -298,7 +298,6 @@ fn passing_boxes(data: &Dataset, mask: &CellMask, box_min: DVec3, box_max: DVec3
     // ([`GroupCode`]: two bytes a group, where the decoded form took 56 and its 7.5 MB of fresh
     // memory for the MNI scan cost more than the cells' bits); in parallel over layers of
     // groups.
-    type Group = Option<([usize; 3], [usize; 3], bool)>;
     let layers: Vec<Vec<GroupCode>> = (0..groups[2])
         .into_par_iter()
         .map(|gk| {
@@ -309,45 +308,67 @@ fn passing_boxes(data: &Dataset, mask: &CellMask, box_min: DVec3, box_max: DVec3
             layer
         })
         .collect();
-    let code = |g: [i64; 3]| -> GroupCode {
-        if (0..3).all(|a| (0..groups[a] as i64).contains(&g[a])) {
-            layers[g[2] as usize][g[0] as usize + groups[0] * g[1] as usize]
-        } else {
-            GroupCode::NONE
-        }
-    };
-    let group = |g: [i64; 3]| -> Group { code(g).get(g.map(|v| v as usize * BRICK)) };
-    let full = |g: [i64; 3]| code(g).all();
-    let mut corners = Vec::new();
-    for gk in 0..groups[2] as i64 {
-        for gj in 0..groups[1] as i64 {
-            for gi in 0..groups[0] as i64 {
-                let Some((first, last, _)) = group([gi, gj, gk]) else {
-                    continue;
-                };
-                let enclosed = (-1..=1)
-                    .all(|c| (-1..=1).all(|b| (-1..=1).all(|a| full([gi + a, gj + b, gk + c]))));
-                if enclosed {
-                    continue;
+    // Whether each group and its 26 neighbours all pass (outside the groups: not): the AND
+    // over the 3×3×3 cube, one axis at a time (the cube is the product of three intervals).
+    let [gx, gy, gz] = groups;
+    let full: Vec<bool> = layers.iter().flatten().map(|c| c.all()).collect();
+    // One axis: along it, of `n` groups `stride` apart (runs of `stride` consecutive groups
+    // in blocks of n·stride).
+    let erode = |v: &[bool], stride: usize, n: usize| -> Vec<bool> {
+        let mut out = vec![false; v.len()];
+        for (block, o) in v.chunks(n * stride).zip(out.chunks_mut(n * stride)) {
+            for c in 1..n.saturating_sub(1) {
+                let (before, at, after) = (
+                    &block[(c - 1) * stride..c * stride],
+                    &block[c * stride..(c + 1) * stride],
+                    &block[(c + 1) * stride..(c + 2) * stride],
+                );
+                for (((o, &a), &b), &d) in o[c * stride..(c + 1) * stride]
+                    .iter_mut()
+                    .zip(before)
+                    .zip(at)
+                    .zip(after)
+                {
+                    *o = a && b && d;
                 }
-                let lo = DVec3::from_array(std::array::from_fn(|a| {
-                    if first[a] == 0 {
-                        box_min[a].min(0.0)
-                    } else {
-                        first[a] as f64 / cells[a] as f64
-                    }
-                }));
-                let hi = DVec3::from_array(std::array::from_fn(|a| {
-                    if last[a] + 1 == cells[a] {
-                        box_max[a].max(1.0)
-                    } else {
-                        (last[a] + 1) as f64 / cells[a] as f64
-                    }
-                }));
-                corners.push((lo, hi));
             }
         }
-    }
+        out
+    };
+    let enclosed = erode(&erode(&erode(&full, 1, gx), gx, gy), gx * gy, gz);
+    // The boxes in group order (x fastest), in parallel over layers of groups.
+    let corners: Vec<(DVec3, DVec3)> = (0..gz)
+        .into_par_iter()
+        .flat_map_iter(|gk| {
+            let layer = &layers[gk];
+            let enclosed = &enclosed[gk * gx * gy..(gk + 1) * gx * gy];
+            (0..gy)
+                .flat_map(move |gj| (0..gx).map(move |gi| (gi, gj)))
+                .filter_map(move |(gi, gj)| {
+                    let at = gi + gx * gj;
+                    if enclosed[at] || layer[at] == GroupCode::NONE {
+                        return None;
+                    }
+                    let lo_cell = [gi * BRICK, gj * BRICK, gk * BRICK];
+                    let (first, last, _) = layer[at].get(lo_cell)?;
+                    let lo = DVec3::from_array(std::array::from_fn(|a| {
+                        if first[a] == 0 {
+                            box_min[a].min(0.0)
+                        } else {
+                            first[a] as f64 / cells[a] as f64
+                        }
+                    }));
+                    let hi = DVec3::from_array(std::array::from_fn(|a| {
+                        if last[a] + 1 == cells[a] {
+                            box_max[a].max(1.0)
+                        } else {
+                            (last[a] + 1) as f64 / cells[a] as f64
+                        }
+                    }));
+                    Some((lo, hi))
+                })
+        })
+        .collect();
     let unit = DVec3::from_array(cells.map(|c| 1.0 / c as f64));
     Some(Boxes { corners, unit })
 }
