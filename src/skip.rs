@@ -57,85 +57,91 @@ const STEP_BELOW: i64 = 4;
 
 /// The chessboard (L∞) distance transform of `dist` in place: on entry 0 for occupied blocks
 /// and `MAX_LEAP` for empty ones; on exit each empty block holds min(distance, MAX_LEAP).
-/// Separable: d(x) = min over y of max(|x − y|, d_prev(y)) along each axis in turn. The lines
-/// of an axis are independent: they are transformed in parallel into a buffer, line by line,
-/// then written back (the same numbers for any number of threads).
+/// Separable: along x the distance to the nearest occupied block of the row (two sweeps: the
+/// entry is 0 or the cap); then along y and along z, d(x) = min over y of max(|x − y|,
+/// d_prev(y)), |x − y| below the cap, a whole row (y) or plane (z) of blocks at a time in
+/// byte lanes. Rows, planes and columns are independent: in parallel, the same numbers for
+/// any number of threads.
 fn chessboard(dist: &mut [u8], dims: [usize; 3]) {
-    let stride = [1, dims[0], dims[0] * dims[1]];
-    for axis in 0..3 {
-        let n = dims[axis];
-        if n == 0 || dist.is_empty() {
-            return;
+    let [nx, ny, nz] = dims;
+    if dist.is_empty() || nx * ny * nz != dist.len() {
+        return;
+    }
+    let cap = MAX_LEAP as usize;
+    dist.par_chunks_mut(nx).for_each(|row| {
+        let mut d = MAX_LEAP;
+        for v in row.iter_mut() {
+            d = if *v == 0 {
+                0
+            } else {
+                d.saturating_add(1).min(MAX_LEAP)
+            };
+            *v = d;
         }
-        let (s, others) = (stride[axis], [0usize, 1, 2]);
-        let lines: Vec<usize> = {
-            // The first index of every line along `axis`.
-            let o: Vec<usize> = others.iter().copied().filter(|&a| a != axis).collect();
-            let mut v = Vec::with_capacity(dims[o[0]] * dims[o[1]]);
-            for j in 0..dims[o[1]] {
-                for i in 0..dims[o[0]] {
-                    v.push(i * stride[o[0]] + j * stride[o[1]]);
-                }
+        let mut d = MAX_LEAP;
+        for v in row.iter_mut().rev() {
+            d = (*v).min(d.saturating_add(1).min(MAX_LEAP));
+            *v = d;
+        }
+    });
+    // `out[i] = min over |e| < cap of max(|e|, src[i + e·unit])` for units of `unit` elements
+    // (a row along y, a plane along z) out of `count`, `out` and `src` whole lines.
+    fn window(out: &mut [u8], src: &[u8], unit: usize, count: usize, at: usize, cap: usize) {
+        out.copy_from_slice(&src[at * unit..(at + 1) * unit]);
+        let lo = at.saturating_sub(cap - 1);
+        let hi = (at + cap - 1).min(count - 1);
+        for other in lo..=hi {
+            if other == at {
+                continue;
             }
-            v
-        };
-        let mut out = vec![0u8; lines.len() * n];
-        let src: &[u8] = dist;
-        out.par_chunks_mut(n)
-            .zip(lines.par_iter())
-            .with_min_len(64)
-            .for_each_init(Vec::new, |line: &mut Vec<u8>, (out, &start)| {
-                line.clear();
-                line.extend((0..n).map(|x| src[start + x * s]));
-                for (x, o) in out.iter_mut().enumerate() {
-                    let mut best = line[x];
-                    let r = best as usize;
-                    let lo = x.saturating_sub(r);
-                    let hi = (x + r).min(n - 1);
-                    // The window's two sides apart, each at distances 1, 2, … from x (fewer
-                    // than 256: r is a distance of the map), so that they compile to lanes.
-                    fn side<'a>(best: u8, ys: impl Iterator<Item = &'a u8>) -> u8 {
-                        ys.zip(1u8..).fold(best, |b, (&v, d)| b.min(d.max(v)))
-                    }
-                    best = side(best, line[lo..x].iter().rev());
-                    best = side(best, line[x + 1..=hi].iter());
-                    *o = best;
-                }
-            });
-        for (line, &start) in out.chunks_exact(n).zip(&lines) {
-            for (x, &v) in line.iter().enumerate() {
-                dist[start + x * s] = v;
+            let e = at.abs_diff(other) as u8;
+            for (o, &v) in out.iter_mut().zip(&src[other * unit..(other + 1) * unit]) {
+                *o = (*o).min(v.max(e));
             }
         }
     }
+    // Along y: plane by plane, a row at a time.
+    dist.par_chunks_mut(nx * ny)
+        .for_each_init(Vec::new, |copy: &mut Vec<u8>, plane| {
+            copy.clear();
+            copy.extend_from_slice(plane);
+            for (y, out) in plane.chunks_mut(nx).enumerate() {
+                window(out, copy, nx, ny, y, cap);
+            }
+        });
+    // Along z: a plane at a time.
+    let copy = dist.to_vec();
+    dist.par_chunks_mut(nx * ny)
+        .enumerate()
+        .for_each(|(z, out)| window(out, &copy, nx * ny, nz, z, cap));
 }
 
 /// The occupied blocks (distance 0) of a distance map with a block of distance > 0 or the
 /// outside of the grid among their 26 neighbours, by index, in order.
 fn shell(dist: &[u8], dims: [usize; 3]) -> Vec<usize> {
     let at = |i: usize, j: usize, k: usize| dist[i + dims[0] * (j + dims[1] * k)];
-    let mut shell = Vec::new();
-    for k in 0..dims[2] {
-        for j in 0..dims[1] {
-            for i in 0..dims[0] {
-                if at(i, j, k) != 0 {
-                    continue;
-                }
-                let edge = [i, j, k]
-                    .iter()
-                    .zip(dims)
-                    .any(|(&c, n)| c == 0 || c + 1 == n);
-                let open = edge
-                    || (k - 1..=k + 1).any(|kk| {
-                        (j - 1..=j + 1).any(|jj| (i - 1..=i + 1).any(|ii| at(ii, jj, kk) != 0))
-                    });
-                if open {
-                    shell.push(i + dims[0] * (j + dims[1] * k));
-                }
-            }
-        }
-    }
-    shell
+    // In parallel over planes, in order.
+    (0..dims[2])
+        .into_par_iter()
+        .flat_map_iter(|k| {
+            (0..dims[1])
+                .flat_map(move |j| (0..dims[0]).map(move |i| (i, j)))
+                .filter_map(move |(i, j)| {
+                    if at(i, j, k) != 0 {
+                        return None;
+                    }
+                    let edge = [i, j, k]
+                        .iter()
+                        .zip(dims)
+                        .any(|(&c, n)| c == 0 || c + 1 == n);
+                    let open = edge
+                        || (k - 1..=k + 1).any(|kk| {
+                            (j - 1..=j + 1).any(|jj| (i - 1..=i + 1).any(|ii| at(ii, jj, kk) != 0))
+                        });
+                    open.then_some(i + dims[0] * (j + dims[1] * k))
+                })
+        })
+        .collect()
 }
 
 /// The [`GroupCode`]s of the row of groups (gi, gj, gk), gi = 0, 1, …, of `data`'s cells
@@ -593,6 +599,8 @@ impl SkipGrid {
                     Default::default();
                 let mut key = Vec::with_capacity(data.len());
                 let mut any = false;
+                // The last block's key and answer: neighbours along x often share them.
+                let mut last: Option<(Vec<(u32, u32)>, bool)> = None;
                 for j in 0..dims[1] {
                     for i in 0..dims[0] {
                         key.clear();
@@ -601,8 +609,12 @@ impl SkipGrid {
                             let (a, b) = bricks_range(bricks, *f, *over, at);
                             (a.to_bits(), b.to_bits())
                         }));
-                        let e = match memo.get(&key) {
-                            Some(&e) => e,
+                        let known = match &last {
+                            Some((k, e)) if *k == key => Some(*e),
+                            _ => memo.get(&key).copied(),
+                        };
+                        let e = match known {
+                            Some(e) => e,
                             None => {
                                 let ranges: Vec<(f32, f32)> = key
                                     .iter()
@@ -613,6 +625,13 @@ impl SkipGrid {
                                 e
                             }
                         };
+                        match &mut last {
+                            Some((k, le)) => {
+                                k.clone_from(&key);
+                                *le = e;
+                            }
+                            None => last = Some((key.clone(), e)),
+                        }
                         plane[i + dims[0] * j] = if e { MAX_LEAP } else { 0 };
                         any |= e;
                     }
