@@ -4,7 +4,7 @@
 //! ```text
 //! target/release/vlconvert nifti ../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz out/mni.vlb
 //! cargo run --release --example mni -- out/mni.vlb out/mni.png [step] [--unshaded] [--size=N] \
-//!     [--cubic] [--ss=N] [--termination=T] [--frames=N] [--no-packets]
+//!     [--cubic] [--ss=N] [--termination=T] [--frames=N] [--no-packets] [--eight]
 //! ```
 //!
 //! `--cubic` samples the dataset with the Catmull–Rom filter instead of trilinear, `--ss=N` turns
@@ -13,7 +13,9 @@
 //! transmittance T instead of 1/512 (`Optimise::termination`; VTK's is 255/32767).
 //! `--frames=N` first renders N more frames of the same scene to memory and prints the fastest
 //! and the median of their times (the steady frame, without loading and precomputation).
-//! `--no-packets` traces every ray by the scalar march (`Optimise::packets` off).
+//! `--no-packets` traces every ray by the scalar march (`Optimise::packets` off); `--eight`
+//! keeps the packet march to AVX2's eight lanes where the processor has AVX-512
+//! (`Optimise::wide_lanes` off).
 
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
@@ -46,6 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let termination: f64 = flag(&all, "--termination=", vlib::render::T_MIN)?;
     let frames: usize = flag(&all, "--frames=", 0)?;
     let packets = !all.iter().any(|a| a == "--no-packets");
+    let wide_lanes = !all.iter().any(|a| a == "--eight");
     let start = Instant::now();
     let mut vl = vlib::Library::new();
     vl.load(mni_scene::BRAIN, vlb)?;
@@ -56,6 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     vl.set_optimise(vlib::scene::Optimise {
         termination,
         packets,
+        wide_lanes,
         ..vlib::scene::Optimise::default()
     })?;
     vl.image(png, 1.0, size, size)?;
