@@ -3892,7 +3892,7 @@ mod tests {
                     continue;
                 }
                 let c = cursor(t0, t1, step, n, k, f64::NEG_INFINITY);
-                let mut run = packet::wide::Run16::default();
+                let mut run = packet::Run16::default();
                 // SAFETY: every feature the function enables was detected above.
                 let m = unsafe { packet::wide::segments16(&c, &mut run) };
                 assert_eq!(m, (n - k).min(16) as usize);

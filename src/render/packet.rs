@@ -315,7 +315,7 @@ impl<'a> Packets<'a> {
         // Per lane: its run's segments, and those still to take by bit (`to_take`; 0 for a
         // lane without a ray). Apart from the rays, so that the common case below reads a
         // word, two numbers and nothing else of the lane.
-        let mut runs = [Run::default(); W];
+        let mut runs = [Run16::default(); W];
         let mut keeps = [0u32; W];
         let mut st = State::default();
         let mut cache = CellGradients::default();
@@ -353,7 +353,7 @@ impl<'a> Packets<'a> {
                         out[px] = self.finish(&st, i, background);
                         continue;
                     }
-                    let j = keep.trailing_zeros() as usize & (W - 1);
+                    let j = keep.trailing_zeros() as usize & (2 * W - 1);
                     *keep &= *keep - 1;
                     st.mid[i] = run.mids[j];
                     st.len[i] = run.lens[j];
@@ -683,12 +683,12 @@ impl<'a> Packets<'a> {
     /// blocks.
     #[inline]
     #[target_feature(enable = "avx2,fma")]
-    fn next_taken(&self, c: &mut Cursor, run: &mut Run) -> u32 {
+    fn next_taken(&self, c: &mut Cursor, run: &mut Run16) -> u32 {
         loop {
             if c.k >= c.n {
                 return 0;
             }
-            let (m, keep) = self.run_at(c, run);
+            let (m, keep) = self.run16_avx2(c, run);
             c.k += m as u64;
             if keep != 0 {
                 return keep;
@@ -696,15 +696,44 @@ impl<'a> Packets<'a> {
             if c.k >= c.n {
                 return 0;
             }
-            self.after_nothing_taken(c);
+            self.after_nothing_taken(c, 2 * W);
         }
+    }
+
+    /// Cursor `c`'s next segments, up to sixteen (there is one), into `run` as two runs of
+    /// eight ([`segments_lanes`]' numbers from the cursor's next segment and the eighth after
+    /// it), and those [`Packets::to_take`] takes of each, by bit (the second's from bit 8):
+    /// their number and the bits. A cursor near 2⁵³ segments, or without a mask, takes runs of
+    /// eight.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn run16_avx2(&self, c: &Cursor, run: &mut Run16) -> (usize, u32) {
+        let (m0, m1) = run.mids.split_at_mut(W);
+        let (l0, l1) = run.lens.split_at_mut(W);
+        fn eight(x: &mut [f64]) -> &mut [f64; W] {
+            x.try_into().expect("eight")
+        }
+        let (m0, m1, l0, l1) = (eight(m0), eight(m1), eight(l0), eight(l1));
+        if index_f64(c.k, c.n) >= (1u64 << 53) as f64 - 32.0 || self.mask.is_empty() {
+            let m = segments_lanes(c, m0, l0);
+            return (m, self.to_take(c, m0, l0, m));
+        }
+        let n0 = segments_from(c, c.k, m0, l0);
+        let keep0 = self.to_take(c, m0, l0, n0);
+        if c.n - c.k <= W as u64 {
+            return (n0, keep0);
+        }
+        let n1 = segments_from(c, c.k + W as u64, m1, l1);
+        let keep1 = self.to_take(c, m1, l1, n1);
+        (n0 + n1, keep0 | keep1 << W)
     }
 
     /// After a run of cursor `c` of which nothing was taken (and with a segment left): where
     /// its next sample is past the occupied blocks the walk last reported, asks the walk (made
-    /// here on first use), and passes over the empty blocks it reports.
+    /// here on first use) about it and the next run's length of samples after it, and passes
+    /// over the empty blocks it reports.
     #[inline]
-    fn after_nothing_taken(&self, c: &mut Cursor) {
+    fn after_nothing_taken(&self, c: &mut Cursor, run: usize) {
         let next = c.mid(c.k);
         if next >= c.occupied_until {
             if let Some(grid) = self.grid {
@@ -712,7 +741,7 @@ impl<'a> Packets<'a> {
                     Some(w) => w,
                     None => grid.walk_into(&mut c.walk, c.o, c.d, next),
                 };
-                let horizon = next + W as f64 * c.step;
+                let horizon = next + run as f64 * c.step;
                 match walk.skip_until(grid, next, horizon) {
                     Ok(exit) => c.pass_before(exit),
                     Err(until) => c.occupied_until = until,
@@ -1164,10 +1193,18 @@ impl Segments {
 #[inline]
 #[target_feature(enable = "avx2")]
 pub(super) fn segments_lanes(c: &Cursor, mids: &mut [f64; W], lens: &mut [f64; W]) -> usize {
-    let k = index_f64(c.k, c.n);
-    if k >= (1u64 << 53) as f64 - 16.0 {
+    if index_f64(c.k, c.n) >= (1u64 << 53) as f64 - 16.0 {
         return c.segments(mids, lens);
     }
+    segments_from(c, c.k, mids, lens)
+}
+
+/// [`segments_lanes`] from segment `from` (below the count and 2⁵³ − 16) instead of the
+/// cursor's next.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn segments_from(c: &Cursor, from: u64, mids: &mut [f64; W], lens: &mut [f64; W]) -> usize {
+    let k = index_f64(from, c.n);
     let t0 = _mm256_set1_pd(c.t0);
     let t1 = _mm256_set1_pd(c.t1);
     let step = _mm256_set1_pd(c.step);
@@ -1194,7 +1231,7 @@ pub(super) fn segments_lanes(c: &Cursor, mids: &mut [f64; W], lens: &mut [f64; W
         );
         std8d(lens, h, _mm256_sub_pd(b, a));
     }
-    (c.n - c.k).min(W as u64) as usize
+    (c.n - from).min(W as u64) as usize
 }
 
 /// For every lane whose run has a segment left to take (a bit of its `keeps` word): that
@@ -1203,7 +1240,7 @@ pub(super) fn segments_lanes(c: &Cursor, mids: &mut [f64; W], lens: &mut [f64; W
 /// from the exponent of that power of two as f32, the segments by gathers from the runs.
 #[inline]
 #[target_feature(enable = "avx2")]
-fn next_segments(keeps: &mut [u32; W], runs: &[Run; W], st: &mut State) -> u32 {
+fn next_segments(keeps: &mut [u32; W], runs: &[Run16; W], st: &mut State) -> u32 {
     // SAFETY: `keeps` is 8 u32, 32 readable and writable bytes; no alignment requirement.
     let k = unsafe { _mm256_loadu_si256(keeps.as_ptr() as *const __m256i) };
     let zero = _mm256_setzero_si256();
@@ -1212,20 +1249,20 @@ fn next_segments(keeps: &mut [u32; W], runs: &[Run; W], st: &mut State) -> u32 {
     if active == 0 {
         return 0;
     }
-    // Every bit is below 8 (runs of at most eight segments), so the lowest as f32 is exact
-    // and its exponent field is 127 + its index; a word of 0 gives index 7 & (0 − 127): in
-    // range, and its lane is not active.
+    // Every bit is below 16 (runs of at most sixteen segments), so the lowest as f32 is
+    // exact and its exponent field is 127 + its index; a word of 0 gives index
+    // 15 & (0 − 127): in range, and its lane is not active.
     let low = _mm256_and_si256(k, _mm256_sub_epi32(zero, k));
     let e = _mm256_srli_epi32::<23>(_mm256_castps_si256(_mm256_cvtepi32_ps(low)));
     let j = _mm256_and_si256(
         _mm256_sub_epi32(e, _mm256_set1_epi32(127)),
-        _mm256_set1_epi32(7),
+        _mm256_set1_epi32(15),
     );
     let rest = _mm256_and_si256(k, _mm256_add_epi32(k, _mm256_set1_epi32(-1)));
     // SAFETY: as above.
     unsafe { _mm256_storeu_si256(keeps.as_mut_ptr() as *mut __m256i, rest) };
-    // Lane i's segment j: f64 number 16·i + j of the runs (its midpoints), + 8 (its lengths).
-    const RUN: i32 = (std::mem::size_of::<Run>() / std::mem::size_of::<f64>()) as i32;
+    // Lane i's segment j: f64 number 32·i + j of the runs (its midpoints), + 16 (its lengths).
+    const RUN: i32 = (std::mem::size_of::<Run16>() / std::mem::size_of::<f64>()) as i32;
     let at = _mm256_add_epi32(
         _mm256_mullo_epi32(
             _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
@@ -1240,12 +1277,13 @@ fn next_segments(keeps: &mut [u32; W], runs: &[Run; W], st: &mut State) -> u32 {
         } else {
             _mm256_extracti128_si256::<1>(at)
         };
-        // SAFETY: `Run` is two arrays of 8 f64 (`repr(C)`), so f64 number 16·i + j and
-        // 16·i + 8 + j (i, j in 0..8) lie inside the 8 runs; gathers need no alignment.
+        // SAFETY: `Run16` is two arrays of 16 f64 (`repr(C)`), so f64 number 32·i + j and
+        // 32·i + 16 + j (i in 0..8, j in 0..16) lie inside the 8 runs; gathers need no
+        // alignment.
         let (mid, len) = unsafe {
             (
                 _mm256_i32gather_pd::<8>(base, idx),
-                _mm256_i32gather_pd::<8>(base.add(8), idx),
+                _mm256_i32gather_pd::<8>(base.add(2 * W), idx),
             )
         };
         std8d(&mut st.mid, h, mid);
@@ -1758,7 +1796,16 @@ struct LaneRay {
     px: usize,
 }
 
-/// The run of segments a lane is taking: midpoints and lengths ([`Cursor::next_run`]).
+/// The run of segments a lane is taking: up to sixteen midpoints and lengths (two runs of
+/// eight, tested against the cell mask together: its gather's latency paid once for both).
+#[derive(Clone, Copy, Default)]
+#[repr(C)]
+pub(in crate::render) struct Run16 {
+    pub(in crate::render) mids: [f64; 2 * W],
+    pub(in crate::render) lens: [f64; 2 * W],
+}
+
+/// A run of eight segments: midpoints and lengths ([`Cursor::next_run`]).
 #[derive(Clone, Copy, Default)]
 #[repr(C)]
 struct Run {

@@ -26,14 +26,6 @@ pub(in crate::render) fn detected() -> bool {
         && is_x86_feature_detected!("avx512cd")
 }
 
-/// The run of segments a wide lane is taking: up to sixteen midpoints and lengths.
-#[derive(Clone, Copy, Default)]
-#[repr(C)]
-pub(in crate::render) struct Run16 {
-    pub(in crate::render) mids: [f64; V],
-    pub(in crate::render) lens: [f64; V],
-}
-
 /// The lanes' state, by lane (as the eight-lane `State`).
 #[derive(Default)]
 #[repr(C, align(64))]
@@ -149,7 +141,7 @@ impl Packets<'_> {
             if c.k >= c.n {
                 return 0;
             }
-            self.after_nothing_taken(c);
+            self.after_nothing_taken(c, V);
         }
     }
 
