@@ -1587,33 +1587,40 @@ pub(super) fn ray_lanes(
         _mm256_mul_pd(_mm256_div_pd(ld4(&x), splat(view.width as f64)), splat(2.0)),
         splat(1.0),
     );
-    // (forward + sx·right) + sy·up, then times 1/√(v·v).
-    let v: [__m256d; 3] = std::array::from_fn(|c| {
-        _mm256_add_pd(
+    // (forward + sx·right) + sy·up, then times 1/√(v·v). (Loops, not `from_fn` closures,
+    // which the compiler left out of line.)
+    let mut v = [sx; 3];
+    for (c, v) in v.iter_mut().enumerate() {
+        *v = _mm256_add_pd(
             _mm256_add_pd(
                 splat(view.forward[c]),
                 _mm256_mul_pd(sx, splat(view.right[c])),
             ),
             splat(sy * view.up[c]),
-        )
-    });
+        );
+    }
     let dot = _mm256_add_pd(
         _mm256_add_pd(_mm256_mul_pd(v[0], v[0]), _mm256_mul_pd(v[1], v[1])),
         _mm256_mul_pd(v[2], v[2]),
     );
     let recip = _mm256_div_pd(splat(1.0), _mm256_sqrt_pd(dot));
-    let dir: [__m256d; 3] = std::array::from_fn(|c| _mm256_mul_pd(v[c], recip));
+    let dir = [
+        _mm256_mul_pd(v[0], recip),
+        _mm256_mul_pd(v[1], recip),
+        _mm256_mul_pd(v[2], recip),
+    ];
     // z·dz + (y·dy + x·dx).
     let m = to_object;
-    let d: [__m256d; 3] = std::array::from_fn(|c| {
-        _mm256_add_pd(
+    let mut d = dir;
+    for (c, d) in d.iter_mut().enumerate() {
+        *d = _mm256_add_pd(
             _mm256_mul_pd(splat(m.z_axis[c]), dir[2]),
             _mm256_add_pd(
                 _mm256_mul_pd(splat(m.y_axis[c]), dir[1]),
                 _mm256_mul_pd(splat(m.x_axis[c]), dir[0]),
             ),
-        )
-    });
+        );
+    }
     (dir, d)
 }
 
@@ -1704,21 +1711,27 @@ pub(super) fn first_segments(
 ) -> [Option<u64>; 4] {
     let step_v = _mm256_set1_pd(step);
     let nf = _mm256_setr_pd(n[0] as f64, n[1] as f64, n[2] as f64, n[3] as f64);
-    let mid = |k: __m256d| {
-        let a = _mm256_add_pd(t0, _mm256_mul_pd(k, step_v));
+    /// `Cursor::mid` of segments `k` in lanes.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn mid_lanes(k: __m256d, t0: __m256d, t1: __m256d, step: __m256d, n: __m256d) -> __m256d {
+        let a = _mm256_add_pd(t0, _mm256_mul_pd(k, step));
         let k1 = _mm256_add_pd(k, _mm256_set1_pd(1.0));
-        let next = _mm256_add_pd(t0, _mm256_mul_pd(k1, step_v));
+        let next = _mm256_add_pd(t0, _mm256_mul_pd(k1, step));
         let b = _mm256_blendv_pd(
             _mm256_min_pd(next, t1),
             t1,
-            _mm256_cmp_pd::<_CMP_GE_OQ>(k1, nf),
+            _mm256_cmp_pd::<_CMP_GE_OQ>(k1, n),
         );
         _mm256_mul_pd(_mm256_set1_pd(0.5), _mm256_add_pd(a, b))
-    };
+    }
     let zero = _mm256_setzero_pd();
     let one = _mm256_set1_pd(1.0);
     // Segment 0 needs no search where its midpoint is not before t.
-    let stays = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_NLT_UQ>(mid(zero), t)) as u32;
+    let stays = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_NLT_UQ>(
+        mid_lanes(zero, t0, t1, step_v, nf),
+        t,
+    )) as u32;
     let g = _mm256_sub_pd(
         _mm256_div_pd(_mm256_sub_pd(t, t0), step_v),
         _mm256_set1_pd(0.5),
@@ -1744,16 +1757,17 @@ pub(super) fn first_segments(
     // Final: k = 1 or mid(k − 1) < t; and k = n or mid(k) ≥ t.
     let low = _mm256_or_pd(
         _mm256_cmp_pd::<_CMP_LE_OQ>(k, one),
-        _mm256_cmp_pd::<_CMP_LT_OQ>(mid(before), t),
+        _mm256_cmp_pd::<_CMP_LT_OQ>(mid_lanes(before, t0, t1, step_v, nf), t),
     );
     let high = _mm256_or_pd(
         _mm256_cmp_pd::<_CMP_GE_OQ>(k, nf),
-        _mm256_cmp_pd::<_CMP_GE_OQ>(mid(k), t),
+        _mm256_cmp_pd::<_CMP_GE_OQ>(mid_lanes(k, t0, t1, step_v, nf), t),
     );
     let fin = _mm256_movemask_pd(_mm256_and_pd(low, high)) as u32;
     let k = st4d(k);
-    std::array::from_fn(|l| {
-        if n[l] == 0 || n[l] >= 1 << 52 || big >> l & 1 != 0 {
+    let mut out = [None; 4];
+    for (l, o) in out.iter_mut().enumerate() {
+        *o = if n[l] == 0 || n[l] >= 1 << 52 || big >> l & 1 != 0 {
             None
         } else if stays >> l & 1 != 0 {
             Some(0)
@@ -1761,8 +1775,9 @@ pub(super) fn first_segments(
             Some(k[l] as u64)
         } else {
             None
-        }
-    })
+        };
+    }
+    out
 }
 
 /// The four f64 of `a` as a register.
