@@ -964,7 +964,9 @@ impl<'a> Packets<'a> {
         let rows = [r(0, 0), r(1, 0), r(0, 1), r(1, 1)];
         let (xm, xp) = (rows.map(|r| r[0]), rows.map(|r| r[3]));
         let pick = |p: (__m256, __m256), a: usize| if a == 0 { p.0 } else { p.1 };
-        std::array::from_fn(|k| {
+        // (A loop, not a `from_fn` closure, which the compiler left out of line.)
+        let mut d = [[_mm256_setzero_ps(); 3]; 8];
+        for (k, dk) in d.iter_mut().enumerate() {
             let (a, b, cc) = (k & 1, k >> 1 & 1, k >> 2);
             let node = |a: usize, b: usize, cc: usize| nodes[a + 2 * b + 4 * cc];
             let row = b + 2 * cc;
@@ -983,8 +985,9 @@ impl<'a> Packets<'a> {
             } else {
                 _mm256_sub_ps(pick(zp[b], a), node(a, b, 0))
             };
-            [dx, dy, dz]
-        })
+            *dk = [dx, dy, dz];
+        }
+        d
     }
 
     /// The lit colours of samples of colours `rgb` and object-space gradients `g`:
