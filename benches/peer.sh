@@ -117,7 +117,14 @@ def write_block(text, name, block):
         return text[:a] + block + text[b:]
     return text + "\n" + block + "\n"
 
-machine = f"{cpu_model()}, {cpus} cores, {platform.system()} {platform.release()}"
+def simd():
+    try:
+        flags = next(l for l in open("/proc/cpuinfo") if l.startswith("flags")).split()
+    except (OSError, StopIteration):
+        return ""
+    return " (AVX-512)" if "avx512f" in flags else " (AVX2)" if "avx2" in flags else ""
+
+machine = f"{cpu_model()}{simd()}, {cpus} cores, {platform.system()} {platform.release()}"
 
 def vlib_ms(group, name):
     p = os.path.join(crit, group, name, "new", "estimates.json")
