@@ -12,10 +12,11 @@
 //!
 //! Each lane has its own ray, [`Cursor`] and state (transmittance, colour). The cursors are the
 //! scalar march's (the same segments, midpoints and lengths, the same start at the [`EntryMap`]
-//! bound), but a lane takes only the samples that can count: each run of eight segments (in lanes,
-//! [`segments_lanes`]) is tested against the cell mask together ([`Packets::to_take`], one gather
-//! a run), and a sample in a cell that cannot reach the zero test's bound (it would add nothing)
-//! takes no lane. The mask alone decides which samples are taken, so that is exact wherever the
+//! bound; a tile's rays started four at a time in lanes, [`Packets::make_starts`]), but a lane
+//! takes only the samples that can count: each run of sixteen segments (two of eight, in lanes,
+//! [`segments_lanes`]) is tested against the cell mask together ([`Packets::to_take`], one
+//! gather a run of eight), and a sample in a cell that cannot reach the zero test's bound (it
+//! would add nothing) takes no lane. The mask alone decides which samples are taken, so that is exact wherever the
 //! walk is; the block walk is asked only after a run of which nothing is taken, past the occupied
 //! blocks it last reported, and leaps over empty blocks ([`Packets::next_taken`]): the scalar
 //! march asks it about every run. The samples taken are the scalar march's samples that the mask
@@ -36,7 +37,8 @@
 //! On by default where it applies (`Optimise::packets` switches it off): about 1.1× the
 //! scalar march's speed shaded and 1.25× unshaded on the measured host as first measured,
 //! 1.15–1.25× shaded after the second round's cheaper loads and bookkeeping, about 1.45×
-//! shaded and 1.5× unshaded since samples in masked cells take no lane (`docs/performance.md`,
+//! shaded and 1.5× unshaded since samples in masked cells take no lane; on the twelfth
+//! session's host (AVX-512), about 2.1× in eight lanes and 2.6× in sixteen (`docs/performance.md`,
 //! "The packet march (AVX2), measured" and the paragraphs after it).
 //!
 //! **Arithmetic.** From node values, the trilinear value and the gradient's sums are the scalar
@@ -430,7 +432,7 @@ impl<'a> Packets<'a> {
     /// `Cursor::unstarted` and the first segment not before the entry bound of
     /// `Cursor::start_at` (by the estimate `Cursor::pass_before` starts from, where its
     /// neighbours show it final; the cursor's own search elsewhere)
-    /// (`ray_starts_are_the_cursors_starts`).
+    /// (`ray_start_lanes_are_the_scalar_starts`).
     #[target_feature(enable = "avx2,fma")]
     fn make_starts(&self, q: &mut Starts, tile: &TileRays<'_>, out: &mut [[f32; 3]]) {
         let obj = self.obj;

@@ -1,12 +1,12 @@
 //! The packet march in sixteen lanes (AVX-512), for the scenes whose numbers fit it: 8-bit
 //! voxels read as voxels ([`Raw8`]) and tables of at most seven rows ([`Segments`]). The
 //! eight-lane march's algorithm and arithmetic lane for lane, with twice the lanes a step: the
-//! same cursors and runs (a lane's run of eight segments is still tested in eight lanes by
-//! [`Packets::next_taken`]), the same samples, the same f32 operations on each, so the same
-//! image bit for bit (`tests/packets.rs` compares the two in every case, `Optimise::wide_lanes`
+//! same cursors and runs of sixteen segments (tested in sixteen lanes here,
+//! [`Packets::run16`]), the same samples, the same f32 operations on each, so the same image
+//! bit for bit (`tests/packets.rs` compares the two in every case, `Optimise::wide_lanes`
 //! off and on). What changes is only how many rays a step carries: on a processor with two
-//! 512-bit units a step of sixteen costs about what one of eight did (the MNI frame about 18 %
-//! faster at 0.5 voxel, 12 % at 2 voxels, on the measured host).
+//! 512-bit units a step of sixteen costs about what one of eight did (the MNI frame at 0.5
+//! voxel in 42 ms against 53 ms in eight lanes, `docs/performance.md`'s last run).
 //!
 //! **Safety.** As in the parent module: gathers and loads through indices clamped into the
 //! slice they read, and the `#[target_feature]` tile function, called only by a [`Packets`]
