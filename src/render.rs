@@ -3721,29 +3721,47 @@ mod tests {
         left
     }
 
+    /// The bits of `x`, every NaN as one: which operand's NaN an addition passes on depends on
+    /// the order the compiler gives its operands (it may swap them), and a march's ends and
+    /// step are never NaN.
+    fn nan_any(x: f64) -> u64 {
+        if x.is_nan() {
+            u64::MAX
+        } else {
+            x.to_bits()
+        }
+    }
+
+    /// A cursor's span and step for the segment tests' case `case`: ordinary (even cases) or
+    /// awkward (±0, subnormal, huge, infinite, NaN, random bits: every third case's parts are
+    /// random bits).
+    fn segment_span(rng: &Xorshift, case: usize) -> (f64, f64, f64) {
+        let mut values: Vec<f64> = AWKWARD.to_vec();
+        values.extend([0.25, 0.5, 1.0 / 3.0, 7.5, 1e-3]);
+        let pick = || {
+            if case.is_multiple_of(3) {
+                f64::from_bits(rng.bits())
+            } else {
+                values[(rng.next() * values.len() as f64) as usize % values.len()]
+            }
+        };
+        if case.is_multiple_of(2) {
+            let t0 = rng.next() * 10.0;
+            (t0, t0 + rng.next() * 20.0, 0.01 + rng.next())
+        } else {
+            (pick(), pick(), pick())
+        }
+    }
+
     /// The run's segments with the last lane made apart are the old ones bit for bit: every
     /// run length, near the start, the end and 2⁵³, for ordinary and awkward ends and steps
-    /// (±0, subnormal, huge, infinite, NaN, random bits).
+    /// (±0, subnormal, huge, infinite, NaN, random bits). A NaN is any NaN ([`nan_any`]).
     #[test]
     fn segments_last_lane_apart_is_the_old_run() {
         let rng = Xorshift::new(0x0dd5_e9e5_1a57_1a9e);
-        let mut values: Vec<f64> = AWKWARD.to_vec();
-        values.extend([0.25, 0.5, 1.0 / 3.0, 7.5, 1e-3]);
         let mut checked = 0;
         for case in 0..4000 {
-            let pick = |_: usize| {
-                if case % 3 == 0 {
-                    f64::from_bits(rng.bits())
-                } else {
-                    values[(rng.next() * values.len() as f64) as usize % values.len()]
-                }
-            };
-            let (t0, t1, step) = if case % 2 == 0 {
-                let t0 = rng.next() * 10.0;
-                (t0, t0 + rng.next() * 20.0, 0.01 + rng.next())
-            } else {
-                (pick(0), pick(1), pick(2))
-            };
+            let (t0, t1, step) = segment_span(&rng, case);
             let n = [1u64, 2, 7, 8, 9, 17, 1 << 20, (1 << 53) + 5, u64::MAX][case % 9];
             for k in [
                 0,
@@ -3762,16 +3780,8 @@ mod tests {
                 let a = segments_old(&c, &mut m0, &mut l0);
                 let b = c.segments(&mut m1, &mut l1);
                 assert_eq!(a, b);
-                assert_eq!(
-                    m0.map(f64::to_bits),
-                    m1.map(f64::to_bits),
-                    "{t0} {t1} {step} {k}/{n}"
-                );
-                assert_eq!(
-                    l0.map(f64::to_bits),
-                    l1.map(f64::to_bits),
-                    "{t0} {t1} {step} {k}/{n}"
-                );
+                assert_eq!(m0.map(nan_any), m1.map(nan_any), "{t0} {t1} {step} {k}/{n}");
+                assert_eq!(l0.map(nan_any), l1.map(nan_any), "{t0} {t1} {step} {k}/{n}");
                 checked += 1;
             }
         }
@@ -3780,9 +3790,7 @@ mod tests {
 
     /// The packet march's segments in lanes are the cursor's, bit for bit, on the cases of
     /// `segments_last_lane_apart_is_the_old_run` (every run length, near the start, the end
-    /// and 2⁵³, ordinary and awkward ends and steps). A NaN is any NaN: which operand's NaN
-    /// an addition passes on depends on the order the compiler gives its operands (it may
-    /// swap them), and a march's ends and step are never NaN.
+    /// and 2⁵³, ordinary and awkward ends and steps). A NaN is any NaN ([`nan_any`]).
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn lanes_segments_are_the_cursors() {
@@ -3790,23 +3798,9 @@ mod tests {
             return;
         }
         let rng = Xorshift::new(0x5e9_3e47_1a9e_5eed);
-        let mut values: Vec<f64> = AWKWARD.to_vec();
-        values.extend([0.25, 0.5, 1.0 / 3.0, 7.5, 1e-3]);
         let mut checked = 0;
         for case in 0..4000 {
-            let pick = |_: usize| {
-                if case % 3 == 0 {
-                    f64::from_bits(rng.bits())
-                } else {
-                    values[(rng.next() * values.len() as f64) as usize % values.len()]
-                }
-            };
-            let (t0, t1, step) = if case % 2 == 0 {
-                let t0 = rng.next() * 10.0;
-                (t0, t0 + rng.next() * 20.0, 0.01 + rng.next())
-            } else {
-                (pick(0), pick(1), pick(2))
-            };
+            let (t0, t1, step) = segment_span(&rng, case);
             let n = [1u64, 2, 7, 8, 9, 17, 1 << 20, (1 << 53) + 5, u64::MAX][case % 9];
             for k in [
                 0,
@@ -3825,12 +3819,7 @@ mod tests {
                 // SAFETY: AVX2 was detected above.
                 let b = unsafe { packet::segments_lanes(&c, &mut m1, &mut l1) };
                 assert_eq!(a, b);
-                let bits = |x: &[f64; 8]| {
-                    x[..a]
-                        .iter()
-                        .map(|v| if v.is_nan() { u64::MAX } else { v.to_bits() })
-                        .collect::<Vec<_>>()
-                };
+                let bits = |x: &[f64; 8]| x[..a].iter().map(|&v| nan_any(v)).collect::<Vec<_>>();
                 assert_eq!(bits(&m0), bits(&m1), "{t0} {t1} {step} {k}/{n}");
                 assert_eq!(bits(&l0), bits(&l1), "{t0} {t1} {step} {k}/{n}");
                 checked += 1;
@@ -3849,23 +3838,9 @@ mod tests {
             return;
         }
         let rng = Xorshift::new(0x51de_5e9e_a11e_0016);
-        let mut values: Vec<f64> = AWKWARD.to_vec();
-        values.extend([0.25, 0.5, 1.0 / 3.0, 7.5, 1e-3]);
         let mut checked = 0;
         for case in 0..4000 {
-            let pick = |_: usize| {
-                if case % 3 == 0 {
-                    f64::from_bits(rng.bits())
-                } else {
-                    values[(rng.next() * values.len() as f64) as usize % values.len()]
-                }
-            };
-            let (t0, t1, step) = if case % 2 == 0 {
-                let t0 = rng.next() * 10.0;
-                (t0, t0 + rng.next() * 20.0, 0.01 + rng.next())
-            } else {
-                (pick(0), pick(1), pick(2))
-            };
+            let (t0, t1, step) = segment_span(&rng, case);
             let n = [
                 1u64,
                 2,
@@ -3896,7 +3871,6 @@ mod tests {
                 // SAFETY: every feature the function enables was detected above.
                 let m = unsafe { packet::wide::segments16(&c, &mut run) };
                 assert_eq!(m, (n - k).min(16) as usize);
-                let nan_any = |x: f64| if x.is_nan() { u64::MAX } else { x.to_bits() };
                 for (h, from) in [(0, k), (8, k + 8)] {
                     if from >= n {
                         continue;
