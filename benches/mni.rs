@@ -81,6 +81,7 @@ fn bench(c: &mut Criterion) {
                 // sixteen.)
                 packets: name != "shaded_scalar",
                 wide_lanes: name != "shaded_eight_lanes",
+                trust_whole_runs: true,
             },
         );
         g.bench_function(name, |b| {

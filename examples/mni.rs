@@ -4,7 +4,7 @@
 //! ```text
 //! target/release/vlconvert nifti ../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz out/mni.vlb
 //! cargo run --release --example mni -- out/mni.vlb out/mni.png [step] [--unshaded] [--size=N] \
-//!     [--cubic] [--ss=N] [--termination=T] [--frames=N] [--no-packets] [--eight]
+//!     [--cubic] [--ss=N] [--termination=T] [--frames=N] [--no-packets] [--eight] [--test-every-run]
 //! ```
 //!
 //! `--cubic` samples the dataset with the Catmull–Rom filter instead of trilinear, `--ss=N` turns
@@ -15,7 +15,8 @@
 //! and the median of their times (the steady frame, without loading and precomputation).
 //! `--no-packets` traces every ray by the scalar march (`Optimise::packets` off); `--eight`
 //! keeps the packet march to AVX2's eight lanes where the processor has AVX-512
-//! (`Optimise::wide_lanes` off).
+//! (`Optimise::wide_lanes` off); `--test-every-run` tests every run of samples against the cell
+//! mask (`Optimise::trust_whole_runs` off).
 
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
@@ -49,6 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frames: usize = flag(&all, "--frames=", 0)?;
     let packets = !all.iter().any(|a| a == "--no-packets");
     let wide_lanes = !all.iter().any(|a| a == "--eight");
+    let trust_whole_runs = !all.iter().any(|a| a == "--test-every-run");
     let start = Instant::now();
     let mut vl = vlib::Library::new();
     vl.load(mni_scene::BRAIN, vlb)?;
@@ -60,6 +62,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         termination,
         packets,
         wide_lanes,
+        trust_whole_runs,
         ..vlib::scene::Optimise::default()
     })?;
     vl.image(png, 1.0, size, size)?;

@@ -307,11 +307,28 @@ fn packets_are_the_scalar_march() {
             true,
             1,
         );
+        // Every run tested against the cell mask, none taken on trust.
+        let tested = render(
+            &Case {
+                optimise: Optimise {
+                    trust_whole_runs: false,
+                    ..case.optimise
+                },
+                ..*case
+            },
+            true,
+            1,
+        );
         let bits = |v: &[[f32; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(
             bits(&packets),
             bits(&two),
             "case {n}: 1 and 2 threads differ"
+        );
+        assert_eq!(
+            bits(&packets),
+            bits(&tested),
+            "case {n}: runs taken on trust change the image"
         );
         assert_eq!(
             bits(&packets),
@@ -464,7 +481,7 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                 }
                 .unwrap();
                 let size = scale.iter().fold(0.0f32, |m, v| m.max(*v));
-                let render = |packets: bool, threads: usize, wide_lanes: bool| {
+                let render = |packets: bool, threads: usize, wide_lanes: bool, trust: bool| {
                     let mut vl = Library::new();
                     vl.add_dataset(1, data.clone()).unwrap();
                     let (a1, an) = (
@@ -485,6 +502,7 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                     vl.set_optimise(Optimise {
                         packets,
                         wide_lanes,
+                        trust_whole_runs: trust,
                         ..Optimise::default()
                     })
                     .unwrap();
@@ -507,13 +525,15 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                     on_threads(threads, || vl.render_preview(6, 5, 1.2)).unwrap()
                 };
                 let (packets, two, scalar) = (
-                    render(true, 1, true),
-                    render(true, 2, true),
-                    render(false, 1, true),
+                    render(true, 1, true, true),
+                    render(true, 2, true, true),
+                    render(false, 1, true, true),
                 );
                 // Sixteen lanes a step (where the processor has AVX-512) or eight: the same
                 // image bit for bit.
-                let narrow = render(true, 1, false);
+                let narrow = render(true, 1, false, true);
+                // Every run tested against the cell mask: the same image bit for bit.
+                let tested = render(true, 1, true, false);
                 let flat = |i: &vlib::render::Image| -> Vec<f32> {
                     i.pixels.iter().flatten().copied().collect()
                 };
@@ -525,6 +545,13 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                 prop_assert_eq!(
                     p.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
                     flat(&two).iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                );
+                prop_assert_eq!(
+                    p.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                    flat(&tested)
+                        .iter()
+                        .map(|v| v.to_bits())
+                        .collect::<Vec<_>>()
                 );
                 prop_assert_eq!(
                     p.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),

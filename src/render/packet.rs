@@ -16,11 +16,13 @@
 //! takes only the samples that can count: each run of sixteen segments (two of eight, in lanes,
 //! [`segments_lanes`]) is tested against the cell mask together ([`Packets::to_take`], one
 //! gather a run of eight), and a sample in a cell that cannot reach the zero test's bound (it
-//! would add nothing) takes no lane. The mask alone decides which samples are taken, so that is exact wherever the
+//! would add nothing) takes no lane. The mask decides which samples are taken, so that is exact wherever the
 //! walk is; the block walk is asked only after a run of which nothing is taken, past the occupied
 //! blocks it last reported, and leaps over empty blocks ([`Packets::next_taken`]): the scalar
 //! march asks it about every run. The samples taken are the scalar march's samples that the mask
-//! passes, and those are all its samples that can count. Every iteration takes each lane's next
+//! passes, and those are all its samples that can count; but after a run the mask passed whole,
+//! the next two are taken untested ([`TRUSTED_RUNS`]: a sample it would have dropped fails the
+//! zero test, so the image is the same bit for bit, and inside visible matter most runs pass). Every iteration takes each lane's next
 //! sample to take and evaluates the eight together: the object points and cells, the eight nodes
 //! (per-lane 8-byte loads and a transposition, [`Nodes::pairs2`]; for 8-bit voxels whose
 //! normalisation never clamps, the voxels themselves, four to a lane by one gather a row of the
@@ -105,6 +107,9 @@ pub(super) struct Packets<'a> {
     raw8: Option<Raw8<'a>>,
     /// The cell mask's bits as 32-bit words (empty: no mask).
     mask: &'a [u32],
+    /// The runs taken untested after one the mask passed whole ([`TRUSTED_RUNS`], or 0 where
+    /// `Optimise::trust_whole_runs` is off).
+    trusted_runs: u32,
     z: f32,
     /// The two tables as segments in registers, where each has at most seven rows.
     segments: Option<Segments>,
@@ -253,6 +258,11 @@ impl<'a> Packets<'a> {
             values,
             raw8,
             mask,
+            trusted_runs: if scene.settings.optimise.trust_whole_runs {
+                TRUSTED_RUNS
+            } else {
+                0
+            },
             z,
             segments,
             bucket_pair,
@@ -348,7 +358,7 @@ impl<'a> Packets<'a> {
                     let lane = lanes[i].as_mut().expect("a ray");
                     // The next run with a segment to take (runs of none are passed over).
                     let (run, keep) = (&mut runs[i], &mut keeps[i]);
-                    *keep = self.next_taken(&mut lane.cursor, run);
+                    *keep = self.next_taken(&mut lane.cursor, run, &mut lane.trusted);
                     if *keep == 0 {
                         let px = lane.px;
                         lanes[i] = None;
@@ -416,6 +426,7 @@ impl<'a> Packets<'a> {
                 occupied_until: f64::NEG_INFINITY,
             },
             px: r.px as usize,
+            trusted: 0,
         });
         match r.k {
             Start::At(k) => lane.cursor.k = k,
@@ -678,19 +689,25 @@ impl<'a> Packets<'a> {
     }
 
     /// The next run of cursor `c`'s ray with a segment to take, as [`Packets::to_take`]'s
-    /// bits (0: the ray has no sample left), its segments in `run`. Every run of segments
-    /// is tested against the cell mask, which alone decides what is taken (exact, as the
-    /// block walk is); the walk is asked only after a run of which nothing is taken, and
-    /// only where the ray is past the occupied blocks it last reported, to leap over empty
-    /// blocks.
+    /// bits (0: the ray has no sample left), its segments in `run`. The runs of segments are
+    /// tested against the cell mask, which decides what is taken (exact, as the block walk
+    /// is), but for the `trusted` runs after one it passed whole ([`TRUSTED_RUNS`]: all
+    /// their segments of positive length taken); the walk is asked only after a run of which
+    /// nothing is taken, and only where the ray is past the occupied blocks it last reported,
+    /// to leap over empty blocks.
     #[inline]
     #[target_feature(enable = "avx2,fma")]
-    fn next_taken(&self, c: &mut Cursor, run: &mut Run16) -> u32 {
+    fn next_taken(&self, c: &mut Cursor, run: &mut Run16, trusted: &mut u32) -> u32 {
         loop {
             if c.k >= c.n {
                 return 0;
             }
-            let (m, keep) = self.run16_avx2(c, run);
+            let test = *trusted == 0;
+            *trusted = trusted.saturating_sub(1);
+            let (m, candidates, keep) = self.run16_avx2(c, run, test);
+            if test && keep != 0 && keep == candidates {
+                *trusted = self.trusted_runs;
+            }
             c.k += m as u64;
             if keep != 0 {
                 return keep;
@@ -705,11 +722,13 @@ impl<'a> Packets<'a> {
     /// Cursor `c`'s next segments, up to sixteen (there is one), into `run` as two runs of
     /// eight ([`segments_lanes`]' numbers from the cursor's next segment and the eighth after
     /// it), and those [`Packets::to_take`] takes of each, by bit (the second's from bit 8):
-    /// their number and the bits. A cursor near 2⁵³ segments, or without a mask, takes runs of
-    /// eight.
+    /// their number, the bits of the segments of positive length (or NaN) and the bits taken,
+    /// those of the former the mask passes (all of them, untested, where `test` is false). A
+    /// cursor near 2⁵³ segments, or without a mask, takes runs of eight (tested, and as
+    /// candidates the complement of those taken: never passed whole).
     #[inline]
     #[target_feature(enable = "avx2,fma")]
-    fn run16_avx2(&self, c: &Cursor, run: &mut Run16) -> (usize, u32) {
+    fn run16_avx2(&self, c: &Cursor, run: &mut Run16, test: bool) -> (usize, u32, u32) {
         let (m0, m1) = run.mids.split_at_mut(W);
         let (l0, l1) = run.lens.split_at_mut(W);
         fn eight(x: &mut [f64]) -> &mut [f64; W] {
@@ -718,16 +737,29 @@ impl<'a> Packets<'a> {
         let (m0, m1, l0, l1) = (eight(m0), eight(m1), eight(l0), eight(l1));
         if index_f64(c.k, c.n) >= (1u64 << 53) as f64 - 32.0 || self.mask.is_empty() {
             let m = segments_lanes(c, m0, l0);
-            return (m, self.to_take(c, m0, l0, m));
+            let keep = self.to_take(c, m0, l0, m);
+            return (m, !keep, keep);
         }
+        let take = |mids: &[f64; W], lens: &[f64; W], m: usize| {
+            let candidates = candidates(lens, m);
+            let keep = if test && candidates != 0 && !self.mask.is_empty() {
+                candidates & self.mask_bits(&object_points(c, mids))
+            } else {
+                if !test {
+                    count_untested();
+                }
+                candidates
+            };
+            (candidates, keep)
+        };
         let n0 = segments_from(c, c.k, m0, l0);
-        let keep0 = self.to_take(c, m0, l0, n0);
+        let (cand0, keep0) = take(m0, l0, n0);
         if c.n - c.k <= W as u64 {
-            return (n0, keep0);
+            return (n0, cand0, keep0);
         }
         let n1 = segments_from(c, c.k + W as u64, m1, l1);
-        let keep1 = self.to_take(c, m1, l1, n1);
-        (n0 + n1, keep0 | keep1 << W)
+        let (cand1, keep1) = take(m1, l1, n1);
+        (n0 + n1, cand0 | cand1 << W, keep0 | keep1 << W)
     }
 
     /// After a run of cursor `c` of which nothing was taken (and with a segment left): where
@@ -769,22 +801,11 @@ impl<'a> Packets<'a> {
     #[inline]
     #[target_feature(enable = "avx2,fma")]
     fn to_take(&self, c: &Cursor, mids: &[f64; 8], lens: &[f64; 8], m: usize) -> u32 {
-        let mut keep = (1u32 << m) - 1;
-        for h in 0..2 {
-            let le = _mm256_cmp_pd::<_CMP_LE_OQ>(ldd(lens, h), _mm256_setzero_pd());
-            keep &= !((_mm256_movemask_pd(le) as u32) << (4 * h));
-        }
+        let keep = candidates(lens, m);
         if self.mask.is_empty() || keep == 0 {
             return keep;
         }
-        // The object points, as `Packets::step` makes them.
-        let p: [__m256; 3] = std::array::from_fn(|axis| {
-            let o = _mm256_set1_pd(c.o[axis]);
-            let d = _mm256_set1_pd(c.d[axis]);
-            let half = |h: usize| _mm256_cvtpd_ps(_mm256_add_pd(o, _mm256_mul_pd(ldd(mids, h), d)));
-            _mm256_set_m128(half(1), half(0))
-        });
-        keep & self.mask_bits(&p)
+        keep & self.mask_bits(&object_points(c, mids))
     }
 
     /// By bit, the object points `p` whose cell the cell mask says may reach the bound (a
@@ -1785,6 +1806,31 @@ pub(super) fn first_segments(
     out
 }
 
+/// By bit, the first `m` (at most eight) segments of lengths `lens` that are positive (or NaN).
+#[inline]
+#[target_feature(enable = "avx2")]
+fn candidates(lens: &[f64; 8], m: usize) -> u32 {
+    let mut keep = (1u32 << m) - 1;
+    for h in 0..2 {
+        let le = _mm256_cmp_pd::<_CMP_LE_OQ>(ldd(lens, h), _mm256_setzero_pd());
+        keep &= !((_mm256_movemask_pd(le) as u32) << (4 * h));
+    }
+    keep
+}
+
+/// The object points of the segments with midpoints `mids` on cursor `c`'s ray, as
+/// [`Packets::step`] makes them (f64, rounded to f32).
+#[inline]
+#[target_feature(enable = "avx2")]
+fn object_points(c: &Cursor, mids: &[f64; 8]) -> [__m256; 3] {
+    std::array::from_fn(|axis| {
+        let o = _mm256_set1_pd(c.o[axis]);
+        let d = _mm256_set1_pd(c.d[axis]);
+        let half = |h: usize| _mm256_cvtpd_ps(_mm256_add_pd(o, _mm256_mul_pd(ldd(mids, h), d)));
+        _mm256_set_m128(half(1), half(0))
+    })
+}
+
 /// The four f64 of `a` as a register.
 #[inline]
 #[target_feature(enable = "avx")]
@@ -1810,10 +1856,36 @@ fn st4(v: [__m256d; 3]) -> [[f64; 4]; 3] {
     [st4d(v[0]), st4d(v[1]), st4d(v[2])]
 }
 
-/// A lane's ray: its cursor and its pixel (in the tile).
+/// A lane's ray: its cursor, its pixel (in the tile), and how many of its next runs are taken
+/// without the cell-mask test ([`TRUSTED_RUNS`]).
 struct LaneRay {
     cursor: Cursor,
     px: usize,
+    trusted: u32,
+}
+
+/// The runs of a ray taken without the cell-mask test after a run the mask passed whole
+/// (`Packets::run16_untested`, and in eight lanes [`Packets::next_taken`]). Exact, as a taken
+/// sample the mask would have dropped adds nothing: the mask clears only cells whose every
+/// value is at most the zero test's bound, with a margin over the rounding of any sample in
+/// them ([`crate::dataset::CellMask`]), so such a sample fails the zero test of
+/// [`Packets::step`]. Inside visible matter the mask passes most runs whole, and at fine
+/// steps its test cost about a third of a sample's work (at 0.125 voxel half the runs of the
+/// MNI frame were passed whole, 37 % not at all); where a run it would have cut comes
+/// untested, the samples it would have dropped take lanes for nothing. Two: the fastest of
+/// 1, 2, 4, 8 and unbounded on the measured host (`docs/performance.md`).
+pub(in crate::render) const TRUSTED_RUNS: u32 = 2;
+
+/// The runs taken on trust, counted in the unit tests (`runs_on_trust_change_nothing`).
+#[cfg(test)]
+pub(in crate::render) static UNTESTED_RUNS: std::sync::atomic::AtomicU64 =
+    std::sync::atomic::AtomicU64::new(0);
+
+/// Counts a run taken on trust (in the unit tests only).
+#[inline]
+pub(in crate::render) fn count_untested() {
+    #[cfg(test)]
+    UNTESTED_RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
 }
 
 /// The run of segments a lane is taking: up to sixteen midpoints and lengths (two runs of
@@ -2067,6 +2139,109 @@ fn ldd(a: &[f64; W], h: usize) -> __m256d {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Runs taken on trust ([`TRUSTED_RUNS`]) are taken, and change no pixel: a scene of
+    /// opaque slabs between empty ones (whole runs inside the slabs, cut runs at their faces),
+    /// seen at fine and coarse steps, shaded and not, in sixteen lanes and in eight, with
+    /// `Optimise::trust_whole_runs` on and off.
+    #[test]
+    fn runs_on_trust_change_nothing() {
+        use crate::dataset::{Dataset, Voxels};
+        use crate::{Camera, Fields, Library, MappingType};
+        if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+            return;
+        }
+        let dims = [40usize, 36, 30];
+        // Slabs along x of 5 voxels above the zero test (with some texture), 3 below it.
+        let voxels = (0..dims.iter().product::<usize>())
+            .map(|i| {
+                let (x, y, z) = (i % dims[0], i / dims[0] % dims[1], i / (dims[0] * dims[1]));
+                if x % 8 < 5 {
+                    (150 + (x * 7 + y * 13 + z * 29) % 100) as u8
+                } else {
+                    (x * 3 + y) as u8 % 60
+                }
+            })
+            .collect();
+        let data = Dataset::new(dims, Voxels::U8(voxels), 0.0, 255.0).unwrap();
+        let render = |step: f32, shaded: bool, wide_lanes: bool, trust: bool| {
+            let mut vl = Library::new();
+            vl.add_dataset(1, data.clone()).unwrap();
+            vl.mapping(
+                1,
+                MappingType::Ramp,
+                3,
+                1,
+                &[0.3, 0.0, 0.6, 0.05, 1.0, 0.08],
+            )
+            .unwrap();
+            vl.mapping(
+                2,
+                MappingType::Ramp,
+                2,
+                3,
+                &[0.0, 0.2, 0.4, 0.6, 1.0, 1.0, 0.9, 0.5],
+            )
+            .unwrap();
+            vl.scene().unwrap();
+            vl.set_optimise(crate::scene::Optimise {
+                wide_lanes,
+                trust_whole_runs: trust,
+                ..Default::default()
+            })
+            .unwrap();
+            vl.camera(&Camera {
+                eye: [90.0, -40.0, 70.0],
+                at: [20.0, 18.0, 15.0],
+                up: [0.0, 0.0, 1.0],
+                fov: 40.0,
+            })
+            .unwrap();
+            vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+            vl.directional_light([0.3, -1.0, 0.2], [1.0, 0.95, 0.9], 1.0)
+                .unwrap();
+            vl.step_size(step, 1.0).unwrap();
+            vl.object().unwrap();
+            vl.scale(39.0, 35.0, 29.0).unwrap();
+            vl.dataset(Fields::F, 1).unwrap();
+            vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+            vl.map(Fields::R, Fields::F, 2, 1).unwrap();
+            vl.map(Fields::G, Fields::F, 2, 2).unwrap();
+            vl.map(Fields::B, Fields::F, 2, 3).unwrap();
+            if shaded {
+                vl.set(Fields::KA, 0.2).unwrap();
+                vl.set(Fields::KD, 0.7).unwrap();
+                vl.set(Fields::KS, 0.3).unwrap();
+            } else {
+                vl.set(Fields::KA, 1.0).unwrap();
+            }
+            vl.end().unwrap();
+            let image = vl.render_preview(64, 48, 1.2).unwrap();
+            image
+                .pixels
+                .iter()
+                .flatten()
+                .map(|v| v.to_bits())
+                .collect::<Vec<_>>()
+        };
+        let runs = || UNTESTED_RUNS.load(std::sync::atomic::Ordering::Relaxed);
+        for step in [0.125, 0.5, 2.0] {
+            for shaded in [false, true] {
+                for wide_lanes in [true, false] {
+                    let tested = render(step, shaded, wide_lanes, false);
+                    let before = runs();
+                    let trusted = render(step, shaded, wide_lanes, true);
+                    let taken = runs() - before;
+                    let what = format!("step {step}, shaded {shaded}, wide {wide_lanes}");
+                    assert_eq!(tested, trusted, "{what}: runs on trust changed the image");
+                    if step == 0.125 {
+                        // (Other tests may count runs meanwhile: this bounds from below.)
+                        assert!(taken > 100, "{what}: {taken} runs on trust");
+                    }
+                }
+            }
+        }
+    }
 
     /// The lanes' opacity correction is `t^e` for every exponent `Packets::new` admits, within
     /// the f32 rounding of its square roots and products (a few units in the last place of

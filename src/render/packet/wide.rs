@@ -89,7 +89,7 @@ impl Packets<'_> {
                     }
                     let lane = lanes[i].as_mut().expect("a ray");
                     let (run, keep) = (&mut runs[i], &mut keeps[i]);
-                    *keep = self.next_taken16(&mut lane.cursor, run);
+                    *keep = self.next_taken16(&mut lane.cursor, run, &mut lane.trusted);
                     if *keep == 0 {
                         let px = lane.px;
                         lanes[i] = None;
@@ -128,12 +128,21 @@ impl Packets<'_> {
     /// together: the cell mask's latency paid once for both).
     #[inline]
     #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
-    fn next_taken16(&self, c: &mut Cursor, run: &mut Run16) -> u32 {
+    fn next_taken16(&self, c: &mut Cursor, run: &mut Run16, trusted: &mut u32) -> u32 {
         loop {
             if c.k >= c.n {
                 return 0;
             }
-            let (m, keep) = self.run16(c, run);
+            let (m, keep) = if *trusted != 0 {
+                *trusted -= 1;
+                self.run16_untested(c, run)
+            } else {
+                let (m, candidates, keep) = self.run16(c, run);
+                if keep != 0 && keep == candidates {
+                    *trusted = self.trusted_runs;
+                }
+                (m, keep)
+            };
             c.k += m as u64;
             if keep != 0 {
                 return keep;
@@ -150,24 +159,22 @@ impl Packets<'_> {
     /// the bits. A cursor near 2⁵³ segments, or without a mask, takes runs of eight.
     #[inline]
     #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
-    fn run16(&self, c: &Cursor, run: &mut Run16) -> (usize, u32) {
+    fn run16(&self, c: &Cursor, run: &mut Run16) -> (usize, u32, u32) {
         let k = index_f64(c.k, c.n);
         if k >= (1u64 << 53) as f64 - 32.0 || self.mask.is_empty() {
             let mut eight = Run::default();
             let (m, keep) = self.run_at(c, &mut eight);
             run.mids[..W].copy_from_slice(&eight.mids);
             run.lens[..W].copy_from_slice(&eight.lens);
-            return (m, keep);
+            // (Never trusted: these runs are rare, or have no test to save.)
+            return (m, !keep, keep);
         }
         let m = segments16(c, run);
-        let (mid0, mid1) = (ld8d(&run.mids, 0), ld8d(&run.mids, 1));
-        let short = |h: usize| {
-            _mm512_cmp_pd_mask::<_CMP_LE_OQ>(ld8d(&run.lens, h), _mm512_setzero_pd()) as u32
-        };
-        let keep = (((1u64 << m) - 1) as u32) & !(short(0) | short(1) << 8);
+        let keep = candidates16(run, m);
         if keep == 0 {
-            return (m, 0);
+            return (m, 0, 0);
         }
+        let (mid0, mid1) = (ld8d(&run.mids, 0), ld8d(&run.mids, 1));
         // The object points, as `Packets::step` makes them (f64, rounded to f32).
         let p: [__m512; 3] = std::array::from_fn(|axis| {
             let o = _mm512_set1_pd(c.o[axis]);
@@ -186,7 +193,24 @@ impl Packets<'_> {
         // A cell past the mask's end may reach the bound.
         let reach =
             _mm512_test_epi32_mask(bit, _mm512_set1_epi32(1)) | _mm512_cmpgt_epi32_mask(word, last);
-        (m, keep & reach as u32)
+        (m, keep, keep & reach as u32)
+    }
+
+    /// [`Packets::run16`] without the cell-mask test: the run's segments of positive length
+    /// (or NaN), all taken. Exact, as a taken sample the mask would have dropped adds nothing:
+    /// the mask clears only cells whose every value is at most the zero test's bound (with a
+    /// margin, [`crate::dataset::CellMask`]), so such a sample fails the zero test in
+    /// [`Packets::step16`]. Taken after a run the mask passed whole ([`TRUSTED_RUNS`]).
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
+    fn run16_untested(&self, c: &Cursor, run: &mut Run16) -> (usize, u32) {
+        if index_f64(c.k, c.n) >= (1u64 << 53) as f64 - 32.0 || self.mask.is_empty() {
+            let (m, _, keep) = self.run16(c, run);
+            return (m, keep);
+        }
+        count_untested();
+        let m = segments16(c, run);
+        (m, candidates16(run, m))
     }
 
     /// [`Packets::step`] in sixteen lanes (voxels, tables in registers).
@@ -637,6 +661,15 @@ impl Raw8<'_> {
         }
         d
     }
+}
+
+/// By bit, the first `m` segments of `run` of positive length (or NaN).
+#[inline]
+#[target_feature(enable = "avx512f")]
+fn candidates16(run: &Run16, m: usize) -> u32 {
+    let short =
+        |h: usize| _mm512_cmp_pd_mask::<_CMP_LE_OQ>(ld8d(&run.lens, h), _mm512_setzero_pd()) as u32;
+    (((1u64 << m) - 1) as u32) & !(short(0) | short(1) << 8)
 }
 
 /// Cursor `c`'s next segments, up to sixteen (there is one, and its index is below 2⁵³ − 32),
