@@ -46,6 +46,25 @@ const TILE: u32 = 16;
 #[cfg(target_arch = "x86_64")]
 mod packet;
 
+/// `rows[y·w + x] = min(rows[y·w + x], v)` over the rectangle `xs` × `ys` (neither side NaN),
+/// in SIMD lanes where the processor has them (the entry map's rasterisation).
+pub(crate) fn lower_rect(
+    rows: &mut [f64],
+    w: usize,
+    xs: std::ops::RangeInclusive<usize>,
+    ys: std::ops::RangeInclusive<usize>,
+    v: f64,
+) {
+    #[cfg(target_arch = "x86_64")]
+    packet::lower_rect(rows, w, xs, ys, v);
+    #[cfg(not(target_arch = "x86_64"))]
+    for y in ys {
+        for b in &mut rows[y * w + *xs.start()..=y * w + *xs.end()] {
+            *b = if v < *b { v } else { *b };
+        }
+    }
+}
+
 /// A rendered image: linear RGB in [0, 1], row-major, top row first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {

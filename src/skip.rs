@@ -1002,12 +1002,9 @@ impl EntryMap {
                 let last = first + rows.len() / w - 1;
                 for m in in_band.iter().map(|&i| &marks[i as usize]) {
                     let (y0, y1) = (m.y.0.max(first), m.y.1.min(last));
-                    for y in y0..=y1 {
-                        let row = &mut rows[(y - first) * w..(y - first + 1) * w];
-                        for b in &mut row[m.x.0..=m.x.1] {
-                            // (Neither is NaN: a comparison in lanes, not `f64::min`.)
-                            *b = if m.near < *b { m.near } else { *b };
-                        }
+                    if y0 <= y1 {
+                        let ys = y0 - first..=y1 - first;
+                        crate::render::lower_rect(rows, w, m.x.0..=m.x.1, ys, m.near);
                     }
                 }
             });
