@@ -56,8 +56,9 @@ pub(crate) fn lower_rect(
     v: f64,
 ) {
     #[cfg(target_arch = "x86_64")]
-    packet::lower_rect(rows, w, xs, ys, v);
-    #[cfg(not(target_arch = "x86_64"))]
+    if packet::lower_rect_wide(rows, w, &xs, &ys, v) {
+        return;
+    }
     for y in ys {
         for b in &mut rows[y * w + *xs.start()..=y * w + *xs.end()] {
             *b = if v < *b { v } else { *b };

@@ -1812,14 +1812,14 @@ pub(super) fn first_segments(
 /// masked load and store: the entry map's rasterisation ([`crate::skip::EntryMap`]), whose
 /// rectangles (about 160 pixels each, 8.3 times the image in all in the MNI frame) left the
 /// compiler's loop mostly in its scalar remainders. The same numbers in any lanes (a minimum
-/// is exact).
-pub(crate) fn lower_rect(
+/// is exact). False, doing nothing, without AVX-512 (`crate::render::lower_rect` then loops).
+pub(crate) fn lower_rect_wide(
     rows: &mut [f64],
     w: usize,
-    xs: std::ops::RangeInclusive<usize>,
-    ys: std::ops::RangeInclusive<usize>,
+    xs: &std::ops::RangeInclusive<usize>,
+    ys: &std::ops::RangeInclusive<usize>,
     v: f64,
-) {
+) -> bool {
     let (x0, x1) = (*xs.start(), *xs.end());
     /// The rectangle in AVX-512 lanes.
     #[target_feature(enable = "avx512f")]
@@ -1856,16 +1856,12 @@ pub(crate) fn lower_rect(
             }
         }
     }
-    if is_x86_feature_detected!("avx512f") {
-        // SAFETY: AVX-512F was detected.
-        unsafe { wide(rows, w, (x0, x1), ys, v) }
-    } else {
-        for y in ys {
-            for b in &mut rows[y * w + x0..=y * w + x1] {
-                *b = if v < *b { v } else { *b };
-            }
-        }
+    if !is_x86_feature_detected!("avx512f") {
+        return false;
     }
+    // SAFETY: AVX-512F was detected.
+    unsafe { wide(rows, w, (x0, x1), ys.clone(), v) };
+    true
 }
 
 /// By bit, the first `m` (at most eight) segments of lengths `lens` that are positive (or NaN).
@@ -2202,7 +2198,8 @@ fn ldd(a: &[f64; W], h: usize) -> __m256d {
 mod tests {
     use super::*;
 
-    /// `lower_rect` is the plain minimum over its rectangle and leaves every other value
+    /// `lower_rect` (in AVX-512 lanes where the processor has them: `lower_rect_wide`) is the
+    /// plain minimum over its rectangle and leaves every other value
     /// alone: rectangles of every width from 1 to 40 (whole registers, remainders, both) at
     /// every offset in a row, values above, below and equal to the map's, ±∞ and −0.
     #[test]
@@ -2232,7 +2229,7 @@ mod tests {
                     init[y0 * w + x0],
                 ] {
                     let mut got = init.clone();
-                    lower_rect(&mut got, w, x0..=x0 + width - 1, y0..=y1, v);
+                    crate::render::lower_rect(&mut got, w, x0..=x0 + width - 1, y0..=y1, v);
                     for (i, (&g, &b)) in got.iter().zip(&init).enumerate() {
                         let (x, y) = (i % w, i / w);
                         let inside = (x0..x0 + width).contains(&x) && (y0..=y1).contains(&y);
