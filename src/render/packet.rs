@@ -16,17 +16,18 @@
 //! takes only the samples that can count: each run of sixteen segments (two of eight, in lanes,
 //! [`segments_lanes`]) is tested against the cell mask together ([`Packets::to_take`], one
 //! gather a run of eight), and a sample in a cell that cannot reach the zero test's bound (it
-//! would add nothing) takes no lane. The mask decides which samples are taken, so that is exact wherever the
-//! walk is; the block walk is asked only after a run of which nothing is taken, past the occupied
-//! blocks it last reported, and leaps over empty blocks ([`Packets::next_taken`]): the scalar
-//! march asks it about every run. The samples taken are the scalar march's samples that the mask
-//! passes, and those are all its samples that can count; but after a run the mask passed whole,
-//! the next two are taken untested ([`TRUSTED_RUNS`]: a sample it would have dropped fails the
-//! zero test, so the image is the same bit for bit, and inside visible matter most runs pass). Every iteration takes each lane's next
-//! sample to take and evaluates the eight together: the object points and cells, the eight nodes
-//! (per-lane 8-byte loads and a transposition, [`Nodes::pairs2`]; for 8-bit voxels whose
-//! normalisation never clamps, the voxels themselves, four to a lane by one gather a row of the
-//! cell, [`Raw8`]), the trilinear value (the scalar code's f32 lerps, unfused, so the same bits
+//! would add nothing) takes no lane. The mask decides which samples are taken, so that is
+//! exact wherever the walk is; the block walk is asked only after a run of which nothing is
+//! taken, past the occupied blocks it last reported, and leaps over empty blocks
+//! ([`Packets::next_taken`]): the scalar march asks it about every run. The samples taken are
+//! the scalar march's samples that the mask passes, and those are all its samples that can
+//! count; but after a run the mask passed whole, the next two are taken untested
+//! ([`TRUSTED_RUNS`]: a sample it would have dropped fails the zero test, so the image is the
+//! same bit for bit, and inside visible matter most runs pass). Every iteration takes each
+//! lane's next sample to take and evaluates the eight together: the object points and cells,
+//! the eight nodes (per-lane 8-byte loads and a transposition, [`Nodes::pairs2`]; for 8-bit
+//! voxels whose normalisation never clamps, the voxels themselves, four to a lane by one
+//! gather a row of the cell, [`Raw8`]), the trilinear value (the scalar code's f32 lerps, unfused, so the same bits
 //! and the same zero test from node values; from voxels, normalised once), opacity and colour
 //! (the two tables as at most eight linear pieces in registers, [`Segments`]; tables of more rows
 //! by their segment pairs, gathered), the opacity correction, the gradient (the trilinear
@@ -2199,9 +2200,9 @@ mod tests {
     use super::*;
 
     /// `lower_rect` (in AVX-512 lanes where the processor has them: `lower_rect_wide`) is the
-    /// plain minimum over its rectangle and leaves every other value
-    /// alone: rectangles of every width from 1 to 40 (whole registers, remainders, both) at
-    /// every offset in a row, values above, below and equal to the map's, ±∞ and −0.
+    /// plain minimum over its rectangle and leaves every other value alone: rectangles of
+    /// every width from 1 to 40 (whole registers, remainders, both) at every third offset in
+    /// a row, values above, below and equal to the map's, ±∞ and −0.
     #[test]
     fn lower_rect_is_the_plain_minimum() {
         let (w, h) = (53usize, 7usize);
