@@ -14,28 +14,26 @@
 //! scalar march's (the same segments, midpoints and lengths, the same start at the [`EntryMap`]
 //! bound; a tile's rays started four at a time in lanes, [`Packets::make_starts`]), but a lane
 //! takes only the samples that can count: each run of sixteen segments (two of eight, in lanes,
-//! [`segments_lanes`]) is tested against the cell mask together ([`Packets::to_take`], one
-//! gather a run of eight), and a sample in a cell that cannot reach the zero test's bound (it
-//! would add nothing) takes no lane. The mask decides which samples are taken, so that is
-//! exact wherever the walk is; the block walk is asked only after a run of which nothing is
-//! taken, past the occupied blocks it last reported, and leaps over empty blocks
-//! ([`Packets::next_taken`]): the scalar march asks it about every run. The samples taken are
-//! the scalar march's samples that the mask passes, and those are all its samples that can
-//! count; but after a run the mask passed whole, the next two are taken untested
-//! ([`TRUSTED_RUNS`]: a sample it would have dropped fails the zero test, so the image is the
-//! same bit for bit, and inside visible matter most runs pass). Every iteration takes each
-//! lane's next sample to take and evaluates the eight together: the object points and cells,
-//! the eight nodes (per-lane 8-byte loads and a transposition, [`Nodes::pairs2`]; for 8-bit
-//! voxels whose normalisation never clamps, the voxels themselves, four to a lane by one
-//! gather a row of the cell, [`Raw8`]), the trilinear value (the scalar code's f32 lerps, unfused, so the same bits
-//! and the same zero test from node values; from voxels, normalised once), opacity and colour
-//! (the two tables as at most eight linear pieces in registers, [`Segments`]; tables of more rows
-//! by their segment pairs, gathered), the opacity correction, the gradient (the trilinear
+//! [`segments_lanes`]) is tested against the cell mask together ([`Packets::to_take`], one gather a
+//! run of eight), and a sample in a cell that cannot reach the zero test's bound (it would add
+//! nothing) takes no lane. The mask decides which samples are taken, so that is exact wherever the
+//! walk is; the block walk is asked only after a run of which nothing is taken, past the occupied
+//! blocks it last reported, and leaps over empty blocks ([`Packets::next_taken`]): the scalar march
+//! asks it about every run. The samples taken are the scalar march's samples that the mask passes,
+//! and those are all its samples that can count; but after a run the mask passed whole, the next
+//! two are taken untested ([`TRUSTED_RUNS`]: a sample it would have dropped fails the zero test, so
+//! the image is the same bit for bit, and inside visible matter most runs pass). Every iteration
+//! takes each lane's next sample to take and evaluates the eight together: the object points and
+//! cells, the eight nodes (per-lane 8-byte loads and a transposition, [`Nodes::pairs2`]; for 8-bit
+//! voxels whose normalisation never clamps, the voxels themselves, four to a lane by one gather a
+//! row of the cell, [`Raw8`]), the trilinear value (the scalar code's f32 lerps, unfused, so the
+//! same bits and the same zero test from node values; from voxels, normalised once), opacity and
+//! colour (the two tables as at most eight linear pieces in registers, [`Segments`]; tables of more
+//! rows by their segment pairs, gathered), the opacity correction, the gradient (the trilinear
 //! interpolation of the nodes' central differences, its nodes again by per-lane loads or by eight
-//! more gathers of voxels, only where a lane's sample has opacity), the headlight's Phong
-//! lighting and the front-to-back composite. A lane whose ray ends
-//! (it leaves the volume or its transmittance falls below the termination bound) takes the tile's
-//! next ray.
+//! more gathers of voxels, only where a lane's sample has opacity), the headlight's Phong lighting
+//! and the front-to-back composite. A lane whose ray ends (it leaves the volume or its
+//! transmittance falls below the termination bound) takes the tile's next ray.
 //!
 //! On by default where it applies (`Optimise::packets` switches it off): about 1.1× the
 //! scalar march's speed shaded and 1.25× unshaded on the measured host as first measured,
