@@ -542,24 +542,10 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                     p.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)),
                     "{p:?}"
                 );
-                prop_assert_eq!(
-                    p.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
-                    flat(&two).iter().map(|v| v.to_bits()).collect::<Vec<_>>()
-                );
-                prop_assert_eq!(
-                    p.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
-                    flat(&tested)
-                        .iter()
-                        .map(|v| v.to_bits())
-                        .collect::<Vec<_>>()
-                );
-                prop_assert_eq!(
-                    p.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
-                    flat(&narrow)
-                        .iter()
-                        .map(|v| v.to_bits())
-                        .collect::<Vec<_>>()
-                );
+                let bits = |v: &[f32]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                prop_assert_eq!(bits(&p), bits(&flat(&two)));
+                prop_assert_eq!(bits(&p), bits(&flat(&tested)));
+                prop_assert_eq!(bits(&p), bits(&flat(&narrow)));
                 for (a, b) in p.iter().zip(&s) {
                     prop_assert!((a - b).abs() <= 1.0 / 255.0, "{a} against {b}");
                 }

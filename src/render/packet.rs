@@ -361,7 +361,7 @@ impl<'a> Packets<'a> {
                     if *keep == 0 {
                         let px = lane.px;
                         lanes[i] = None;
-                        out[px] = self.finish(&st, i, background);
+                        out[px] = finish(&st.col, &st.t, i, background);
                         continue;
                     }
                     let j = keep.trailing_zeros() as usize & (2 * W - 1);
@@ -384,7 +384,7 @@ impl<'a> Packets<'a> {
                     let px = lane.take().expect("a ray").px;
                     *keep = 0;
                     st.t[i] = 0.0;
-                    out[px] = self.finish(&st, i, background);
+                    out[px] = finish(&st.col, &st.t, i, background);
                 }
             }
         }
@@ -518,16 +518,6 @@ impl<'a> Packets<'a> {
         }
     }
 
-    /// Lane `i`'s pixel: its colour plus its transmittance times the background.
-    fn finish(&self, st: &State, i: usize, background: DVec3) -> [f32; 3] {
-        let col = DVec3::new(
-            st.col[0][i] as f64,
-            st.col[1][i] as f64,
-            st.col[2][i] as f64,
-        );
-        to_f32(col + st.t[i] as f64 * background)
-    }
-
     /// One sample of each lane in `active` (at `st.mid`, `st.len`): shaded and composited
     /// into the lane's state. Returns the lanes whose rays end there (transmittance below the
     /// termination bound).
@@ -621,11 +611,7 @@ impl<'a> Packets<'a> {
             let mut ta = [0f32; W];
             st8(&mut oa, o);
             st8(&mut ta, tr);
-            for i in 0..W {
-                if odd >> i & 1 != 0 {
-                    ta[i] = transmit_at_most_one(oa[i] as f64, st.len[i] * self.inv_ref) as f32;
-                }
-            }
+            self.transmit_one_by_one(&oa, &st.len, odd, &mut ta);
             tr = ld8(&ta);
         }
         let shown_v = lanes_mask(shown);
@@ -944,15 +930,7 @@ impl<'a> Packets<'a> {
                 st8(&mut pa[axis], p[axis]);
                 st8(&mut ga[axis], g[axis]);
             }
-            for i in 0..W {
-                if outer >> i & 1 != 0 {
-                    let pi = [pa[0][i], pa[1][i], pa[2][i]];
-                    let gi = self.data.gradient_cached(pi, Filter::Trilinear, cache);
-                    for axis in 0..3 {
-                        ga[axis][i] = gi[axis] as f32;
-                    }
-                }
-            }
+            self.gradients_one_by_one(&pa, outer, cache, &mut ga);
             for axis in 0..3 {
                 g[axis] = ld8(&ga[axis]);
             }
@@ -1366,10 +1344,10 @@ impl<'a> Raw8<'a> {
         let at = _mm256_min_epi32(_mm256_max_epi32(first, _mm256_setzero_si256()), hi);
         let kept = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(at, first)));
         if !(kept as u32) & live != 0 {
-            return self.rows_one_by_one(first, [0, sy, sz, sy + sz]);
+            return self.rows_one_by_one(first, central_offsets(sy, sz));
         }
         let mut r = [at; 4];
-        for (w, off) in r.iter_mut().zip([0, sy, sz, sy + sz]) {
+        for (w, off) in r.iter_mut().zip(central_offsets(sy, sz)) {
             *w = gather_bytes(self.raw, _mm256_add_epi32(at, _mm256_set1_epi32(off)));
         }
         Rows { r }
@@ -1420,16 +1398,7 @@ impl<'a> Raw8<'a> {
         let mut side = [zero; 8];
         // Rows y0 − 1 and y0 + 2 at z0 + c, rows z0 − 1 and z0 + 2 at y0 + b (from x0): the
         // index clamped (a no-op for an interior cell's lane).
-        for (w, off) in side.iter_mut().zip([
-            -sy,
-            -sy + sz,
-            2 * sy,
-            2 * sy + sz,
-            -sz,
-            sy - sz,
-            2 * sz,
-            sy + 2 * sz,
-        ]) {
+        for (w, off) in side.iter_mut().zip(side_offsets(sy, sz)) {
             let at = _mm256_add_epi32(base, _mm256_set1_epi32(off));
             *w = gather_bytes(self.raw, _mm256_min_epi32(_mm256_max_epi32(at, zero), hi));
         }
@@ -1911,6 +1880,83 @@ pub(super) fn st4d(v: __m256d) -> [f64; 4] {
 #[target_feature(enable = "avx")]
 fn st4(v: [__m256d; 3]) -> [[f64; 4]; 3] {
     [st4d(v[0]), st4d(v[1]), st4d(v[2])]
+}
+
+/// Lane `i`'s pixel (of lanes with colours `col` by channel and transmittances `t`, in eight
+/// or sixteen lanes): its colour plus its transmittance times the background.
+fn finish<const N: usize>(
+    col: &[[f32; N]; 3],
+    t: &[f32; N],
+    i: usize,
+    background: DVec3,
+) -> [f32; 3] {
+    let c = DVec3::new(col[0][i] as f64, col[1][i] as f64, col[2][i] as f64);
+    to_f32(c + t[i] as f64 * background)
+}
+
+/// The offsets of a cell's four central rows (y0 + b, z0 + c for b + 2c = 0 … 3) from its
+/// first node's row, for node strides `sy`, `sz` ([`Raw8::central_rows`]).
+fn central_offsets(sy: i32, sz: i32) -> [i32; 4] {
+    [0, sy, sz, sy + sz]
+}
+
+/// The offsets of the rows beside a cell that its gradient's differences read, from its
+/// first node: rows y0 − 1 and y0 + 2 at z0 + c (c = 0, 1), then rows z0 − 1 and z0 + 2 at
+/// y0 + b (b = 0, 1) ([`Raw8::differences`]).
+fn side_offsets(sy: i32, sz: i32) -> [i32; 8] {
+    [
+        -sy,
+        -sy + sz,
+        2 * sy,
+        2 * sy + sz,
+        -sz,
+        sy - sz,
+        2 * sz,
+        sy + 2 * sz,
+    ]
+}
+
+impl Packets<'_> {
+    /// The opacity correction lane by lane where a sample's exponent is not the step's common
+    /// one (the lanes of `odd`, eight or sixteen of them): `1 − t` of opacities `o` over
+    /// lengths `len`, by the scalar `transmit_at_most_one`, into `t`.
+    fn transmit_one_by_one<const N: usize>(
+        &self,
+        o: &[f32; N],
+        len: &[f64; N],
+        odd: u32,
+        t: &mut [f32; N],
+    ) {
+        for i in 0..N {
+            if odd >> i & 1 != 0 {
+                t[i] = transmit_at_most_one(o[i] as f64, len[i] * self.inv_ref) as f32;
+            }
+        }
+    }
+
+    /// The gradients lane by lane where a cell's 4³ neighbourhood is not inside the grid (the
+    /// lanes of `outer`, eight or sixteen of them), at object points `p` (by axis), by the
+    /// scalar `Dataset::gradient_cached`, into `g` (by axis).
+    fn gradients_one_by_one<const N: usize>(
+        &self,
+        p: &[[f32; N]; 3],
+        outer: u32,
+        cache: &mut CellGradients,
+        g: &mut [[f32; N]; 3],
+    ) {
+        for i in 0..N {
+            if outer >> i & 1 != 0 {
+                let gi = self.data.gradient_cached(
+                    [p[0][i], p[1][i], p[2][i]],
+                    Filter::Trilinear,
+                    cache,
+                );
+                for axis in 0..3 {
+                    g[axis][i] = gi[axis] as f32;
+                }
+            }
+        }
+    }
 }
 
 /// A lane's ray: its cursor, its pixel (in the tile), and how many of its next runs are taken

@@ -93,7 +93,7 @@ impl Packets<'_> {
                     if *keep == 0 {
                         let px = lane.px;
                         lanes[i] = None;
-                        out[px] = finish16(&st, i, background);
+                        out[px] = finish(&st.col, &st.t, i, background);
                         continue;
                     }
                     let j = keep.trailing_zeros() as usize & (V - 1);
@@ -116,7 +116,7 @@ impl Packets<'_> {
                     let px = lane.take().expect("a ray").px;
                     *keep = 0;
                     st.t[i] = 0.0;
-                    out[px] = finish16(&st, i, background);
+                    out[px] = finish(&st.col, &st.t, i, background);
                 }
             }
         }
@@ -280,11 +280,7 @@ impl Packets<'_> {
             let mut ta = [0f32; V];
             st16(&mut oa, o);
             st16(&mut ta, tr);
-            for i in 0..V {
-                if odd >> i & 1 != 0 {
-                    ta[i] = transmit_at_most_one(oa[i] as f64, st.len[i] * self.inv_ref) as f32;
-                }
-            }
+            self.transmit_one_by_one(&oa, &st.len, odd.into(), &mut ta);
             tr = ld16(&ta);
         }
         let alpha = _mm512_maskz_mov_ps(shown, _mm512_sub_ps(one, tr));
@@ -391,15 +387,7 @@ impl Packets<'_> {
                 st16(&mut pa[axis], p[axis]);
                 st16(&mut ga[axis], g[axis]);
             }
-            for i in 0..V {
-                if outer >> i & 1 != 0 {
-                    let pi = [pa[0][i], pa[1][i], pa[2][i]];
-                    let gi = self.data.gradient_cached(pi, Filter::Trilinear, cache);
-                    for axis in 0..3 {
-                        ga[axis][i] = gi[axis] as f32;
-                    }
-                }
-            }
+            self.gradients_one_by_one(&pa, outer.into(), cache, &mut ga);
             for axis in 0..3 {
                 g[axis] = ld16(&ga[axis]);
             }
@@ -576,7 +564,7 @@ impl Raw8<'_> {
             st16i(&mut f, first);
             let halves = [0, 1].map(|h| {
                 let part: &[i32; W] = f[W * h..W * h + W].try_into().expect("eight lanes");
-                self.rows_one_by_one(ld8i(part), [0, sy, sz, sy + sz])
+                self.rows_one_by_one(ld8i(part), central_offsets(sy, sz))
             });
             let r = std::array::from_fn(|k| {
                 let mut lo = [0i32; W];
@@ -591,7 +579,7 @@ impl Raw8<'_> {
             return Rows16 { r };
         }
         let mut r = [at; 4];
-        for (w, off) in r.iter_mut().zip([0, sy, sz, sy + sz]) {
+        for (w, off) in r.iter_mut().zip(central_offsets(sy, sz)) {
             *w = gather_bytes16(self.raw, _mm512_add_epi32(at, _mm512_set1_epi32(off)));
         }
         Rows16 { r }
@@ -612,16 +600,7 @@ impl Raw8<'_> {
         let hi = _mm512_set1_epi32(self.raw.len() as i32 - 4);
         let zero = _mm512_setzero_si512();
         let mut side = [zero; 8];
-        for (w, off) in side.iter_mut().zip([
-            -sy,
-            -sy + sz,
-            2 * sy,
-            2 * sy + sz,
-            -sz,
-            sy - sz,
-            2 * sz,
-            sy + 2 * sz,
-        ]) {
+        for (w, off) in side.iter_mut().zip(side_offsets(sy, sz)) {
             let at = _mm512_add_epi32(base, _mm512_set1_epi32(off));
             *w = gather_bytes16(self.raw, _mm512_min_epi32(_mm512_max_epi32(at, zero), hi));
         }
@@ -758,16 +737,6 @@ fn next_segments16(keeps: &mut [u32; V], runs: &[Run16; V], st: &mut State16) ->
         st8d(&mut st.len, h, len);
     }
     active as u32
-}
-
-/// Lane `i`'s pixel: its colour plus its transmittance times the background.
-fn finish16(st: &State16, i: usize, background: DVec3) -> [f32; 3] {
-    let col = DVec3::new(
-        st.col[0][i] as f64,
-        st.col[1][i] as f64,
-        st.col[2][i] as f64,
-    );
-    to_f32(col + st.t[i] as f64 * background)
 }
 
 /// [`transmit_lanes`] in sixteen lanes.
