@@ -73,6 +73,9 @@ pub(super) mod wide;
 /// Lanes of a packet.
 const W: usize = 8;
 
+/// Packets of eight lanes a tile's step carries ([`Packets::march_tile`]).
+const PACKETS8: usize = 2;
+
 /// The lighting of [`Packets`]: unlit (kd and ks 0: the ambient term alone) or a headlight
 /// as [`HeadlitLanes`] holds it, in f32.
 enum Light32 {
@@ -293,26 +296,6 @@ impl<'a> Packets<'a> {
         unbounded: Option<[f32; 3]>,
         (tx, ty, tw, th): (u32, u32, u32, u32),
     ) -> Vec<[f32; 3]> {
-        if self.wide {
-            // SAFETY: `Packets::new` set `wide` only where `wide::detected` found every
-            // feature `tile_avx512` enables (and AVX2 and FMA before it).
-            return unsafe { self.tile_avx512(view, entry, image, unbounded, (tx, ty, tw, th)) };
-        }
-        // SAFETY: `Packets::new` (the only way to make `self`) found AVX2 and FMA.
-        unsafe { self.tile_avx2(view, entry, image, unbounded, (tx, ty, tw, th)) }
-    }
-
-    #[target_feature(enable = "avx2,fma")]
-    fn tile_avx2(
-        &self,
-        view: &Pinhole,
-        entry: Option<&EntryMap>,
-        image: &ImageRays,
-        unbounded: Option<[f32; 3]>,
-        (tx, ty, tw, th): (u32, u32, u32, u32),
-    ) -> Vec<[f32; 3]> {
-        let background = image.background;
-        let mut out = vec![[0f32; 3]; (tw * th) as usize];
         let tile = TileRays {
             view,
             entry,
@@ -321,53 +304,110 @@ impl<'a> Packets<'a> {
             origin: (tx, ty),
             size: (tw, th),
         };
+        if self.wide {
+            // SAFETY: `Packets::new` set `wide` only where `wide::detected` found every
+            // feature `tile_avx512` enables (and AVX2 and FMA before it).
+            return unsafe { self.tile_avx512(&tile) };
+        }
+        // SAFETY: `Packets::new` (the only way to make `self`) found AVX2 and FMA.
+        unsafe { self.tile_avx2(&tile) }
+    }
+
+    /// [`Packets::tile`] in [`PACKETS8`] packets of eight lanes.
+    #[target_feature(enable = "avx2,fma")]
+    fn tile_avx2(&self, tile: &TileRays<'_>) -> Vec<[f32; 3]> {
+        // SAFETY: this function has the AVX2 and FMA `march_tile` asks for.
+        unsafe {
+            self.march_tile::<W, PACKETS8, { PACKETS8 * W }>(
+                tile,
+                |keeps, runs, st| next_segments(keeps, runs, st),
+                |st, active, cache| self.step(st, active, cache),
+                |c, run, trusted| self.next_taken(c, run, trusted),
+            )
+        }
+    }
+
+    /// The pixels of `tile`, row by row, marched in `P` packets of `N` lanes (`L` = P·N lanes
+    /// in all, at most 64, lane `i` being lane `i % N` of packet `i / N`); the march of
+    /// either width ([`Packets::tile_avx2`], `tile_avx512`) through its own three steps:
+    ///
+    /// - `next_segments(keeps, runs, st)`: the packet's lanes whose run has a next segment
+    ///   to take (their bit in `keeps` taken, its segment written into `st`), by bit;
+    /// - `step(st, active, cache)`: one sample in each `active` lane of the packet, composited
+    ///   front to back; the lanes whose ray it ended (early termination), by bit;
+    /// - `next_taken(cursor, run, trusted)`: a ray's next run with a segment to take, by bit
+    ///   (0 at the ray's end).
+    ///
+    /// A step steps every packet: their chains of dependent operations overlap. Each ray is
+    /// its own cursor and arithmetic, so which lane or packet carries it changes nothing in
+    /// its pixel.
+    ///
+    /// # Safety
+    /// The caller must have AVX2 and FMA (for [`Packets::next_ray`]). Always inlined, so
+    /// that the steps inline into the caller's target features.
+    #[inline(always)]
+    unsafe fn march_tile<const N: usize, const P: usize, const L: usize>(
+        &self,
+        tile: &TileRays<'_>,
+        next_segments: impl Fn(&mut [u32; N], &[Run16; N], &mut LaneState<N>) -> u32,
+        mut step: impl FnMut(&mut LaneState<N>, u32, &mut CellGradients) -> u32,
+        next_taken: impl Fn(&mut Cursor, &mut Run16, &mut u32) -> u32,
+    ) -> Vec<[f32; 3]> {
+        const { assert!(N == 8 || N == 16) };
+        const { assert!(P >= 1 && L == P * N && L <= 64) };
+        let all = u64::MAX >> (64 - L);
+        let background = tile.image.background;
+        let (tw, th) = tile.size;
+        let mut out = vec![[0f32; 3]; (tw * th) as usize];
         let mut starts = Starts::default();
-        let mut lanes: [Option<LaneRay>; W] = Default::default();
+        let mut lanes: [Option<LaneRay>; L] = std::array::from_fn(|_| None);
         // Per lane: its run's segments, and those still to take by bit (`to_take`; 0 for a
         // lane without a ray). Apart from the rays, so that the common case below reads a
         // word, two numbers and nothing else of the lane.
-        let mut runs = [Run16::default(); W];
-        let mut keeps = [0u32; W];
-        let mut st = State::default();
+        let mut runs = [Run16::default(); L];
+        let mut keeps = [0u32; L];
+        let mut st: [LaneState<N>; P] = std::array::from_fn(|_| LaneState::default());
         let mut cache = CellGradients::default();
         loop {
             // The common case: a lane's run has a next segment to take (all lanes at once).
-            let mut active = next_segments(&mut keeps, &runs, &mut st);
+            let mut active = 0u64;
+            for (h, st) in st.iter_mut().enumerate() {
+                let k = (&mut keeps[N * h..N * h + N]).try_into().expect("N lanes");
+                let r = runs[N * h..N * h + N].try_into().expect("N lanes");
+                active |= (next_segments(k, r, st) as u64) << (N * h);
+            }
             // The other lanes: the next run of their ray with a segment to take, or a new ray
             // where their ray has ended.
-            let mut idle = !active & ((1 << W) - 1);
+            let mut idle = !active & all;
             while idle != 0 {
-                let i = idle.trailing_zeros() as usize & (W - 1);
+                let i = idle.trailing_zeros() as usize % L;
                 idle &= idle - 1;
+                let (h, l) = (i / N, i % N);
+                let st = &mut st[h];
                 loop {
                     if lanes[i].is_none() {
-                        let Some((c, view)) =
-                            self.next_ray(&mut starts, &mut lanes[i], &tile, &mut out)
-                        else {
+                        // SAFETY: the caller has AVX2 and FMA.
+                        let next =
+                            unsafe { self.next_ray(&mut starts, &mut lanes[i], tile, &mut out) };
+                        let Some((c, view)) = next else {
                             break;
                         };
-                        st.t[i] = 1.0;
-                        for (ch, &v) in view.iter().enumerate() {
-                            st.col[ch][i] = 0.0;
-                            st.view[ch][i] = v;
-                            st.ro[ch][i] = c.o[ch];
-                            st.rd[ch][i] = c.d[ch];
-                        }
+                        st.start(l, c, view);
                     }
                     let lane = lanes[i].as_mut().expect("a ray");
                     // The next run with a segment to take (runs of none are passed over).
                     let (run, keep) = (&mut runs[i], &mut keeps[i]);
-                    *keep = self.next_taken(&mut lane.cursor, run, &mut lane.trusted);
+                    *keep = next_taken(&mut lane.cursor, run, &mut lane.trusted);
                     if *keep == 0 {
                         let px = lane.px;
                         lanes[i] = None;
-                        out[px] = finish(&st.col, &st.t, i, background);
+                        out[px] = finish(&st.col, &st.t, l, background);
                         continue;
                     }
-                    let j = keep.trailing_zeros() as usize & (2 * W - 1);
+                    let j = keep.trailing_zeros() as usize % (2 * W);
                     *keep &= *keep - 1;
-                    st.mid[i] = run.mids[j];
-                    st.len[i] = run.lens[j];
+                    st.mid[l] = run.mids[j];
+                    st.len[l] = run.lens[j];
                     active |= 1 << i;
                     break;
                 }
@@ -375,17 +415,19 @@ impl<'a> Packets<'a> {
             if active == 0 {
                 break;
             }
-            let ended = self.step(&mut st, active, &mut cache);
-            if ended == 0 {
-                continue;
+            let mut ended = 0u64;
+            for (h, st) in st.iter_mut().enumerate() {
+                let a = (active >> (N * h)) as u32 & (u32::MAX >> (32 - N));
+                ended |= (step(st, a, &mut cache) as u64) << (N * h);
             }
-            for (i, (lane, keep)) in lanes.iter_mut().zip(&mut keeps).enumerate() {
-                if ended >> i & 1 != 0 {
-                    let px = lane.take().expect("a ray").px;
-                    *keep = 0;
-                    st.t[i] = 0.0;
-                    out[px] = finish(&st.col, &st.t, i, background);
-                }
+            while ended != 0 {
+                let i = ended.trailing_zeros() as usize % L;
+                ended &= ended - 1;
+                let (h, l) = (i / N, i % N);
+                let px = lanes[i].take().expect("a ray").px;
+                keeps[i] = 0;
+                st[h].t[l] = 0.0;
+                out[px] = finish(&st[h].col, &st[h].t, l, background);
             }
         }
         out
@@ -2009,20 +2051,50 @@ struct Run {
     lens: [f64; 8],
 }
 
-/// The lanes' state, by lane: the ray in object coordinates (`o + t·d`), the view direction
-/// (towards the eye), the sample being taken (its segment's midpoint and length), the
-/// transmittance and the colour so far.
-#[derive(Default)]
-#[repr(C, align(32))]
-struct State {
-    ro: [[f64; W]; 3],
-    rd: [[f64; W]; 3],
-    mid: [f64; W],
-    len: [f64; W],
-    view: [[f32; W]; 3],
-    t: [f32; W],
-    col: [[f32; W]; 3],
+/// A packet's state, by lane, for `N` lanes: the ray in object coordinates (`o + t·d`), the
+/// view direction (towards the eye), the sample being taken (its segment's midpoint and
+/// length), the transmittance and the colour so far.
+#[repr(C, align(64))]
+struct LaneState<const N: usize> {
+    ro: [[f64; N]; 3],
+    rd: [[f64; N]; 3],
+    mid: [f64; N],
+    len: [f64; N],
+    view: [[f32; N]; 3],
+    t: [f32; N],
+    col: [[f32; N]; 3],
 }
+
+impl<const N: usize> Default for LaneState<N> {
+    fn default() -> Self {
+        Self {
+            ro: [[0.0; N]; 3],
+            rd: [[0.0; N]; 3],
+            mid: [0.0; N],
+            len: [0.0; N],
+            view: [[0.0; N]; 3],
+            t: [0.0; N],
+            col: [[0.0; N]; 3],
+        }
+    }
+}
+
+impl<const N: usize> LaneState<N> {
+    /// Lane `l` starts ray `c` (transmittance 1, no colour yet), seen along `view`.
+    #[inline(always)]
+    fn start(&mut self, l: usize, c: &Cursor, view: [f32; 3]) {
+        self.t[l] = 1.0;
+        for (ch, &v) in view.iter().enumerate() {
+            self.col[ch][l] = 0.0;
+            self.view[ch][l] = v;
+            self.ro[ch][l] = c.o[ch];
+            self.rd[ch][l] = c.d[ch];
+        }
+    }
+}
+
+/// The eight-lane march's state.
+type State = LaneState<W>;
 
 /// `t^e` in each lane for a common exponent `e` (0.5, 1, 0.25, 2, 0.125 or 4: any other
 /// gives t⁴), by square roots and products in f32: `transmit_common`'s operations.

@@ -8,13 +8,14 @@
 //! 512-bit units a step of sixteen costs about what one of eight did (the MNI frame at 0.5
 //! voxel in 42 ms against 53 ms in eight lanes, `docs/performance.md`'s last run).
 //!
-//! A tile's step carries two such packets ([`P`]), thirty-two rays: a sample's work is one
-//! long chain of dependent operations (segment, point, cell, four gathers, lerps, table,
-//! opacity correction, transmittance), and the branch on which lanes ended waits for its end,
-//! so one packet's step left the processor waiting; two independent chains in one step
-//! overlap (the frame about 5–10 % faster on the measured host; four packets were no faster).
-//! Each ray is still its own cursor and arithmetic, so which lane or packet carries it
-//! changes nothing in its pixel.
+//! A tile's step carries two such packets ([`P`]), thirty-two rays, through the driver both
+//! widths share ([`Packets::march_tile`]; the eight-lane march steps two packets of eight):
+//! a sample's work is one long chain of dependent operations (segment, point, cell, four
+//! gathers, lerps, table, opacity correction, transmittance), and the branch on which lanes
+//! ended waits for its end, so one packet's step left the processor waiting; two independent
+//! chains in one step overlap (the frame about 5–10 % faster on the measured host; four
+//! packets were no faster). Each ray is still its own cursor and arithmetic, so which lane or
+//! packet carries it changes nothing in its pixel.
 //!
 //! **Safety.** As in the parent module: gathers and loads through indices clamped into the
 //! slice they read, and the `#[target_feature]` tile function, called only by a [`Packets`]
@@ -25,13 +26,8 @@ use super::*;
 /// Lanes of a wide packet.
 const V: usize = 16;
 
-/// Packets of [`V`] lanes a tile's step carries (at most four: a lane is a bit of a `u64`).
+/// Packets of [`V`] lanes a tile's step carries ([`Packets::march_tile`]; at most four).
 const P: usize = 2;
-
-/// A bit for each of the `P · V` lanes.
-const ALL: u64 = u64::MAX >> (64 - P * V);
-
-const _: () = assert!(P >= 1 && P * V <= 64);
 
 /// The AVX-512 features the wide march uses (with AVX2 and FMA for the runs it shares).
 pub(in crate::render) fn detected() -> bool {
@@ -43,110 +39,22 @@ pub(in crate::render) fn detected() -> bool {
 }
 
 /// The lanes' state, by lane (as the eight-lane `State`).
-#[derive(Default)]
-#[repr(C, align(64))]
-struct State16 {
-    ro: [[f64; V]; 3],
-    rd: [[f64; V]; 3],
-    mid: [f64; V],
-    len: [f64; V],
-    view: [[f32; V]; 3],
-    t: [f32; V],
-    col: [[f32; V]; 3],
-}
+type State16 = LaneState<V>;
 
 impl Packets<'_> {
     /// [`Packets::tile`] in [`P`] packets of sixteen lanes: lane `i` is lane `i % 16` of
     /// packet `i / 16`, and a step steps every packet.
     #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
-    pub(super) fn tile_avx512(
-        &self,
-        view: &Pinhole,
-        entry: Option<&EntryMap>,
-        image: &ImageRays,
-        unbounded: Option<[f32; 3]>,
-        (tx, ty, tw, th): (u32, u32, u32, u32),
-    ) -> Vec<[f32; 3]> {
-        let background = image.background;
-        let mut out = vec![[0f32; 3]; (tw * th) as usize];
-        let tile = TileRays {
-            view,
-            entry,
-            image,
-            unbounded,
-            origin: (tx, ty),
-            size: (tw, th),
-        };
-        let mut starts = Starts::default();
-        let mut lanes: [Option<LaneRay>; P * V] = std::array::from_fn(|_| None);
-        let mut runs = [Run16::default(); P * V];
-        let mut keeps = [0u32; P * V];
-        let mut st: [State16; P] = Default::default();
-        let mut cache = CellGradients::default();
-        loop {
-            let mut active = 0u64;
-            for (h, st) in st.iter_mut().enumerate() {
-                let (k, r) = (&mut keeps[V * h..V * h + V], &runs[V * h..V * h + V]);
-                let (k, r) = (k.try_into().expect("16"), r.try_into().expect("16"));
-                active |= (next_segments16(k, r, st) as u64) << (V * h);
-            }
-            let mut idle = !active & ALL;
-            while idle != 0 {
-                let i = idle.trailing_zeros() as usize & (P * V - 1);
-                idle &= idle - 1;
-                let (h, l) = (i / V, i % V);
-                let st = &mut st[h];
-                loop {
-                    if lanes[i].is_none() {
-                        let Some((c, view)) =
-                            self.next_ray(&mut starts, &mut lanes[i], &tile, &mut out)
-                        else {
-                            break;
-                        };
-                        st.t[l] = 1.0;
-                        for (ch, &v) in view.iter().enumerate() {
-                            st.col[ch][l] = 0.0;
-                            st.view[ch][l] = v;
-                            st.ro[ch][l] = c.o[ch];
-                            st.rd[ch][l] = c.d[ch];
-                        }
-                    }
-                    let lane = lanes[i].as_mut().expect("a ray");
-                    let (run, keep) = (&mut runs[i], &mut keeps[i]);
-                    *keep = self.next_taken16(&mut lane.cursor, run, &mut lane.trusted);
-                    if *keep == 0 {
-                        let px = lane.px;
-                        lanes[i] = None;
-                        out[px] = finish(&st.col, &st.t, l, background);
-                        continue;
-                    }
-                    let j = keep.trailing_zeros() as usize & (V - 1);
-                    *keep &= *keep - 1;
-                    st.mid[l] = run.mids[j];
-                    st.len[l] = run.lens[j];
-                    active |= 1u64 << i;
-                    break;
-                }
-            }
-            if active == 0 {
-                break;
-            }
-            let mut ended = 0u64;
-            for (h, st) in st.iter_mut().enumerate() {
-                ended |= (self.step16(st, (active >> (V * h) & 0xffff) as u32, &mut cache) as u64)
-                    << (V * h);
-            }
-            while ended != 0 {
-                let i = ended.trailing_zeros() as usize & (P * V - 1);
-                ended &= ended - 1;
-                let (h, l) = (i / V, i % V);
-                let px = lanes[i].take().expect("a ray").px;
-                keeps[i] = 0;
-                st[h].t[l] = 0.0;
-                out[px] = finish(&st[h].col, &st[h].t, l, background);
-            }
+    pub(super) fn tile_avx512(&self, tile: &TileRays<'_>) -> Vec<[f32; 3]> {
+        // SAFETY: this function has AVX2 and FMA, which `march_tile` asks for.
+        unsafe {
+            self.march_tile::<V, P, { P * V }>(
+                tile,
+                |keeps, runs, st| next_segments16(keeps, runs, st),
+                |st, active, cache| self.step16(st, active, cache),
+                |c, run, trusted| self.next_taken16(c, run, trusted),
+            )
         }
-        out
     }
 
     /// [`Packets::next_taken`] with runs of sixteen segments ([`Packets::run16`]): the same
