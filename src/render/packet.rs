@@ -76,6 +76,21 @@ const W: usize = 8;
 /// Packets of eight lanes a tile's step carries ([`Packets::march_tile`]).
 const PACKETS8: usize = 2;
 
+/// In unit tests, the packets a step carries in either width where not 0 (1, 2 or 4; else
+/// [`PACKETS8`] and `wide::P`): `packets_carry_rays_without_changing_them` sets it. Global, so
+/// a test running meanwhile may render with it too, which the claim it tests allows.
+#[cfg(test)]
+static TEST_PACKETS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// [`TEST_PACKETS`], 0 outside unit tests.
+#[inline(always)]
+fn test_packets() -> usize {
+    #[cfg(test)]
+    return TEST_PACKETS.load(std::sync::atomic::Ordering::Relaxed);
+    #[cfg(not(test))]
+    0
+}
+
 /// The lighting of [`Packets`]: unlit (kd and ks 0: the ambient term alone) or a headlight
 /// as [`HeadlitLanes`] holds it, in f32.
 enum Light32 {
@@ -316,14 +331,16 @@ impl<'a> Packets<'a> {
     /// [`Packets::tile`] in [`PACKETS8`] packets of eight lanes.
     #[target_feature(enable = "avx2,fma")]
     fn tile_avx2(&self, tile: &TileRays<'_>) -> Vec<[f32; 3]> {
+        let segments = |keeps: &mut _, runs: &_, st: &mut _| next_segments(keeps, runs, st);
+        let step = |st: &mut _, active, cache: &mut _| self.step(st, active, cache);
+        let taken = |c: &mut _, run: &mut _, trusted: &mut _| self.next_taken(c, run, trusted);
         // SAFETY: this function has the AVX2 and FMA `march_tile` asks for.
         unsafe {
-            self.march_tile::<W, PACKETS8, { PACKETS8 * W }>(
-                tile,
-                |keeps, runs, st| next_segments(keeps, runs, st),
-                |st, active, cache| self.step(st, active, cache),
-                |c, run, trusted| self.next_taken(c, run, trusted),
-            )
+            match test_packets() {
+                1 => self.march_tile::<W, 1, W>(tile, segments, step, taken),
+                4 => self.march_tile::<W, 4, { 4 * W }>(tile, segments, step, taken),
+                _ => self.march_tile::<W, PACKETS8, { PACKETS8 * W }>(tile, segments, step, taken),
+            }
         }
     }
 
@@ -2363,19 +2380,15 @@ mod tests {
         }
     }
 
-    /// Runs taken on trust ([`TRUSTED_RUNS`]) are taken, and change no pixel: a scene of
-    /// opaque slabs between empty ones (whole runs inside the slabs, cut runs at their faces),
-    /// seen at fine and coarse steps, shaded and not, in sixteen lanes and in eight, with
-    /// `Optimise::trust_whole_runs` on and off.
-    #[test]
-    fn runs_on_trust_change_nothing() {
+    /// The test scene of slabs: slabs along x of 5 voxels (with some texture) between empty
+    /// ones of 3 (whole runs inside the slabs, cut runs at their faces), faint or, if
+    /// `opaque`, dense enough that most rays end early, before a grey-blue background, seen
+    /// at `step`, shaded or not, with `optimise`; its 64×48 image as the bits of its pixels
+    /// (tiles of 32×32: two whole, two of 32×16).
+    fn slabs(step: f32, shaded: bool, opaque: bool, optimise: crate::scene::Optimise) -> Vec<u32> {
         use crate::dataset::{Dataset, Voxels};
         use crate::{Camera, Fields, Library, MappingType};
-        if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
-            return;
-        }
         let dims = [40usize, 36, 30];
-        // Slabs along x of 5 voxels above the zero test (with some texture), 3 below it.
         let voxels = (0..dims.iter().product::<usize>())
             .map(|i| {
                 let (x, y, z) = (i % dims[0], i / dims[0] % dims[1], i / (dims[0] * dims[1]));
@@ -2387,65 +2400,75 @@ mod tests {
             })
             .collect();
         let data = Dataset::new(dims, Voxels::U8(voxels), 0.0, 255.0).unwrap();
+        let mut vl = Library::new();
+        vl.add_dataset(1, data).unwrap();
+        let density = if opaque {
+            [0.3, 0.0, 0.6, 0.6, 1.0, 0.95]
+        } else {
+            [0.3, 0.0, 0.6, 0.05, 1.0, 0.08]
+        };
+        vl.mapping(1, MappingType::Ramp, 3, 1, &density).unwrap();
+        vl.mapping(
+            2,
+            MappingType::Ramp,
+            2,
+            3,
+            &[0.0, 0.2, 0.4, 0.6, 1.0, 1.0, 0.9, 0.5],
+        )
+        .unwrap();
+        vl.scene().unwrap();
+        vl.set_optimise(optimise).unwrap();
+        vl.background(0.1, 0.2, 0.3).unwrap();
+        vl.camera(&Camera {
+            eye: [90.0, -40.0, 70.0],
+            at: [20.0, 18.0, 15.0],
+            up: [0.0, 0.0, 1.0],
+            fov: 40.0,
+        })
+        .unwrap();
+        vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+        vl.directional_light([0.3, -1.0, 0.2], [1.0, 0.95, 0.9], 1.0)
+            .unwrap();
+        vl.step_size(step, 1.0).unwrap();
+        vl.object().unwrap();
+        vl.scale(39.0, 35.0, 29.0).unwrap();
+        vl.dataset(Fields::F, 1).unwrap();
+        vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+        vl.map(Fields::R, Fields::F, 2, 1).unwrap();
+        vl.map(Fields::G, Fields::F, 2, 2).unwrap();
+        vl.map(Fields::B, Fields::F, 2, 3).unwrap();
+        if shaded {
+            vl.set(Fields::KA, 0.2).unwrap();
+            vl.set(Fields::KD, 0.7).unwrap();
+            vl.set(Fields::KS, 0.3).unwrap();
+        } else {
+            vl.set(Fields::KA, 1.0).unwrap();
+        }
+        vl.end().unwrap();
+        let image = vl.render_preview(64, 48, 1.2).unwrap();
+        image
+            .pixels
+            .iter()
+            .flatten()
+            .map(|v| v.to_bits())
+            .collect::<Vec<_>>()
+    }
+
+    /// Runs taken on trust ([`TRUSTED_RUNS`]) are taken, and change no pixel: the slabs
+    /// ([`slabs`]) at fine and coarse steps, shaded and not, in sixteen lanes and in eight,
+    /// with `Optimise::trust_whole_runs` on and off.
+    #[test]
+    fn runs_on_trust_change_nothing() {
+        if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+            return;
+        }
         let render = |step: f32, shaded: bool, wide_lanes: bool, trust: bool| {
-            let mut vl = Library::new();
-            vl.add_dataset(1, data.clone()).unwrap();
-            vl.mapping(
-                1,
-                MappingType::Ramp,
-                3,
-                1,
-                &[0.3, 0.0, 0.6, 0.05, 1.0, 0.08],
-            )
-            .unwrap();
-            vl.mapping(
-                2,
-                MappingType::Ramp,
-                2,
-                3,
-                &[0.0, 0.2, 0.4, 0.6, 1.0, 1.0, 0.9, 0.5],
-            )
-            .unwrap();
-            vl.scene().unwrap();
-            vl.set_optimise(crate::scene::Optimise {
+            let optimise = crate::scene::Optimise {
                 wide_lanes,
                 trust_whole_runs: trust,
                 ..Default::default()
-            })
-            .unwrap();
-            vl.camera(&Camera {
-                eye: [90.0, -40.0, 70.0],
-                at: [20.0, 18.0, 15.0],
-                up: [0.0, 0.0, 1.0],
-                fov: 40.0,
-            })
-            .unwrap();
-            vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
-            vl.directional_light([0.3, -1.0, 0.2], [1.0, 0.95, 0.9], 1.0)
-                .unwrap();
-            vl.step_size(step, 1.0).unwrap();
-            vl.object().unwrap();
-            vl.scale(39.0, 35.0, 29.0).unwrap();
-            vl.dataset(Fields::F, 1).unwrap();
-            vl.map(Fields::O, Fields::F, 1, 1).unwrap();
-            vl.map(Fields::R, Fields::F, 2, 1).unwrap();
-            vl.map(Fields::G, Fields::F, 2, 2).unwrap();
-            vl.map(Fields::B, Fields::F, 2, 3).unwrap();
-            if shaded {
-                vl.set(Fields::KA, 0.2).unwrap();
-                vl.set(Fields::KD, 0.7).unwrap();
-                vl.set(Fields::KS, 0.3).unwrap();
-            } else {
-                vl.set(Fields::KA, 1.0).unwrap();
-            }
-            vl.end().unwrap();
-            let image = vl.render_preview(64, 48, 1.2).unwrap();
-            image
-                .pixels
-                .iter()
-                .flatten()
-                .map(|v| v.to_bits())
-                .collect::<Vec<_>>()
+            };
+            slabs(step, shaded, false, optimise)
         };
         let runs = || UNTESTED_RUNS.load(std::sync::atomic::Ordering::Relaxed);
         for step in [0.125, 0.5, 2.0] {
@@ -2460,6 +2483,45 @@ mod tests {
                     if step == 0.125 {
                         // (Other tests may count runs meanwhile: this bounds from below.)
                         assert!(taken > 100, "{what}: {taken} runs on trust");
+                    }
+                }
+            }
+        }
+    }
+
+    /// How many packets a step carries, and so which lane or packet a ray is marched in,
+    /// changes no pixel ([`Packets::march_tile`]): the slabs, faint and opaque (rays ending
+    /// early in every packet), at fine and coarse steps, shaded and not, in sixteen lanes and
+    /// in eight, in one, two and four packets and by default, byte for byte.
+    #[test]
+    fn packets_carry_rays_without_changing_them() {
+        use std::sync::atomic::Ordering::Relaxed;
+        if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+            return;
+        }
+        for opaque in [false, true] {
+            for step in [0.125, 0.5, 2.0] {
+                for shaded in [false, true] {
+                    for wide_lanes in [true, false] {
+                        let optimise = crate::scene::Optimise {
+                            wide_lanes,
+                            ..Default::default()
+                        };
+                        let by = |packets: usize| {
+                            TEST_PACKETS.store(packets, Relaxed);
+                            slabs(step, shaded, opaque, optimise)
+                        };
+                        let (default, one, two, four) = (by(0), by(1), by(2), by(4));
+                        TEST_PACKETS.store(0, Relaxed);
+                        let what = format!(
+                            "opaque {opaque}, step {step}, shaded {shaded}, wide {wide_lanes}"
+                        );
+                        assert_eq!(one, two, "{what}: one packet and two differ");
+                        assert_eq!(four, two, "{what}: four packets and two differ");
+                        assert_eq!(default, two, "{what}: the default and two packets differ");
+                        let background = [0.1f32, 0.2, 0.3].map(f32::to_bits);
+                        let shown = default.chunks(3).filter(|p| *p != background).count();
+                        assert!(shown > 500, "{what}: {shown} pixels show the slabs");
                     }
                 }
             }

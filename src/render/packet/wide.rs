@@ -46,14 +46,16 @@ impl Packets<'_> {
     /// packet `i / 16`, and a step steps every packet.
     #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
     pub(super) fn tile_avx512(&self, tile: &TileRays<'_>) -> Vec<[f32; 3]> {
+        let segments = |keeps: &mut _, runs: &_, st: &mut _| next_segments16(keeps, runs, st);
+        let step = |st: &mut _, active, cache: &mut _| self.step16(st, active, cache);
+        let taken = |c: &mut _, run: &mut _, trusted: &mut _| self.next_taken16(c, run, trusted);
         // SAFETY: this function has AVX2 and FMA, which `march_tile` asks for.
         unsafe {
-            self.march_tile::<V, P, { P * V }>(
-                tile,
-                |keeps, runs, st| next_segments16(keeps, runs, st),
-                |st, active, cache| self.step16(st, active, cache),
-                |c, run, trusted| self.next_taken16(c, run, trusted),
-            )
+            match test_packets() {
+                1 => self.march_tile::<V, 1, V>(tile, segments, step, taken),
+                4 => self.march_tile::<V, 4, { 4 * V }>(tile, segments, step, taken),
+                _ => self.march_tile::<V, P, { P * V }>(tile, segments, step, taken),
+            }
         }
     }
 
