@@ -40,9 +40,24 @@ pub const SUPER_SAMPLE_CONTRAST: f32 = 4.0 / 255.0;
 /// Central differences below this change of F count as a zero gradient.
 const ZERO_GRADIENT: f64 = 1e-7;
 
-/// Side of the square pixel tiles traced in parallel (32: a tile of the sixteen-lane march
-/// fills its 32 lanes for longer before its last rays drain them, `packet::wide`).
-const TILE: u32 = 32;
+/// Side of the square pixel tiles traced in parallel.
+const TILE: u32 = 16;
+
+/// Side of the packet march's tiles where the image has enough of them ([`packet_tile`]): a
+/// tile's 32 lanes stay full for longer before its last rays drain them.
+const PACKET_TILE: u32 = 32;
+
+/// The packet march's tile side for an image of `width × height`: [`PACKET_TILE`] where that
+/// gives at least 16 tiles a thread (work-stealing balances tiles of unequal cost only when
+/// there are many), else [`TILE`]. Only the order of the work depends on it, not a pixel.
+fn packet_tile(width: u32, height: u32) -> u32 {
+    let big = width.div_ceil(PACKET_TILE) as usize * height.div_ceil(PACKET_TILE) as usize;
+    if big >= 16 * rayon::current_num_threads() {
+        PACKET_TILE
+    } else {
+        TILE
+    }
+}
 
 #[cfg(target_arch = "x86_64")]
 mod packet;
@@ -2370,10 +2385,10 @@ fn view(settings: &Settings, width: u32, height: u32, aspect: f32) -> Pinhole {
     }
 }
 
-fn tiles(width: u32, height: u32) -> Vec<(u32, u32)> {
+fn tiles(width: u32, height: u32, side: u32) -> Vec<(u32, u32)> {
     let mut v = Vec::new();
-    for ty in (0..height).step_by(TILE as usize) {
-        for tx in (0..width).step_by(TILE as usize) {
+    for ty in (0..height).step_by(side as usize) {
+        for tx in (0..width).step_by(side as usize) {
             v.push((tx, ty));
         }
     }
@@ -2385,7 +2400,7 @@ fn per_pixel<F>(width: u32, height: u32, f: F) -> Vec<[f32; 3]>
 where
     F: Fn(u32, u32) -> [f32; 3] + Sync,
 {
-    per_tile(width, height, |(tx, ty, tw, th)| {
+    per_tile(width, height, TILE, |(tx, ty, tw, th)| {
         let mut out = Vec::with_capacity((tw * th) as usize);
         for y in ty..ty + th {
             for x in tx..tx + tw {
@@ -2396,30 +2411,31 @@ where
     })
 }
 
-/// Evaluates `f` for every tile (x, y, width, height), which gives its pixels row by row, in
-/// parallel over tiles, deterministically.
-fn per_tile<F>(width: u32, height: u32, f: F) -> Vec<[f32; 3]>
+/// Evaluates `f` for every tile (x, y, width, height) of `side × side` pixels (fewer at the
+/// right and bottom edges), which gives its pixels row by row, in parallel over tiles,
+/// deterministically.
+fn per_tile<F>(width: u32, height: u32, side: u32, f: F) -> Vec<[f32; 3]>
 where
     F: Fn((u32, u32, u32, u32)) -> Vec<[f32; 3]> + Sync,
 {
     type Tile = ((u32, u32), Vec<[f32; 3]>);
-    let results: Vec<Tile> = tiles(width, height)
+    let results: Vec<Tile> = tiles(width, height, side)
         .into_par_iter()
         .map(|(tx, ty)| {
-            let (tw, th) = ((tx + TILE).min(width) - tx, (ty + TILE).min(height) - ty);
+            let (tw, th) = ((tx + side).min(width) - tx, (ty + side).min(height) - ty);
             ((tx, ty), f((tx, ty, tw, th)))
         })
         .collect();
-    // The tiles come in row-major order: each band of TILE rows is a row of tiles, copied
+    // The tiles come in row-major order: each band of `side` rows is a row of tiles, copied
     // into place in parallel, a tile row at a time.
-    let per_row = width.div_ceil(TILE) as usize;
+    let per_row = width.div_ceil(side) as usize;
     let mut pixels = vec![[0.0f32; 3]; (width * height) as usize];
     pixels
-        .par_chunks_mut((width * TILE) as usize)
+        .par_chunks_mut((width * side) as usize)
         .zip(results.par_chunks(per_row))
         .for_each(|(band, row)| {
             for ((tx, _), out) in row {
-                let tw = ((tx + TILE).min(width) - tx) as usize;
+                let tw = ((tx + side).min(width) - tx) as usize;
                 for (y, src) in out.chunks(tw).enumerate() {
                     let at = y * width as usize + *tx as usize;
                     band[at..at + tw].copy_from_slice(src);
@@ -2465,7 +2481,7 @@ pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> R
         // Eight rays at a time in SIMD lanes, where that applies (one ray per pixel).
         #[cfg(target_arch = "x86_64")]
         if let Some(p) = packet::Packets::new(scene) {
-            return per_tile(width, height, |tile| {
+            return per_tile(width, height, packet_tile(width, height), |tile| {
                 p.tile(&view, entry.as_ref(), &image, unbounded, tile)
             });
         }
@@ -2568,6 +2584,33 @@ pub fn render_outputs(desc: &SceneDesc) -> Result<()> {
 mod tests {
     use super::*;
     use crate::testing::Xorshift;
+
+    /// The packet march's tiles are 32×32 where the image has at least 16 of them a thread,
+    /// else 16×16; and `tiles` with either side covers the image once, row-major.
+    #[test]
+    fn packet_tiles_are_large_only_where_there_are_many() {
+        let threads = rayon::current_num_threads();
+        assert_eq!(packet_tile(64, 48), TILE, "4 tiles of 32");
+        // Exactly 16 a thread: a row of 16·threads tiles of 32, the last one partial.
+        let w = 32 * 16 * threads as u32 - 5;
+        assert_eq!(packet_tile(w, 32), PACKET_TILE);
+        assert_eq!(packet_tile(w - 32, 32), TILE);
+        for side in [TILE, PACKET_TILE] {
+            let (w, h) = (101u32, 67u32);
+            let t = tiles(w, h, side);
+            assert_eq!(t.len(), (w.div_ceil(side) * h.div_ceil(side)) as usize);
+            let mut covered = vec![0u8; (w * h) as usize];
+            for &(tx, ty) in &t {
+                for y in ty..(ty + side).min(h) {
+                    for x in tx..(tx + side).min(w) {
+                        covered[(y * w + x) as usize] += 1;
+                    }
+                }
+            }
+            assert!(covered.iter().all(|&c| c == 1), "side {side}");
+            assert!(t.windows(2).all(|p| (p[0].1, p[0].0) < (p[1].1, p[1].0)));
+        }
+    }
 
     /// `try_normalize` is glam's `DVec3::try_normalize`, bit for bit and in when it declines:
     /// zero, tiny (a square that underflows), huge (one that overflows), infinite and NaN

@@ -2383,9 +2383,15 @@ mod tests {
     /// The test scene of slabs: slabs along x of 5 voxels (with some texture) between empty
     /// ones of 3 (whole runs inside the slabs, cut runs at their faces), faint or, if
     /// `opaque`, dense enough that most rays end early, before a grey-blue background, seen
-    /// at `step`, shaded or not, with `optimise`; its 64×48 image as the bits of its pixels
-    /// (tiles of 32×32: two whole, two of 32×16).
-    fn slabs(step: f32, shaded: bool, opaque: bool, optimise: crate::scene::Optimise) -> Vec<u32> {
+    /// at `step`, shaded or not, with `optimise`; its image of `(width, height)` pixels as
+    /// the bits of its pixels.
+    fn slabs(
+        step: f32,
+        shaded: bool,
+        opaque: bool,
+        optimise: crate::scene::Optimise,
+        (width, height): (u32, u32),
+    ) -> Vec<u32> {
         use crate::dataset::{Dataset, Voxels};
         use crate::{Camera, Fields, Library, MappingType};
         let dims = [40usize, 36, 30];
@@ -2445,7 +2451,7 @@ mod tests {
             vl.set(Fields::KA, 1.0).unwrap();
         }
         vl.end().unwrap();
-        let image = vl.render_preview(64, 48, 1.2).unwrap();
+        let image = vl.render_preview(width, height, 1.2).unwrap();
         image
             .pixels
             .iter()
@@ -2468,7 +2474,7 @@ mod tests {
                 trust_whole_runs: trust,
                 ..Default::default()
             };
-            slabs(step, shaded, false, optimise)
+            slabs(step, shaded, false, optimise, (64, 48))
         };
         let runs = || UNTESTED_RUNS.load(std::sync::atomic::Ordering::Relaxed);
         for step in [0.125, 0.5, 2.0] {
@@ -2492,36 +2498,41 @@ mod tests {
     /// How many packets a step carries, and so which lane or packet a ray is marched in,
     /// changes no pixel ([`Packets::march_tile`]): the slabs, faint and opaque (rays ending
     /// early in every packet), at fine and coarse steps, shaded and not, in sixteen lanes and
-    /// in eight, in one, two and four packets and by default, byte for byte.
+    /// in eight, in one, two and four packets and by default, byte for byte; in an image of
+    /// few tiles (16×16 pixels) and, on up to two threads, of many (32×32, `packet_tile`).
     #[test]
     fn packets_carry_rays_without_changing_them() {
         use std::sync::atomic::Ordering::Relaxed;
         if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
             return;
         }
-        for opaque in [false, true] {
-            for step in [0.125, 0.5, 2.0] {
-                for shaded in [false, true] {
-                    for wide_lanes in [true, false] {
-                        let optimise = crate::scene::Optimise {
-                            wide_lanes,
-                            ..Default::default()
-                        };
-                        let by = |packets: usize| {
-                            TEST_PACKETS.store(packets, Relaxed);
-                            slabs(step, shaded, opaque, optimise)
-                        };
-                        let (default, one, two, four) = (by(0), by(1), by(2), by(4));
-                        TEST_PACKETS.store(0, Relaxed);
-                        let what = format!(
-                            "opaque {opaque}, step {step}, shaded {shaded}, wide {wide_lanes}"
-                        );
-                        assert_eq!(one, two, "{what}: one packet and two differ");
-                        assert_eq!(four, two, "{what}: four packets and two differ");
-                        assert_eq!(default, two, "{what}: the default and two packets differ");
-                        let background = [0.1f32, 0.2, 0.3].map(f32::to_bits);
-                        let shown = default.chunks(3).filter(|p| *p != background).count();
-                        assert!(shown > 500, "{what}: {shown} pixels show the slabs");
+        for size in [(64, 48), (256, 160)] {
+            for opaque in [false, true] {
+                for step in [0.125, 0.5, 2.0] {
+                    for shaded in [false, true] {
+                        for wide_lanes in [true, false] {
+                            let optimise = crate::scene::Optimise {
+                                wide_lanes,
+                                ..Default::default()
+                            };
+                            let by = |packets: usize| {
+                                TEST_PACKETS.store(packets, Relaxed);
+                                slabs(step, shaded, opaque, optimise, size)
+                            };
+                            let (default, one, two, four) = (by(0), by(1), by(2), by(4));
+                            TEST_PACKETS.store(0, Relaxed);
+                            let what = format!(
+                                "{size:?}, opaque {opaque}, step {step}, shaded {shaded}, \
+                                 wide {wide_lanes}"
+                            );
+                            assert_eq!(one, two, "{what}: one packet and two differ");
+                            assert_eq!(four, two, "{what}: four packets and two differ");
+                            assert_eq!(default, two, "{what}: the default and two packets differ");
+                            let background = [0.1f32, 0.2, 0.3].map(f32::to_bits);
+                            let shown = default.chunks(3).filter(|p| *p != background).count();
+                            let least = (size.0 * size.1 / 6) as usize;
+                            assert!(shown > least, "{what}: {shown} pixels show the slabs");
+                        }
                     }
                 }
             }
