@@ -373,6 +373,9 @@ impl<'a> Packets<'a> {
         const { assert!(N == 8 || N == 16) };
         const { assert!(P >= 1 && L == P * N && L <= 64) };
         let all = u64::MAX >> (64 - L);
+        // A packet's bits (its steps give none above them; masked all the same, so that a
+        // stray bit cannot name a lane of the next packet).
+        let lanes_of = u64::MAX >> (64 - N);
         let background = tile.image.background;
         let (tw, th) = tile.size;
         let mut out = vec![[0f32; 3]; (tw * th) as usize];
@@ -391,7 +394,7 @@ impl<'a> Packets<'a> {
             for (h, st) in st.iter_mut().enumerate() {
                 let k = (&mut keeps[N * h..N * h + N]).try_into().expect("N lanes");
                 let r = runs[N * h..N * h + N].try_into().expect("N lanes");
-                active |= (next_segments(k, r, st) as u64) << (N * h);
+                active |= (next_segments(k, r, st) as u64 & lanes_of) << (N * h);
             }
             // The other lanes: the next run of their ray with a segment to take, or a new ray
             // where their ray has ended.
@@ -434,8 +437,8 @@ impl<'a> Packets<'a> {
             }
             let mut ended = 0u64;
             for (h, st) in st.iter_mut().enumerate() {
-                let a = (active >> (N * h)) as u32 & (u32::MAX >> (32 - N));
-                ended |= (step(st, a, &mut cache) as u64) << (N * h);
+                let a = (active >> (N * h) & lanes_of) as u32;
+                ended |= (step(st, a, &mut cache) as u64 & lanes_of) << (N * h);
             }
             while ended != 0 {
                 let i = ended.trailing_zeros() as usize % L;
