@@ -82,7 +82,7 @@ const PACKETS8: usize = 2;
 #[cfg(test)]
 static TEST_PACKETS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 
-/// [`TEST_PACKETS`], 0 outside unit tests.
+/// The unit tests' `TEST_PACKETS`, 0 outside them.
 #[inline(always)]
 fn test_packets() -> usize {
     #[cfg(test)]
