@@ -2478,7 +2478,7 @@ pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> R
         // What a pixel whose bound is +∞ shows, where that is known without its ray.
         let unbounded = scene.unbounded_colour().map(to_f32);
         let image = scene.image_rays(view.eye);
-        // Eight rays at a time in SIMD lanes, where that applies (one ray per pixel).
+        // Rays in packets of SIMD lanes, where that applies (one ray per pixel).
         #[cfg(target_arch = "x86_64")]
         if let Some(p) = packet::Packets::new(scene) {
             return per_tile(width, height, packet_tile(width, height), |tile| {

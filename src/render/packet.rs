@@ -2343,13 +2343,8 @@ mod tests {
     #[test]
     fn lower_rect_is_the_plain_minimum() {
         let (w, h) = (53usize, 7usize);
-        let mut seed = 1u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let rng = crate::testing::Xorshift::new(0x10e5_7ec7_0001);
+        let next = || rng.next();
         for width in 1..=40usize {
             for x0 in (0..=w - width).step_by(3) {
                 let init: Vec<f64> = (0..w * h)
