@@ -7,12 +7,12 @@
 //! `text.c` and `chess.c` load datasets from their working directory: before they run, the
 //! `word_png` and `profiles` examples draw them and `vlconvert` converts them there (see
 //! [`prepare`]). They and the other examples that take an optional `argv[1]` width (`cvg.c`,
-//! `textures.c`, `smoke.c`, `deform.c`, `metaballs.c`: [`SMALL_WIDTHS`]) render small images
+//! `textures.c`, `smoke.c`, `deform.c`, `metaballs.c`: `common::SMALL_WIDTHS`) render small images
 //! here.
 
 mod common;
 
-use common::{Ppm, TempDir};
+use common::{prepare, small_width, Ppm, TempDir, SMALL};
 use std::path::Path;
 use std::process::Command;
 
@@ -46,39 +46,6 @@ fn build_and_run(source: &str) -> (TempDir, String) {
     (cwd, stdout)
 }
 
-/// The width at which the tests render text.c and chess.c.
-const SMALL: usize = 160;
-
-/// The widths at which the tests render the examples without datasets that take a width.
-const SMALL_WIDTHS: [(&str, usize); 5] = [
-    ("examples/c/cvg.c", 200),
-    ("examples/c/textures.c", SMALL),
-    ("examples/c/smoke.c", 120),
-    ("examples/c/deform.c", SMALL),
-    ("examples/c/metaballs.c", SMALL),
-];
-
-/// The width at which the tests render example `source`.
-fn small_width(source: &str) -> usize {
-    SMALL_WIDTHS
-        .iter()
-        .find(|(s, _)| *s == source)
-        .map(|(_, w)| *w)
-        .unwrap_or_else(|| panic!("{source} is not in SMALL_WIDTHS"))
-}
-
-/// Makes the datasets the C program `source` loads, in `cwd`, as examples/gallery.sh does;
-/// returns the arguments to run it with.
-fn prepare(source: &str, cwd: &Path) -> Vec<String> {
-    if SMALL_WIDTHS.iter().any(|(s, _)| *s == source) {
-        return vec![small_width(source).to_string()];
-    }
-    if common::make_inputs(source, cwd) {
-        vec![SMALL.to_string()]
-    } else {
-        Vec::new()
-    }
-}
 
 /// A PNG's pixels, decoded by `vlconvert image` (colour: one 8-bit .vlb per channel, rows
 /// flipped, which does not matter here) in the PNG's directory.

@@ -290,3 +290,47 @@ pub fn make_inputs(source: &str, cwd: &Path) -> bool {
         _ => false,
     }
 }
+
+/// The width at which the tests render text.c and chess.c.
+pub const SMALL: usize = 160;
+
+/// The widths at which the tests render the examples without datasets that take a width.
+pub const SMALL_WIDTHS: [(&str, usize); 5] = [
+    ("examples/c/cvg.c", 200),
+    ("examples/c/textures.c", SMALL),
+    ("examples/c/smoke.c", 120),
+    ("examples/c/deform.c", SMALL),
+    ("examples/c/metaballs.c", SMALL),
+];
+
+/// The width at which the tests render example `source`.
+pub fn small_width(source: &str) -> usize {
+    SMALL_WIDTHS
+        .iter()
+        .find(|(s, _)| *s == source)
+        .map(|(_, w)| *w)
+        .unwrap_or_else(|| panic!("{source} is not in SMALL_WIDTHS"))
+}
+
+/// Makes the datasets the C program `source` loads, in `cwd`, as examples/gallery.sh does;
+/// returns the arguments to run it with.
+pub fn prepare(source: &str, cwd: &Path) -> Vec<String> {
+    if SMALL_WIDTHS.iter().any(|(s, _)| *s == source) {
+        return vec![small_width(source).to_string()];
+    }
+    if make_inputs(source, cwd) {
+        vec![SMALL.to_string()]
+    } else {
+        Vec::new()
+    }
+}
+
+/// Makes sure the Rust examples `names` are fresh in `target/<profile>/examples/`; returns
+/// `target/<profile>`.
+pub fn ensure_examples(names: &[&str]) -> PathBuf {
+    let mut args = vec!["-p", "vlib"];
+    for n in names {
+        args.extend(["--example", n]);
+    }
+    cargo_build(&args)
+}
