@@ -46,7 +46,6 @@ fn build_and_run(source: &str) -> (TempDir, String) {
     (cwd, stdout)
 }
 
-
 /// A PNG's pixels, decoded by `vlconvert image` (colour: one 8-bit .vlb per channel, rows
 /// flipped, which does not matter here) in the PNG's directory.
 fn read_png(path: &Path) -> Ppm {

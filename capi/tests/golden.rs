@@ -91,9 +91,17 @@ fn render_gallery() -> BTreeMap<String, u64> {
             let nii = nii.to_string_lossy().into_owned();
             common::tool("vlconvert", &["nifti", &nii, "mni.vlb"], dir);
             let brain = |name: &str, size: &str| -> Vec<String> {
-                vec!["mni.vlb".into(), format!("{name}.png"), format!("--size={size}")]
+                vec![
+                    "mni.vlb".into(),
+                    format!("{name}.png"),
+                    format!("--size={size}"),
+                ]
             };
-            for (name, size) in [("mni", "256"), ("twisted_brain", "128"), ("mip_brain", "128")] {
+            for (name, size) in [
+                ("mni", "256"),
+                ("twisted_brain", "128"),
+                ("mip_brain", "128"),
+            ] {
                 let before = images(dir);
                 run(&examples.join(name), &brain(name, size), dir);
                 record(&mut hashes, name, dir, &before);
@@ -121,7 +129,8 @@ fn gallery_images_are_byte_identical() {
     let file = common::workspace_root().join("capi/tests/golden/hashes.txt");
     let got = render_gallery();
     if std::env::var_os("VLIB_BLESS").is_some() {
-        let mut text = String::from("# capi/tests/golden.rs: image file -> FNV-1a 64 of its bytes\n");
+        let mut text =
+            String::from("# capi/tests/golden.rs: image file -> FNV-1a 64 of its bytes\n");
         for (name, hash) in &got {
             text.push_str(&format!("{name} {hash:016x}\n"));
         }
