@@ -7,7 +7,7 @@
 //! and in `docs/compat.md`.
 
 use crate::error::{err, ErrorCode, Result};
-use crate::program::clamp_fields;
+use crate::num::clamp_fields;
 use crate::types::MappingType;
 
 /// The largest number of rows a mapping may have.
@@ -357,7 +357,7 @@ impl Mapping {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::program::clamp_field;
+    use crate::num::clamp_field;
 
     fn lookup(table: &[f32], points: i32, outputs: i32) -> Mapping {
         Mapping::new(MappingType::Lookup, points, outputs, table).unwrap()

@@ -1,4 +1,6 @@
-//! Rounding to integers without a library call.
+//! Small numeric helpers of the base layer: rounding to integers without a library call, and
+//! the clamp of a value written to a field (scalar and in lanes). Owns no state and knows no
+//! scene types.
 //!
 //! On the x86-64 baseline (SSE2) `f64::floor` and `f64::ceil` are calls into libm; the block
 //! walk rounds several times per leap, and noise three times per octave, so they use these
@@ -27,6 +29,25 @@ pub(crate) fn floor(x: f64) -> f64 {
 #[inline]
 pub(crate) fn ceil(x: f64) -> f64 {
     -floor(-x)
+}
+
+/// Clamps a value written to a field: into [0, 1], NaN to 0.
+#[inline]
+pub(crate) fn clamp_field(v: f32) -> f32 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(0.0, 1.0)
+    }
+}
+
+/// [`clamp_field`] in lanes, bit for bit: a lane not at least 0 (below it, or NaN) becomes
+/// +0 and the rest the lesser of it and 1 (−0 stays −0, as `f32::clamp` leaves it). Four
+/// vector operations instead of a NaN test and two comparisons per value.
+#[inline]
+pub(crate) fn clamp_fields(v: wide::f32x4) -> wide::f32x4 {
+    use wide::f32x4;
+    (v.simd_ge(f32x4::ZERO) & v).fast_min(f32x4::ONE)
 }
 
 #[cfg(test)]

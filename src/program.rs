@@ -13,6 +13,8 @@
 use crate::dataset::{Dataset, Filter};
 use crate::error::{err, Error, ErrorCode, Result};
 use crate::mapping::Mapping;
+pub(crate) use crate::num::clamp_field;
+pub(crate) use crate::num::clamp_fields;
 use crate::types::{Fields, FIELD_COUNT};
 use std::collections::BTreeMap;
 use std::fmt;
@@ -104,25 +106,6 @@ pub(crate) fn sample_dataset(
         .get(&id)
         .ok_or_else(|| Error::new(ErrorCode::BadId, format!("vlSample: no dataset {id}")))?;
     Ok(d.sample(p, filter))
-}
-
-/// Clamps a value written to a field: into [0, 1], NaN to 0.
-#[inline]
-pub fn clamp_field(v: f32) -> f32 {
-    if v.is_nan() {
-        0.0
-    } else {
-        v.clamp(0.0, 1.0)
-    }
-}
-
-/// [`clamp_field`] in lanes, bit for bit: a lane not at least 0 (below it, or NaN) becomes
-/// +0 and the rest the lesser of it and 1 (−0 stays −0, as `f32::clamp` leaves it). Four
-/// vector operations instead of a NaN test and two comparisons per value.
-#[inline]
-pub(crate) fn clamp_fields(v: wide::f32x4) -> wide::f32x4 {
-    use wide::f32x4;
-    (v.simd_ge(f32x4::ZERO) & v).fast_min(f32x4::ONE)
 }
 
 /// What a sample's callback may do (the sample scope of the state machine).

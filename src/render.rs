@@ -28,10 +28,7 @@ use glam::{DMat4, DVec3};
 use rayon::prelude::*;
 use std::sync::Arc;
 
-/// The default of `Optimise::termination`: rays stop once their transmittance falls below
-/// this, so what remains can change an 8-bit pixel by at most 1/512 < 1/510 (half a grey level
-/// of an 8-bit image).
-pub const T_MIN: f64 = 1.0 / 512.0;
+pub use crate::types::T_MIN;
 
 /// Super-sampling refines a pixel when a colour channel differs from a 4-neighbour's by more
 /// than this.
@@ -61,26 +58,6 @@ fn packet_tile(width: u32, height: u32) -> u32 {
 
 #[cfg(target_arch = "x86_64")]
 mod packet;
-
-/// `rows[y·w + x] = min(rows[y·w + x], v)` over the rectangle `xs` × `ys` (neither side NaN),
-/// in SIMD lanes where the processor has them (the entry map's rasterisation).
-pub(crate) fn lower_rect(
-    rows: &mut [f64],
-    w: usize,
-    xs: std::ops::RangeInclusive<usize>,
-    ys: std::ops::RangeInclusive<usize>,
-    v: f64,
-) {
-    #[cfg(target_arch = "x86_64")]
-    if packet::lower_rect_wide(rows, w, &xs, &ys, v) {
-        return;
-    }
-    for y in ys {
-        for b in &mut rows[y * w + *xs.start()..=y * w + *xs.end()] {
-            *b = if v < *b { v } else { *b };
-        }
-    }
-}
 
 /// A rendered image: linear RGB in [0, 1], row-major, top row first.
 #[derive(Clone, Debug, PartialEq)]

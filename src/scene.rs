@@ -238,7 +238,7 @@ impl Default for Optimise {
         Optimise {
             skip_empty: true,
             early_termination: true,
-            termination: crate::render::T_MIN,
+            termination: crate::types::T_MIN,
             wide_lanes: true,
             trust_whole_runs: true,
             lean_kernel: true,

@@ -17,6 +17,8 @@ use crate::types::FIELD_COUNT;
 use glam::{DMat3, DMat4, DVec3};
 use rayon::prelude::*;
 
+mod rect;
+
 /// The blocks of one object and which of them are empty.
 pub(crate) struct SkipGrid {
     dims: [usize; 3],
@@ -1004,7 +1006,7 @@ impl EntryMap {
                     let (y0, y1) = (m.y.0.max(first), m.y.1.min(last));
                     if y0 <= y1 {
                         let ys = y0 - first..=y1 - first;
-                        crate::render::lower_rect(rows, w, m.x.0..=m.x.1, ys, m.near);
+                        rect::lower_rect(rows, w, m.x.0..=m.x.1, ys, m.near);
                     }
                 }
             });

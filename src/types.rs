@@ -252,6 +252,11 @@ int_enum!(
     }
 );
 
+/// The default of `Optimise::termination`: rays stop once their transmittance falls below
+/// this, so what remains can change an 8-bit pixel by at most 1/512 < 1/510 (half a grey level
+/// of an 8-bit image).
+pub const T_MIN: f64 = 1.0 / 512.0;
+
 /// Axes for `vlFlip`, as a bit mask.
 pub mod axes {
     /// The x axis (`VL_X`).
