@@ -1,4 +1,4 @@
-//! Representative scenes (issue #7, item 2), each rendered to memory at 256×256 with
+//! Representative scenes besides the MNI brain, each rendered to memory at 256×256 with
 //! `render_preview`:
 //!
 //! - `figure2`: the paper's Figure 2 (the stone of `examples/figure2.rs`): DVR, a paraboloid
@@ -135,7 +135,7 @@ fn hypertexture() -> Library {
 /// Direct surface rendering: five metaballs (the blobs of `examples/c/metaballs.c`) as two
 /// iso-surfaces of their summed field, a translucent veil at 0.3 round opaque cores at 0.55,
 /// with specular highlights; the object casts and receives shadows (the veil shades the cores;
-/// the surfaces also speckle themselves with shadow acne, see `docs/performance.md`).
+/// the surfaces do not shadow themselves: `dsr_surface_does_not_shadow_itself` in `tests/secondary.rs`).
 fn dsr() -> Library {
     const S: f32 = 0.07;
     const CUT: f32 = 16.0;

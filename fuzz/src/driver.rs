@@ -10,7 +10,7 @@
 //! voxel grid) are drawn from tables whose valid entries are small, so that every input runs in
 //! milliseconds; their invalid entries are as wild as anywhere else.
 //!
-//! After every call the driver checks the robustness contract of `docs/robustness.md`:
+//! After every call the driver checks the robustness contract of `docs/dev/robustness.md`:
 //! - nothing panics (a panic is a crash for the fuzzer and a failure for the CI run);
 //! - a command outside its scopes is refused with `BadScope`, and a command inside them is never
 //!   refused with `BadScope`;

@@ -1,0 +1,113 @@
+//! Unit tests of `program`.
+
+use super::*;
+use crate::testing::Xorshift;
+use crate::types::MappingType;
+
+/// [`clamp_fields`] is [`clamp_field`] lane by lane, bit for bit: on NaNs, ±0, ±∞, the
+/// subnormals, values around 0 and 1, and 100 000 random bit patterns, in every lane.
+#[test]
+fn clamp_fields_is_clamp_field() {
+    let mut values = vec![
+        f32::NAN,
+        -f32::NAN,
+        f32::from_bits(0x7f80_0001),
+        0.0,
+        -0.0,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::MIN_POSITIVE,
+        -f32::MIN_POSITIVE,
+        f32::from_bits(1),
+        f32::from_bits(0x8000_0001),
+        0.5,
+        1.0,
+        -1.0,
+        f32::MAX,
+        f32::MIN,
+    ];
+    values.extend(
+        [1.0f32, -0.0, 0.0]
+            .iter()
+            .flat_map(|x| [x.next_up(), x.next_down()]),
+    );
+    let rng = Xorshift::new(0x9e37_79b9_7f4a_7c15u64);
+    values.extend((0..100_000).map(|_| f32::from_bits((rng.bits() >> 32) as u32)));
+    for (k, w) in values.windows(4).enumerate() {
+        let mut lanes = [w[0], w[1], w[2], w[3]];
+        lanes.rotate_left(k % 4);
+        let got = clamp_fields(wide::f32x4::new(lanes)).to_array();
+        assert_eq!(
+            got.map(f32::to_bits),
+            lanes.map(|v| clamp_field(v).to_bits()),
+            "{lanes:?}"
+        );
+    }
+}
+
+#[test]
+fn set_is_masked_and_clamped() {
+    let prog = vec![
+        Instr::Set {
+            fields: Fields::KA,
+            value: 0.3,
+        },
+        Instr::Function {
+            fields: Fields::F,
+            f: Arc::new(|s: &mut Sample| {
+                s.set(Fields::ALL, 2.0).unwrap();
+            }),
+        },
+        Instr::Function {
+            fields: Fields::O | Fields::R,
+            f: Arc::new(|s: &mut Sample| {
+                let f = s.field(Fields::F).unwrap();
+                s.set(Fields::O, f - 0.25).unwrap();
+                s.set(Fields::R, f32::NAN).unwrap();
+                s.set(Fields::G, 0.5).unwrap();
+            }),
+        },
+    ];
+    let mut s = Sample::new([0.5; 3], [0.0; 3]);
+    run(&prog, &mut s);
+    let v = s.values();
+    assert_eq!(v[4], 0.3);
+    assert_eq!(v[9], 1.0, "2.0 clamps to 1");
+    assert_eq!(v[0], 0.75);
+    assert_eq!(v[1], 0.0, "NaN becomes 0");
+    assert_eq!(v[2], 0.0, "G was not in the function's mask");
+    assert_eq!(prefix_for(&prog, Fields::F), 2);
+    assert_eq!(prefix_for(&prog, Fields::KS), 0);
+}
+
+#[test]
+fn map_reads_source_field() {
+    let m = Arc::new(Mapping::new(MappingType::Lookup, 2, 1, &[0.001, 1.0, 1.0, 0.3]).unwrap());
+    let prog = vec![
+        Instr::Set {
+            fields: Fields::F,
+            value: 0.5,
+        },
+        Instr::Map {
+            targets: Fields::O | Fields::KS,
+            source: 9,
+            mapping: m,
+            output: 0,
+        },
+    ];
+    let mut s = Sample::new([0.5; 3], [0.0; 3]);
+    run(&prog, &mut s);
+    assert_eq!(s.value(0), 0.3);
+    assert_eq!(s.value(6), 0.3);
+}
+
+#[test]
+fn normal_role_cannot_write() {
+    let mut s = Sample::new([0.5; 3], [0.0; 3]);
+    s.role = SampleRole::Normal;
+    assert_eq!(s.set(Fields::O, 1.0).unwrap_err().code, ErrorCode::BadScope);
+    assert_eq!(
+        s.field(Fields::O | Fields::R).unwrap_err().code,
+        ErrorCode::BadField
+    );
+}
