@@ -3,7 +3,7 @@
 //! A thin layer: every exported function validates its C arguments (NULL pointers, enumerations
 //! arriving as integers, string encodings), calls one method of the core's
 //! [`vlib_core::Library`] and records any error for `vlError`. All meaning (scopes, validation,
-//! rendering) lives in the core crate.
+//! rendering) lives in the core crate; this crate owns only the C forms and the panic boundary.
 //!
 //! Modules: [`types`] (the types and constants of the header), `ffi` (the panic boundary, the
 //! global state and scope dispatch, pointer helpers), `errors` (the `vlError` queue), `sample`
@@ -14,13 +14,14 @@
 //! exported surface can be audited at a glance.
 //!
 //! ## Safety
-//! Pointer arguments must be NULL or point to as many valid elements as the command reads or
-//! writes; strings must be NUL-terminated. NULL is always detected and reported as
-//! `VL_NULLPOINTER`. C field, normal and spatial functions must be thread-safe: the renderer calls
-//! them concurrently from worker threads.
+//! The exports that take pointers are `unsafe`: pointer arguments must be NULL or point to as
+//! many valid elements as the command reads or writes; strings must be NUL-terminated. NULL is
+//! always detected and reported as `VL_NULLPOINTER`. The other exports are safe functions. C
+//! field, normal and spatial functions must be thread-safe: the renderer calls them concurrently
+//! from worker threads.
 
 #![allow(non_snake_case)]
-#![allow(clippy::missing_safety_doc)]
+#![deny(unsafe_op_in_unsafe_fn)]
 
 // The order of the modules is the order of the header (cbindgen reads them in this order):
 // types and constants, then the commands by API area. Keep the blank lines: they stop rustfmt

@@ -9,7 +9,7 @@ fn a_panic_becomes_vl_internal_and_a_poisoned_state_is_recovered() {
     // uninitialised here, so that what the check sees is what the panic left.
     let _serial = crate::tests::common::serial();
     *lock_state() = None;
-    let v = boundary(7, || -> Result<i32> {
+    let v = ffi_boundary(7, || -> Result<i32> {
         let _state = lock_state();
         panic!("boom");
     });
