@@ -23,9 +23,10 @@
 #![allow(non_snake_case)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
-// The order of the modules is the order of the header (cbindgen reads them in this order):
-// types and constants, then the commands by API area. Keep the blank lines: they stop rustfmt
-// from sorting the declarations.
+// cbindgen reads the modules in the order they are declared, and that is the order of the header:
+// the types and constants, then the commands by API area. Keep the blank lines: they stop rustfmt
+// from sorting the declarations. Every other module is marked `cbindgen:ignore` (the one way
+// items are kept out of `vlib.h`): it holds no item of the header.
 pub mod types;
 
 mod session; // commands 1–4
@@ -38,11 +39,16 @@ mod object; // commands 26–38
 
 mod sampling; // commands 39–44
 
+/// cbindgen:ignore
 mod callbacks;
+/// cbindgen:ignore
 mod errors;
+/// cbindgen:ignore
 mod ffi;
+/// cbindgen:ignore
 mod sample;
-pub mod vlaux; // vlaux.h
+/// cbindgen:ignore
+pub mod vlaux;
 
 pub use types::*;
 

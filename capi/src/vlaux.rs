@@ -1,6 +1,7 @@
 //! vlaux, the auxiliary library (`vlaux.h`): camera shorthand, noise, turbulence, splines and
 //! ready-made field functions, all thin wrappers over `vlib_core::vlaux` and `vlib_core::cvg`,
-//! which own the algorithms. `vlaux.h` is written by hand.
+//! which own the algorithms. `vlaux.h` is written by hand; cbindgen never reads this module (its
+//! `mod` line in `lib.rs` carries `cbindgen:ignore`), so nothing here reaches `vlib.h`.
 //!
 //! These are not commands and have no scope of their own, except that the field functions write
 //! as `vlSet` does, `vluCamera` sets the camera as `vlCamera` does, and the CVG operators
@@ -158,9 +159,6 @@ pub unsafe extern "C" fn VLU_CYLINDER(p: *mut vlfloat, _misc: *mut c_void) {
 /// `vlSet(VL_ALLFIELDS, …)`. NULL `misc` (or `p`) records `VL_NULLPOINTER` and writes nothing;
 /// an unknown id records `VL_BADID` (as `vlSample`) and writes 0.
 ///
-/// Not in `vlib.h` (it is declared in `vlaux.h`):
-/// cbindgen:ignore
-///
 /// # Safety
 /// `p` must be NULL or point to 3 floats; `misc` NULL or point to a `vlint`.
 #[no_mangle]
@@ -223,9 +221,6 @@ fn cvg_operator(name: &str, op: Operator) -> Result<()> {
 
 /// Field function: the CVG union of the children (`docs/cvg.md`): opacity max_i o_i, the other
 /// fields from the child of largest opacity. `p` and `misc` are not read.
-///
-/// Not in `vlib.h` (it is declared in `vlaux.h`):
-/// cbindgen:ignore
 #[no_mangle]
 pub extern "C" fn VLU_UNION(_p: *mut vlfloat, _misc: *mut c_void) {
     ffi_boundary((), || cvg_operator("VLU_UNION", Operator::Union))
@@ -233,9 +228,6 @@ pub extern "C" fn VLU_UNION(_p: *mut vlfloat, _misc: *mut c_void) {
 
 /// Field function: the CVG intersection of the children (`docs/cvg.md`): opacity min_i o_i, the
 /// other fields from the child of smallest opacity. `p` and `misc` are not read.
-///
-/// Not in `vlib.h` (it is declared in `vlaux.h`):
-/// cbindgen:ignore
 #[no_mangle]
 pub extern "C" fn VLU_INTERSECTION(_p: *mut vlfloat, _misc: *mut c_void) {
     ffi_boundary((), || {
@@ -245,9 +237,6 @@ pub extern "C" fn VLU_INTERSECTION(_p: *mut vlfloat, _misc: *mut c_void) {
 
 /// Field function: the CVG difference, child 1 minus the others (`docs/cvg.md`): opacity
 /// min(o_1, 1 − max_{i≥2} o_i), the other fields from child 1. `p` and `misc` are not read.
-///
-/// Not in `vlib.h` (it is declared in `vlaux.h`):
-/// cbindgen:ignore
 #[no_mangle]
 pub extern "C" fn VLU_DIFFERENCE(_p: *mut vlfloat, _misc: *mut c_void) {
     ffi_boundary((), || cvg_operator("VLU_DIFFERENCE", Operator::Difference))
@@ -255,9 +244,6 @@ pub extern "C" fn VLU_DIFFERENCE(_p: *mut vlfloat, _misc: *mut c_void) {
 
 /// Field function: the CVG blend, a smooth union (`docs/cvg.md`): opacity 1 − Π_i (1 − o_i),
 /// the other fields the opacity-weighted mean of the children's. `p` and `misc` are not read.
-///
-/// Not in `vlib.h` (it is declared in `vlaux.h`):
-/// cbindgen:ignore
 #[no_mangle]
 pub extern "C" fn VLU_BLEND(_p: *mut vlfloat, _misc: *mut c_void) {
     ffi_boundary((), || cvg_operator("VLU_BLEND", Operator::Blend))
