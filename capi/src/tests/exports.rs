@@ -1,6 +1,7 @@
 //! The exported functions, read from the sources: every `#[no_mangle]` function's body is one
-//! call of the panic boundary (`ffi::ffi_boundary`). The C side of the same surface (symbols,
-//! headers) is checked by `capi/tests/symbols.rs`.
+//! call of the panic boundary (`ffi::ffi_boundary`), and the command modules export exactly the
+//! commands of the list (`crate::COMMANDS`). The C side of the same surface (symbols, headers) is
+//! checked by `capi/tests/symbols.rs`.
 
 use std::path::{Path, PathBuf};
 
@@ -72,7 +73,10 @@ fn all_exports() -> Vec<Export> {
 #[test]
 fn every_export_runs_inside_the_panic_boundary() {
     let exports = all_exports();
-    assert!(exports.len() > 44, "the commands and vlaux");
+    assert!(
+        exports.len() > crate::COMMAND_COUNT,
+        "the commands and vlaux"
+    );
     let outside: Vec<String> = exports
         .iter()
         .filter(|e| !e.first_line.starts_with("ffi_boundary("))
@@ -83,4 +87,17 @@ fn every_export_runs_inside_the_panic_boundary() {
         "exports whose body is not one ffi_boundary call:\n{}",
         outside.join("\n")
     );
+}
+
+#[test]
+fn the_command_modules_export_exactly_the_listed_commands() {
+    let mut exported: Vec<String> = all_exports()
+        .into_iter()
+        .filter(|e| !e.file.ends_with("vlaux.rs"))
+        .map(|e| e.name)
+        .collect();
+    exported.sort();
+    let mut listed: Vec<String> = crate::COMMANDS.iter().map(|s| s.to_string()).collect();
+    listed.sort();
+    assert_eq!(exported, listed);
 }

@@ -1,5 +1,5 @@
-//! The scope state machine through the C interface, exhaustively: every one of the 44 commands
-//! in each of the 5 scopes, called with valid arguments so that the scope is the only possible
+//! The scope state machine through the C interface, exhaustively: every command in each of the 5
+//! scopes, called with valid arguments so that the scope is the only possible
 //! error. Illegal calls must record exactly `VL_BADSCOPE` and change nothing; legal calls must not
 //! record `VL_BADSCOPE`. The legality table is the core's (`vlib_core::scope::legal`).
 //!
@@ -232,7 +232,7 @@ fn every_command_in_every_scope_outside_sample_scope() {
         }
     }
     reset_to(Scope::Uninitialised);
-    assert_eq!(checked, 4 * 44);
+    assert_eq!(checked, 4 * COMMAND_COUNT);
     assert!(
         failures.is_empty(),
         "{} failure(s):\n{}",
@@ -348,7 +348,7 @@ fn every_command_in_sample_scope() {
     );
 
     let log = PROBE_LOG.lock().unwrap().take().expect("the probe ran");
-    assert_eq!(log.calls.len(), 44);
+    assert_eq!(log.calls.len(), COMMAND_COUNT);
     let failures: Vec<String> = log
         .calls
         .iter()
