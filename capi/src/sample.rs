@@ -1,4 +1,6 @@
-//! The sample context: which [`Sample`] the C callback running on this thread belongs to.
+//! The sample context: which [`Sample`] the C callback running on this thread belongs to. It
+//! owns the thread-local pointer only; what a sample holds and which commands are legal in
+//! sample scope are the core's.
 //!
 //! While the renderer calls a C field or normal function, a thread-local pointer names the
 //! sample being evaluated; this is the C API's *sample scope*. Commands test it before anything
