@@ -1,4 +1,6 @@
-//! C callbacks as core closures.
+//! C callbacks as core closures: the wrappers that enter sample scope and call the C function.
+//! When and on which thread they run is the core's renderer's decision; the commands that
+//! receive the pointers (`object`) check them for NULL.
 //!
 //! `vlFunction`, `vlNormal` and `vlSpatial` receive a C function pointer and a `misc` pointer. They
 //! are wrapped into the closures the core stores; each call enters sample scope for the sample

@@ -1,10 +1,12 @@
-//! Commands 22–25: datasets and transfer functions.
+//! The data commands: loading and freeing datasets, sampling them, and declaring transfer
+//! functions. Each converts its C arguments and calls the core, which reads the files and owns
+//! the datasets and mappings.
 
-use crate::ffi::{c_path, either, library, null};
+use crate::ffi::{c_path, either, ffi_boundary, library, null};
 use crate::types::{vlfloat, vlint};
 use std::os::raw::c_char;
 use vlib_core::mapping::{MAX_OUTPUTS, MAX_POINTS};
-use vlib_core::{Command, Error, ErrorCode, MappingType};
+use vlib_core::{Command, Error, ErrorCode, MappingType, Result};
 
 /// Loads a `.vlb` dataset under the id `id`.
 ///
@@ -12,25 +14,32 @@ use vlib_core::{Command, Error, ErrorCode, MappingType};
 /// `file` must be NULL or a NUL-terminated string.
 #[no_mangle]
 pub unsafe extern "C" fn vlLoad(id: vlint, file: *const c_char) {
-    library(Command::Load, (), |lib| {
-        let path = c_path(Command::Load.name(), "file", file)?;
-        lib.load(id, path)
+    ffi_boundary((), || {
+        library(Command::Load, |lib| {
+            // SAFETY: `file` is NULL or NUL-terminated by the caller's contract.
+            let path = unsafe { c_path(Command::Load.name(), "file", file) }?;
+            lib.load(id, path)
+        })
     })
 }
 
 /// Frees the dataset `id`.
 #[no_mangle]
-pub unsafe extern "C" fn vlUnload(id: vlint) {
-    library(Command::Unload, (), |lib| lib.unload(id))
+pub extern "C" fn vlUnload(id: vlint) {
+    ffi_boundary((), || library(Command::Unload, |lib| lib.unload(id)))
 }
 
 /// The normalised value of dataset `id` at dataset coordinates (x, y, z) in [0, 1]^3; 0 on
 /// error.
 #[no_mangle]
-pub unsafe extern "C" fn vlSample(id: vlint, x: vlfloat, y: vlfloat, z: vlfloat) -> vlfloat {
+pub extern "C" fn vlSample(id: vlint, x: vlfloat, y: vlfloat, z: vlfloat) -> vlfloat {
+    ffi_boundary(0.0, || sample(id, x, y, z))
+}
+
+/// `vlSample` inside the caller's panic boundary (`VLU_SWEEP` samples through it).
+pub(crate) fn sample(id: vlint, x: vlfloat, y: vlfloat, z: vlfloat) -> Result<vlfloat> {
     either(
         Command::Sample,
-        0.0,
         |s| s.dataset(id, [x, y, z]),
         |lib| lib.sample(id, x, y, z),
     )
@@ -49,27 +58,29 @@ pub unsafe extern "C" fn vlMapping(
     outputs: vlint,
     table: *const vlfloat,
 ) {
-    library(Command::Mapping, (), |lib| {
-        let kind = MappingType::from_raw(r#type)?;
-        if table.is_null() {
-            return Err(null(Command::Mapping.name(), "table"));
-        }
-        // The sizes are checked before the length is computed, so no huge slice is ever formed.
-        if points < 1
-            || points as usize > MAX_POINTS
-            || outputs < 1
-            || outputs as usize > MAX_OUTPUTS
-        {
-            return Err(Error::new(
+    ffi_boundary((), || {
+        library(Command::Mapping, |lib| {
+            let kind = MappingType::from_raw(r#type)?;
+            if table.is_null() {
+                return Err(null(Command::Mapping.name(), "table"));
+            }
+            // The sizes are checked before the length is computed, so no huge slice is ever formed.
+            if points < 1
+                || points as usize > MAX_POINTS
+                || outputs < 1
+                || outputs as usize > MAX_OUTPUTS
+            {
+                return Err(Error::new(
                 ErrorCode::BadValue,
                 format!(
                     "vlMapping: {points} points, {outputs} outputs (must be 1 … {MAX_POINTS} and 1 … {MAX_OUTPUTS})"
                 ),
             ));
-        }
-        let len = points as usize * (outputs as usize + 1);
-        // SAFETY: non-NULL, and `len` floats long by the caller's contract.
-        let table = std::slice::from_raw_parts(table, len);
-        lib.mapping(id, kind, points, outputs, table)
+            }
+            let len = points as usize * (outputs as usize + 1);
+            // SAFETY: non-NULL, and `len` floats long by the caller's contract.
+            let table = unsafe { std::slice::from_raw_parts(table, len) };
+            lib.mapping(id, kind, points, outputs, table)
+        })
     })
 }

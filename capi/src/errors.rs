@@ -1,4 +1,5 @@
-//! The error queue behind `vlError`.
+//! The error queue behind `vlError`. It stores the codes and the last message; which code an
+//! error has is the core's decision.
 //!
 //! Every failed command appends its code here; `vlError` pops the oldest. The queue has its own
 //! mutex, separate from the library state, and it is held only for a push or a pop, never while

@@ -1,14 +1,21 @@
-//! The boundary between C and the core: the panic guard, the global library state, the scope
-//! dispatch every command goes through, and pointer and string helpers.
+//! The boundary between C and the core: the panic boundary, the global library state, the scope
+//! dispatch every command goes through, and pointer and string helpers. It owns no command and
+//! no validation of a command's arguments (the command modules and the core do that), only the
+//! mechanics every export shares.
 //!
-//! Every exported function's body runs inside [`boundary`]: an `Err` from the core or from
-//! argument checks is recorded for `vlError` and a neutral value returned; a panic is caught and
-//! recorded as `VL_INTERNAL`. No error ever crosses into C as anything but a queued code.
+//! ## The panic boundary
+//! Every exported function, command or vlaux, has a body that is one call of [`ffi_boundary`]:
+//! an `Err` from the core or from argument checks is recorded for `vlError` and a neutral value
+//! returned; a panic is caught and recorded as `VL_INTERNAL`. No error ever crosses into C as
+//! anything but a queued code. The helpers below return a `Result` and run inside that call;
+//! none of them catches anything itself. A unit test (`tests/exports.rs`) reads the sources and
+//! fails on an export whose body does not start with `ffi_boundary(`.
 //!
+//! ## State and scope
 //! The library lives in [`STATE`] (`None` before `vlInit` and after the final `vlEnd`). Scope
-//! dispatch ([`dispatch`], [`library`]) first asks the thread-local sample context: in sample scope
-//! the state is never locked (the rendering `vlEnd` holds it), and which commands are legal comes
-//! from `vlib_core::scope`, the one table of legality.
+//! dispatch ([`dispatch`], [`either`], [`library`]) first asks the thread-local sample context: in
+//! sample scope the state is never locked (the rendering `vlEnd` holds it), and which commands are
+//! legal comes from `vlib_core::scope`, the one table of legality.
 
 use crate::errors;
 use crate::sample;
@@ -30,8 +37,8 @@ pub(crate) fn lock_state() -> MutexGuard<'static, Option<Library>> {
     STATE.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// Runs `f`, turning an `Err` or a panic into a recorded error and `neutral`.
-pub(crate) fn boundary<T>(neutral: T, f: impl FnOnce() -> Result<T>) -> T {
+/// The panic boundary: runs `f`, turning an `Err` or a panic into a recorded error and `neutral`.
+pub(crate) fn ffi_boundary<T>(neutral: T, f: impl FnOnce() -> Result<T>) -> T {
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(Ok(v)) => v,
         Ok(Err(e)) => {
@@ -53,25 +60,22 @@ pub(crate) fn boundary<T>(neutral: T, f: impl FnOnce() -> Result<T>) -> T {
     }
 }
 
-/// Runs command `cmd` inside the panic boundary: in sample scope `in_sample` gets the current
-/// sample (if `cmd` is legal there, else `VL_BADSCOPE` without locking the state); otherwise
-/// `outside` gets the locked state.
+/// Runs command `cmd`: in sample scope `in_sample` gets the current sample (if `cmd` is legal
+/// there, else `VL_BADSCOPE` without locking the state); otherwise `outside` gets the locked
+/// state.
 pub(crate) fn dispatch<T>(
     cmd: Command,
-    neutral: T,
     in_sample: impl FnOnce(&mut Sample<'_>) -> Result<T>,
     outside: impl FnOnce(&mut Option<Library>) -> Result<T>,
-) -> T {
-    boundary(neutral, || {
-        let sampled = sample::with_current(|s| {
-            require(cmd, Scope::Sample)?;
-            in_sample(s)
-        });
-        match sampled {
-            Some(r) => r,
-            None => outside(&mut lock_state()),
-        }
-    })
+) -> Result<T> {
+    let sampled = sample::with_current(|s| {
+        require(cmd, Scope::Sample)?;
+        in_sample(s)
+    });
+    match sampled {
+        Some(r) => r,
+        None => outside(&mut lock_state()),
+    }
 }
 
 /// The scope of the locked state.
@@ -84,11 +88,10 @@ pub(crate) fn scope_of(state: &Option<Library>) -> Scope {
 /// `VL_BADSCOPE`) and `outside` gets the library.
 pub(crate) fn either<T>(
     cmd: Command,
-    neutral: T,
     in_sample: impl FnOnce(&mut Sample<'_>) -> Result<T>,
     outside: impl FnOnce(&mut Library) -> Result<T>,
-) -> T {
-    dispatch(cmd, neutral, in_sample, |state| {
+) -> Result<T> {
+    dispatch(cmd, in_sample, |state| {
         require(cmd, scope_of(state))?;
         match state {
             Some(lib) => outside(lib),
@@ -98,8 +101,8 @@ pub(crate) fn either<T>(
 }
 
 /// Runs a command that is legal only outside sample scope, in an initialised library.
-pub(crate) fn library<T>(cmd: Command, neutral: T, f: impl FnOnce(&mut Library) -> Result<T>) -> T {
-    either(cmd, neutral, |_| never(cmd), f)
+pub(crate) fn library<T>(cmd: Command, f: impl FnOnce(&mut Library) -> Result<T>) -> Result<T> {
+    either(cmd, |_| never(cmd), f)
 }
 
 /// The result for a scope that the scope table allows but a command's C form does not handle;
@@ -129,8 +132,9 @@ pub(crate) unsafe fn read_floats<const N: usize>(
         return Err(null(name, arg));
     }
     let mut out = [0.0; N];
-    // SAFETY: non-NULL and, by the caller's contract, N floats long; unaligned reads are fine.
-    std::ptr::copy_nonoverlapping(p, out.as_mut_ptr(), N);
+    // SAFETY: non-NULL, aligned (a C `float *`) and, by the caller's contract, N floats long;
+    // `out` is a distinct local array of N floats.
+    unsafe { std::ptr::copy_nonoverlapping(p, out.as_mut_ptr(), N) };
     Ok(out)
 }
 
@@ -142,8 +146,9 @@ pub(crate) unsafe fn c_path<'a>(name: &str, arg: &str, s: *const c_char) -> Resu
     if s.is_null() {
         return Err(null(name, arg));
     }
-    // SAFETY: non-NULL and NUL-terminated by the caller's contract.
-    let bytes = CStr::from_ptr(s).to_bytes();
+    // SAFETY: non-NULL and NUL-terminated by the caller's contract, which also bounds the
+    // lifetime `'a`.
+    let bytes = unsafe { CStr::from_ptr(s) }.to_bytes();
     os_str(name, bytes).map(Path::new)
 }
 
@@ -175,28 +180,4 @@ pub fn state_fingerprint() -> String {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_panic_becomes_vl_internal_and_a_poisoned_state_is_recovered() {
-        // The state is global: held against the other tests that use it (one of them, run
-        // at the same time, once left it initialised between the panic and the check), and
-        // uninitialised here, so that what the check sees is what the panic left.
-        let _serial = crate::tests::common::serial();
-        *lock_state() = None;
-        let v = boundary(7, || -> Result<i32> {
-            let _state = lock_state();
-            panic!("boom");
-        });
-        assert_eq!(v, 7, "the neutral value");
-        assert_eq!(errors::pop(), ErrorCode::Internal);
-        assert!(errors::last_error_message().is_some_and(|m| m.contains("boom")));
-        assert!(STATE.is_poisoned());
-        assert!(
-            lock_state().is_none(),
-            "the state is usable after the panic"
-        );
-        STATE.clear_poison();
-    }
-}
+mod tests;

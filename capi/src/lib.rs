@@ -3,100 +3,74 @@
 //! A thin layer: every exported function validates its C arguments (NULL pointers, enumerations
 //! arriving as integers, string encodings), calls one method of the core's
 //! [`vlib_core::Library`] and records any error for `vlError`. All meaning (scopes, validation,
-//! rendering) lives in the core crate.
+//! rendering) lives in the core crate; this crate owns only the C forms and the panic boundary.
 //!
-//! Modules: [`types`] (the types and constants of the header), `ffi` (the panic boundary, the
-//! global state and scope dispatch, pointer helpers), `errors` (the `vlError` queue), `sample`
-//! (the thread-local sample scope), `callbacks` (C function pointers as core closures), one
-//! module per API area holding the commands, and [`vlaux`] (vlaux, `vlaux.h`).
-//!
-//! Every command is listed below, once, in the order of the API (`docs` and `api.md`), so the
-//! exported surface can be audited at a glance.
+//! Modules: [`types`] (the types and constants of the header), one module per API area holding
+//! the commands (`session`, `scene`, `data`, `object`, `sampling`), `commands` (the list of the
+//! commands, in header order), `ffi` (the panic boundary, the global state and scope dispatch,
+//! pointer helpers), `errors` (the `vlError` queue), `sample` (the thread-local sample scope),
+//! `callbacks` (C function pointers as core closures) and [`vlaux`] (vlaux, `vlaux.h`).
 //!
 //! ## Safety
-//! Pointer arguments must be NULL or point to as many valid elements as the command reads or
-//! writes; strings must be NUL-terminated. NULL is always detected and reported as
-//! `VL_NULLPOINTER`. C field, normal and spatial functions must be thread-safe: the renderer calls
-//! them concurrently from worker threads.
+//! The exports that take pointers are `unsafe`: pointer arguments must be NULL or point to as
+//! many valid elements as the command reads or writes; strings must be NUL-terminated. NULL is
+//! always detected and reported as `VL_NULLPOINTER`. The other exports are safe functions. C
+//! field, normal and spatial functions must be thread-safe: the renderer calls them concurrently
+//! from worker threads.
 
 #![allow(non_snake_case)]
-#![allow(clippy::missing_safety_doc)]
+#![deny(unsafe_op_in_unsafe_fn)]
 
-// The order of the modules is the order of the header (cbindgen reads them in this order):
-// types and constants, then the commands by API area. Keep the blank lines: they stop rustfmt
-// from sorting the declarations.
+// cbindgen reads the modules in the order they are declared, and that is the order of the header:
+// the types and constants, then the commands by API area. Keep the blank lines: they stop rustfmt
+// from sorting the declarations. Every other module is marked `cbindgen:ignore` (the one way
+// items are kept out of `vlib.h`): it holds no item of the header.
 pub mod types;
 
-mod session; // commands 1–4
+mod session;
 
-mod scene; // commands 5–21
+mod scene;
 
-mod data; // commands 22–25
+mod data;
 
-mod object; // commands 26–38
+mod object;
 
-mod sampling; // commands 39–44
+mod sampling;
 
+/// cbindgen:ignore
 mod callbacks;
+/// cbindgen:ignore
+#[macro_use]
+mod commands;
+/// cbindgen:ignore
 mod errors;
+/// cbindgen:ignore
 mod ffi;
+/// cbindgen:ignore
 mod sample;
-pub mod vlaux; // vlaux.h
+/// cbindgen:ignore
+pub mod vlaux;
 
 pub use types::*;
 
-// The 44 commands, in the order of the API.
-pub use data::vlLoad; // 22
-pub use data::vlMapping; // 25
-pub use data::vlSample; // 24
-pub use data::vlUnload; // 23
-pub use object::vlBoundary; // 32
-pub use object::vlDataset; // 36
-pub use object::vlFlip; // 30
-pub use object::vlFunction; // 35
-pub use object::vlMap; // 37
-pub use object::vlMatrix; // 31
-pub use object::vlNormal; // 38
-pub use object::vlObject; // 26
-pub use object::vlRotate; // 29
-pub use object::vlScale; // 27
-pub use object::vlSet; // 34
-pub use object::vlSpatial; // 33
-pub use object::vlTranslate; // 28
-pub use sampling::vlChildCount; // 41
-pub use sampling::vlChildField; // 43
-pub use sampling::vlChildHit; // 42
-pub use sampling::vlChildNormal;
-pub use sampling::vlField; // 39
-pub use sampling::vlPosition; // 40
-pub use scene::vlAmbient; // 11
-pub use scene::vlBackground; // 9
-pub use scene::vlCamera; // 8
-pub use scene::vlCubicFilter; // 20
-pub use scene::vlDirectionalLight; // 13
-pub use scene::vlImage; // 6
-pub use scene::vlInterpolationType; // 19
-pub use scene::vlNeighborhood; // 21
-pub use scene::vlPointLight; // 12
-pub use scene::vlRecursion; // 18
-pub use scene::vlRenderType; // 14
-pub use scene::vlScene; // 5
-pub use scene::vlStepSize; // 15
-pub use scene::vlSuperSample; // 10
-pub use scene::vlSurface; // 16
-pub use scene::vlToggle; // 17
-pub use scene::vlVolume; // 7
-pub use session::vlEnd; // 2
-pub use session::vlError; // 3
-pub use session::vlErrorString; // 4
-pub use session::vlInit; // 1 // 44
+/// Re-exports the commands of a `for_each_command!` list from their modules.
+macro_rules! reexport {
+    ($($module:ident::$name:ident),+ $(,)?) => {
+        $(pub use $module::$name;)+
+    };
+}
+
+// The commands, from the one list in `commands`.
+for_each_command!(reexport);
+pub use commands::{COMMANDS, COMMAND_COUNT};
 
 // vlaux (`vlaux.h`).
 pub use vlaux::{
-    vluCamera, vluNoise, vluSpline, vluTurbulence, VLU_CYLINDER, VLU_SPHERE, VL_PARAB1,
+    vluCamera, vluNoise, vluSpline, vluTurbulence, VLU_BLEND, VLU_CYLINDER, VLU_DIFFERENCE,
+    VLU_INTERSECTION, VLU_SPHERE, VLU_SWEEP, VLU_UNION, VL_PARAB1,
 };
 
-// Rust-only helpers for tests and Rust hosts (not part of the C interface).
+// Rust-only helpers for the unit tests (not part of the C interface).
 pub use errors::{last_error_message, MAX_QUEUED};
 pub use ffi::state_fingerprint;
 

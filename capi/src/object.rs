@@ -1,39 +1,45 @@
-//! Commands 26–38: objects, their transforms and their field programs.
+//! The object commands: opening an object, its transforms, its boundary and the instructions
+//! of its field program (`vlSet`, `vlFunction`, `vlDataset`, `vlMap`), its spatial and normal
+//! functions. Each converts its C arguments and calls one method of the core's `Library` (or,
+//! for `vlSet` in a field function, of the current sample); C function pointers become core
+//! closures in `callbacks`.
 
 use crate::callbacks::{CField, CNormal, CSpatial};
-use crate::ffi::{either, library, null, read_floats};
+use crate::ffi::{either, ffi_boundary, library, null, read_floats};
 use crate::types::{vlfloat, vlint};
 use std::os::raw::c_void;
-use vlib_core::{Command, Fields};
+use vlib_core::{Command, Fields, Result};
 
 /// Opens an object; it captures the rendering parameters in force.
 #[no_mangle]
-pub unsafe extern "C" fn vlObject() {
-    library(Command::Object, (), |lib| lib.object())
+pub extern "C" fn vlObject() {
+    ffi_boundary((), || library(Command::Object, |lib| lib.object()))
 }
 
 /// Scales the object (non-zero factors).
 #[no_mangle]
-pub unsafe extern "C" fn vlScale(x: vlfloat, y: vlfloat, z: vlfloat) {
-    library(Command::Scale, (), |lib| lib.scale(x, y, z))
+pub extern "C" fn vlScale(x: vlfloat, y: vlfloat, z: vlfloat) {
+    ffi_boundary((), || library(Command::Scale, |lib| lib.scale(x, y, z)))
 }
 
 /// Translates the object.
 #[no_mangle]
-pub unsafe extern "C" fn vlTranslate(x: vlfloat, y: vlfloat, z: vlfloat) {
-    library(Command::Translate, (), |lib| lib.translate(x, y, z))
+pub extern "C" fn vlTranslate(x: vlfloat, y: vlfloat, z: vlfloat) {
+    ffi_boundary((), || {
+        library(Command::Translate, |lib| lib.translate(x, y, z))
+    })
 }
 
 /// Rotates the object by degrees about x, then y, then z.
 #[no_mangle]
-pub unsafe extern "C" fn vlRotate(x: vlfloat, y: vlfloat, z: vlfloat) {
-    library(Command::Rotate, (), |lib| lib.rotate(x, y, z))
+pub extern "C" fn vlRotate(x: vlfloat, y: vlfloat, z: vlfloat) {
+    ffi_boundary((), || library(Command::Rotate, |lib| lib.rotate(x, y, z)))
 }
 
 /// Mirrors object space (p → 1 − p) on the axes `VL_X | VL_Y | VL_Z` named.
 #[no_mangle]
-pub unsafe extern "C" fn vlFlip(axes: vlint) {
-    library(Command::Flip, (), |lib| lib.flip(axes))
+pub extern "C" fn vlFlip(axes: vlint) {
+    ffi_boundary((), || library(Command::Flip, |lib| lib.flip(axes)))
 }
 
 /// Applies a general affine 4×4 transform, row-major (bottom row 0 0 0 1).
@@ -42,16 +48,21 @@ pub unsafe extern "C" fn vlFlip(axes: vlint) {
 /// `m` must be NULL or point to 16 floats.
 #[no_mangle]
 pub unsafe extern "C" fn vlMatrix(m: *const vlfloat) {
-    library(Command::Matrix, (), |lib| {
-        let m = read_floats::<16>(Command::Matrix.name(), "m", m)?;
-        lib.matrix(&m)
+    ffi_boundary((), || {
+        library(Command::Matrix, |lib| {
+            // SAFETY: `m` is NULL or 16 floats long by the caller's contract.
+            let m = unsafe { read_floats::<16>(Command::Matrix.name(), "m", m) }?;
+            lib.matrix(&m)
+        })
     })
 }
 
 /// Scales the object's boundary box about its centre without scaling the object.
 #[no_mangle]
-pub unsafe extern "C" fn vlBoundary(x: vlfloat, y: vlfloat, z: vlfloat) {
-    library(Command::Boundary, (), |lib| lib.boundary(x, y, z))
+pub extern "C" fn vlBoundary(x: vlfloat, y: vlfloat, z: vlfloat) {
+    ffi_boundary((), || {
+        library(Command::Boundary, |lib| lib.boundary(x, y, z))
+    })
 }
 
 /// Adds a spatial transfer function, which may rewrite p for the instructions after it.
@@ -63,9 +74,11 @@ pub unsafe extern "C" fn vlSpatial(
     f: Option<unsafe extern "C" fn(p: *mut vlfloat, misc: *mut c_void)>,
     misc: *mut c_void,
 ) {
-    library(Command::Spatial, (), |lib| {
-        let f = CSpatial::new(f, misc).ok_or_else(|| null(Command::Spatial.name(), "f"))?;
-        lib.spatial_arc(f.into_core())
+    ffi_boundary((), || {
+        library(Command::Spatial, |lib| {
+            let f = CSpatial::new(f, misc).ok_or_else(|| null(Command::Spatial.name(), "f"))?;
+            lib.spatial_arc(f.into_core())
+        })
     })
 }
 
@@ -73,10 +86,14 @@ pub unsafe extern "C" fn vlSpatial(
 /// `value` at the current point to the fields of `fields` that the `vlFunction` call named.
 /// Values are clamped to [0, 1]; NaN becomes 0.
 #[no_mangle]
-pub unsafe extern "C" fn vlSet(fields: vlint, value: vlfloat) {
+pub extern "C" fn vlSet(fields: vlint, value: vlfloat) {
+    ffi_boundary((), || set(fields, value))
+}
+
+/// `vlSet` inside the caller's panic boundary (the vlaux field functions write through it).
+pub(crate) fn set(fields: vlint, value: vlfloat) -> Result<()> {
     either(
         Command::Set,
-        (),
         |s| s.set(Fields::from_raw(fields)?, value),
         |lib| lib.set(Fields::from_raw(fields)?, value),
     )
@@ -93,30 +110,36 @@ pub unsafe extern "C" fn vlFunction(
     f: Option<unsafe extern "C" fn(p: *mut vlfloat, misc: *mut c_void)>,
     misc: *mut c_void,
 ) {
-    library(Command::Function, (), |lib| {
-        let f = CField::new(f, misc).ok_or_else(|| null(Command::Function.name(), "f"))?;
-        lib.function_arc(Fields::from_raw(fields)?, f.into_core())
+    ffi_boundary((), || {
+        library(Command::Function, |lib| {
+            let f = CField::new(f, misc).ok_or_else(|| null(Command::Function.name(), "f"))?;
+            lib.function_arc(Fields::from_raw(fields)?, f.into_core())
+        })
     })
 }
 
 /// An instruction casting dataset `id` to `fields`, with the interpolation in force now.
 #[no_mangle]
-pub unsafe extern "C" fn vlDataset(fields: vlint, id: vlint) {
-    library(Command::Dataset, (), |lib| {
-        lib.dataset(Fields::from_raw(fields)?, id)
+pub extern "C" fn vlDataset(fields: vlint, id: vlint) {
+    ffi_boundary((), || {
+        library(Command::Dataset, |lib| {
+            lib.dataset(Fields::from_raw(fields)?, id)
+        })
     })
 }
 
 /// An instruction: `targets` = Φ(`mapping`)(value of field `source`), output `output` (from 1).
 #[no_mangle]
-pub unsafe extern "C" fn vlMap(targets: vlint, source: vlint, mapping: vlint, output: vlint) {
-    library(Command::Map, (), |lib| {
-        lib.map(
-            Fields::from_raw(targets)?,
-            Fields::from_raw(source)?,
-            mapping,
-            output,
-        )
+pub extern "C" fn vlMap(targets: vlint, source: vlint, mapping: vlint, output: vlint) {
+    ffi_boundary((), || {
+        library(Command::Map, |lib| {
+            lib.map(
+                Fields::from_raw(targets)?,
+                Fields::from_raw(source)?,
+                mapping,
+                output,
+            )
+        })
     })
 }
 
@@ -130,8 +153,10 @@ pub unsafe extern "C" fn vlNormal(
     f: Option<unsafe extern "C" fn(n: *mut vlfloat, p: *mut vlfloat, misc: *mut c_void)>,
     misc: *mut c_void,
 ) {
-    library(Command::Normal, (), |lib| {
-        let f = CNormal::new(f, misc).ok_or_else(|| null(Command::Normal.name(), "f"))?;
-        lib.normal_arc(f.into_core())
+    ffi_boundary((), || {
+        library(Command::Normal, |lib| {
+            let f = CNormal::new(f, misc).ok_or_else(|| null(Command::Normal.name(), "f"))?;
+            lib.normal_arc(f.into_core())
+        })
     })
 }

@@ -1,4 +1,6 @@
-//! The sample context: which [`Sample`] the C callback running on this thread belongs to.
+//! The sample context: which [`Sample`] the C callback running on this thread belongs to. It
+//! owns the thread-local pointer only; what a sample holds and which commands are legal in
+//! sample scope are the core's.
 //!
 //! While the renderer calls a C field or normal function, a thread-local pointer names the
 //! sample being evaluated; this is the C API's *sample scope*. Commands test it before anything
@@ -57,24 +59,4 @@ pub(crate) fn with_current<R>(f: impl FnOnce(&mut Sample<'_>) -> R) -> Option<R>
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sample_scope_is_left_even_by_unwinding() {
-        let mut s = Sample::new([0.5; 3], [0.0; 3]);
-        let p: *mut Sample = &mut s;
-        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            let _outer = Enter::new(p);
-            assert!(active());
-            {
-                let _inner = Enter::new(p);
-            }
-            assert!(active(), "leaving a nested scope restores the outer one");
-            panic!("unwind through the guard");
-        }));
-        assert!(r.is_err());
-        assert!(!active());
-        assert!(with_current(|_| ()).is_none());
-    }
-}
+mod tests;

@@ -1,21 +1,23 @@
-//! Commands 39–44: what a field or normal function may ask about the current point.
+//! The sampling commands: what a field or normal function may ask about the current point. They
+//! read the current sample (`sample`); the core computes every answer.
 //!
 //! All of them are legal only in sample scope; elsewhere they record `VL_BADSCOPE`. Children are
 //! counted from 1 in declaration order; a bad index records `VL_BADINDEX`.
 
-use crate::ffi::{either, never, null};
+use crate::ffi::{either, ffi_boundary, never, null};
 use crate::types::{vlfloat, vlint};
 use vlib_core::{Command, Fields};
 
 /// Inside a field or normal function: the current value of one field at this point; 0 on error.
 #[no_mangle]
-pub unsafe extern "C" fn vlField(field: vlint) -> vlfloat {
-    either(
-        Command::Field,
-        0.0,
-        |s| s.field(Fields::from_raw(field)?),
-        |_| never(Command::Field),
-    )
+pub extern "C" fn vlField(field: vlint) -> vlfloat {
+    ffi_boundary(0.0, || {
+        either(
+            Command::Field,
+            |s| s.field(Fields::from_raw(field)?),
+            |_| never(Command::Field),
+        )
+    })
 }
 
 /// Inside a field or normal function: writes the world-space position of the current point.
@@ -24,55 +26,59 @@ pub unsafe extern "C" fn vlField(field: vlint) -> vlfloat {
 /// `world` must be NULL or point to 3 writable floats.
 #[no_mangle]
 pub unsafe extern "C" fn vlPosition(world: *mut vlfloat) {
-    either(
-        Command::Position,
-        (),
-        |s| {
-            if world.is_null() {
-                return Err(null(Command::Position.name(), "world"));
-            }
-            let w = s.world_position();
-            // SAFETY: non-NULL and 3 floats long by the caller's contract.
-            std::ptr::copy_nonoverlapping(w.as_ptr(), world, 3);
-            Ok(())
-        },
-        |_| never(Command::Position),
-    )
+    ffi_boundary((), || {
+        either(
+            Command::Position,
+            |s| {
+                if world.is_null() {
+                    return Err(null(Command::Position.name(), "world"));
+                }
+                let w = s.world_position();
+                // SAFETY: non-NULL and 3 writable floats by the caller's contract.
+                unsafe { std::ptr::copy_nonoverlapping(w.as_ptr(), world, 3) };
+                Ok(())
+            },
+            |_| never(Command::Position),
+        )
+    })
 }
 
 /// Inside a field function: the number of children of the object being evaluated.
 #[no_mangle]
-pub unsafe extern "C" fn vlChildCount() -> vlint {
-    either(
-        Command::ChildCount,
-        0,
-        |s| Ok(s.child_count() as vlint),
-        |_| never(Command::ChildCount),
-    )
+pub extern "C" fn vlChildCount() -> vlint {
+    ffi_boundary(0, || {
+        either(
+            Command::ChildCount,
+            |s| Ok(s.child_count() as vlint),
+            |_| never(Command::ChildCount),
+        )
+    })
 }
 
 /// Inside a field function: whether the current point lies inside child `child` (from 1);
 /// `VL_TRUE` or `VL_FALSE`.
 #[no_mangle]
-pub unsafe extern "C" fn vlChildHit(child: vlint) -> vlint {
-    either(
-        Command::ChildHit,
-        0,
-        |s| s.child_hit(child).map(vlint::from),
-        |_| never(Command::ChildHit),
-    )
+pub extern "C" fn vlChildHit(child: vlint) -> vlint {
+    ffi_boundary(0, || {
+        either(
+            Command::ChildHit,
+            |s| s.child_hit(child).map(vlint::from),
+            |_| never(Command::ChildHit),
+        )
+    })
 }
 
 /// Inside a field function: a field of child `child` (from 1) at the current point, from the
 /// child's own program in the child's space (0 outside its boundary).
 #[no_mangle]
-pub unsafe extern "C" fn vlChildField(child: vlint, field: vlint) -> vlfloat {
-    either(
-        Command::ChildField,
-        0.0,
-        |s| s.child_field(child, Fields::from_raw(field)?),
-        |_| never(Command::ChildField),
-    )
+pub extern "C" fn vlChildField(child: vlint, field: vlint) -> vlfloat {
+    ffi_boundary(0.0, || {
+        either(
+            Command::ChildField,
+            |s| s.child_field(child, Fields::from_raw(field)?),
+            |_| never(Command::ChildField),
+        )
+    })
 }
 
 /// Inside a normal function: writes the world-space normal of child `child` (from 1) at the
@@ -82,18 +88,19 @@ pub unsafe extern "C" fn vlChildField(child: vlint, field: vlint) -> vlfloat {
 /// `n` must be NULL or point to 3 writable floats.
 #[no_mangle]
 pub unsafe extern "C" fn vlChildNormal(child: vlint, n: *mut vlfloat) {
-    either(
-        Command::ChildNormal,
-        (),
-        |s| {
-            if n.is_null() {
-                return Err(null(Command::ChildNormal.name(), "n"));
-            }
-            let v = s.child_normal(child)?;
-            // SAFETY: non-NULL and 3 floats long by the caller's contract.
-            std::ptr::copy_nonoverlapping(v.as_ptr(), n, 3);
-            Ok(())
-        },
-        |_| never(Command::ChildNormal),
-    )
+    ffi_boundary((), || {
+        either(
+            Command::ChildNormal,
+            |s| {
+                if n.is_null() {
+                    return Err(null(Command::ChildNormal.name(), "n"));
+                }
+                let v = s.child_normal(child)?;
+                // SAFETY: non-NULL and 3 writable floats by the caller's contract.
+                unsafe { std::ptr::copy_nonoverlapping(v.as_ptr(), n, 3) };
+                Ok(())
+            },
+            |_| never(Command::ChildNormal),
+        )
+    })
 }

@@ -1,6 +1,8 @@
-//! Commands 5–21: scenes, outputs, camera, lights and rendering parameters.
+//! The scene commands: opening a scene, its outputs (image, voxelization), the camera, the
+//! lights and the rendering parameters. Each converts its C arguments and calls one method of
+//! the core's `Library`, which checks the scope and the values and owns what they mean.
 
-use crate::ffi::{c_path, library, null};
+use crate::ffi::{c_path, ffi_boundary, library, null};
 use crate::types::{vlfloat, vlint, VLCAMERA, VL_FALSE, VL_TRUE};
 use std::os::raw::c_char;
 use vlib_core::{
@@ -9,8 +11,8 @@ use vlib_core::{
 
 /// Opens a scene; it starts from the settings made at library scope.
 #[no_mangle]
-pub unsafe extern "C" fn vlScene() {
-    library(Command::Scene, (), |lib| lib.scene())
+pub extern "C" fn vlScene() {
+    ffi_boundary((), || library(Command::Scene, |lib| lib.scene()))
 }
 
 /// Requests an image of the scene, written when the scene ends. `aspect` is the view plane's
@@ -25,9 +27,12 @@ pub unsafe extern "C" fn vlImage(
     width: vlint,
     height: vlint,
 ) {
-    library(Command::Image, (), |lib| {
-        let path = c_path(Command::Image.name(), "file", file)?;
-        lib.image(path, aspect, width, height)
+    ffi_boundary((), || {
+        library(Command::Image, |lib| {
+            // SAFETY: `file` is NULL or NUL-terminated by the caller's contract.
+            let path = unsafe { c_path(Command::Image.name(), "file", file) }?;
+            lib.image(path, aspect, width, height)
+        })
     })
 }
 
@@ -52,16 +57,19 @@ pub unsafe extern "C" fn vlVolume(
     nz: vlint,
     bytes: vlint,
 ) {
-    library(Command::Volume, (), |lib| {
-        let prefix = c_path(Command::Volume.name(), "prefix", prefix)?;
-        lib.volume(
-            prefix,
-            Fields::from_raw(fields)?,
-            [x0, y0, z0],
-            [x1, y1, z1],
-            [nx, ny, nz],
-            bytes,
-        )
+    ffi_boundary((), || {
+        library(Command::Volume, |lib| {
+            // SAFETY: `prefix` is NULL or NUL-terminated by the caller's contract.
+            let prefix = unsafe { c_path(Command::Volume.name(), "prefix", prefix) }?;
+            lib.volume(
+                prefix,
+                Fields::from_raw(fields)?,
+                [x0, y0, z0],
+                [x1, y1, z1],
+                [nx, ny, nz],
+                bytes,
+            )
+        })
     })
 }
 
@@ -71,42 +79,49 @@ pub unsafe extern "C" fn vlVolume(
 /// `camera` must be NULL or point to a `VLCAMERA`.
 #[no_mangle]
 pub unsafe extern "C" fn vlCamera(camera: *const VLCAMERA) {
-    library(Command::Camera, (), |lib| {
-        // SAFETY: the caller passes NULL or a valid VLCAMERA.
-        let c = camera
-            .as_ref()
-            .ok_or_else(|| null(Command::Camera.name(), "camera"))?;
-        lib.camera(&Camera {
-            eye: c.eye,
-            at: c.at,
-            up: c.up,
-            fov: c.fov,
+    ffi_boundary((), || {
+        library(Command::Camera, |lib| {
+            // SAFETY: `camera` is NULL or points to a VLCAMERA by the caller's contract.
+            let c =
+                unsafe { camera.as_ref() }.ok_or_else(|| null(Command::Camera.name(), "camera"))?;
+            lib.camera(&Camera {
+                eye: c.eye,
+                at: c.at,
+                up: c.up,
+                fov: c.fov,
+            })
         })
     })
 }
 
 /// Sets the background colour (components in [0, 1]).
 #[no_mangle]
-pub unsafe extern "C" fn vlBackground(r: vlfloat, g: vlfloat, b: vlfloat) {
-    library(Command::Background, (), |lib| lib.background(r, g, b))
+pub extern "C" fn vlBackground(r: vlfloat, g: vlfloat, b: vlfloat) {
+    ffi_boundary((), || {
+        library(Command::Background, |lib| lib.background(r, g, b))
+    })
 }
 
 /// Adaptive super-sampling with up to n×n samples per pixel; 1 = one sample per pixel.
 #[no_mangle]
-pub unsafe extern "C" fn vlSuperSample(n: vlint) {
-    library(Command::SuperSample, (), |lib| lib.super_sample(n))
+pub extern "C" fn vlSuperSample(n: vlint) {
+    ffi_boundary((), || {
+        library(Command::SuperSample, |lib| lib.super_sample(n))
+    })
 }
 
 /// Sets the ambient light: colour in [0, 1] and intensity ≥ 0.
 #[no_mangle]
-pub unsafe extern "C" fn vlAmbient(r: vlfloat, g: vlfloat, b: vlfloat, intensity: vlfloat) {
-    library(Command::Ambient, (), |lib| lib.ambient(r, g, b, intensity))
+pub extern "C" fn vlAmbient(r: vlfloat, g: vlfloat, b: vlfloat, intensity: vlfloat) {
+    ffi_boundary((), || {
+        library(Command::Ambient, |lib| lib.ambient(r, g, b, intensity))
+    })
 }
 
 /// Adds a point light: `VL_NOATTENUATION`, `VL_INVERSE` or `VL_INVERSESQUARE`.
 #[no_mangle]
 #[allow(clippy::too_many_arguments)]
-pub unsafe extern "C" fn vlPointLight(
+pub extern "C" fn vlPointLight(
     x: vlfloat,
     y: vlfloat,
     z: vlfloat,
@@ -116,15 +131,17 @@ pub unsafe extern "C" fn vlPointLight(
     b: vlfloat,
     intensity: vlfloat,
 ) {
-    library(Command::PointLight, (), |lib| {
-        let att = Attenuation::from_raw(attenuation)?;
-        lib.point_light([x, y, z], att, [r, g, b], intensity)
+    ffi_boundary((), || {
+        library(Command::PointLight, |lib| {
+            let att = Attenuation::from_raw(attenuation)?;
+            lib.point_light([x, y, z], att, [r, g, b], intensity)
+        })
     })
 }
 
 /// Adds a light travelling in direction (dx, dy, dz).
 #[no_mangle]
-pub unsafe extern "C" fn vlDirectionalLight(
+pub extern "C" fn vlDirectionalLight(
     dx: vlfloat,
     dy: vlfloat,
     dz: vlfloat,
@@ -133,77 +150,93 @@ pub unsafe extern "C" fn vlDirectionalLight(
     b: vlfloat,
     intensity: vlfloat,
 ) {
-    library(Command::DirectionalLight, (), |lib| {
-        lib.directional_light([dx, dy, dz], [r, g, b], intensity)
+    ffi_boundary((), || {
+        library(Command::DirectionalLight, |lib| {
+            lib.directional_light([dx, dy, dz], [r, g, b], intensity)
+        })
     })
 }
 
 /// Selects the rendering algorithm: `VL_DVR` (default), `VL_DSR` or `VL_MIP`.
 #[no_mangle]
-pub unsafe extern "C" fn vlRenderType(r#type: vlint) {
-    library(Command::RenderType, (), |lib| {
-        lib.render_type(RenderType::from_raw(r#type)?)
+pub extern "C" fn vlRenderType(r#type: vlint) {
+    ffi_boundary((), || {
+        library(Command::RenderType, |lib| {
+            lib.render_type(RenderType::from_raw(r#type)?)
+        })
     })
 }
 
 /// Sets the world-space sampling interval and the interval over which opacity is exact.
 #[no_mangle]
-pub unsafe extern "C" fn vlStepSize(step: vlfloat, reference: vlfloat) {
-    library(Command::StepSize, (), |lib| lib.step_size(step, reference))
+pub extern "C" fn vlStepSize(step: vlfloat, reference: vlfloat) {
+    ffi_boundary((), || {
+        library(Command::StepSize, |lib| lib.step_size(step, reference))
+    })
 }
 
 /// Adds an iso-surface of one field at `threshold` (for `VL_DSR`).
 #[no_mangle]
-pub unsafe extern "C" fn vlSurface(field: vlint, threshold: vlfloat) {
-    library(Command::Surface, (), |lib| {
-        lib.surface(Fields::from_raw(field)?, threshold)
+pub extern "C" fn vlSurface(field: vlint, threshold: vlfloat) {
+    ffi_boundary((), || {
+        library(Command::Surface, |lib| {
+            lib.surface(Fields::from_raw(field)?, threshold)
+        })
     })
 }
 
 /// Switches a rendering feature (`VL_CASTSHADOWS` …) on (`VL_TRUE`) or off (`VL_FALSE`); any
 /// other state is `VL_BADVALUE`.
 #[no_mangle]
-pub unsafe extern "C" fn vlToggle(feature: vlint, state: vlint) {
-    library(Command::Toggle, (), |lib| {
-        let feature = Feature::from_raw(feature)?;
-        let on = match state {
-            VL_TRUE => true,
-            VL_FALSE => false,
-            _ => {
-                return Err(Error::new(
-                    ErrorCode::BadValue,
-                    format!("vlToggle: state {state} (must be VL_TRUE or VL_FALSE)"),
-                ))
-            }
-        };
-        lib.toggle(feature, on)
+pub extern "C" fn vlToggle(feature: vlint, state: vlint) {
+    ffi_boundary((), || {
+        library(Command::Toggle, |lib| {
+            let feature = Feature::from_raw(feature)?;
+            let on = match state {
+                VL_TRUE => true,
+                VL_FALSE => false,
+                _ => {
+                    return Err(Error::new(
+                        ErrorCode::BadValue,
+                        format!("vlToggle: state {state} (must be VL_TRUE or VL_FALSE)"),
+                    ))
+                }
+            };
+            lib.toggle(feature, on)
+        })
     })
 }
 
 /// Sets the maximum depth of reflection and refraction rays.
 #[no_mangle]
-pub unsafe extern "C" fn vlRecursion(depth: vlint) {
-    library(Command::Recursion, (), |lib| lib.recursion(depth))
+pub extern "C" fn vlRecursion(depth: vlint) {
+    ffi_boundary((), || {
+        library(Command::Recursion, |lib| lib.recursion(depth))
+    })
 }
 
 /// Selects dataset interpolation: `VL_NEAREST`, `VL_TRILINEAR` (default) or `VL_TRICUBIC`.
 #[no_mangle]
-pub unsafe extern "C" fn vlInterpolationType(r#type: vlint) {
-    library(Command::InterpolationType, (), |lib| {
-        lib.interpolation(Interpolation::from_raw(r#type)?)
+pub extern "C" fn vlInterpolationType(r#type: vlint) {
+    ffi_boundary((), || {
+        library(Command::InterpolationType, |lib| {
+            lib.interpolation(Interpolation::from_raw(r#type)?)
+        })
     })
 }
 
 /// Sets B and C of the tricubic BC-spline filter (default Catmull-Rom: 0, 0.5).
 #[no_mangle]
-pub unsafe extern "C" fn vlCubicFilter(b: vlfloat, c: vlfloat) {
-    library(Command::CubicFilter, (), |lib| lib.cubic_filter(b, c))
+pub extern "C" fn vlCubicFilter(b: vlfloat, c: vlfloat) {
+    ffi_boundary((), || {
+        library(Command::CubicFilter, |lib| lib.cubic_filter(b, c))
+    })
 }
 
 /// Sets the central-difference neighbourhood for normals of function-defined geometry.
 #[no_mangle]
-pub unsafe extern "C" fn vlNeighborhood(dx: vlfloat, dy: vlfloat, dz: vlfloat) {
-    library(Command::Neighborhood, (), |lib| {
-        lib.neighborhood(dx, dy, dz)
+pub extern "C" fn vlNeighborhood(dx: vlfloat, dy: vlfloat, dz: vlfloat) {
+    ffi_boundary((), || {
+        library(Command::Neighborhood, |lib| lib.neighborhood(dx, dy, dz))
     })
 }

@@ -223,7 +223,7 @@ mod checks {
     }
 
     // `Fields::bits` is not a `const fn`, so the masks are tied to the core's field order
-    // (`FIELD_NAMES`) here and compared with `Fields::*.bits()` in `field_masks_match` below.
+    // (`FIELD_NAMES`) here and compared with `Fields::*.bits()` in `tests.rs`.
     const _: () = assert!(field_is(VL_O, "o"));
     const _: () = assert!(field_is(VL_R, "r"));
     const _: () = assert!(field_is(VL_G, "g"));
@@ -284,26 +284,7 @@ mod checks {
     const _: () = assert!(ErrorCode::ALL.len() == 18);
     const _: () = assert!(VL_MAXSPECULAR == MAX_SPECULAR);
     const _: () = assert!(VL_MAXREFRACTION == MAX_REFRACTION);
-
-    #[test]
-    fn field_masks_match() {
-        use vlib_core::Fields;
-        let pairs = [
-            (VL_O, Fields::O),
-            (VL_R, Fields::R),
-            (VL_G, Fields::G),
-            (VL_B, Fields::B),
-            (VL_KA, Fields::KA),
-            (VL_KD, Fields::KD),
-            (VL_KS, Fields::KS),
-            (VL_N, Fields::N),
-            (VL_RF, Fields::RF),
-            (VL_F, Fields::F),
-            (VL_COLORS, Fields::COLORS),
-            (VL_ALLFIELDS, Fields::ALL),
-        ];
-        for (c, f) in pairs {
-            assert_eq!(c as u32, f.bits());
-        }
-    }
 }
+
+#[cfg(test)]
+mod tests;

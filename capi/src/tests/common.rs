@@ -17,8 +17,7 @@ pub fn serial() -> MutexGuard<'static, ()> {
 pub fn drain() -> Vec<i32> {
     let mut v = Vec::new();
     loop {
-        // SAFETY: vlError takes no arguments.
-        let e = unsafe { crate::vlError() };
+        let e = crate::vlError();
         if e == crate::VL_NOERROR {
             return v;
         }

@@ -2,4 +2,5 @@
 //! built only as `staticlib` and `cdylib`, so integration tests cannot link it as Rust).
 
 pub(crate) mod common;
+mod exports;
 mod scopes;

@@ -1,5 +1,5 @@
-//! The scope state machine through the C interface, exhaustively: every one of the 44 commands
-//! in each of the 5 scopes, called with valid arguments so that the scope is the only possible
+//! The scope state machine through the C interface, exhaustively: every command in each of the 5
+//! scopes, called with valid arguments so that the scope is the only possible
 //! error. Illegal calls must record exactly `VL_BADSCOPE` and change nothing; legal calls must not
 //! record `VL_BADSCOPE`. The legality table is the core's (`vlib_core::scope::legal`).
 //!
@@ -66,8 +66,7 @@ fn files() -> &'static Files {
 }
 
 extern "C" fn set_opaque(_p: *mut vlfloat, _misc: *mut c_void) {
-    // SAFETY: called by the renderer in sample scope.
-    unsafe { vlSet(VL_O, 1.0) }
+    vlSet(VL_O, 1.0)
 }
 
 extern "C" fn spatial_identity(_p: *mut vlfloat, _misc: *mut c_void) {}
@@ -75,84 +74,86 @@ extern "C" fn spatial_identity(_p: *mut vlfloat, _misc: *mut c_void) {}
 extern "C" fn keep_normal(_n: *mut vlfloat, _p: *mut vlfloat, _misc: *mut c_void) {}
 
 /// Calls `cmd` with valid arguments (valid wherever the command is legal).
-///
-/// # Safety
-/// Calls the C interface; in sample scope only from a field function.
-unsafe fn call(cmd: Command) {
+fn call(cmd: Command) {
     let f = files();
     let mut buf = [0.0f32; 3];
-    match cmd {
-        Command::Init => vlInit(),
-        Command::End => vlEnd(),
-        Command::Error => {
-            vlError();
+    // SAFETY: every pointer is valid for what its command reads or writes: the file names live
+    // for the whole test binary, the camera and the tables are constants, `buf` holds 3 floats,
+    // and the C functions may be called from any thread.
+    unsafe {
+        match cmd {
+            Command::Init => vlInit(),
+            Command::End => vlEnd(),
+            Command::Error => {
+                vlError();
+            }
+            Command::ErrorString => {
+                vlErrorString(VL_BADSCOPE);
+            }
+            Command::Scene => vlScene(),
+            Command::Image => vlImage(f.image.as_ptr(), 1.0, 2, 2),
+            Command::Volume => vlVolume(
+                f.volume.as_ptr(),
+                VL_O,
+                0.0,
+                0.0,
+                0.0,
+                1.0,
+                1.0,
+                1.0,
+                2,
+                2,
+                2,
+                1,
+            ),
+            Command::Camera => vlCamera(&CAMERA),
+            Command::Background => vlBackground(0.1, 0.2, 0.3),
+            Command::SuperSample => vlSuperSample(2),
+            Command::Ambient => vlAmbient(1.0, 1.0, 1.0, 0.5),
+            Command::PointLight => vlPointLight(0.0, 0.0, -5.0, VL_INVERSE, 1.0, 1.0, 1.0, 1.0),
+            Command::DirectionalLight => vlDirectionalLight(0.0, -1.0, 1.0, 1.0, 1.0, 1.0, 1.0),
+            Command::RenderType => vlRenderType(VL_DVR),
+            Command::StepSize => vlStepSize(0.5, 1.0),
+            Command::Surface => vlSurface(VL_F, 0.5),
+            Command::Toggle => vlToggle(VL_VISIBLE, VL_TRUE),
+            Command::Recursion => vlRecursion(2),
+            Command::InterpolationType => vlInterpolationType(VL_TRICUBIC),
+            Command::CubicFilter => vlCubicFilter(1.0 / 3.0, 1.0 / 3.0),
+            Command::Neighborhood => vlNeighborhood(0.1, 0.1, 0.1),
+            Command::Load => vlLoad(7, f.dataset.as_ptr()),
+            Command::Unload => vlUnload(7),
+            Command::Sample => {
+                vlSample(7, 0.5, 0.5, 0.5);
+            }
+            Command::Mapping => vlMapping(2, VL_RAMP, 2, 1, TABLE.as_ptr()),
+            Command::Object => vlObject(),
+            Command::Scale => vlScale(2.0, 2.0, 2.0),
+            Command::Translate => vlTranslate(1.0, 2.0, 3.0),
+            Command::Rotate => vlRotate(10.0, 20.0, 30.0),
+            Command::Flip => vlFlip(VL_X | VL_Z),
+            Command::Matrix => vlMatrix(IDENTITY.as_ptr()),
+            Command::Boundary => vlBoundary(1.5, 1.5, 1.5),
+            Command::Spatial => vlSpatial(Some(spatial_identity), ptr::null_mut()),
+            Command::Set => vlSet(VL_KA, 0.3),
+            Command::Function => vlFunction(VL_O, Some(set_opaque), ptr::null_mut()),
+            Command::Dataset => vlDataset(VL_O, 7),
+            Command::Map => vlMap(VL_O, VL_F, 1, 1),
+            Command::Normal => vlNormal(Some(keep_normal), ptr::null_mut()),
+            Command::Field => {
+                vlField(VL_O);
+            }
+            Command::Position => vlPosition(buf.as_mut_ptr()),
+            Command::ChildCount => {
+                vlChildCount();
+            }
+            Command::ChildHit => {
+                vlChildHit(1);
+            }
+            Command::ChildField => {
+                vlChildField(1, VL_O);
+            }
+            Command::ChildNormal => vlChildNormal(1, buf.as_mut_ptr()),
         }
-        Command::ErrorString => {
-            vlErrorString(VL_BADSCOPE);
-        }
-        Command::Scene => vlScene(),
-        Command::Image => vlImage(f.image.as_ptr(), 1.0, 2, 2),
-        Command::Volume => vlVolume(
-            f.volume.as_ptr(),
-            VL_O,
-            0.0,
-            0.0,
-            0.0,
-            1.0,
-            1.0,
-            1.0,
-            2,
-            2,
-            2,
-            1,
-        ),
-        Command::Camera => vlCamera(&CAMERA),
-        Command::Background => vlBackground(0.1, 0.2, 0.3),
-        Command::SuperSample => vlSuperSample(2),
-        Command::Ambient => vlAmbient(1.0, 1.0, 1.0, 0.5),
-        Command::PointLight => vlPointLight(0.0, 0.0, -5.0, VL_INVERSE, 1.0, 1.0, 1.0, 1.0),
-        Command::DirectionalLight => vlDirectionalLight(0.0, -1.0, 1.0, 1.0, 1.0, 1.0, 1.0),
-        Command::RenderType => vlRenderType(VL_DVR),
-        Command::StepSize => vlStepSize(0.5, 1.0),
-        Command::Surface => vlSurface(VL_F, 0.5),
-        Command::Toggle => vlToggle(VL_VISIBLE, VL_TRUE),
-        Command::Recursion => vlRecursion(2),
-        Command::InterpolationType => vlInterpolationType(VL_TRICUBIC),
-        Command::CubicFilter => vlCubicFilter(1.0 / 3.0, 1.0 / 3.0),
-        Command::Neighborhood => vlNeighborhood(0.1, 0.1, 0.1),
-        Command::Load => vlLoad(7, f.dataset.as_ptr()),
-        Command::Unload => vlUnload(7),
-        Command::Sample => {
-            vlSample(7, 0.5, 0.5, 0.5);
-        }
-        Command::Mapping => vlMapping(2, VL_RAMP, 2, 1, TABLE.as_ptr()),
-        Command::Object => vlObject(),
-        Command::Scale => vlScale(2.0, 2.0, 2.0),
-        Command::Translate => vlTranslate(1.0, 2.0, 3.0),
-        Command::Rotate => vlRotate(10.0, 20.0, 30.0),
-        Command::Flip => vlFlip(VL_X | VL_Z),
-        Command::Matrix => vlMatrix(IDENTITY.as_ptr()),
-        Command::Boundary => vlBoundary(1.5, 1.5, 1.5),
-        Command::Spatial => vlSpatial(Some(spatial_identity), ptr::null_mut()),
-        Command::Set => vlSet(VL_KA, 0.3),
-        Command::Function => vlFunction(VL_O, Some(set_opaque), ptr::null_mut()),
-        Command::Dataset => vlDataset(VL_O, 7),
-        Command::Map => vlMap(VL_O, VL_F, 1, 1),
-        Command::Normal => vlNormal(Some(keep_normal), ptr::null_mut()),
-        Command::Field => {
-            vlField(VL_O);
-        }
-        Command::Position => vlPosition(buf.as_mut_ptr()),
-        Command::ChildCount => {
-            vlChildCount();
-        }
-        Command::ChildHit => {
-            vlChildHit(1);
-        }
-        Command::ChildField => {
-            vlChildField(1, VL_O);
-        }
-        Command::ChildNormal => vlChildNormal(1, buf.as_mut_ptr()),
     }
 }
 
@@ -163,8 +164,7 @@ fn reset_to(scope: Scope) {
         if state_fingerprint() == "uninitialised" {
             break;
         }
-        // SAFETY: no arguments.
-        unsafe { vlEnd() };
+        vlEnd();
     }
     assert_eq!(
         state_fingerprint(),
@@ -172,18 +172,16 @@ fn reset_to(scope: Scope) {
         "could not close the library"
     );
     drain();
-    // SAFETY: valid arguments.
-    unsafe {
-        if scope != Scope::Uninitialised {
-            vlInit();
-            vlMapping(1, VL_LOOKUP, 2, 1, TABLE.as_ptr());
-        }
-        if matches!(scope, Scope::Scene | Scope::Object) {
-            vlScene();
-        }
-        if scope == Scope::Object {
-            vlObject();
-        }
+    if scope != Scope::Uninitialised {
+        vlInit();
+        // SAFETY: TABLE holds the 2 points × (1 + 1) floats declared.
+        unsafe { vlMapping(1, VL_LOOKUP, 2, 1, TABLE.as_ptr()) };
+    }
+    if matches!(scope, Scope::Scene | Scope::Object) {
+        vlScene();
+    }
+    if scope == Scope::Object {
+        vlObject();
     }
     assert_eq!(drain(), Vec::<i32>::new(), "setting up {scope:?} scope");
 }
@@ -226,8 +224,7 @@ fn every_command_in_every_scope_outside_sample_scope() {
         for &cmd in Command::ALL {
             reset_to(scope);
             let before = state_fingerprint();
-            // SAFETY: valid arguments, outside sample scope.
-            unsafe { call(cmd) };
+            call(cmd);
             let errors = drain();
             let unchanged = state_fingerprint() == before;
             failures.extend(judge(cmd, scope, &errors, unchanged));
@@ -235,7 +232,7 @@ fn every_command_in_every_scope_outside_sample_scope() {
         }
     }
     reset_to(Scope::Uninitialised);
-    assert_eq!(checked, 4 * 44);
+    assert_eq!(checked, 4 * COMMAND_COUNT);
     assert!(
         failures.is_empty(),
         "{} failure(s):\n{}",
@@ -351,7 +348,7 @@ fn every_command_in_sample_scope() {
     );
 
     let log = PROBE_LOG.lock().unwrap().take().expect("the probe ran");
-    assert_eq!(log.calls.len(), 44);
+    assert_eq!(log.calls.len(), COMMAND_COUNT);
     let failures: Vec<String> = log
         .calls
         .iter()
@@ -579,24 +576,21 @@ fn bad_enumerations_values_and_fields_are_refused() {
 #[test]
 fn figure2_bad_mapping_output_is_skipped() {
     let _g = serial();
-    // SAFETY: valid arguments; the output index is bad on purpose.
-    unsafe {
-        refused(
-            Scope::Object,
-            "vlMap(VL_KS, VL_F, 1, 2)",
-            VL_BADINDEX,
-            || vlMap(VL_KS, VL_F, 1, 2),
-        );
-        refused(Scope::Object, "vlMap through mapping 9", VL_BADID, || {
-            vlMap(VL_KS, VL_F, 9, 1)
-        });
-        // The valid line 19 is accepted and changes the object.
-        reset_to(Scope::Object);
-        let before = state_fingerprint();
-        vlMap(VL_O, VL_F, 1, 1);
-        assert_eq!(drain(), Vec::<i32>::new());
-        assert_ne!(state_fingerprint(), before);
-    }
+    refused(
+        Scope::Object,
+        "vlMap(VL_KS, VL_F, 1, 2)",
+        VL_BADINDEX,
+        || vlMap(VL_KS, VL_F, 1, 2),
+    );
+    refused(Scope::Object, "vlMap through mapping 9", VL_BADID, || {
+        vlMap(VL_KS, VL_F, 9, 1)
+    });
+    // The valid line 19 is accepted and changes the object.
+    reset_to(Scope::Object);
+    let before = state_fingerprint();
+    vlMap(VL_O, VL_F, 1, 1);
+    assert_eq!(drain(), Vec::<i32>::new());
+    assert_ne!(state_fingerprint(), before);
     reset_to(Scope::Uninitialised);
 }
 
@@ -604,16 +598,14 @@ static SCENE_CALLED: AtomicBool = AtomicBool::new(false);
 static SCENE_THREAD: Mutex<Option<std::thread::ThreadId>> = Mutex::new(None);
 
 extern "C" fn calls_vl_scene(_p: *mut vlfloat, _misc: *mut c_void) {
-    // SAFETY: in sample scope: vlScene must be refused without touching the locked state.
-    unsafe {
-        if !SCENE_CALLED.swap(true, Ordering::SeqCst) {
-            *SCENE_THREAD.lock().unwrap() = Some(std::thread::current().id());
-            vlScene();
-            vlEnd();
-            vlInit();
-        }
-        vlSet(VL_O, 1.0);
+    // In sample scope: each must be refused without touching the locked state.
+    if !SCENE_CALLED.swap(true, Ordering::SeqCst) {
+        *SCENE_THREAD.lock().unwrap() = Some(std::thread::current().id());
+        vlScene();
+        vlEnd();
+        vlInit();
     }
+    vlSet(VL_O, 1.0);
 }
 
 /// A field function calling scope-changing commands: each records VL_BADSCOPE from the worker
@@ -658,13 +650,10 @@ fn field_function_calling_vl_scene_records_badscope_without_deadlock() {
 fn error_queue_is_bounded_and_fifo() {
     let _g = serial();
     reset_to(Scope::Uninitialised);
-    // SAFETY: no arguments / valid arguments.
-    unsafe {
-        vlScene(); // VL_BADSCOPE first
-        vlInit();
-        for _ in 0..2000 {
-            vlRenderType(99); // VL_BADENUM
-        }
+    vlScene(); // VL_BADSCOPE first
+    vlInit();
+    for _ in 0..2000 {
+        vlRenderType(99); // VL_BADENUM
     }
     let errors = drain();
     assert_eq!(
@@ -675,8 +664,7 @@ fn error_queue_is_bounded_and_fifo() {
     assert_eq!(errors[0], VL_BADSCOPE, "oldest first");
     assert!(errors[1..].iter().all(|e| *e == VL_BADENUM));
     assert!(last_error_message().is_some_and(|m| m.contains("render type")));
-    // SAFETY: no arguments.
-    assert_eq!(unsafe { vlError() }, VL_NOERROR);
+    assert_eq!(vlError(), VL_NOERROR);
     reset_to(Scope::Uninitialised);
 }
 
@@ -700,8 +688,7 @@ fn error_strings_are_static_and_total() {
 fn vlu_camera_is_vl_camera_with_y_up_and_default_fov() {
     let _g = serial();
     reset_to(Scope::Library);
-    // SAFETY: valid arguments.
-    unsafe { vluCamera(1.0, 2.0, -3.0, 0.5, 0.5, 0.5) };
+    vluCamera(1.0, 2.0, -3.0, 0.5, 0.5, 0.5);
     let a = state_fingerprint();
     reset_to(Scope::Library);
     let cam = VLCAMERA {
