@@ -126,7 +126,7 @@ impl Dataset {
         // Per plane of bricks (in parallel), separably: the extremes over the plane's slab of
         // nodes per (x, y) column, then over each brick row's span of y, then along x. Only
         // small scratch rows: a first image pays a page fault per 4 KiB of fresh memory, which
-        // whole intermediate grids made a third of the ranges' time.
+        // whole intermediate grids would pay over and over.
         use rayon::prelude::*;
         let [nx, ny, _] = d;
         let plane = counts[0] * counts[1];

@@ -29,7 +29,7 @@ pub(super) fn pack_flags(flags: &[u8]) -> u64 {
     const SPREAD: u64 = 0x0102_0408_1020_4080;
     let byte = |x: u64, b: usize| (x.wrapping_mul(SPREAD) >> 56) << (8 * b);
     // Whole words of eight flags read as they are; the last, shorter group padded with zeros
-    // (apart: padding every group cost a copy per eight flags).
+    // (apart: padding every group would cost a copy per eight flags).
     let mut eights = flags.chunks_exact(8);
     let mut w = 0;
     for (b, eight) in (&mut eights).enumerate() {
@@ -187,9 +187,9 @@ impl Dataset {
         let [sx, sy, sz] = self.strides;
         let top = self.top32.map(|t| t as usize);
         // The extreme that decides a cell: the largest raw voxel where increasing, the
-        // smallest where decreasing. `t` is moved into the test: captured by reference, it was
-        // loaded again for every cell (the flags written might have been it, for all the
-        // compiler knew), and the loop did not compile to lanes.
+        // smallest where decreasing. `t` is moved into the test: captured by reference, it would
+        // be loaded again for every cell (the flags written might be it, for all the compiler
+        // knows), and the loop would not compile to lanes.
         let pick = |p: T, q: T| {
             if UP {
                 if p > q {

@@ -35,8 +35,8 @@ impl Dataset {
     /// [`Dataset::cells_above`]). The cells are found in lanes across the points, with the
     /// operations of [`Dataset::cell_in_lanes`] lane for lane, so the same values. The other
     /// values are 0. (Written into `out`, all eight values, rather than returned: the batched
-    /// march keeps one array for every run, and a returned array was copied from the return
-    /// slot to the caller's, one f32 at a time, on every run.) `cells` receives the points'
+    /// march keeps one array for every run, and a returned array would be copied from the
+    /// return slot to the caller's, one f32 at a time, on every run.) `cells` receives the points'
     /// cells, for their gradients (see [`Cells8`]).
     #[inline]
     pub(crate) fn trilinear8(
@@ -109,8 +109,8 @@ impl Dataset {
     /// Bit `i`: point `i` of the last [`Dataset::trilinear8`] that filled `cells` (of the
     /// first [`Cells8::count`]) lies in an interior cell (its 4×4×4 neighbourhood inside the
     /// grid, see [`Dataset::interior_cell32`]): 1 ≤ cu < n − 2 along every axis (see
-    /// [`Dataset::cell_in_lanes`]). Taken by the batched march only for runs with a sample to
-    /// shade, not for every run as `trilinear8` did. The lower bound as one test of the three
+    /// [`Dataset::cell_in_lanes`]). Apart from `trilinear8`, so that the batched march takes it
+    /// only for runs with a sample to shade. The lower bound as one test of the three
     /// axes' least (`interior8_is_the_tests_axis_by_axis`).
     #[inline]
     pub(crate) fn interior8(&self, cells: &Cells8) -> u32 {
@@ -131,9 +131,9 @@ impl Dataset {
     /// The values at the first `count` of `N` points whose cells' first nodes are `at` (as
     /// `index` converts them to node indices) and whose weights `f` are given by axis (see
     /// [`Dataset::trilinear8`]), written into `out`, which holds 0s: a value the mask knows to
-    /// be 0 is left as it is. (The mask tested here rather than in the cell's interpolation, the
-    /// rejected cells skip the 0's store and the loads of their weights, which the compiler had
-    /// hoisted above the test.)
+    /// be 0 is left as it is. (The mask is tested here rather than in the cell's interpolation, so
+    /// that the rejected cells skip the 0's store and the loads of their weights, which the
+    /// compiler would hoist above the test there.)
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn values_in_cells<T: Copy, const N: usize>(

@@ -14,14 +14,14 @@
 //! - `filter`: the [`Filter`]s (nearest node, trilinear, the Mitchell–Netravali BC family of
 //!   tricubic filters) and the generic value and gradient paths;
 //! - `trilinear`: the specialised trilinear path the renderer's inner loops call (the cell in
-//!   SSE lanes, the cell's value, the interior gradient and its [`CellGradients`] cache);
-//! - `lanes`: the trilinear values of eight points at once ([`Cells8`]) for the batched march;
+//!   SSE lanes, the cell's value, the interior gradient and its `CellGradients` cache);
+//! - `lanes`: the trilinear values of eight points at once (`Cells8`) for the batched march;
 //! - `bricks`: the brick ranges ([`Bricks`], [`BRICK`]) of empty-space skipping;
-//! - `cells`: the [`CellMask`]s, which trilinear cells may reach a bound.
+//! - `cells`: the `CellMask`s, which trilinear cells may reach a bound.
 //!
 //! Not here: what the values mean (transfer functions and field programs, `program`), the
 //! skipping structures built from the brick ranges (`skip`), the packet march that reads the
-//! values or voxels directly (`render::packet`, through [`Dataset::packet_parts`]), other file
+//! values or voxels directly (`render::packet`, through `Dataset::packet_parts`), other file
 //! formats (the `vlconvert` tool converts them to `.vlb`), and atomic file output (`output`).
 //!
 //! The caches a render fills (node values, brick ranges, cell masks) are made once per dataset

@@ -33,14 +33,15 @@ impl Default for CellGradients {
 /// The trilinear value of a cell, clamped to [0, 1], from its eight nodes as two pairs of
 /// x-rows, `z0 = [r00, r01]` and `z1 = [r10, r11]` (`rYZ` the row at y + Y, z + Z, its two
 /// nodes along x), at weights `f` of the second nodes: the lerps `a + (b − a)·t` along x, then
-/// y, then z, of the scalar code (`c00 = lerp(r00[0], r00[1], fx)`, …,
-/// `lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz)`), but the x-lerps and the y-lerps in
+/// y, then z (`c00 = lerp(r00[0], r00[1], fx)`, …,
+/// `lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz)`), the x-lerps and the y-lerps in
 /// SSE lanes: lanes 0 and 2 of each register hold the two rows' first nodes, lanes 1 and 3
 /// their second, so lerping each register against itself shifted down a lane leaves c00 and
 /// c01 (c10 and c11) in lanes 0 and 2, and lerping the two results leaves both y-lerps there
 /// (lanes 1 and 3 are never read). Each lane is the same f32 subtraction, product and sum, with
-/// no fused multiply-add, so the same bits (`trilinear_rows_is_the_scalar_lerps`); it takes
-/// the pairs as the two rows' 8-byte loads, where the scalar lerps shuffled them about.
+/// no fused multiply-add, so the same bits as the scalar lerps
+/// (`trilinear_rows_is_the_scalar_lerps`); it takes the pairs as the two rows' 8-byte loads,
+/// which scalar lerps would shuffle about.
 #[inline(always)]
 pub(super) fn trilinear_rows(z0: [f32; 4], z1: [f32; 4], [fx, fy, fz]: [f32; 3]) -> f32 {
     use wide::f32x4;
@@ -177,7 +178,7 @@ impl Dataset {
                 ])
             });
             // (Always there: the cell lies inside the grid. The rows by reference: copied
-            // out as arrays, they were loaded through integer registers.)
+            // out as arrays, they would be loaded through integer registers.)
             let [r00, r10, r01, r11] = rows?;
             let z0 = [r00[0], r00[1], r01[0], r01[1]];
             Some(trilinear_rows(z0, [r10[0], r10[1], r11[0], r11[1]], f))

@@ -79,10 +79,10 @@ fn cells_in_lanes_are_the_cells_axis_by_axis() {
     trilinear8_is_trilinear(&long, &mut rng, &specials);
 }
 
-/// [`Dataset::interior8`] against the test axis by axis it replaced (kept here verbatim),
-/// on clamped coordinates drawn from awkward numbers (±0, ±∞, subnormals, huge, 1 and the
-/// interior bound and their neighbours) and random bits, at every count: every number but
-/// NaN, which `trilinear8` never writes (checked here from NaN points).
+/// [`Dataset::interior8`] against the test axis by axis, on clamped coordinates drawn from
+/// awkward numbers (±0, ±∞, subnormals, huge, 1 and the interior bound and their neighbours)
+/// and random bits, at every count: every number but NaN, which `trilinear8` never writes
+/// (checked here from NaN points).
 #[test]
 fn interior8_is_the_tests_axis_by_axis() {
     use wide::f32x8;
@@ -92,7 +92,7 @@ fn interior8_is_the_tests_axis_by_axis() {
         let Some([_, _, inner]) = d.lanes else {
             panic!("{dims:?} is small enough for lanes");
         };
-        let old = |cells: &Cells8| {
+        let axis_by_axis = |cells: &Cells8| {
             let inside = |axis: usize| {
                 let cu = f32x8::new(cells.cu[axis]);
                 cu.simd_ge(f32x8::ONE) & cu.simd_lt(f32x8::splat(inner[axis]))
@@ -132,7 +132,11 @@ fn interior8_is_the_tests_axis_by_axis() {
                 count: round % 10,
                 ..Cells8::default()
             };
-            assert_eq!(d.interior8(&cells), old(&cells), "{dims:?} {cells:?}");
+            assert_eq!(
+                d.interior8(&cells),
+                axis_by_axis(&cells),
+                "{dims:?} {cells:?}"
+            );
         }
         // NaN and infinite points give clamped coordinates that are numbers.
         let mut cells = Cells8::default();
@@ -229,7 +233,12 @@ fn cell_reads_are_the_nodes() {
 }
 
 /// [`Dataset::trilinear8`]'s values, returned.
-pub(super) fn values8(d: &Dataset, p: &[[f32; 8]; 3], count: usize, mask: Option<&CellMask>) -> [f32; 8] {
+pub(super) fn values8(
+    d: &Dataset,
+    p: &[[f32; 8]; 3],
+    count: usize,
+    mask: Option<&CellMask>,
+) -> [f32; 8] {
     let mut out = [1.0f32; 8]; // not 0: `trilinear8` sets every value
     d.trilinear8(p, count, mask, &mut out, &mut Cells8::default());
     out

@@ -5,20 +5,21 @@
 use super::super::trilinear::trilinear_rows;
 use super::*;
 
-/// [`CellGradients`] as it was before the differences were stored in the order (y, z, x).
-struct OldCellGradients {
+/// A [`CellGradients`] whose differences are in the order (x, y, z), for
+/// [`gradient_row_by_row`].
+struct XyzCellGradients {
     lo: usize,
     diffs: [[f32; 4]; 8],
 }
 
-/// `Dataset::trilinear_gradient_at` before its rows were bounds-checked through the two
-/// furthest rows and its differences gathered in the order (y, z, x), verbatim (`self` as
-/// `d`), the oracle of `gradient_rows_are_the_row_by_row_read`.
-fn old_trilinear_gradient_at(
+/// `Dataset::trilinear_gradient_at` the plain way: each row bounds-checked on its own, the
+/// differences gathered by a transpose in the order (x, y, z), and the products summed in a
+/// loop from 0; the oracle of `gradient_rows_are_the_row_by_row_read`.
+fn gradient_row_by_row(
     d: &Dataset,
     lo: usize,
     [fx, fy, fz]: [f32; 3],
-    cache: &mut OldCellGradients,
+    cache: &mut XyzCellGradients,
 ) -> Option<[f64; 3]> {
     if cache.lo != lo {
         let (sy, sz) = (d.strides[1], d.strides[2]);
@@ -77,11 +78,11 @@ fn same_f64(a: f64, b: f64) -> bool {
 }
 
 /// The trilinear gradient's rows read under the test of the neighbourhood's last row, and
-/// its differences gathered in the order (y, z, x), give what the row-by-row read gave:
-/// a gradient exactly for the neighbourhood starts whose last row lies inside the values
-/// (every interior cell's: `specialised_trilinear_paths_agree_with_the_generic_filter`),
-/// and there the same bits, through a cache that hits and misses, on values of every kind
-/// (random bits: NaNs, infinities, subnormals, ±0, huge) and awkward weights.
+/// its differences gathered in the order (y, z, x), give a gradient exactly for the
+/// neighbourhood starts whose last row lies inside the values (every interior cell's:
+/// `specialised_trilinear_paths_agree_with_the_generic_filter`), and there the bits of the
+/// row-by-row read ([`gradient_row_by_row`]), through a cache that hits and misses, on values
+/// of every kind (random bits: NaNs, infinities, subnormals, ±0, huge) and awkward weights.
 #[test]
 fn gradient_rows_are_the_row_by_row_read() {
     let rng = crate::testing::Xorshift::new(0x5eed_6a0d);
@@ -121,9 +122,9 @@ fn gradient_rows_are_the_row_by_row_read() {
                     .collect::<Vec<f32>>(),
             );
         }
-        let (mut new, mut old) = (
+        let (mut cache, mut xyz_cache) = (
             CellGradients::default(),
-            OldCellGradients {
+            XyzCellGradients {
                 lo: usize::MAX,
                 diffs: [[0.0; 4]; 8],
             },
@@ -131,13 +132,13 @@ fn gradient_rows_are_the_row_by_row_read() {
         for lo in 0..d.raw.len() + 3 {
             for _ in 0..3 {
                 let f = [weight(&rng), weight(&rng), weight(&rng)];
-                let got = d.trilinear_gradient_at::<true>(lo, f, &mut new);
+                let got = d.trilinear_gradient_at::<true>(lo, f, &mut cache);
                 let (sy, sz) = (d.strides[1], d.strides[2]);
                 let inside = lo + 3 * sy + 3 * sz + 4 <= d.raw.len();
                 assert_eq!(got.is_some(), inside, "{dims:?} lo {lo}");
-                // (The old read where the new one reads, the same cache traffic.)
+                // (The plain read where the gradient reads, the same cache traffic.)
                 let want = if inside {
-                    old_trilinear_gradient_at(&d, lo, f, &mut old)
+                    gradient_row_by_row(&d, lo, f, &mut xyz_cache)
                 } else {
                     None
                 };
@@ -241,14 +242,13 @@ fn specialised_trilinear_paths_agree_with_the_generic_filter() {
     assert_eq!(a, slab.sample([0.3, 0.6, 0.9], Filter::Trilinear));
 }
 
-/// [`trilinear_rows`] in lanes against the scalar lerps it replaced (kept here verbatim),
-/// bit for bit, on nodes and weights drawn from awkward values (NaN, ±0, ±∞, subnormals,
-/// huge, the unit interval's ends) and from random bits, and on the usual nodes in [0, 1]
-/// with weights in [0, 1). Where both give NaN only that is required: Rust leaves a NaN's
+/// [`trilinear_rows`] in lanes against the scalar lerps, bit for bit, on nodes and weights
+/// drawn from awkward values (NaN, ±0, ±∞, subnormals, huge, the unit interval's ends) and from
+/// random bits, and on the usual nodes in [0, 1] with weights in [0, 1). Where both give NaN only that is required: Rust leaves a NaN's
 /// payload unspecified, and the compiler may swap a sum's or product's operands.
 #[test]
 fn trilinear_rows_is_the_scalar_lerps() {
-    let old = |[r00, r10, r01, r11]: [[f32; 2]; 4], [fx, fy, fz]: [f32; 3]| {
+    let scalar = |[r00, r10, r01, r11]: [[f32; 2]; 4], [fx, fy, fz]: [f32; 3]| {
         let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
         let (c00, c10, c01, c11) = (
             lerp(r00[0], r00[1], fx),
@@ -293,7 +293,7 @@ fn trilinear_rows_is_the_scalar_lerps() {
         let [r00, r10, r01, r11] = rows;
         let z0 = [r00[0], r00[1], r01[0], r01[1]];
         let new = trilinear_rows(z0, [r10[0], r10[1], r11[0], r11[1]], f);
-        let want = old(rows, f);
+        let want = scalar(rows, f);
         assert!(
             new.to_bits() == want.to_bits() || (new.is_nan() && want.is_nan()),
             "{rows:?} {f:?}: {new:?} against {want:?}"
