@@ -1,0 +1,182 @@
+//! Brick ranges: the range of node values any point of each 4×4×4 brick of nodes can read under
+//! a filter, the unit of empty-space skipping.
+//!
+//! This file owns [`Bricks`] and their computation from a dataset's raw voxels (per dataset and
+//! filter reach, once, in parallel). Not here: the skipping structures and decisions built from
+//! the ranges (`skip`), and the finer per-cell test of one bound (the `cells` module's
+//! [`CellMask`](super::CellMask)).
+
+use super::{normaliser, Dataset, Filter, Voxels};
+
+/// Nodes per side of a brick, the unit of empty-space skipping.
+pub const BRICK: usize = 4;
+
+/// The range of node values that any point of each brick can read under a filter: brick
+/// (i, j, k) covers object coordinates of node indices [4i, 4i + 4] × …, and its range is taken
+/// over every node the filter can reach from there, including from points a rounding error
+/// outside it.
+#[derive(Clone, Debug)]
+pub struct Bricks {
+    /// Brick counts per axis.
+    pub dims: [usize; 3],
+    /// Smallest value per brick, x fastest.
+    pub min: Vec<f32>,
+    /// Largest value per brick.
+    pub max: Vec<f32>,
+}
+
+impl Bricks {
+    /// The (min, max) of brick (i, j, k); indices are clamped to the grid.
+    #[inline]
+    pub fn get(&self, i: usize, j: usize, k: usize) -> (f32, f32) {
+        let d = self.dims;
+        let idx = i.min(d[0] - 1) + d[0] * (j.min(d[1] - 1) + d[1] * k.min(d[2] - 1));
+        (self.min[idx], self.max[idx])
+    }
+}
+
+/// Lowers each of `min` to the matching value of `lo` where that is smaller, and raises each of
+/// `max` to the matching value of `hi` where that is larger (raw voxels: no NaN among them).
+fn widen<T: Copy + PartialOrd>(min: &mut [T], max: &mut [T], lo: &[T], hi: &[T]) {
+    // (As selects rather than conditional stores, so that they compile to lanes of minima and
+    // maxima.)
+    for (m, &x) in min.iter_mut().zip(lo) {
+        *m = if x < *m { x } else { *m };
+    }
+    for (m, &x) in max.iter_mut().zip(hi) {
+        *m = if x > *m { x } else { *m };
+    }
+}
+
+impl Dataset {
+    /// The brick ranges for `filter` (computed once per dataset and reach, then shared).
+    pub fn bricks(&self, filter: Filter) -> &Bricks {
+        let reach = match filter {
+            Filter::Nearest | Filter::Trilinear => 1,
+            Filter::Cubic { .. } => 2,
+        };
+        self.bricks[reach - 1].get_or_init(|| self.compute_bricks(reach))
+    }
+
+    fn compute_bricks(&self, reach: usize) -> Bricks {
+        // Over the raw voxels (a quarter or half of the node values' memory, compared a byte
+        // or two at a time), then normalised: `normaliser` is monotone, so the normalised
+        // raw extremes are the extremes of the node values, the same numbers.
+        let (min, max) = match &self.raw {
+            Voxels::U8(v) => self.normalised(self.raw_brick_extremes(v, reach)),
+            Voxels::U16(v) => self.normalised(self.raw_brick_extremes(v, reach)),
+        };
+        Bricks {
+            dims: self.brick_counts(),
+            min,
+            max,
+        }
+    }
+
+    /// The node-value ranges of raw ranges `(lo, hi)`: each end normalised, the two swapped
+    /// where the normalisation decreases (b < a).
+    fn normalised<T: Copy + Into<f64> + Sync>(
+        &self,
+        (lo, hi): (Vec<T>, Vec<T>),
+    ) -> (Vec<f32>, Vec<f32>) {
+        use rayon::prelude::*;
+        let norm = normaliser(self.a, self.b);
+        let up = self.b > self.a;
+        // (In parallel: a brick's normalisation is two divisions, and a scan has some 10⁵
+        // bricks.)
+        lo.par_iter()
+            .zip(&hi)
+            .with_min_len(1 << 12)
+            .map(|(&l, &h)| {
+                let (l, h) = (norm(l.into()), norm(h.into()));
+                if up {
+                    (l, h)
+                } else {
+                    (h, l)
+                }
+            })
+            .unzip()
+    }
+
+    /// Bricks per axis.
+    fn brick_counts(&self) -> [usize; 3] {
+        self.dims
+            .map(|n| (n.saturating_sub(1)).div_ceil(BRICK).max(1))
+    }
+
+    /// The smallest and largest raw voxel of each brick's padded span of nodes (see
+    /// [`Bricks`]), x fastest, from the raw voxels `v`.
+    fn raw_brick_extremes<T>(&self, v: &[T], reach: usize) -> (Vec<T>, Vec<T>)
+    where
+        T: Copy + PartialOrd + Default + Send + Sync,
+    {
+        let d = self.dims;
+        let counts = self.brick_counts();
+        // Along each axis, a point of brick b has its continuous index u in [4b, 4b + 4], or a
+        // rounding error outside. Trilinear (reach 1) reads nodes floor(u) and floor(u) + 1, so
+        // [4b − 1, 4b + 5] covers u from just below 4b to just above 4b + 4; nearest reads
+        // round(u), inside that; the cubic filter (reach 2) reads floor(u) − 1 … floor(u) + 2,
+        // so [4b − 2, 4b + 6].
+        let pad = reach;
+        let span = |b: usize, n: usize| {
+            let lo = (b * BRICK).saturating_sub(pad);
+            let hi = (b * BRICK + BRICK + pad).min(n - 1);
+            (lo, hi)
+        };
+        // Per plane of bricks (in parallel), separably: the extremes over the plane's slab of
+        // nodes per (x, y) column, then over each brick row's span of y, then along x. Only
+        // small scratch rows: a first image pays a page fault per 4 KiB of fresh memory, which
+        // whole intermediate grids would pay over and over.
+        use rayon::prelude::*;
+        let [nx, ny, _] = d;
+        let plane = counts[0] * counts[1];
+        let zero = T::default();
+        let (mut min, mut max) = (vec![zero; plane * counts[2]], vec![zero; plane * counts[2]]);
+        let layer = |z: usize| &v[z * nx * ny..(z + 1) * nx * ny];
+        min.par_chunks_mut(plane)
+            .zip(max.par_chunks_mut(plane))
+            .enumerate()
+            .for_each_init(
+                || {
+                    (
+                        vec![zero; nx * ny],
+                        vec![zero; nx * ny],
+                        vec![zero; nx],
+                        vec![zero; nx],
+                    )
+                },
+                |(zmin, zmax, ymin, ymax), (k, (min, max))| {
+                    let (z0, z1) = span(k, d[2]);
+                    zmin.copy_from_slice(layer(z0));
+                    zmax.copy_from_slice(layer(z0));
+                    for z in z0 + 1..=z1 {
+                        widen(zmin, zmax, layer(z), layer(z));
+                    }
+                    for bj in 0..counts[1] {
+                        let (y0, y1) = span(bj, ny);
+                        ymin.copy_from_slice(&zmin[y0 * nx..(y0 + 1) * nx]);
+                        ymax.copy_from_slice(&zmax[y0 * nx..(y0 + 1) * nx]);
+                        for y in y0 + 1..=y1 {
+                            let r = y * nx..(y + 1) * nx;
+                            widen(ymin, ymax, &zmin[r.clone()], &zmax[r]);
+                        }
+                        for bi in 0..counts[0] {
+                            let (x0, x1) = span(bi, nx);
+                            let (mut mn, mut mx) = (ymin[x0], ymax[x0]);
+                            for (&lo, &hi) in ymin[x0..=x1].iter().zip(&ymax[x0..=x1]) {
+                                if lo < mn {
+                                    mn = lo;
+                                }
+                                if hi > mx {
+                                    mx = hi;
+                                }
+                            }
+                            min[bi + counts[0] * bj] = mn;
+                            max[bi + counts[0] * bj] = mx;
+                        }
+                    }
+                },
+            );
+        (min, max)
+    }
+}

@@ -1,0 +1,317 @@
+//! Volume datasets: a regular grid of normalised voxels, read from `.vlb` files and sampled
+//! through interpolation filters.
+//!
+//! A [`Dataset`] is a regular grid of nodes (node i of n lies at object coordinate i/(n − 1); a
+//! dimension of 1 is constant along its axis) holding 8- or 16-bit voxels normalised by
+//! `min(1, max(0, (v − a)/(b − a)))`. It is immutable once loaded and shared by `Arc` between
+//! every object that casts it, so 32 chess pieces made from six datasets hold six grids.
+//!
+//! This file owns the grid itself: the [`Dataset`] struct with its construction, its accessors,
+//! the raw [`Voxels`], the normalisation, and the node values made from the voxels on first use.
+//! The concerns built on it live in submodules, each adding its own `impl Dataset` block:
+//!
+//! - `vlb`: the `.vlb` file format ([`MAGIC`], [`HEADER_LEN`], parsing, loading and saving);
+//! - `filter`: the [`Filter`]s (nearest node, trilinear, the Mitchell–Netravali BC family of
+//!   tricubic filters) and the generic value and gradient paths;
+//! - `trilinear`: the specialised trilinear path the renderer's inner loops call (the cell in
+//!   SSE lanes, the cell's value, the interior gradient and its `CellGradients` cache);
+//! - `lanes`: the trilinear values of eight points at once (`Cells8`) for the batched march;
+//! - `bricks`: the brick ranges ([`Bricks`], [`BRICK`]) of empty-space skipping;
+//! - `cells`: the `CellMask`s, which trilinear cells may reach a bound.
+//!
+//! Not here: what the values mean (transfer functions and field programs, `program`), the
+//! skipping structures built from the brick ranges (`skip`), the packet march that reads the
+//! values or voxels directly (`render::packet`, through `Dataset::packet_parts`), other file
+//! formats (the `vlconvert` tool converts them to `.vlb`), and atomic file output (`output`).
+//!
+//! The caches a render fills (node values, brick ranges, cell masks) are made once per dataset
+//! on first use and then shared; they never change what a dataset is ([`PartialEq`] compares
+//! the dimensions, normalisation and voxels).
+
+mod bricks;
+mod cells;
+mod filter;
+mod lanes;
+#[cfg(test)]
+mod tests;
+mod trilinear;
+mod vlb;
+
+pub use bricks::{Bricks, BRICK};
+pub(crate) use cells::CellMask;
+use cells::CellMasks;
+pub use filter::{bc_abs_sum, bc_kernel, Filter};
+pub(crate) use lanes::Cells8;
+pub(crate) use trilinear::CellGradients;
+pub use vlb::{HEADER_LEN, MAGIC};
+
+use crate::error::{err, ErrorCode, Result};
+
+/// The largest number of voxels a dataset may have (2^32; 16 GiB of normalised values).
+pub const MAX_VOXELS: u64 = 1 << 32;
+
+/// The raw voxels of a dataset, as stored in the file.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Voxels {
+    /// One byte per voxel.
+    U8(Vec<u8>),
+    /// Two bytes per voxel.
+    U16(Vec<u16>),
+}
+
+impl Voxels {
+    /// Bytes per voxel.
+    pub fn width(&self) -> u32 {
+        match self {
+            Voxels::U8(_) => 1,
+            Voxels::U16(_) => 2,
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Voxels::U8(v) => v.len(),
+            Voxels::U16(v) => v.len(),
+        }
+    }
+
+    fn get(&self, i: usize) -> f64 {
+        match self {
+            Voxels::U8(v) => v[i] as f64,
+            Voxels::U16(v) => v[i] as f64,
+        }
+    }
+}
+
+/// The normalisation of raw voxel values to node values, `(v − a)/(b − a)` clamped to [0, 1],
+/// in f64 and then rounded to f32: the node values ([`Dataset::new`]) and the brick ranges
+/// found from raw extremes ([`Dataset::bricks`]) both come from it. Monotone in v
+/// (non-decreasing for b > a, non-increasing for b < a): each step (a subtraction, a division
+/// by a constant, a clamp, a rounding) is, so the extremes of the node values over any set of
+/// nodes are the normalised extremes of their raw values.
+fn normaliser(a: f32, b: f32) -> impl Fn(f64) -> f32 + Copy + Sync {
+    let (af, bf) = (a as f64, b as f64);
+    move |v: f64| ((v - af) / (bf - af)).clamp(0.0, 1.0) as f32
+}
+
+/// A loaded dataset: dimensions, raw voxels, normalisation and the normalised node values.
+#[derive(Clone, Debug)]
+pub struct Dataset {
+    dims: [usize; 3],
+    a: f32,
+    b: f32,
+    raw: Voxels,
+    /// Normalised node values, x fastest: computed on first use ([`Dataset::values`]). A
+    /// render that reads only the raw voxels (the packet march of 8-bit voxels, the brick
+    /// ranges, the cell masks) never makes them: for a scan, four times its voxels' memory,
+    /// and a large part of its first image's time.
+    values: std::sync::OnceLock<Vec<f32>>,
+    /// Brick ranges, computed on first use: for reach 1 (nearest, trilinear) and 2 (cubic).
+    bricks: [std::sync::OnceLock<Bricks>; 2],
+    /// Cell masks built so far, by the bits of their bound (see [`Dataset::cells_above`]).
+    cell_masks: std::sync::Arc<std::sync::Mutex<CellMasks>>,
+    /// n − 1 per axis, as f64 (int ↔ float conversions of usize are slow on x86-64).
+    last: [f64; 3],
+    /// 0.5·(n − 1) per axis (exact), the scale of a gradient's central differences.
+    half_last: [f64; 3],
+    /// The offset of node (1, 1, 1) from node (0, 0, 0) along a cell's neighbourhood: 1 + nx +
+    /// nx·ny (see [`Dataset::neighbourhood_lo`]).
+    lo_offset: usize,
+    /// n − 1 per axis, as f32.
+    last32: [f32; 3],
+    /// The last cell's first node per axis, max(n − 2, 0), as i32 (saturated).
+    top32: [i32; 3],
+    /// For [`Dataset::cell32`] in SSE lanes: (n − 1, max(n − 2, 0), n − 2) per axis as f32 (a
+    /// fourth lane of 0, 0, 1), when every n is at most 2²⁴ (so they are exact); else `None`.
+    lanes: Option<[[f32; 4]; 3]>,
+    /// Node strides (1, nx, nx·ny), 0 along axes of one node.
+    strides: [usize; 3],
+    /// The strides as f32 when there are at most 2²⁴ nodes (every node index, and every
+    /// product and sum of [`Dataset::node_index`], is then an integer exact in f32), for
+    /// [`Dataset::trilinear8`]'s cells' first nodes in lanes; else `None`.
+    index_lanes: Option<[f32; 3]>,
+    /// [`Dataset::lanes`]' three rows and [`Dataset::index_lanes`] (0s where that is `None`),
+    /// each number splatted across eight aligned lanes: [`Dataset::trilinear8`] then reads a
+    /// splat as one load, or as the memory operand of its first use, instead of a scalar load
+    /// and a shuffle.
+    splats: ([[wide::f32x4; 3]; 4], [[wide::f32x8; 3]; 4]),
+}
+
+impl PartialEq for Dataset {
+    /// Datasets are equal when their contents are (caches aside).
+    fn eq(&self, other: &Dataset) -> bool {
+        self.dims == other.dims
+            && self.a.to_bits() == other.a.to_bits()
+            && self.b.to_bits() == other.b.to_bits()
+            && self.raw == other.raw
+    }
+}
+
+impl Dataset {
+    /// A dataset from raw voxels (x fastest, then y, then z) and normalisation a, b.
+    pub fn new(dims: [usize; 3], raw: Voxels, a: f32, b: f32) -> Result<Dataset> {
+        if dims.contains(&0) {
+            return err(
+                ErrorCode::BadValue,
+                format!("dataset dimensions {dims:?} contain 0"),
+            );
+        }
+        let n = dims
+            .iter()
+            .try_fold(1u64, |acc, &d| acc.checked_mul(d as u64));
+        match n {
+            Some(n) if n <= MAX_VOXELS && n as usize == raw.len() => {}
+            _ => {
+                return err(
+                    ErrorCode::BadValue,
+                    format!(
+                        "dataset dimensions {dims:?} do not match {} voxels",
+                        raw.len()
+                    ),
+                )
+            }
+        }
+        if !a.is_finite() || !b.is_finite() || a == b {
+            return err(
+                ErrorCode::BadValue,
+                format!("dataset normalisation a = {a}, b = {b}: both finite and different"),
+            );
+        }
+        let strides = [
+            usize::from(dims[0] > 1),
+            if dims[1] > 1 { dims[0] } else { 0 },
+            if dims[2] > 1 { dims[0] * dims[1] } else { 0 },
+        ];
+        Ok(Dataset {
+            dims,
+            a,
+            b,
+            bricks: Default::default(),
+            cell_masks: Default::default(),
+            last: dims.map(|n| (n - 1) as f64),
+            half_last: dims.map(|n| 0.5 * (n - 1) as f64),
+            lo_offset: 1 + dims[0] + dims[0] * dims[1],
+            last32: dims.map(|n| (n - 1) as f32),
+            top32: dims.map(|n| i32::try_from(n.saturating_sub(2)).unwrap_or(i32::MAX)),
+            lanes: dims.iter().all(|&n| n <= 1 << 24).then(|| {
+                let lane =
+                    |f: &dyn Fn(usize) -> f32, w: f32| [f(dims[0]), f(dims[1]), f(dims[2]), w];
+                [
+                    lane(&|n| (n - 1) as f32, 0.0),
+                    lane(&|n| n.saturating_sub(2) as f32, 0.0),
+                    lane(&|n| n as f32 - 2.0, 1.0),
+                ]
+            }),
+            strides,
+            index_lanes: (raw.len() <= 1 << 24).then(|| strides.map(|s| s as f32)),
+            splats: Default::default(),
+            values: std::sync::OnceLock::new(),
+            raw,
+        }
+        .with_splats())
+    }
+
+    /// The dataset with its [`Dataset::splats`] filled in.
+    fn with_splats(mut self) -> Dataset {
+        let rows = self.lanes.unwrap_or_default();
+        let strides = self.index_lanes.unwrap_or_default();
+        let rows = [
+            [rows[0][0], rows[0][1], rows[0][2]],
+            [rows[1][0], rows[1][1], rows[1][2]],
+            [rows[2][0], rows[2][1], rows[2][2]],
+            strides,
+        ];
+        self.splats = (
+            rows.map(|r| r.map(wide::f32x4::splat)),
+            rows.map(|r| r.map(wide::f32x8::splat)),
+        );
+        self
+    }
+
+    /// The node strides (1, nx, nx·ny; 0 along an axis of one node) and 0.5·(n − 1) per axis:
+    /// what the packet march (`render::packet`) reads besides the values or voxels.
+    pub(crate) fn packet_parts(&self) -> ([usize; 3], [f64; 3]) {
+        (self.strides, self.half_last)
+    }
+
+    /// Dimensions (nx, ny, nz).
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// Normalisation parameters (a, b).
+    pub fn range(&self) -> (f32, f32) {
+        (self.a, self.b)
+    }
+
+    /// The raw voxels.
+    pub fn raw(&self) -> &Voxels {
+        &self.raw
+    }
+
+    /// The normalised value of node (i, j, k): from the node values where they have been
+    /// made, else from its voxel (the same number: the values are the voxels' normalisations),
+    /// so that a read of a few nodes does not make all of them.
+    #[inline]
+    pub fn node(&self, i: usize, j: usize, k: usize) -> f32 {
+        let at = self.node_index([i, j, k]);
+        match self.values.get() {
+            Some(v) => v[at],
+            None => normaliser(self.a, self.b)(self.raw.get(at)),
+        }
+    }
+
+    /// The position of node (i, j, k) in the node arrays (x fastest).
+    #[inline(always)]
+    pub(crate) fn node_index(&self, [i, j, k]: [usize; 3]) -> usize {
+        i + self.dims[0] * (j + self.dims[1] * k)
+    }
+
+    /// The normalised node values, x fastest: made on first use (in parallel), then kept.
+    pub fn values(&self) -> &[f32] {
+        self.values.get_or_init(|| self.compute_values())
+    }
+
+    /// Whether the node values have been made ([`Dataset::values`]): a render that reads only
+    /// the voxels leaves them unmade.
+    pub fn values_made(&self) -> bool {
+        self.values.get().is_some()
+    }
+
+    /// The node values of the raw voxels ([`normaliser`]), on as many threads as rayon's pool
+    /// has, but threads of their own: made from inside a render's parallel loop (a first
+    /// read there), a rayon job that waits for its parts may run another part of the render
+    /// meanwhile, which would ask for the values again, in the thread that is making them.
+    fn compute_values(&self) -> Vec<f32> {
+        let norm = normaliser(self.a, self.b);
+        let mut values = vec![0f32; self.raw.len()];
+        let threads = rayon::current_num_threads().clamp(1, 64);
+        let chunk = self.raw.len().div_ceil(threads).max(1 << 16);
+        let lut: [f32; 256] = std::array::from_fn(|x| norm(x as f64));
+        std::thread::scope(|scope| {
+            for (k, out) in values.chunks_mut(chunk).enumerate() {
+                let from = k * chunk;
+                let raw = &self.raw;
+                let lut = &lut;
+                scope.spawn(move || match raw {
+                    Voxels::U8(v) => {
+                        for (o, &x) in out.iter_mut().zip(&v[from..]) {
+                            *o = lut[x as usize];
+                        }
+                    }
+                    Voxels::U16(v) => {
+                        for (o, &x) in out.iter_mut().zip(&v[from..]) {
+                            *o = norm(x as f64);
+                        }
+                    }
+                });
+            }
+        });
+        values
+    }
+
+    /// The raw value of node (i, j, k) before normalisation.
+    pub fn raw_node(&self, i: usize, j: usize, k: usize) -> f64 {
+        self.raw.get(self.node_index([i, j, k]))
+    }
+}

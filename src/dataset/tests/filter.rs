@@ -1,0 +1,145 @@
+//! Tests of the filters: linear fields reproduced with exact gradients, nodes interpolated,
+//! the BC kernel a partition of unity, and the cubic interior paths the generic filter bit for
+//! bit.
+
+use super::*;
+
+#[test]
+fn trilinear_reproduces_linear_functions() {
+    let mut rng = Lcg(1);
+    for dims in [[5, 7, 3], [2, 2, 2], [9, 1, 4]] {
+        let (d, f) = linear(dims);
+        for _ in 0..2000 {
+            // Includes points outside [0, 1]^3, which clamp to the faces.
+            let p = [
+                rng.next() * 1.2 - 0.1,
+                rng.next() * 1.2 - 0.1,
+                rng.next() * 1.2 - 0.1,
+            ];
+            let got = d.sample(p.map(|x| x as f32), Filter::Trilinear) as f64;
+            let want = f([p[0] as f32 as f64, p[1] as f32 as f64, p[2] as f32 as f64]);
+            // f32 node values and result: a few ulps of values < 1.
+            assert!((got - want).abs() < 1e-6, "{dims:?} {p:?}: {got} vs {want}");
+        }
+    }
+}
+
+#[test]
+fn gradient_of_a_linear_field_is_exact_for_every_filter() {
+    let (d, _) = linear([6, 5, 4]);
+    let want = [
+        7.0 * 5.0 / 65535.0,
+        300.0 * 4.0 / 65535.0,
+        20.0 * 3.0 / 65535.0,
+    ];
+    let mut rng = Lcg(2);
+    for filter in [
+        Filter::Nearest,
+        Filter::Trilinear,
+        Filter::Cubic { b: 0.0, c: 0.5 },
+        Filter::Cubic { b: 1.0, c: 0.0 },
+    ] {
+        for _ in 0..500 {
+            let p = [rng.next() as f32, rng.next() as f32, rng.next() as f32];
+            let g = d.gradient(p, filter);
+            for a in 0..3 {
+                // Node values are f32 (error ≤ 6e-8 each); a difference of two, times up to
+                // n − 1 = 5 per unit, stays below 1e-6.
+                assert!(
+                    (g[a] - want[a]).abs() < 1e-6,
+                    "{filter:?} {p:?} axis {a}: {g:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn nearest_and_cardinal_cubics_pass_through_nodes() {
+    let d = random_u8([5, 4, 6], 3);
+    let [nx, ny, nz] = d.dims();
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let p = [
+                    i as f32 / (nx - 1) as f32,
+                    j as f32 / (ny - 1) as f32,
+                    k as f32 / (nz - 1) as f32,
+                ];
+                let node = d.node(i, j, k);
+                assert_eq!(d.sample(p, Filter::Nearest), node);
+                assert!((d.sample(p, Filter::Trilinear) - node).abs() < 1e-6);
+                for c in [0.0, 0.5, 1.0] {
+                    let v = d.sample(p, Filter::Cubic { b: 0.0, c });
+                    assert!(
+                        (v - node).abs() < 1e-5,
+                        "C={c} node ({i},{j},{k}): {v} vs {node}"
+                    );
+                }
+            }
+        }
+    }
+    // The B-spline (B = 1) smooths: it does not interpolate a random field.
+    let p = [0.5f32, 1.0 / 3.0, 0.4];
+    let (i, j, k) = (2, 1, 2);
+    assert!((d.sample(p, Filter::Cubic { b: 1.0, c: 0.0 }) - d.node(i, j, k)).abs() > 1e-4);
+}
+
+#[test]
+fn nearest_returns_node_values_between_nodes() {
+    let d = random_u8([4, 4, 4], 4);
+    let mut rng = Lcg(5);
+    for _ in 0..1000 {
+        let p = [rng.next() as f32, rng.next() as f32, rng.next() as f32];
+        let idx = p.map(|x| (x as f64 * 3.0).round() as usize);
+        assert_eq!(d.sample(p, Filter::Nearest), d.node(idx[0], idx[1], idx[2]));
+    }
+}
+
+#[test]
+fn kernel_is_a_partition_of_unity() {
+    for (b, c) in [(0.0, 0.5), (1.0, 0.0), (1.0 / 3.0, 1.0 / 3.0)] {
+        for t in [0.0, 0.1, 0.5, 0.77] {
+            let s: f64 = (-1..=2).map(|m| bc_kernel(t - m as f64, b, c)).sum();
+            assert!((s - 1.0).abs() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn interior_cubic_path_is_the_generic_filter_bit_for_bit() {
+    let d = random_u8([9, 7, 8], 8);
+    let mut rng = Lcg(11);
+    let (mut interior, mut derivative) = (0, 0);
+    for (b, c) in [(0.0, 0.5), (1.0, 0.0), (1.0 / 3.0, 1.0 / 3.0)] {
+        for _ in 0..3000 {
+            let p = rng.point_around_box();
+            let u = [d.index(p[0], 0), d.index(p[1], 1), d.index(p[2], 2)];
+            let f = Filter::Cubic { b, c };
+            let generic = d.filter(u, f, |i, j, k| d.node(i, j, k) as f64);
+            if let Some(v) = d.cubic_interior(u, b as f64, c as f64) {
+                interior += 1;
+                assert_eq!(v.to_bits(), generic.to_bits(), "{p:?} b {b} c {c}");
+            }
+            assert_eq!(
+                d.sample(p, f).to_bits(),
+                (generic as f32).clamp(0.0, 1.0).to_bits()
+            );
+            for axis in 0..3 {
+                let want = d.filter(u, f, |i, j, k| d.node_derivative(i, j, k, axis));
+                if let Some(v) = d.cubic_derivative_interior(u, b as f64, c as f64, axis) {
+                    derivative += 1;
+                    assert_eq!(v.to_bits(), want.to_bits(), "{p:?} axis {axis}");
+                }
+            }
+        }
+    }
+    assert!(
+        interior > 1000,
+        "the interior path was taken {interior} times"
+    );
+    assert!(
+        derivative > 1000,
+        "the derivative path was taken {derivative} times"
+    );
+}

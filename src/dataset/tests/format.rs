@@ -1,0 +1,114 @@
+//! Tests of the `.vlb` format: round trips, and malformed files refused with the right error.
+
+use super::*;
+use crate::error::ErrorCode;
+
+#[test]
+fn vlb_round_trip_is_bit_exact() {
+    let d8 = random_u8([7, 3, 5], 6);
+    let back = Dataset::from_vlb_bytes(&d8.to_vlb_bytes()).unwrap();
+    assert_eq!(back, d8);
+    assert_eq!(back.to_vlb_bytes(), d8.to_vlb_bytes());
+    let (d16, _) = linear([4, 3, 2]);
+    let bytes = d16.to_vlb_bytes();
+    assert_eq!(bytes.len(), HEADER_LEN + 4 * 3 * 2 * 2);
+    assert_eq!(&bytes[..4], b"VLB1");
+    assert_eq!(Dataset::from_vlb_bytes(&bytes).unwrap(), d16);
+    // Files too.
+    let path = std::env::temp_dir().join(format!("vlib-rt-{}.vlb", std::process::id()));
+    d16.save(&path).unwrap();
+    assert_eq!(Dataset::load(&path).unwrap(), d16);
+    std::fs::remove_file(&path).unwrap();
+}
+
+#[test]
+fn malformed_files_are_refused_with_the_right_error() {
+    let good = random_u8([3, 2, 2], 7).to_vlb_bytes();
+    let patch = |at: usize, bytes: &[u8]| {
+        let mut v = good.clone();
+        v[at..at + bytes.len()].copy_from_slice(bytes);
+        v
+    };
+    let cases: Vec<(&str, Vec<u8>, ErrorCode)> = vec![
+        ("empty", vec![], ErrorCode::BadSize),
+        ("short header", good[..20].to_vec(), ErrorCode::BadSize),
+        ("short non-vlb file", b"P6\n".to_vec(), ErrorCode::BadMagic),
+        ("bad magic", patch(0, b"VLB2"), ErrorCode::BadMagic),
+        (
+            "zero dimension",
+            patch(8, &0u32.to_le_bytes()),
+            ErrorCode::BadDimensions,
+        ),
+        (
+            "10^15 voxels",
+            {
+                let mut v = patch(4, &100_000u32.to_le_bytes());
+                v[8..12].copy_from_slice(&100_000u32.to_le_bytes());
+                v[12..16].copy_from_slice(&100_000u32.to_le_bytes());
+                v
+            },
+            ErrorCode::BadDimensions,
+        ),
+        (
+            "voxel width 3",
+            patch(16, &3u32.to_le_bytes()),
+            ErrorCode::BadVoxelWidth,
+        ),
+        (
+            "voxel width 0",
+            patch(16, &0u32.to_le_bytes()),
+            ErrorCode::BadVoxelWidth,
+        ),
+        (
+            "a = b",
+            patch(24, &10.0f32.to_le_bytes()),
+            ErrorCode::BadRange,
+        ),
+        (
+            "a NaN",
+            patch(20, &f32::NAN.to_le_bytes()),
+            ErrorCode::BadRange,
+        ),
+        (
+            "b infinite",
+            patch(24, &f32::INFINITY.to_le_bytes()),
+            ErrorCode::BadRange,
+        ),
+        (
+            "truncated voxels",
+            good[..good.len() - 1].to_vec(),
+            ErrorCode::BadSize,
+        ),
+        (
+            "trailing data",
+            [good.clone(), vec![0]].concat(),
+            ErrorCode::BadSize,
+        ),
+        (
+            "16-bit claim on 8-bit data",
+            patch(16, &2u32.to_le_bytes()),
+            ErrorCode::BadSize,
+        ),
+    ];
+    let dir = std::env::temp_dir().join(format!("vlib-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, bytes, code) in cases {
+        assert_eq!(
+            Dataset::from_vlb_bytes(&bytes).unwrap_err().code,
+            code,
+            "{name} (memory)"
+        );
+        let path = dir.join("bad.vlb");
+        std::fs::write(&path, &bytes).unwrap();
+        assert_eq!(
+            Dataset::load(&path).unwrap_err().code,
+            code,
+            "{name} (file)"
+        );
+    }
+    assert_eq!(
+        Dataset::load(&dir.join("missing.vlb")).unwrap_err().code,
+        ErrorCode::IoError
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,0 +1,121 @@
+//! Tests of the datasets module: here the grid itself (node values, normalisation) and the
+//! helpers every test file shares (a seeded generator, a linear field, random 8-bit grids); the
+//! file format, the filters, the trilinear paths, the lanes, the brick ranges and the cell masks
+//! in the files of those names. The plain versions the specialised paths must agree with bit
+//! for bit (oracles) live in these files, not in the module.
+
+mod bricks;
+mod cells;
+mod filter;
+mod format;
+mod lanes;
+mod trilinear;
+
+use super::*;
+
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// A point of [−0.2, 1.2]³: the unit box and a margin around it, where reads clamp.
+    fn point_around_box(&mut self) -> [f32; 3] {
+        std::array::from_fn(|_| (self.next() * 1.4 - 0.2) as f32)
+    }
+}
+
+/// A 16-bit dataset whose raw values are the integer linear function 1000 + 7i + 300j + 20k
+/// (no clamping: all within [0, 65535]), normalised by a = 0, b = 65535.
+fn linear(dims: [usize; 3]) -> (Dataset, impl Fn([f64; 3]) -> f64) {
+    let mut raw = Vec::new();
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                raw.push((1000 + 7 * i + 300 * j + 20 * k) as u16);
+            }
+        }
+    }
+    let d = Dataset::new(dims, Voxels::U16(raw), 0.0, 65535.0).unwrap();
+    let n = dims.map(|n| (n.max(2) - 1) as f64);
+    let f = move |p: [f64; 3]| {
+        let c = |x: f64, axis: usize| {
+            if dims[axis] == 1 {
+                0.0
+            } else {
+                x.clamp(0.0, 1.0) * n[axis]
+            }
+        };
+        (1000.0 + 7.0 * c(p[0], 0) + 300.0 * c(p[1], 1) + 20.0 * c(p[2], 2)) / 65535.0
+    };
+    (d, f)
+}
+
+fn random_u8(dims: [usize; 3], seed: u64) -> Dataset {
+    let mut rng = Lcg(seed);
+    let n = dims.iter().product();
+    let raw: Vec<u8> = (0..n).map(|_| (rng.next() * 256.0) as u8).collect();
+    Dataset::new(dims, Voxels::U8(raw), 10.0, 240.0).unwrap()
+}
+
+/// Node values are made on first use, by any number of threads the same, and a node read
+/// before then (from its voxel) is the node value made after: for 8- and 16-bit voxels,
+/// normalisations that increase, decrease and clamp, sizes below and above a thread's
+/// share (65 536 voxels).
+#[test]
+fn node_values_are_made_on_first_use_the_same_on_any_threads() {
+    let mut rng = Lcg(99);
+    for (case, dims) in [[7, 5, 3], [61, 47, 29], [2, 1, 1]].into_iter().enumerate() {
+        let n: usize = dims.iter().product();
+        for (a, b) in [(0.0, 255.0), (240.0, 10.0), (1000.0, 60000.0), (-5.0, 3.0)] {
+            let raw = if case % 2 == 0 {
+                Voxels::U8((0..n).map(|_| (rng.next() * 256.0) as u8).collect())
+            } else {
+                Voxels::U16((0..n).map(|_| (rng.next() * 65536.0) as u16).collect())
+            };
+            let d = Dataset::new(dims, raw, a, b).unwrap();
+            assert!(!d.values_made());
+            let norm = normaliser(a, b);
+            let before: Vec<u32> = (0..n)
+                .map(|at| {
+                    let [i, j, k] = [
+                        at % dims[0],
+                        at / dims[0] % dims[1],
+                        at / (dims[0] * dims[1]),
+                    ];
+                    d.node(i, j, k).to_bits()
+                })
+                .collect();
+            assert!(!d.values_made(), "reading a node made the values");
+            let want: Vec<u32> = (0..n).map(|at| norm(d.raw.get(at)).to_bits()).collect();
+            assert_eq!(before, want);
+            let made = |threads: usize| {
+                let e = d.clone();
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| e.values().iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+            };
+            assert_eq!(made(1), want);
+            assert_eq!(made(3), want);
+            assert_eq!(d.values().len(), n);
+            assert!(d.values_made());
+        }
+    }
+}
+
+#[test]
+fn normalisation_clamps() {
+    let d = Dataset::new([3, 1, 1], Voxels::U8(vec![0, 100, 255]), 50.0, 150.0).unwrap();
+    assert_eq!(d.values(), &[0.0, 0.5, 1.0]);
+    // b < a inverts.
+    let d = Dataset::new([2, 1, 1], Voxels::U8(vec![0, 255]), 255.0, 0.0).unwrap();
+    assert_eq!(d.values(), &[1.0, 0.0]);
+    // A dimension of 1 is constant along its axis.
+    assert_eq!(d.sample([1.0, 0.3, 0.9], Filter::Trilinear), 0.0);
+}
