@@ -1,0 +1,261 @@
+//! The per-image entry map: for each pixel, a lower bound on where a primary ray through it
+//! meets a block of one object that may hold opacity, by projecting boxes (the grid's shell,
+//! or the passing boxes) through a [`Pinhole`] camera. Owns the projection and its refusals;
+//! the rectangles' rasterisation is `rect`'s, the boxes are `grid`'s and `passing`'s.
+
+use super::grid::{Boxes, SkipGrid};
+use super::rect::lower_rect;
+use glam::{DMat3, DMat4, DVec3};
+use rayon::prelude::*;
+
+/// A pinhole camera as the image's primary rays see it: the ray through image position
+/// (x, y) (pixels from the top-left corner of a `width × height` image) leaves `eye` along
+/// `forward + sx·right + sy·up`, with sx = 2x/width − 1 and sy = 1 − 2y/height.
+pub(crate) struct Pinhole {
+    pub eye: DVec3,
+    pub forward: DVec3,
+    pub right: DVec3,
+    pub up: DVec3,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Pinhole {
+    /// The unit direction of the ray through image position (x, y).
+    #[inline]
+    pub(crate) fn ray(&self, x: f64, y: f64) -> DVec3 {
+        let sx = x / self.width as f64 * 2.0 - 1.0;
+        let sy = 1.0 - y / self.height as f64 * 2.0;
+        (self.forward + sx * self.right + sy * self.up).normalize()
+    }
+}
+
+/// Per pixel of an image, a lower bound on the parameter t (distance from the eye along a unit
+/// direction) at which a primary ray through any point of the pixel meets a block of one
+/// object that may hold opacity; +∞ where no such ray meets one. A ray need not walk the
+/// blocks before its bound: every sample there lies in an empty block, so starting later
+/// never changes a pixel, and a pixel whose bound is +∞ shows the background.
+///
+/// Built per image by projecting the grid's shell (see [`SkipGrid`]): each shell block, grown
+/// by an eighth of a block on every side (far more than any rounding of the walk or the
+/// projection), is mapped to the image through its eight corners; the pixels whose square,
+/// grown by a hundredth of a pixel, meets the corners' bounding rectangle take the block's
+/// smallest depth along the view direction (a unit ray's t is at least the depth of its
+/// point) as a bound.
+/// The projection of a box wholly in front of the eye is the convex hull of its corners'
+/// projections, so every ray that meets the block passes through a marked pixel.
+///
+/// Why the shell suffices: a ray's samples lie in the object's box, inside the grid. The
+/// first block along the ray that may hold opacity is either where the ray starts (at the
+/// eye, or where it enters the box, in an edge block: shell) or entered from a neighbour the
+/// ray crossed before, which is then empty (shell again). An eye inside such a block is
+/// enclosed by shell blocks, some of whose corners are then not in front of it: no map.
+pub(crate) struct EntryMap {
+    pub(super) width: usize,
+    pub(super) bound: Vec<f64>,
+}
+
+/// Rows per parallel task filling an entry map.
+pub(super) const ENTRY_BAND: usize = 16;
+
+/// A shell block's pixel rectangle (inclusive) and its smallest depth.
+pub(super) struct Mark {
+    pub(super) x: (usize, usize),
+    pub(super) y: (usize, usize),
+    pub(super) near: f64,
+}
+
+/// Rectangle pixels an entry map may mark, per image pixel, before it gives up (a camera
+/// close to a finely divided volume): a marked pixel costs a comparison, a ray thousands of
+/// instructions.
+const ENTRY_BUDGET: usize = 64;
+
+/// Boxes an entry map may project, per image pixel: projecting a box costs about what the map
+/// saves a ray, so with more boxes than pixels (a small image of a large volume) the rays
+/// walk from the object's box instead.
+const ENTRY_BOXES_PER_PIXEL: usize = 1;
+
+impl EntryMap {
+    /// The map of `grid`'s object (whose object-to-world transform is `to_world`) seen by
+    /// `camera`; `None` when it cannot help or cannot be proved: a shell corner not clearly
+    /// in front of the eye (an eye in or next to a block that may hold opacity, a volume
+    /// around or behind the eye), a singular camera basis, or more marking than
+    /// [`ENTRY_BUDGET`] allows.
+    pub(crate) fn build(grid: &SkipGrid, to_world: DMat4, camera: &Pinhole) -> Option<EntryMap> {
+        Self::of_boxes(&grid.shell, to_world, camera)
+    }
+
+    /// The map of `boxes`, each grown by an eighth of their unit on every side, that hold the
+    /// first sample with opacity above 0 of any ray (the shell's blocks, or
+    /// [`SkipGrid::passing_boxes`]); `None` as for [`EntryMap::build`], and for more boxes
+    /// than [`ENTRY_BOXES_PER_PIXEL`] allows.
+    pub(crate) fn of_boxes(boxes: &Boxes, to_world: DMat4, camera: &Pinhole) -> Option<EntryMap> {
+        let pixels = (camera.width as usize).saturating_mul(camera.height as usize);
+        if boxes.corners.len() > pixels.saturating_mul(ENTRY_BOXES_PER_PIXEL) {
+            return None;
+        }
+        let budget = pixels.saturating_mul(ENTRY_BUDGET);
+        Self::build_within(boxes, to_world, camera, budget)
+    }
+
+    /// [`EntryMap::of_boxes`], giving up past `budget` marked rectangle pixels.
+    pub(super) fn build_within(
+        boxes: &Boxes,
+        to_world: DMat4,
+        camera: &Pinhole,
+        budget: usize,
+    ) -> Option<EntryMap> {
+        let (w, h) = (camera.width as usize, camera.height as usize);
+        if w == 0 || h == 0 || boxes.corners.is_empty() {
+            return None;
+        }
+        let margin = boxes.unit * 0.125;
+        // Coefficients (depth, right, up) of an eye-relative vector: the rays' own basis.
+        let basis = DMat3::from_cols(camera.forward, camera.right, camera.up);
+        let det = basis.determinant().abs();
+        if det.is_nan() || det <= 1e-12 {
+            return None;
+        }
+        let to_view = basis.inverse();
+        let unit_forward = camera.forward.normalize_or_zero();
+        let (wf, hf) = (w as f64, h as f64);
+        // A box's corners are lo + (a·e.x, b·e.y, c·e.z) for a, b, c in {0, 1} (e = hi − lo),
+        // and their eye-relative vectors q, view coefficients v = to_view·q and depths
+        // q·forward are affine in the object point: each corner's numbers are the lowest
+        // corner's plus the terms of its axes, so a box costs the products of one corner and
+        // three edges, not of eight corners. (Rounding differs from transforming each corner
+        // by a few units in the last place, far inside the eighth of a block each box is
+        // grown by.)
+        let axes = [
+            to_world.x_axis.truncate(),
+            to_world.y_axis.truncate(),
+            to_world.z_axis.truncate(),
+        ];
+        let origin_q = to_world.w_axis.truncate() - camera.eye;
+        let view_axes = axes.map(|a| to_view * a);
+        let origin_v = to_view * origin_q;
+        let depth_axes = axes.map(|a| a.dot(unit_forward));
+        let origin_depth = origin_q.dot(unit_forward);
+        // Each box's pixel rectangle and depth, in parallel; `None` gives up.
+        let project = |&(lo, hi): &(DVec3, DVec3)| -> Option<Option<Mark>> {
+            let (lo, hi) = (lo - margin, hi + margin);
+            let e = hi - lo;
+            let (mut x0, mut x1) = (f64::INFINITY, f64::NEG_INFINITY);
+            let (mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY);
+            let mut near = f64::INFINITY;
+            let q0 = origin_q + axes[0] * lo.x + axes[1] * lo.y + axes[2] * lo.z;
+            let v0 = origin_v + view_axes[0] * lo.x + view_axes[1] * lo.y + view_axes[2] * lo.z;
+            let n0 =
+                origin_depth + depth_axes[0] * lo.x + depth_axes[1] * lo.y + depth_axes[2] * lo.z;
+            let dq = [axes[0] * e.x, axes[1] * e.y, axes[2] * e.z];
+            let dv = [view_axes[0] * e.x, view_axes[1] * e.y, view_axes[2] * e.z];
+            let dn = [
+                depth_axes[0] * e.x,
+                depth_axes[1] * e.y,
+                depth_axes[2] * e.z,
+            ];
+            for k in 0..8 {
+                let (mut q, mut v, mut n) = (q0, v0, n0);
+                for (a, ((dq, dv), dn)) in dq.iter().zip(&dv).zip(&dn).enumerate() {
+                    if k >> a & 1 != 0 {
+                        q += *dq;
+                        v += *dv;
+                        n += dn;
+                    }
+                }
+                // Clearly in front (a corner at or behind the eye's plane breaks the hull
+                // argument): v.x > 10⁻⁹·|q|, squared (v.x positive first); NaN fails too.
+                if !(v.x > 0.0 && v.x * v.x > 1e-18 * q.length_squared()) {
+                    return None;
+                }
+                let (x, y) = ((v.y / v.x + 1.0) * 0.5 * wf, (1.0 - v.z / v.x) * 0.5 * hf);
+                if !(x.is_finite() && y.is_finite()) {
+                    return None;
+                }
+                // `x0.min(x)` and the like, by comparisons: neither side is NaN (x and y are
+                // finite here; the bounds start at ±∞ and only take them), where the NaN-aware
+                // forms cost 7 instructions each (four a corner); and they agree on ties, as
+                // neither x nor y can be −0: `r + 1` and `1 − r` round to +0, never −0, and
+                // when not 0 are at least 2⁻⁵³ in magnitude, which halving and the image size
+                // (≥ 1) cannot take to 0.
+                if x < x0 {
+                    x0 = x;
+                }
+                if x > x1 {
+                    x1 = x;
+                }
+                if y < y0 {
+                    y0 = y;
+                }
+                if y > y1 {
+                    y1 = y;
+                }
+                near = near.min(n);
+            }
+            // Pixel squares [px, px + 1) meeting [x0 − ε, x1 + ε] (and likewise in y). (The
+            // floor inline, bit for bit the library's, which is a call on the SSE2 baseline.)
+            const EPS: f64 = 0.01;
+            let floor = crate::num::floor;
+            let (px0, px1) = (floor(x0 - EPS).max(0.0), floor(x1 + EPS).min(wf - 1.0));
+            let (py0, py1) = (floor(y0 - EPS).max(0.0), floor(y1 + EPS).min(hf - 1.0));
+            if px0 > px1 || py0 > py1 {
+                return Some(None); // off the image
+            }
+            Some(Some(Mark {
+                x: (px0 as usize, px1 as usize),
+                y: (py0 as usize, py1 as usize),
+                // Rounding of the depth itself: a relative slack far below the margin's.
+                near: near - 1e-9 * near.abs(),
+            }))
+        };
+        let marks: Vec<Mark> = boxes
+            .corners
+            .par_iter()
+            .filter_map(|b| match project(b) {
+                None => Some(None), // give up
+                Some(None) => None, // off the image
+                Some(mark) => Some(mark),
+            })
+            .collect::<Option<Vec<Mark>>>()?;
+        let area = marks.iter().fold(0usize, |sum, m| {
+            sum.saturating_add((m.x.1 - m.x.0 + 1) * (m.y.1 - m.y.0 + 1))
+        });
+        if area > budget {
+            return None;
+        }
+        // The rectangles' minimum, in parallel over bands of rows (the same numbers in any
+        // order), each band going through the rectangles that meet it.
+        let mut in_band: Vec<Vec<u32>> = vec![Vec::new(); h.div_ceil(ENTRY_BAND)];
+        for (i, m) in marks.iter().enumerate() {
+            for band in &mut in_band[m.y.0 / ENTRY_BAND..=m.y.1 / ENTRY_BAND] {
+                band.push(i as u32);
+            }
+        }
+        // (Zeroed memory from the allocator, each band filled with +∞ by its own task: a
+        // first touch of fresh pages, in parallel.)
+        let mut bound = vec![0.0f64; w * h];
+        bound
+            .par_chunks_mut(ENTRY_BAND * w)
+            .zip(&in_band)
+            .enumerate()
+            .for_each(|(band, (rows, in_band))| {
+                rows.fill(f64::INFINITY);
+                let first = band * ENTRY_BAND;
+                let last = first + rows.len() / w - 1;
+                for m in in_band.iter().map(|&i| &marks[i as usize]) {
+                    let (y0, y1) = (m.y.0.max(first), m.y.1.min(last));
+                    if y0 <= y1 {
+                        let ys = y0 - first..=y1 - first;
+                        lower_rect(rows, w, m.x.0..=m.x.1, ys, m.near);
+                    }
+                }
+            });
+        Some(EntryMap { width: w, bound })
+    }
+
+    /// The bound of pixel (x, y).
+    #[inline]
+    pub(crate) fn bound(&self, x: u32, y: u32) -> f64 {
+        self.bound[y as usize * self.width + x as usize]
+    }
+}

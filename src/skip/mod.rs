@@ -1,0 +1,39 @@
+//! Exact empty-space skipping.
+//!
+//! For an object whose opacity is computed from datasets (through any chain of `vlDataset`,
+//! `vlMap` and `vlSet` instructions), the part of its program that determines opacity is
+//! evaluated over *intervals*, once per block of the object: each dataset contributes the range
+//! of node values its filter can read anywhere in the block
+//! ([`crate::dataset::Dataset::bricks`]), each mapping the exact range of Φ over its input
+//! interval ([`crate::mapping::Mapping::range`]), each constant itself, and each field
+//! function the whole [0, 1] (nothing is known of it). A block whose opacity interval is
+//! [0, 0] is *empty*: every sample in it has o = 0 and contributes nothing. Rays walk the block
+//! grid (a 3D DDA) and skip the segments whose sample points lie in empty blocks; the remaining
+//! samples are exactly the ones that would have been taken, so skipping never changes a pixel.
+//!
+//! The module owns these acceleration structures, not their use: the renderer asks a [`Walk`]
+//! whether a sample lies in an empty block and where to resume, and an [`EntryMap`] where each
+//! primary ray may start; nothing here depends on the renderer. The cache of an object's grid
+//! lives with the object in the scene.
+//!
+//! - `grid`: [`SkipGrid`], the blocks of one object, their opacity intervals, the chessboard
+//!   distance map the walk leaps by and the shell the entry map projects.
+//! - `passing`: the boxes of a dataset's cells that can pass a zero test, by groups of 4³
+//!   cells (what the batched march's entry map projects instead of the shell).
+//! - `walk`: [`Walk`], the block walk (a 3D DDA with leaps) along one ray.
+//! - `entry`: [`Pinhole`] and [`EntryMap`], the per-image lower bound on where each primary ray
+//!   meets a block that may hold opacity.
+//! - `rect`: the entry map's rasterisation (lowering a rectangle of the map).
+//! - `tests`: every unit test of the module and the brute-force references they check against.
+
+mod entry;
+mod grid;
+mod passing;
+mod rect;
+#[cfg(test)]
+mod tests;
+mod walk;
+
+pub(crate) use entry::{EntryMap, Pinhole};
+pub(crate) use grid::SkipGrid;
+pub(crate) use walk::Walk;

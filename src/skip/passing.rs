@@ -1,0 +1,232 @@
+//! The boxes of a dataset's cells whose samples can pass a zero test ([`CellMask`]), by groups
+//! of 4³ cells, made once per skip grid for the batched march's entry map: per group its
+//! passing cells' bounding box, leaving out the groups enclosed by full groups. Owns reading
+//! the mask into [`GroupCode`]s and the boxes; projecting them is the entry map's (`entry`).
+
+use super::grid::{Boxes, SkipGrid};
+use crate::dataset::{CellMask, Dataset, BRICK};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// The [`GroupCode`]s of the row of groups (gi, gj, gk), gi = 0, 1, …, of `data`'s cells
+/// (`cells` per axis, in groups of `BRICK` per axis): each group's lowest and highest passing
+/// cell per axis and whether all pass (`passing_in`, the tests' oracle), found together. Each
+/// of the groups' rows of cells is read from `mask` 64 cells at a time and split among the
+/// groups (whole groups to a word: 64 is a multiple of `BRICK`): reading each group's rows
+/// apart would cost a node index and a run of the mask per row and group.
+pub(super) fn passing_groups_row(
+    data: &Dataset,
+    mask: &CellMask,
+    cells: [usize; 3],
+    (gj, gk): (usize, usize),
+    out: &mut [GroupCode],
+) {
+    const _: () = assert!(64 % BRICK == 0);
+    let groups = cells[0].div_ceil(BRICK);
+    debug_assert_eq!(out.len(), groups);
+    // Per group: lowest and highest passing offset per axis (u8::MAX / 0: none yet), all.
+    let mut first = vec![[u8::MAX; 3]; groups];
+    let mut last = vec![[0u8; 3]; groups];
+    let mut all = vec![true; groups];
+    // The rows of cells along y and z that the groups cover.
+    let lo = [gj * BRICK, gk * BRICK];
+    let hi = [(lo[0] + BRICK).min(cells[1]), (lo[1] + BRICK).min(cells[2])];
+    for k in lo[1]..hi[1] {
+        for j in lo[0]..hi[0] {
+            let row = data.node_index([0, j, k]);
+            let (dj, dk) = ((j - lo[0]) as u8, (k - lo[1]) as u8);
+            for (w, x0) in (0..cells[0]).step_by(64).enumerate() {
+                let width = (cells[0] - x0).min(64);
+                let word = mask.run(row + x0, width);
+                for g in 64 / BRICK * w..(64 / BRICK * (w + 1)).min(groups) {
+                    let at = g * BRICK - x0;
+                    let n = (width - at).min(BRICK);
+                    let ones = (1u64 << n) - 1;
+                    let bits = word >> at & ones;
+                    // (All n set: a comparison, where `count_ones` is a software population
+                    // count on the x86-64 baseline.)
+                    all[g] &= bits == ones;
+                    if bits == 0 {
+                        continue;
+                    }
+                    let (a, b) = (bits.trailing_zeros() as u8, 63 - bits.leading_zeros() as u8);
+                    let (f, l) = (&mut first[g], &mut last[g]);
+                    for (axis, c) in [(0, a), (1, dj), (2, dk)] {
+                        f[axis] = f[axis].min(c);
+                    }
+                    for (axis, c) in [(0, b), (1, dj), (2, dk)] {
+                        l[axis] = l[axis].max(c);
+                    }
+                }
+            }
+        }
+    }
+    for (g, code) in out.iter_mut().enumerate() {
+        *code = if first[g][0] == u8::MAX {
+            GroupCode::NONE
+        } else {
+            GroupCode::of_offsets(first[g], last[g], all[g])
+        };
+    }
+}
+
+/// A group's passing cells ([`passing_groups_row`]) in 16 bits: each axis's lowest and
+/// highest passing cell as offsets (0 … 3) from the group's first cell, two bits each, and
+/// whether all pass (bit 12); [`GroupCode::NONE`] where none does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct GroupCode(pub(super) u16);
+
+// Offsets within a group fit in two bits.
+const _: () = assert!(BRICK <= 4);
+
+impl GroupCode {
+    pub(super) const NONE: GroupCode = GroupCode(u16::MAX);
+
+    /// The code of a group whose passing cells lie between offsets `first` and `last` (each
+    /// below `BRICK`) from its first cell per axis, all of its cells passing or not.
+    pub(super) fn of_offsets(first: [u8; 3], last: [u8; 3], all: bool) -> GroupCode {
+        let mut c = u16::from(all) << 12;
+        for a in 0..3 {
+            debug_assert!(first[a] <= last[a] && (last[a] as usize) < BRICK);
+            c |= u16::from(first[a]) << (2 * a);
+            c |= u16::from(last[a]) << (6 + 2 * a);
+        }
+        GroupCode(c)
+    }
+
+    /// Whether all the group's cells pass.
+    pub(super) fn all(self) -> bool {
+        self != GroupCode::NONE && self.0 >> 12 & 1 != 0
+    }
+
+    /// The passing cells again, for the group whose first cell is `lo`.
+    pub(super) fn get(self, lo: [usize; 3]) -> Option<([usize; 3], [usize; 3], bool)> {
+        if self == GroupCode::NONE {
+            return None;
+        }
+        let at = |shift: usize, a: usize| lo[a] + (self.0 >> shift & 3) as usize;
+        Some((
+            std::array::from_fn(|a| at(2 * a, a)),
+            std::array::from_fn(|a| at(6 + 2 * a, a)),
+            self.0 >> 12 & 1 != 0,
+        ))
+    }
+}
+
+/// See [`SkipGrid::passing_boxes`].
+pub(super) fn passing_boxes(
+    data: &Dataset,
+    mask: &CellMask,
+    box_min: DVec3,
+    box_max: DVec3,
+) -> Option<Boxes> {
+    let n = data.dims();
+    if n.iter().any(|&k| k < 2) {
+        return None;
+    }
+    let cells = n.map(|k| k - 1);
+    let groups = cells.map(|c| c.div_ceil(BRICK));
+    // Per group: the lowest and highest passing cell per axis, and whether all pass
+    // ([`GroupCode`]: two bytes a group; the decoded form takes 56, and filling that much fresh
+    // memory costs more than reading the cells' bits); in parallel over layers of groups.
+    let layers: Vec<Vec<GroupCode>> = (0..groups[2])
+        .into_par_iter()
+        .map(|gk| {
+            let mut layer = vec![GroupCode::NONE; groups[0] * groups[1]];
+            for (gj, row) in layer.chunks_exact_mut(groups[0]).enumerate() {
+                passing_groups_row(data, mask, cells, (gj, gk), row);
+            }
+            layer
+        })
+        .collect();
+    // Whether each group and its 26 neighbours all pass (outside the groups: not): the AND
+    // over the 3×3×3 cube, one axis at a time (the cube is the product of three intervals).
+    let [gx, gy, gz] = groups;
+    let full: Vec<bool> = layers.iter().flatten().map(|c| c.all()).collect();
+    // One axis: along it, of `n` groups `stride` apart (runs of `stride` consecutive groups
+    // in blocks of n·stride).
+    let erode = |v: &[bool], stride: usize, n: usize| -> Vec<bool> {
+        let mut out = vec![false; v.len()];
+        for (block, o) in v.chunks(n * stride).zip(out.chunks_mut(n * stride)) {
+            for c in 1..n.saturating_sub(1) {
+                let (before, at, after) = (
+                    &block[(c - 1) * stride..c * stride],
+                    &block[c * stride..(c + 1) * stride],
+                    &block[(c + 1) * stride..(c + 2) * stride],
+                );
+                for (((o, &a), &b), &d) in o[c * stride..(c + 1) * stride]
+                    .iter_mut()
+                    .zip(before)
+                    .zip(at)
+                    .zip(after)
+                {
+                    *o = a && b && d;
+                }
+            }
+        }
+        out
+    };
+    let enclosed = erode(&erode(&erode(&full, 1, gx), gx, gy), gx * gy, gz);
+    // The boxes in group order (x fastest), in parallel over layers of groups.
+    let corners: Vec<(DVec3, DVec3)> = (0..gz)
+        .into_par_iter()
+        .flat_map_iter(|gk| {
+            let layer = &layers[gk];
+            let enclosed = &enclosed[gk * gx * gy..(gk + 1) * gx * gy];
+            (0..gy)
+                .flat_map(move |gj| (0..gx).map(move |gi| (gi, gj)))
+                .filter_map(move |(gi, gj)| {
+                    let at = gi + gx * gj;
+                    if enclosed[at] || layer[at] == GroupCode::NONE {
+                        return None;
+                    }
+                    let lo_cell = [gi * BRICK, gj * BRICK, gk * BRICK];
+                    let (first, last, _) = layer[at].get(lo_cell)?;
+                    let lo = DVec3::from_array(std::array::from_fn(|a| {
+                        if first[a] == 0 {
+                            box_min[a].min(0.0)
+                        } else {
+                            first[a] as f64 / cells[a] as f64
+                        }
+                    }));
+                    let hi = DVec3::from_array(std::array::from_fn(|a| {
+                        if last[a] + 1 == cells[a] {
+                            box_max[a].max(1.0)
+                        } else {
+                            (last[a] + 1) as f64 / cells[a] as f64
+                        }
+                    }));
+                    Some((lo, hi))
+                })
+        })
+        .collect();
+    let unit = DVec3::from_array(cells.map(|c| 1.0 / c as f64));
+    Some(Boxes { corners, unit })
+}
+
+impl SkipGrid {
+    /// For the batched march of `data` with the cell mask `mask` (its cells whose samples can
+    /// pass the zero test) over the object box [box_min, box_max]: boxes that hold every
+    /// sample whose opacity is above 0, or at least the first one along any ray, computed
+    /// once per grid (the mask belongs to the grid's object).
+    ///
+    /// Per 4³ cells of the dataset, the box of those that can pass: a sample's value comes
+    /// from the cell that holds its point, so a sample whose opacity is above 0 lies in such
+    /// a box. A box whose cells touch a face of the dataset reaches to the object box there
+    /// (a sample outside the dataset takes the value of the nearest edge cell). Left out: the
+    /// groups whose cells all pass, with all 26 neighbouring groups the same: a ray that meets
+    /// opacity first in one has crossed a neighbour's box before (or starts in a region of them,
+    /// enclosed by boxes some of which are then behind the eye: no map). `None` for a
+    /// dataset with an axis of one node.
+    pub(crate) fn passing_boxes(
+        &self,
+        data: &Dataset,
+        mask: &CellMask,
+        box_min: DVec3,
+        box_max: DVec3,
+    ) -> Option<std::sync::Arc<Boxes>> {
+        self.passing
+            .get_or_init(|| passing_boxes(data, mask, box_min, box_max).map(std::sync::Arc::new))
+            .clone()
+    }
+}

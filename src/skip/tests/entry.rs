@@ -1,0 +1,271 @@
+//! Tests of the entry map: every ray's first occupied block against its pixel's bound, the
+//! refusals, and the projection against a reference with a transform per corner and NaN-aware
+//! minima (`build_within_reference`).
+
+use super::*;
+
+/// The parameter at which the object-space ray `o + t·d` first enters an occupied block
+/// (slab test against every one; ∞ if none).
+fn first_occupied(g: &SkipGrid, o: DVec3, d: DVec3) -> f64 {
+    (0..g.dist.len())
+        .filter(|&i| g.dist[i] == 0)
+        .map(|i| entry(g.block_box(i), o, d))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Every ray through every pixel (its centre, its corners and random points in it) meets
+/// no occupied block before the pixel's bound, and none at all where the bound is ∞, with
+/// the eye outside the grid or inside it in an empty slab; the bounds are informative
+/// (background pixels exist, and a hit ray's bound is close to its hit).
+#[test]
+fn entry_bounds_never_pass_an_occupied_block() {
+    let mut rng = Rng(0x5eed_0002);
+    let mut tally = Tally::default();
+    for case in 0..32 {
+        let mut g = random_grid(&mut rng, [0.03, 0.1, 0.3][case % 3]);
+        let to_world = random_placement(&mut rng);
+        let from = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
+        let camera = if case < 24 {
+            camera_at(to_world, from, 90.0 + 60.0 * rng.next(), 24)
+        } else {
+            // The eye inside the grid, in an empty slab (the first three layers), looking
+            // along +z at the rest.
+            let occupied: Vec<bool> = (0..g.dist.len())
+                .map(|i| i / (g.dims[0] * g.dims[1]) >= 3 && g.dist[i] == 0)
+                .collect();
+            g = grid_of(g.dims, &occupied);
+            let eye = DVec3::new(0.3 + 0.4 * rng.next(), 0.3 + 0.4 * rng.next(), 0.1);
+            let forward = to_world.transform_vector3(DVec3::Z).normalize();
+            let right = forward.any_orthonormal_vector() * 0.4;
+            Pinhole {
+                eye: to_world.transform_point3(eye),
+                forward,
+                right,
+                up: forward.cross(right).normalize() * 0.35,
+                width: 24,
+                height: 21,
+            }
+        };
+        let Some(map) = EntryMap::build(&g, to_world, &camera) else {
+            panic!("case {case}: a camera with the volume in front gets a map");
+        };
+        let first = |o, d| first_occupied(&g, o, d);
+        tally.check(&mut rng, (&map, &camera, to_world), 4, first, case);
+    }
+    tally.informative();
+}
+
+/// No map where the walk's start cannot be proved: the eye in the grid, a shell corner
+/// behind the eye, or more marking than the budget; and a grid with no occupied block
+/// needs none.
+#[test]
+fn entry_map_refuses_what_it_cannot_prove() {
+    let mut rng = Rng(0x5eed_0003);
+    let g = random_grid(&mut rng, 0.3);
+    let to_world = DMat4::from_scale(DVec3::splat(40.0));
+    let outside = camera_at(to_world, DVec3::new(1.0, 0.3, 0.2), 100.0, 16);
+    assert!(EntryMap::build(&g, to_world, &outside).is_some());
+    // Within one block of the grid, the grid's corner included.
+    for eye in [
+        DVec3::splat(20.0),
+        DVec3::ZERO,
+        DVec3::splat(-40.0 / 6.0 + 0.1),
+    ] {
+        let inside = Pinhole {
+            eye,
+            ..camera_at(to_world, DVec3::X, 100.0, 16)
+        };
+        assert!(
+            EntryMap::build(&g, to_world, &inside).is_none(),
+            "eye at {eye}"
+        );
+    }
+    // Outside, but looking away: the shell is behind the eye.
+    let away = Pinhole {
+        forward: -outside.forward,
+        ..camera_at(to_world, DVec3::new(1.0, 0.3, 0.2), 100.0, 16)
+    };
+    assert!(EntryMap::build(&g, to_world, &away).is_none());
+    // The budget: what the default marks, and one pixel less.
+    let marked = |budget| EntryMap::build_within(&g.shell, to_world, &outside, budget).is_some();
+    let need = (0..=16 * 13 * 64)
+        .find(|&b| marked(b))
+        .expect("within the default budget");
+    assert!(need > 0 && !marked(need - 1));
+    // More boxes than pixels: not worth projecting.
+    let tiny = Pinhole {
+        width: 2,
+        height: 2,
+        ..camera_at(to_world, DVec3::new(1.0, 0.3, 0.2), 100.0, 16)
+    };
+    assert!(g.shell.corners.len() > 4);
+    assert!(EntryMap::of_boxes(&g.shell, to_world, &tiny).is_none());
+    let few = Boxes {
+        corners: g.shell.corners[..4].to_vec(),
+        unit: g.shell.unit,
+    };
+    assert!(EntryMap::of_boxes(&few, to_world, &tiny).is_some());
+    // Nothing occupied: nothing to project.
+    let empty = grid_of(g.dims, &vec![false; g.dist.len()]);
+    assert!(EntryMap::build(&empty, to_world, &outside).is_none());
+}
+
+/// [`EntryMap::build_within`] with `f64::min` / `f64::max` for the rectangles and each
+/// corner transformed on its own, picked by mask (sequential: the parallel form gives the
+/// same numbers).
+fn build_within_reference(
+    boxes: &Boxes,
+    to_world: DMat4,
+    camera: &Pinhole,
+    budget: usize,
+) -> Option<EntryMap> {
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    if w == 0 || h == 0 || boxes.corners.is_empty() {
+        return None;
+    }
+    let margin = boxes.unit * 0.125;
+    // Coefficients (depth, right, up) of an eye-relative vector: the rays' own basis.
+    let basis = DMat3::from_cols(camera.forward, camera.right, camera.up);
+    let det = basis.determinant().abs();
+    if det.is_nan() || det <= 1e-12 {
+        return None;
+    }
+    let to_view = basis.inverse();
+    let unit_forward = camera.forward.normalize_or_zero();
+    let (wf, hf) = (w as f64, h as f64);
+    // Each box's pixel rectangle and depth, in parallel; `None` gives up.
+    let project = |&(lo, hi): &(DVec3, DVec3)| -> Option<Option<Mark>> {
+        let (lo, hi) = (lo - margin, hi + margin);
+        let (mut x0, mut x1) = (f64::INFINITY, f64::NEG_INFINITY);
+        let (mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY);
+        let mut near = f64::INFINITY;
+        for corner in 0..8 {
+            let p = DVec3::select(
+                glam::BVec3::new(corner & 1 != 0, corner & 2 != 0, corner & 4 != 0),
+                hi,
+                lo,
+            );
+            let q = to_world.transform_point3(p) - camera.eye;
+            let v = to_view * q;
+            // Clearly in front (a corner at or behind the eye's plane breaks the hull
+            // argument); NaN fails too.
+            if v.x.partial_cmp(&(1e-9 * q.length())) != Some(std::cmp::Ordering::Greater) {
+                return None;
+            }
+            let (x, y) = ((v.y / v.x + 1.0) * 0.5 * wf, (1.0 - v.z / v.x) * 0.5 * hf);
+            if !(x.is_finite() && y.is_finite()) {
+                return None;
+            }
+            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+            near = near.min(q.dot(unit_forward));
+        }
+        // Pixel squares [px, px + 1) meeting [x0 − ε, x1 + ε] (and likewise in y).
+        const EPS: f64 = 0.01;
+        let (px0, px1) = (
+            (x0 - EPS).floor().max(0.0),
+            (x1 + EPS).floor().min(wf - 1.0),
+        );
+        let (py0, py1) = (
+            (y0 - EPS).floor().max(0.0),
+            (y1 + EPS).floor().min(hf - 1.0),
+        );
+        if px0 > px1 || py0 > py1 {
+            return Some(None); // off the image
+        }
+        Some(Some(Mark {
+            x: (px0 as usize, px1 as usize),
+            y: (py0 as usize, py1 as usize),
+            // Rounding of the depth itself: a relative slack far below the margin's.
+            near: near - 1e-9 * near.abs(),
+        }))
+    };
+    let marks: Vec<Mark> = boxes
+        .corners
+        .iter()
+        .filter_map(|b| match project(b) {
+            None => Some(None), // give up
+            Some(None) => None, // off the image
+            Some(mark) => Some(mark),
+        })
+        .collect::<Option<Vec<Mark>>>()?;
+    let area = marks.iter().fold(0usize, |sum, m| {
+        sum.saturating_add((m.x.1 - m.x.0 + 1) * (m.y.1 - m.y.0 + 1))
+    });
+    if area > budget {
+        return None;
+    }
+    // The rectangles' minimum, in parallel over bands of rows (the same numbers in any
+    // order).
+    let mut bound = vec![f64::INFINITY; w * h];
+    bound
+        .chunks_mut(ENTRY_BAND * w)
+        .enumerate()
+        .for_each(|(band, rows)| {
+            let first = band * ENTRY_BAND;
+            let last = first + rows.len() / w - 1;
+            for m in &marks {
+                let (y0, y1) = (m.y.0.max(first), m.y.1.min(last));
+                for y in y0..=y1 {
+                    let row = &mut rows[(y - first) * w..(y - first + 1) * w];
+                    for b in &mut row[m.x.0..=m.x.1] {
+                        // (Neither is NaN: a comparison in lanes, not `f64::min`.)
+                        *b = if m.near < *b { m.near } else { *b };
+                    }
+                }
+            }
+        });
+    Some(EntryMap { width: w, bound })
+}
+
+/// The map is the one the NaN-aware minima and maxima and each corner's own transform
+/// give (the reference), up to the rounding of the affine corners: the same refusals, the
+/// same marked pixels, and every bound within a relative 10⁻¹² of the reference's (a
+/// rectangle's edge moves with rounding only where it lies within that of a pixel's edge,
+/// which these cases never do): random grids, placements and cameras, far and near
+/// (corners close to or behind the eye's plane: no map), looking away, tiny images and
+/// budgets.
+#[test]
+fn entry_map_is_the_nan_aware_projection() {
+    let mut rng = Rng(0x5eed_0004);
+    let (mut maps, mut refusals) = (0, 0);
+    for case in 0..60 {
+        let g = random_grid(&mut rng, [0.03, 0.1, 0.3][case % 3]);
+        let to_world = random_placement(&mut rng);
+        let from = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
+        let distance = [90.0 + 60.0 * rng.next(), 40.0 * rng.next(), 1e-3][case % 3];
+        let size = [24, 7, 4][case / 3 % 3];
+        let mut camera = camera_at(to_world, from, distance, size);
+        if case % 10 == 9 {
+            camera.forward = -camera.forward;
+        }
+        for budget in [usize::MAX, 50] {
+            let got = EntryMap::build_within(&g.shell, to_world, &camera, budget);
+            let want = build_within_reference(&g.shell, to_world, &camera, budget);
+            match (got, want) {
+                (None, None) => refusals += 1,
+                (Some(got), Some(want)) => {
+                    assert_eq!(got.width, want.width);
+                    for (a, b) in got.bound.iter().zip(&want.bound) {
+                        assert_eq!(a.is_finite(), b.is_finite(), "case {case}: {a} {b}");
+                        if b.is_finite() {
+                            assert!(
+                                (a - b).abs() <= 1e-12 * b.abs(),
+                                "case {case}: {a} against {b}"
+                            );
+                        }
+                    }
+                    maps += 1;
+                }
+                (got, want) => panic!(
+                    "case {case}, budget {budget}: {} against {}",
+                    got.is_some(),
+                    want.is_some()
+                ),
+            }
+        }
+    }
+    assert!(
+        maps > 20 && refusals > 10,
+        "{maps} maps, {refusals} refusals"
+    );
+}
