@@ -15,7 +15,7 @@ mod common;
 use common::{mni_dataset as dataset, mni_scene as scene};
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::time::{Duration, Instant};
-use vlib::scene::Optimise;
+use vlib::Optimise;
 
 fn bench(c: &mut Criterion) {
     let vlb = dataset();
@@ -40,7 +40,7 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("mni_512_sd0.5");
     g.sample_size(10).measurement_time(Duration::from_secs(8));
     let vtk_termination = common::mni_scene::VTK_TERMINATION;
-    let t_min = vlib::render::T_MIN;
+    let t_min = vlib::T_MIN;
     let variants = [
         ("shaded", true, true, true, true, t_min),
         ("shaded_no_skipping", true, false, true, true, t_min),

@@ -133,7 +133,7 @@ fn images() {
     for (name, t) in [("baseline", (&[][..], &[][..])), ("all", all)] {
         let img = scene(t).render_preview(320, 240, 320.0 / 240.0).unwrap();
         let path = std::path::Path::new(&dir).join(format!("plan_{name}.png"));
-        vlib::output::write_image(&path, 320, 240, &img.to_rgb8()).unwrap();
+        vlib::write_image(&path, 320, 240, &img.to_rgb8()).unwrap();
     }
 }
 

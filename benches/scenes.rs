@@ -57,7 +57,7 @@ fn figure2() -> Library {
         eye: [175.0, 250.0, -350.0],
         at: [175.0, 140.0, 70.0],
         up: [0.0, 1.0, 0.0],
-        fov: vlib::scene::DEFAULT_FOV,
+        fov: vlib::DEFAULT_FOV,
     })
     .unwrap();
     vl.background(1.0, 1.0, 1.0).unwrap();
@@ -223,7 +223,7 @@ fn images() {
     for (name, build) in SCENES {
         let img = render(&build());
         let path = std::path::Path::new(&dir).join(format!("scene_{name}.png"));
-        vlib::output::write_image(&path, SIDE, SIDE, &img.to_rgb8()).unwrap();
+        vlib::write_image(&path, SIDE, SIDE, &img.to_rgb8()).unwrap();
         println!("wrote {}", path.display());
     }
 }

@@ -25,7 +25,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
-use vlib::dataset::Dataset;
+use vlib::Dataset;
 use vlib::{
     vlaux, Attenuation, Camera, Fields, Image, Interpolation, Library, MappingType, RenderType,
 };
@@ -150,7 +150,7 @@ impl Cfg {
             ss,
             filter: Filter::Trilinear,
             nbhd: None,
-            termination: vlib::render::T_MIN,
+            termination: vlib::T_MIN,
         }
     }
 
@@ -180,9 +180,9 @@ impl Cfg {
         if let Some(d) = self.nbhd {
             vl.neighborhood(d, d, d)?;
         }
-        vl.set_optimise(vlib::scene::Optimise {
+        vl.set_optimise(vlib::Optimise {
             termination: self.termination,
-            ..vlib::scene::Optimise::default()
+            ..vlib::Optimise::default()
         })
     }
 }
@@ -348,7 +348,7 @@ fn mark_pareto_equal_cost(rows: &mut [Row]) {
 fn save_debug(name: &str, img: &Image) -> Res<()> {
     if let Some(dir) = std::env::var_os("VLIB_ACCURACY_IMAGES") {
         let path = Path::new(&dir).join(format!("{name}.png"));
-        vlib::output::write_image(&path, img.width, img.height, &img.to_rgb8())?;
+        vlib::write_image(&path, img.width, img.height, &img.to_rgb8())?;
     }
     Ok(())
 }
@@ -988,7 +988,7 @@ fn write_section(path: &Path, body: &str) -> Res<()> {
         (Some(a), Some(b)) if a < b => format!("{}{block}{}", &doc[..a], &doc[b + end.len()..]),
         _ => format!("{}\n\n{block}\n", doc.trim_end()),
     };
-    vlib::output::write_atomic(path, new.as_bytes())?;
+    vlib::write_atomic(path, new.as_bytes())?;
     Ok(())
 }
 
@@ -1098,8 +1098,8 @@ fn mni_study(p: &Params, cache: &mut Cache, start: Instant) -> Res<(Study, Brain
     let path = mni_dataset()?;
     let data = Dataset::load(&path)?;
     // Fill the brick-range caches once (every scene shares the dataset), not in every scene's first frame.
-    data.bricks(vlib::dataset::Filter::Trilinear);
-    data.bricks(vlib::dataset::Filter::Cubic { b: 0.0, c: 0.5 });
+    data.bricks(vlib::Filter::Trilinear);
+    data.bricks(vlib::Filter::Cubic { b: 0.0, c: 0.5 });
     let brain = Brain {
         data: Arc::new(data),
         path,
@@ -1162,7 +1162,7 @@ fn mni_study(p: &Params, cache: &mut Cache, start: Instant) -> Res<(Study, Brain
     let thresholds: [(f64, &str); 6] = [
         (0.0, "0 (none)"),
         (1.0 / 2048.0, "1/2048"),
-        (vlib::render::T_MIN, "1/512 (default)"),
+        (vlib::T_MIN, "1/512 (default)"),
         (mni_scene::VTK_TERMINATION, "255/32767 (VTK)"),
         (1.0 / 32.0, "1/32"),
         (1.0 / 8.0, "1/8"),

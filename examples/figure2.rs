@@ -31,7 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         eye: [175.0, 250.0, -350.0],
         at: [175.0, 140.0, 70.0],
         up: [0.0, 1.0, 0.0],
-        fov: vlib::scene::DEFAULT_FOV,
+        fov: vlib::DEFAULT_FOV,
     })?;
     vl.image(&out, 1.0, 100, 100)?;
     vl.background(1.0, 1.0, 1.0)?;

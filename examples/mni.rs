@@ -46,7 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let size: i32 = flag(&all, "--size=", 512)?;
     let cubic = all.iter().any(|a| a == "--cubic");
     let ss: i32 = flag(&all, "--ss=", 1)?;
-    let termination: f64 = flag(&all, "--termination=", vlib::render::T_MIN)?;
+    let termination: f64 = flag(&all, "--termination=", vlib::T_MIN)?;
     let frames: usize = flag(&all, "--frames=", 0)?;
     let packets = !all.iter().any(|a| a == "--no-packets");
     let wide_lanes = !all.iter().any(|a| a == "--eight");
@@ -58,12 +58,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dims = vl.dataset_of(mni_scene::BRAIN).expect("loaded").dims();
     mni_scene::mappings(&mut vl)?;
     vl.scene()?;
-    vl.set_optimise(vlib::scene::Optimise {
+    vl.set_optimise(vlib::Optimise {
         termination,
         packets,
         wide_lanes,
         trust_whole_runs,
-        ..vlib::scene::Optimise::default()
+        ..vlib::Optimise::default()
     })?;
     vl.image(png, 1.0, size, size)?;
     vl.super_sample(ss)?;

@@ -51,8 +51,7 @@ fn main() -> ExitCode {
         .map_err(|e| format!("{}: {e}", args[0]))
         .and_then(|bytes| {
             let (w, h, px) = parse_ppm(&bytes).map_err(|e| format!("{}: {e}", args[0]))?;
-            vlib::output::write_image(std::path::Path::new(&args[1]), w, h, px)
-                .map_err(|e| e.to_string())
+            vlib::write_image(std::path::Path::new(&args[1]), w, h, px).map_err(|e| e.to_string())
         });
     match result {
         Ok(()) => ExitCode::SUCCESS,

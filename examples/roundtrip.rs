@@ -146,7 +146,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             (Some(a), Some(b)) => format!("{}{block}{}", &doc[..a], &doc[b + end.len()..]),
             _ => format!("{doc}\n{block}\n"),
         };
-        vlib::output::write_atomic(std::path::Path::new(path), new.as_bytes())?;
+        vlib::write_atomic(std::path::Path::new(path), new.as_bytes())?;
         say::say(format_args!("updated {path}"))?;
     }
     Ok(())

@@ -2,9 +2,9 @@
 //! functions (`vlSet`, `vlDataset`, `vlMap`, the usual program of a scanned volume) compiled
 //! into a flat list of operations on ten field registers.
 //!
-//! It computes exactly what [`crate::program::run`] computes, bit for bit (the same dataset
+//! It computes exactly what [`crate::model::program::run`] computes, bit for bit (the same dataset
 //! filters, the same [`Mapping`] arithmetic, the same clamping of written values), without the
-//! generality a field function needs: no [`crate::program::Sample`] per point, no instruction
+//! generality a field function needs: no [`crate::model::program::Sample`] per point, no instruction
 //! dispatch over function calls. These rewrites make it cheaper, all exact:
 //!
 //! - **The zero test.** When opacity is last written by a transfer function that is 0 on an
@@ -22,9 +22,9 @@
 //!   Where an input's bucket lies inside one ramp segment of each table, both segments are
 //!   found by one lookup ([`SegmentPairs`]) and evaluated without the tables' case analysis.
 
-use crate::dataset::{Dataset, Filter};
-use crate::mapping::{segment_value, Mapping};
-use crate::program::{clamp_field, clamp_fields, Instr};
+use crate::data::{Dataset, Filter};
+use crate::model::mapping::{segment_value, Mapping};
+use crate::model::program::{clamp_field, clamp_fields, Instr};
 use crate::types::{Fields, FIELD_COUNT};
 use std::sync::Arc;
 

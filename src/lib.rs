@@ -5,9 +5,17 @@
 //! geometry), defined by an ordered program of constants, field functions and transfer functions,
 //! placed in the world by transforms and rendered by a discrete ray tracer.
 //!
-//! This crate owns all meaning: the state machine ([`Library`]), the object model
-//! ([`program`], [`mapping`]), the ray tracer ([`render`]) and image output ([`output`]). The C
-//! interface (`capi/`, built as `libvlib.a` / `libvlib.so`) is a thin layer over [`Library`].
+//! This crate owns all meaning: the state machine ([`Library`], one method per command), the
+//! object model, datasets, the ray tracer and the output files. The C interface (`capi/`, built
+//! as `libvlib.a` / `libvlib.so`) is a thin layer over [`Library`].
+//!
+//! The public API is what this page lists: [`Library`] and the types its methods take and
+//! return, the auxiliary library [`vlaux`], the CVG operators [`cvg`], the command table
+//! [`scope`], the base [`types`], and two file helpers ([`write_image`], [`write_atomic`]).
+//! Everything else is internal, in layers that import downward only (`docs/dev/architecture.md`):
+//! `api` (the state machine) → `output` (the one place that writes files) → `render` (scene →
+//! immutable plan → pixels) → `accel` (empty-space skipping) → `data` (datasets) and `model`
+//! (plain scene data and the object model) → the base types (`types`, `error`, `num`).
 //!
 //! ```no_run
 //! use vlib::{Camera, Fields, Library};
@@ -28,29 +36,45 @@
 
 #![warn(missing_docs)]
 
-pub mod cvg;
-pub mod dataset;
-pub mod error;
+mod accel;
+mod api;
+mod data;
+mod error;
 mod kernel;
-pub mod library;
-pub mod mapping;
+mod model;
 mod num;
-pub mod output;
-pub mod program;
-pub mod render;
-pub mod scene;
-pub mod scope;
-mod skip;
+mod output;
+mod render;
 #[cfg(test)]
 mod testing;
 pub mod types;
-pub mod vlaux;
-pub mod voxel;
+mod voxel;
 
+pub use api::library::{Closed, Library};
+pub use api::scope;
+pub use api::scope::{Command, Scope};
+pub use data::{Dataset, Filter, Voxels};
 pub use error::{Error, ErrorCode, Result};
-pub use library::{Closed, Library};
-pub use program::{Sample, SampleRole};
-pub use render::Image;
-pub use scene::Camera;
-pub use scope::{Command, Scope};
-pub use types::{Attenuation, Feature, Fields, Interpolation, MappingType, RenderType};
+pub use model::program::{FieldFn, NormalFn, Sample, SampleRole};
+pub use model::scene::{Camera, Optimise, DEFAULT_FOV};
+pub use model::{cvg, vlaux};
+pub use output::{write_atomic, write_image};
+pub use render::{Image, Plan};
+pub use types::{Attenuation, Feature, Fields, Interpolation, MappingType, RenderType, T_MIN};
+
+/// The library's limits on what a call may ask for (`docs/commands.md`): larger requests are
+/// refused with `VL_BADVALUE`.
+pub mod limits {
+    pub use crate::api::library::{
+        MAX_DEPTH, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_RECURSION, MAX_SUPER_SAMPLE, MAX_SURFACES,
+        MAX_VOLUME_NODES,
+    };
+    pub use crate::data::MAX_VOXELS;
+    pub use crate::model::mapping::{MAX_OUTPUTS, MAX_POINTS};
+}
+
+/// The `.vlb` dataset format's constants (the format itself: [`Dataset::load`],
+/// [`Dataset::save`], `docs/compat.md`).
+pub mod vlb {
+    pub use crate::data::{HEADER_LEN, MAGIC};
+}

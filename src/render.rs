@@ -17,18 +17,16 @@
 //! [`T_MIN`]). Shadow rays use the same
 //! segments; mirror and refracted rays start at surface hits.
 
-use crate::dataset::{CellGradients, Cells8, Dataset, Filter};
+use crate::accel::{EntryMap, Pinhole, SkipGrid, Walk};
+use crate::data::{CellGradients, Cells8, Dataset, Filter};
 use crate::error::{Error, ErrorCode, Result};
 use crate::kernel::Lean;
-use crate::program::{prefix_for, run, Instr, NormalFn, Sample, SampleEnv, SampleRole};
-use crate::scene::{Light, ObjectDesc, SceneDesc, Settings};
-use crate::skip::{EntryMap, Pinhole, SkipGrid, Walk};
+use crate::model::program::{prefix_for, run, Instr, NormalFn, Sample, SampleEnv, SampleRole};
+use crate::model::scene::{Light, ObjectDesc, SceneDesc, Settings};
 use crate::types::{Attenuation, Feature, Fields, RenderType, FIELD_COUNT, MAX_SPECULAR};
 use glam::{DMat4, DVec3};
 use rayon::prelude::*;
 use std::sync::Arc;
-
-pub use crate::types::T_MIN;
 
 /// Super-sampling refines a pixel when a colour channel differs from a 4-neighbour's by more
 /// than this.
@@ -120,8 +118,8 @@ struct CObj {
     skip: Option<Arc<SkipGrid>>,
     /// For a lean program with a value head rendered by the batched march, under empty-space
     /// skipping: the cells of its dataset whose samples can pass the zero test (see
-    /// [`crate::dataset::CellMask`]).
-    cells: Option<Arc<crate::dataset::CellMask>>,
+    /// [`crate::data::CellMask`]).
+    cells: Option<Arc<crate::data::CellMask>>,
     /// The rendering algorithm the object captured.
     render_type: RenderType,
     /// Iso-surfaces (field index, threshold) for DSR.
@@ -173,16 +171,16 @@ fn slab((mut t0, mut t1): (f64, f64), o: f64, d: f64, min: f64, max: f64) -> Opt
 impl CObj {
     fn new(
         o: &ObjectDesc,
-        datasets: &Arc<crate::program::Datasets>,
-        optimise: crate::scene::Optimise,
+        datasets: &Arc<crate::model::program::Datasets>,
+        optimise: crate::model::scene::Optimise,
     ) -> CObj {
         let to_world = o.matrix();
-        let b = crate::scene::v3(o.boundary);
+        let b = crate::model::scene::v3(o.boundary);
         let box_min = DVec3::splat(0.5) - b * 0.5;
         let box_max = DVec3::splat(0.5) + b * 0.5;
         let step = o.state.step as f64;
         let delta = match o.state.neighborhood {
-            Some(d) => crate::scene::v3(d),
+            Some(d) => crate::model::scene::v3(d),
             None => {
                 let extent = (0..3)
                     .map(|i| to_world.col(i).truncate().length() * b[i])
@@ -494,16 +492,16 @@ fn try_normalize(v: DVec3) -> Option<DVec3> {
 pub(crate) fn compile_children(
     o: &ObjectDesc,
     world_to_o: DMat4,
-    datasets: &Arc<crate::program::Datasets>,
-) -> Vec<crate::program::Child> {
+    datasets: &Arc<crate::model::program::Datasets>,
+) -> Vec<crate::model::program::Child> {
     o.children
         .iter()
         .map(|c| {
             let to_child = c.matrix().inverse();
             let world_to_child = to_child * world_to_o;
-            let b = crate::scene::v3(c.boundary);
+            let b = crate::model::scene::v3(c.boundary);
             let r = &c.state;
-            crate::program::Child {
+            crate::model::program::Child {
                 program: c.program.clone(),
                 to_child,
                 world_to_child,
@@ -1025,7 +1023,7 @@ impl Compiled {
             .iter()
             .map(|&light| {
                 let (Light::Point { radiance, .. } | Light::Directional { radiance, .. }) = light;
-                (light, crate::scene::v3(radiance))
+                (light, crate::model::scene::v3(radiance))
             })
             .collect();
         let directional = lights
@@ -1040,7 +1038,7 @@ impl Compiled {
             lights,
             directional,
             lanes: Vec::new(),
-            ambient: crate::scene::v3(desc.settings.ambient),
+            ambient: crate::model::scene::v3(desc.settings.ambient),
             settings: desc.settings.clone(),
             plan,
         };
@@ -1506,7 +1504,7 @@ impl Compiled {
     fn unbounded_colour(&self) -> Option<DVec3> {
         let ray = Ray::PRIMARY;
         let background = if ray.background {
-            crate::scene::v3(self.settings.background)
+            crate::model::scene::v3(self.settings.background)
         } else {
             DVec3::ZERO
         };
@@ -1538,7 +1536,7 @@ impl Compiled {
                 [obj] => obj.object_ray(origin, DVec3::ZERO).0,
                 _ => DVec3::ZERO,
             },
-            background: crate::scene::v3(self.settings.background),
+            background: crate::model::scene::v3(self.settings.background),
         }
     }
 
@@ -1564,7 +1562,7 @@ impl Compiled {
         let background = if ray.background {
             match image {
                 Some(i) => i.background,
-                None => crate::scene::v3(self.settings.background),
+                None => crate::model::scene::v3(self.settings.background),
             }
         } else {
             DVec3::ZERO
@@ -2353,7 +2351,7 @@ fn view(settings: &Settings, width: u32, height: u32, aspect: f32) -> Pinhole {
         (half, half / aspect)
     };
     Pinhole {
-        eye: crate::scene::v3(cam.eye),
+        eye: crate::model::scene::v3(cam.eye),
         right: r * hw,
         up: u * hh,
         forward: f,
@@ -2499,7 +2497,7 @@ pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> R
                     let sx = x as f64 + (i as f64 + 0.5) / n as f64;
                     let sy = y as f64 + (j as f64 + 0.5) / n as f64;
                     let c = scene.trace(view.eye, &image, view.ray(sx, sy), from(x, y));
-                    sum += crate::scene::v3(to_f32(c));
+                    sum += crate::model::scene::v3(to_f32(c));
                 }
             }
             to_f32(sum / (n * n) as f64)
@@ -2681,7 +2679,7 @@ mod tests {
     /// A scene of one object (receiving and casting shadows if `shadows`) under `lights`,
     /// compiled.
     fn lit_scene(lights: Vec<Light>, shadows: bool) -> Compiled {
-        let mut state = crate::scene::RenderState::default();
+        let mut state = crate::model::scene::RenderState::default();
         state.toggles[Feature::CastShadows as usize] = shadows;
         state.toggles[Feature::ReceiveShadows as usize] = shadows;
         Compiled::new(&SceneDesc {
@@ -3082,7 +3080,7 @@ mod tests {
                 v.min(255.0) as u8
             })
             .collect();
-        let data = Dataset::new([n; 3], crate::dataset::Voxels::U8(voxels), 0.0, 1.0).unwrap();
+        let data = Dataset::new([n; 3], crate::data::Voxels::U8(voxels), 0.0, 1.0).unwrap();
         let mut terminated = 0;
         for (ks, exponent) in [(0.3, 10.0), (0.0, 10.0), (0.6, 3.0), (0.3, 20.5)] {
             let mut vl = crate::Library::new();
@@ -3182,7 +3180,7 @@ mod tests {
                 }
             })
             .collect();
-        let data = Dataset::new([n; 3], crate::dataset::Voxels::U8(voxels), 0.0, 1.0).unwrap();
+        let data = Dataset::new([n; 3], crate::data::Voxels::U8(voxels), 0.0, 1.0).unwrap();
         let mut vl = crate::Library::new();
         vl.add_dataset(1, data).unwrap();
         vl.mapping(2, MappingType::Ramp, 3, 1, &[0.3, 0.0, 0.5, 0.6, 1.0, 0.95])
@@ -3452,7 +3450,7 @@ mod tests {
             [f32::NAN, f32::INFINITY, -0.0],
         ] {
             scene.settings.background = background;
-            let bg = crate::scene::v3(background);
+            let bg = crate::model::scene::v3(background);
             let obj = &scene.objects[0];
             for &a in &AWKWARD {
                 for &b in &AWKWARD {
@@ -3493,7 +3491,7 @@ mod tests {
     fn cursor_started_in_place_is_the_new_cursor() {
         let mut scene = sphere_scene();
         scene.settings.background = [0.1, 0.2, 0.3];
-        let bg = crate::scene::v3(scene.settings.background);
+        let bg = crate::model::scene::v3(scene.settings.background);
         let obj = &scene.objects[0];
         let rng = Xorshift::new(0x9e37_79b9_7f4a_7c15u64);
         let next = || rng.next();

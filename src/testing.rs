@@ -2,6 +2,10 @@
 
 use std::cell::Cell;
 
+#[path = "../tests/common/lcg.rs"]
+mod lcg;
+pub(crate) use lcg::Lcg;
+
 /// The xorshift64 generator (shifts 13, 7, 17) the unit tests draw their random inputs from:
 /// raw bits, or numbers in [0, 1). Its state is in a `Cell`, so several closures of a test
 /// can draw from one generator.

@@ -7,10 +7,10 @@
 //! [0, 1] are quantised to the nearest of 0 … 255 or 0 … 65535, and the files carry a = 0 and
 //! b = 255 or 65535, so loading one gives back the values to within half a quantum.
 
-use crate::dataset::{Dataset, Voxels};
+use crate::data::{Dataset, Voxels};
 use crate::error::{Error, Result};
+use crate::model::scene::VolumeRequest;
 use crate::render::Compiled;
-use crate::scene::VolumeRequest;
 use crate::types::{FIELD_COUNT, FIELD_NAMES};
 use glam::DVec3;
 use rayon::prelude::*;

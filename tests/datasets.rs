@@ -2,9 +2,9 @@
 //! changes a pixel, dataset-driven normals, and the MNI brain end to end.
 
 use std::sync::{Arc, Mutex};
-use vlib::dataset::{Dataset, Filter, Voxels};
-use vlib::scene::Optimise;
+use vlib::Optimise;
 use vlib::{Camera, Fields, Interpolation, Library, MappingType};
+use vlib::{Dataset, Filter, Voxels};
 
 #[path = "common/lcg.rs"]
 mod lcg;
@@ -201,7 +201,7 @@ fn early_termination_changes_pixels_by_less_than_its_threshold() {
         .unwrap();
     assert!((2..=9).contains(&worst), "largest change {worst}");
     assert!(at(0.0) == off, "termination 0 stopped a ray early");
-    assert!(at(vlib::render::T_MIN) == on, "the default is T_MIN");
+    assert!(at(vlib::T_MIN) == on, "the default is T_MIN");
 }
 
 #[test]

@@ -79,7 +79,7 @@ fn opacity_reference_scales_the_exponent() {
         let got = img.pixel(1, 1)[0] as f64;
         // Early termination may drop at most T_MIN of the remaining light.
         assert!(
-            (got - expected).abs() < 1e-5 + vlib::render::T_MIN,
+            (got - expected).abs() < 1e-5 + vlib::T_MIN,
             "o {o} ref {reference}: {got} vs {expected}"
         );
     }

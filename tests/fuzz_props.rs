@@ -17,7 +17,9 @@ mod driver;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 use std::path::PathBuf;
-use vlib::dataset::{Dataset, HEADER_LEN, MAX_VOXELS};
+use vlib::limits::MAX_VOXELS;
+use vlib::vlb::HEADER_LEN;
+use vlib::Dataset;
 use vlib::ErrorCode;
 
 /// A runner with a fixed seed, `cases` cases (times `VLIB_FUZZ_CASES`), no regression files.

@@ -18,9 +18,9 @@
 //! the bound (1/512) times a colour. So 1/255 (one 8-bit level) per channel, and a root mean
 //! square far below it.
 
-use vlib::dataset::{Dataset, Voxels};
-use vlib::scene::Optimise;
+use vlib::Optimise;
 use vlib::{Camera, Feature, Fields, Library, MappingType};
+use vlib::{Dataset, Voxels};
 
 #[path = "common/lcg.rs"]
 mod lcg;
@@ -534,9 +534,8 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                 let narrow = render(true, 1, false, true);
                 // Every run tested against the cell mask: the same image bit for bit.
                 let tested = render(true, 1, true, false);
-                let flat = |i: &vlib::render::Image| -> Vec<f32> {
-                    i.pixels.iter().flatten().copied().collect()
-                };
+                let flat =
+                    |i: &vlib::Image| -> Vec<f32> { i.pixels.iter().flatten().copied().collect() };
                 let (p, s) = (flat(&packets), flat(&scalar));
                 prop_assert!(
                     p.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)),

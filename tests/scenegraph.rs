@@ -3,7 +3,7 @@
 
 use glam::{DMat4, DVec3};
 use vlib::cvg::{self, Operator};
-use vlib::dataset::Dataset;
+use vlib::Dataset;
 use vlib::{Fields, Library};
 
 fn tmp(tag: &str) -> std::path::PathBuf {

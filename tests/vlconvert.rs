@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use vlib::dataset::{Dataset, Voxels};
+use vlib::{Dataset, Voxels};
 
 fn run(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_vlconvert"))

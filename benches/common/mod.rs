@@ -10,8 +10,8 @@ pub mod mni_scene;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use vlib::scene::Optimise;
 use vlib::Library;
+use vlib::Optimise;
 
 /// The converted MNI template: `$VLIB_MNI_VLB`, or `target/bench-data/mni.vlb`, made on first
 /// use with `vlconvert` from `../shared/data/…nii.gz`. An error when neither the file nor the

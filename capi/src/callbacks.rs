@@ -42,7 +42,7 @@ impl CField {
     }
 
     /// The core closure: enters sample scope and calls `f` with a copy of the object-space point.
-    pub(crate) fn into_core(self) -> vlib_core::program::FieldFn {
+    pub(crate) fn into_core(self) -> vlib_core::FieldFn {
         // A method call captures the whole wrapper (not its raw-pointer fields one by one).
         Arc::new(move |s: &mut Sample<'_>| self.call(s))
     }
@@ -67,7 +67,7 @@ impl CSpatial {
 
     /// The core closure: calls `f` on a copy of the point and moves the sample to wherever `f`
     /// left it (a non-finite point is refused and recorded).
-    pub(crate) fn into_core(self) -> vlib_core::program::FieldFn {
+    pub(crate) fn into_core(self) -> vlib_core::FieldFn {
         // A method call captures the whole wrapper (not its raw-pointer fields one by one).
         Arc::new(move |s: &mut Sample<'_>| self.call(s))
     }
@@ -106,7 +106,7 @@ impl CNormal {
     }
 
     /// The core closure: enters sample scope and calls `f` on the normal and a copy of the point.
-    pub(crate) fn into_core(self) -> vlib_core::program::NormalFn {
+    pub(crate) fn into_core(self) -> vlib_core::NormalFn {
         Arc::new(move |n: &mut [f32; 3], s: &mut Sample<'_>| self.call(n, s))
     }
 

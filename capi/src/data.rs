@@ -5,7 +5,7 @@
 use crate::ffi::{c_path, either, ffi_boundary, library, null};
 use crate::types::{vlfloat, vlint};
 use std::os::raw::c_char;
-use vlib_core::mapping::{MAX_OUTPUTS, MAX_POINTS};
+use vlib_core::limits::{MAX_OUTPUTS, MAX_POINTS};
 use vlib_core::{Command, Error, ErrorCode, MappingType, Result};
 
 /// Loads a `.vlb` dataset under the id `id`.

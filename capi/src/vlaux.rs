@@ -39,7 +39,7 @@ pub extern "C" fn vluCamera(
                 eye: [ex, ey, ez],
                 at: [lx, ly, lz],
                 up: [0.0, 1.0, 0.0],
-                fov: vlib_core::scene::DEFAULT_FOV,
+                fov: vlib_core::DEFAULT_FOV,
             })
         })
     })

@@ -27,12 +27,12 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use vlib::dataset::{Dataset, Voxels};
-use vlib::library::{MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_VOLUME_NODES};
+use vlib::limits::{MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_VOLUME_NODES};
 use vlib::{
     Attenuation, Camera, Closed, Command, ErrorCode, Feature, Fields, Interpolation, Library,
     MappingType, RenderType, Sample, Scope,
 };
+use vlib::{Dataset, Voxels};
 
 /// How the interpreter behaves.
 #[derive(Clone, Copy, Debug)]
@@ -424,7 +424,7 @@ pub fn run(data: &[u8], dir: &Path, cfg: Config) -> Stats {
 /// A field function of one of several kinds: well-behaved ones, ones that misuse the sample
 /// (bad masks, bad child indices, moving the point outside a spatial function), NaN writers and,
 /// if allowed, one that panics.
-fn field_fn(kind: u8, c: f32, id: i32, allow_panic: bool) -> vlib::program::FieldFn {
+fn field_fn(kind: u8, c: f32, id: i32, allow_panic: bool) -> vlib::FieldFn {
     match kind % 9 {
         0 => Arc::new(move |s: &mut Sample| {
             s.set(Fields::ALL, c).expect("set in a field function");
@@ -514,7 +514,7 @@ fn field_fn(kind: u8, c: f32, id: i32, allow_panic: bool) -> vlib::program::Fiel
 }
 
 /// A spatial transfer function: scales, shifts, sends the point to NaN or infinity.
-fn spatial_fn(kind: u8, c: f32) -> vlib::program::FieldFn {
+fn spatial_fn(kind: u8, c: f32) -> vlib::FieldFn {
     Arc::new(move |s: &mut Sample| {
         let p = s.position();
         let q = match kind % 5 {
@@ -537,7 +537,7 @@ fn spatial_fn(kind: u8, c: f32) -> vlib::program::FieldFn {
 }
 
 /// A normal function: constant, NaN, zero, a child's normal, or one that tries to write fields.
-fn normal_fn(kind: u8, c: f32) -> vlib::program::NormalFn {
+fn normal_fn(kind: u8, c: f32) -> vlib::NormalFn {
     Arc::new(move |n: &mut [f32; 3], s: &mut Sample| match kind % 5 {
         0 => *n = [c, 1.0, 0.0],
         1 => *n = [f32::NAN; 3],
@@ -905,7 +905,7 @@ impl<'d> Driver<'d> {
                 let c0 = [input.f(), input.f(), input.f()];
                 let c1 = [input.f(), input.f(), input.f()];
                 let mut nodes = [input.pick(&NODES), input.pick(&NODES), input.pick(&NODES)];
-                if valid_but_large(&nodes, vlib::dataset::MAX_VOXELS, MAX_VOLUME_NODES, 64) {
+                if valid_but_large(&nodes, vlib::limits::MAX_VOXELS, MAX_VOLUME_NODES, 64) {
                     nodes = [4, 2, 3];
                 }
                 let bytes = input.pick(&[1, 2, 0, 3, -1]);
@@ -1289,7 +1289,7 @@ pub fn check_vlb(data: &[u8], scratch: Option<&Path>) {
             assert_eq!(d.to_vlb_bytes(), data, "re-encoding differs");
             assert!(d.values().iter().all(|v| (0.0..=1.0).contains(v)));
             for kind in Interpolation::ALL {
-                let f = vlib::dataset::Filter::new(*kind, (0.0, 0.5));
+                let f = vlib::Filter::new(*kind, (0.0, 0.5));
                 for p in [
                     [0.0; 3],
                     [0.5; 3],

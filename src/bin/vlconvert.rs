@@ -15,7 +15,7 @@
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use vlib::dataset::{Dataset, Voxels};
+use vlib::{Dataset, Voxels};
 
 #[derive(Parser)]
 #[command(

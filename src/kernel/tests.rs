@@ -1,8 +1,8 @@
 //! Unit tests of `kernel`.
 
 use super::*;
-use crate::dataset::Voxels;
-use crate::program::{run, Sample};
+use crate::data::Voxels;
+use crate::model::program::{run, Sample};
 use crate::testing::Xorshift;
 use crate::types::MappingType;
 
@@ -88,7 +88,7 @@ fn programs() -> Vec<Vec<Instr>> {
 #[test]
 fn lean_matches_the_interpreter_bit_for_bit() {
     for (n, prog) in programs().into_iter().enumerate() {
-        let o_prefix = crate::program::prefix_for(&prog, Fields::O);
+        let o_prefix = crate::model::program::prefix_for(&prog, Fields::O);
         let lean = Lean::new(&prog, o_prefix).expect("lean program");
         let mut tested_zero = 0;
         for i in 0..=20 {
@@ -153,7 +153,7 @@ fn constants_overwritten_later_are_folded() {
 fn direct_form_applies_to_the_usual_shape_only() {
     let progs = programs();
     let direct = |prog: &[Instr]| {
-        let lean = Lean::new(prog, crate::program::prefix_for(prog, Fields::O)).unwrap();
+        let lean = Lean::new(prog, crate::model::program::prefix_for(prog, Fields::O)).unwrap();
         lean.direct
             .map(|d| d.colour.map_or(0, |(_, outputs)| outputs.len()))
     };
@@ -178,8 +178,9 @@ fn direct_form_applies_to_the_usual_shape_only() {
 #[test]
 fn direct_shading_is_the_registers() {
     let progs = programs();
-    let lean =
-        |prog: &[Instr]| Lean::new(prog, crate::program::prefix_for(prog, Fields::O)).unwrap();
+    let lean = |prog: &[Instr]| {
+        Lean::new(prog, crate::model::program::prefix_for(prog, Fields::O)).unwrap()
+    };
     let usual = lean(&progs[0]);
     let shading = usual.direct_shading().expect("the usual program");
     assert_eq!(shading.coefficients, [0.2f32 as f64, 0.0, 0.0, 0.0]);
@@ -266,7 +267,7 @@ fn direct_shading_is_the_registers() {
         assert!(lean(&prog).direct_shading().is_none(), "{name}");
     }
     for (n, prog) in progs.iter().enumerate().skip(1) {
-        let o_prefix = crate::program::prefix_for(prog, Fields::O);
+        let o_prefix = crate::model::program::prefix_for(prog, Fields::O);
         if let Some(l) = Lean::new(prog, o_prefix) {
             assert!(l.direct_shading().is_none(), "program {n}");
         }

@@ -62,9 +62,9 @@
 //! table ([`gather`]), so every lane reads inside the slice whatever the ray.
 
 use super::*;
-use crate::dataset::{Filter, Voxels};
+use crate::data::{Filter, Voxels};
 use crate::kernel::DirectShading;
-use crate::mapping::Mapping;
+use crate::model::mapping::Mapping;
 use crate::types::MappingType;
 use std::arch::x86_64::*;
 
@@ -1976,7 +1976,7 @@ struct LaneRay {
 /// (`Packets::run16_untested`, and in eight lanes [`Packets::next_taken`]). Exact, as a taken
 /// sample the mask would have dropped adds nothing: the mask clears only cells whose every
 /// value is at most the zero test's bound, with a margin over the rounding of any sample in
-/// them ([`crate::dataset::CellMask`]), so such a sample fails the zero test of
+/// them ([`crate::data::CellMask`]), so such a sample fails the zero test of
 /// [`Packets::step`]. Inside visible matter the mask passes most runs whole, and at fine
 /// steps its test cost about a third of a sample's work (at 0.125 voxel half the runs of the
 /// MNI frame were passed whole, 37 % not at all); where a run it would have cut comes
@@ -2287,10 +2287,10 @@ mod tests {
         step: f32,
         shaded: bool,
         opaque: bool,
-        optimise: crate::scene::Optimise,
+        optimise: crate::model::scene::Optimise,
         (width, height): (u32, u32),
     ) -> Vec<u32> {
-        use crate::dataset::{Dataset, Voxels};
+        use crate::data::{Dataset, Voxels};
         use crate::{Camera, Fields, Library, MappingType};
         let dims = [40usize, 36, 30];
         let voxels = (0..dims.iter().product::<usize>())
@@ -2367,7 +2367,7 @@ mod tests {
             return;
         }
         let render = |step: f32, shaded: bool, wide_lanes: bool, trust: bool| {
-            let optimise = crate::scene::Optimise {
+            let optimise = crate::model::scene::Optimise {
                 wide_lanes,
                 trust_whole_runs: trust,
                 ..Default::default()
@@ -2409,7 +2409,7 @@ mod tests {
                 for step in [0.125, 0.5, 2.0] {
                     for shaded in [false, true] {
                         for wide_lanes in [true, false] {
-                            let optimise = crate::scene::Optimise {
+                            let optimise = crate::model::scene::Optimise {
                                 wide_lanes,
                                 ..Default::default()
                             };

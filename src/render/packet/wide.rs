@@ -135,7 +135,7 @@ impl Packets<'_> {
     /// [`Packets::run16`] without the cell-mask test: the run's segments of positive length
     /// (or NaN), all taken. Exact, as a taken sample the mask would have dropped adds nothing:
     /// the mask clears only cells whose every value is at most the zero test's bound (with a
-    /// margin, [`crate::dataset::CellMask`]), so such a sample fails the zero test in
+    /// margin, [`crate::data::CellMask`]), so such a sample fails the zero test in
     /// [`Packets::step16`]. Taken after a run the mask passed whole ([`TRUSTED_RUNS`]).
     #[inline]
     #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]

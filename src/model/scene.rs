@@ -5,7 +5,7 @@
 //! [`SceneDesc`] to the renderer when the scene closes.
 
 use crate::error::{err, ErrorCode, Result};
-use crate::program::{Instr, NormalFn};
+use crate::model::program::{Instr, NormalFn};
 use crate::types::{Attenuation, Feature, Fields, Interpolation, RenderType};
 use glam::{DMat4, DVec3};
 use std::fmt;
@@ -310,7 +310,7 @@ pub struct ObjectDesc {
     /// The empty-space grid, built by the first render after the object is closed (its
     /// program and boundary no longer change then) and shared by later renders.
     pub(crate) skip:
-        std::sync::Arc<std::sync::OnceLock<Option<std::sync::Arc<crate::skip::SkipGrid>>>>,
+        std::sync::Arc<std::sync::OnceLock<Option<std::sync::Arc<crate::accel::SkipGrid>>>>,
 }
 
 impl ObjectDesc {
@@ -341,11 +341,6 @@ impl ObjectDesc {
             }
         }
         self.to_world * f
-    }
-
-    /// Whether the program or normal chain reads fields by way of the geometry field.
-    pub fn writes(&self, fields: Fields) -> bool {
-        self.program.iter().any(|i| i.writes().intersects(fields))
     }
 }
 
@@ -384,5 +379,5 @@ pub struct SceneDesc {
     /// Root objects, in definition order.
     pub objects: Vec<ObjectDesc>,
     /// The library's datasets when the scene closed (for `vlSample` in field functions).
-    pub datasets: std::sync::Arc<crate::program::Datasets>,
+    pub datasets: std::sync::Arc<crate::model::program::Datasets>,
 }

@@ -4,7 +4,7 @@
 //! the mask into [`GroupCode`]s and the boxes; projecting them is the entry map's (`entry`).
 
 use super::grid::{Boxes, SkipGrid};
-use crate::dataset::{CellMask, Dataset, BRICK};
+use crate::data::{CellMask, Dataset, BRICK};
 use glam::DVec3;
 use rayon::prelude::*;
 

@@ -154,11 +154,6 @@ impl Mapping {
         self.outputs
     }
 
-    /// The number of rows.
-    pub fn points(&self) -> usize {
-        self.a.len()
-    }
-
     /// The input points a_1 < … < a_n.
     pub(crate) fn breakpoints(&self) -> &[f32] {
         &self.a
@@ -257,7 +252,7 @@ impl Mapping {
         }
     }
 
-    /// A field value clamped as [`clamp_field`](crate::program::clamp_field) clamps it (into
+    /// A field value clamped as [`clamp_field`](crate::model::program::clamp_field) clamps it (into
     /// [0, 1], NaN → 0), and the bucket of [`Mapping::locate`]'s table holding the clamped
     /// value x: ⌊x·BUCKETS⌋, the same for every mapping, so one bucket index serves several
     /// tables. Computed in an f32 lane: the clamp as [`clamp_fields`] (bit for bit
@@ -354,5 +349,7 @@ impl Mapping {
     }
 }
 
+#[cfg(test)]
+mod paper;
 #[cfg(test)]
 mod tests;

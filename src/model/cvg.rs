@@ -14,7 +14,7 @@
 //!
 //! Each writes only the fields its `vlFunction` call named. With no children every field is 0.
 
-use crate::program::Sample;
+use crate::model::program::Sample;
 use crate::types::{Fields, FIELD_COUNT};
 use crate::Result;
 

@@ -10,9 +10,9 @@
 //! This module does not know about rays or the C interface: the C layer wraps C function pointers
 //! into closures of the types below.
 
-use crate::dataset::{Dataset, Filter};
+use crate::data::{Dataset, Filter};
 use crate::error::{err, Error, ErrorCode, Result};
-use crate::mapping::Mapping;
+use crate::model::mapping::Mapping;
 pub(crate) use crate::num::clamp_field;
 pub(crate) use crate::num::clamp_fields;
 use crate::types::{Fields, FIELD_COUNT};

@@ -1,16 +1,16 @@
 //! The state machine: one [`Library`] value is one `vlInit … vlEnd` session.
 //!
 //! Every method is one command of the API. Each first checks its scope against the table in
-//! [`crate::scope`], then validates every argument, and only then changes state, so a call that
+//! [`crate::api::scope`], then validates every argument, and only then changes state, so a call that
 //! returns `Err` has changed nothing. The C interface calls these methods one to one; Rust users
 //! call them directly (field functions are closures).
 
-use crate::dataset::{Dataset, Filter};
+use crate::api::scope::{require, Command, Scope};
+use crate::data::{Dataset, Filter};
 use crate::error::{err, Error, ErrorCode, Result};
-use crate::mapping::Mapping;
-use crate::program::{clamp_field, Instr, NormalFn, Sample};
-use crate::scene::{Camera, ImageRequest, Light, ObjectDesc, SceneDesc, Settings};
-use crate::scope::{require, Command, Scope};
+use crate::model::mapping::Mapping;
+use crate::model::program::{clamp_field, Instr, NormalFn, Sample};
+use crate::model::scene::{Camera, ImageRequest, Light, ObjectDesc, SceneDesc, Settings};
 use crate::types::{axes, Attenuation, Feature, Fields, Interpolation, MappingType, RenderType};
 use glam::{DMat4, DVec4};
 use std::collections::BTreeMap;
@@ -49,7 +49,7 @@ struct OpenScene {
     settings: Settings,
     lights: Vec<Light>,
     images: Vec<ImageRequest>,
-    volumes: Vec<crate::scene::VolumeRequest>,
+    volumes: Vec<crate::model::scene::VolumeRequest>,
     objects: Vec<ObjectDesc>,
     /// Objects being specified (nested ones after their parents).
     open: Vec<ObjectDesc>,
@@ -61,7 +61,7 @@ pub struct Library {
     /// Defaults that each new scene starts from (set at library scope).
     defaults: Settings,
     mappings: BTreeMap<i32, Arc<Mapping>>,
-    datasets: crate::program::Datasets,
+    datasets: crate::model::program::Datasets,
     scene: Option<OpenScene>,
     ended: bool,
 }
@@ -277,7 +277,7 @@ impl Library {
         }
         for axis in 0..3 {
             let n = nodes[axis];
-            if n < 1 || n as u64 > crate::dataset::MAX_VOXELS {
+            if n < 1 || n as u64 > crate::data::MAX_VOXELS {
                 return err(
                     ErrorCode::BadValue,
                     format!("vlVolume: {n} nodes along an axis"),
@@ -300,14 +300,16 @@ impl Library {
                 format!("vlVolume: {total} nodes exceed {MAX_VOLUME_NODES}"),
             );
         }
-        self.scene_mut().volumes.push(crate::scene::VolumeRequest {
-            prefix: prefix.to_path_buf(),
-            fields,
-            corner0,
-            corner1,
-            nodes: nodes.map(|n| n as usize),
-            bytes: bytes as u32,
-        });
+        self.scene_mut()
+            .volumes
+            .push(crate::model::scene::VolumeRequest {
+                prefix: prefix.to_path_buf(),
+                fields,
+                corner0,
+                corner1,
+                nodes: nodes.map(|n| n as usize),
+                bytes: bytes as u32,
+            });
         Ok(())
     }
 
@@ -362,7 +364,7 @@ impl Library {
         colour("vlPointLight", rgb)?;
         intensity("vlPointLight", i)?;
         self.scene_mut().lights.push(Light::Point {
-            position: crate::scene::v3(position),
+            position: crate::model::scene::v3(position),
             attenuation,
             radiance: rgb.map(|c| c * i),
         });
@@ -375,7 +377,7 @@ impl Library {
         finite("vlDirectionalLight", &dir)?;
         colour("vlDirectionalLight", rgb)?;
         intensity("vlDirectionalLight", i)?;
-        let d = crate::scene::v3(dir);
+        let d = crate::model::scene::v3(dir);
         let len = d.length();
         if len.is_nan() || len <= 0.0 || !len.is_finite() {
             return err(ErrorCode::BadValue, "vlDirectionalLight: zero direction");
@@ -522,7 +524,7 @@ impl Library {
     /// (x, y, z), under the interpolation in force.
     pub fn sample(&self, id: i32, x: f32, y: f32, z: f32) -> Result<f32> {
         self.check(Command::Sample)?;
-        crate::program::sample_dataset(&self.datasets, id, [x, y, z], self.filter())
+        crate::model::program::sample_dataset(&self.datasets, id, [x, y, z], self.filter())
     }
 
     /// `vlMapping`: declares (or replaces) transfer function `id`. Objects that already mapped
@@ -578,7 +580,7 @@ impl Library {
         }
         self.transform(
             Command::Scale,
-            DMat4::from_scale(crate::scene::v3([x, y, z])),
+            DMat4::from_scale(crate::model::scene::v3([x, y, z])),
         )
     }
 
@@ -588,7 +590,7 @@ impl Library {
         finite("vlTranslate", &[x, y, z])?;
         self.transform(
             Command::Translate,
-            DMat4::from_translation(crate::scene::v3([x, y, z])),
+            DMat4::from_translation(crate::model::scene::v3([x, y, z])),
         )
     }
 
@@ -663,7 +665,7 @@ impl Library {
     }
 
     /// `vlSpatial` with a shared function.
-    pub fn spatial_arc(&mut self, f: crate::program::FieldFn) -> Result<()> {
+    pub fn spatial_arc(&mut self, f: crate::model::program::FieldFn) -> Result<()> {
         self.check(Command::Spatial)?;
         self.object_mut().program.push(Instr::Spatial { f });
         Ok(())
@@ -689,7 +691,11 @@ impl Library {
     }
 
     /// `vlFunction` with a shared function.
-    pub fn function_arc(&mut self, fields: Fields, f: crate::program::FieldFn) -> Result<()> {
+    pub fn function_arc(
+        &mut self,
+        fields: Fields,
+        f: crate::model::program::FieldFn,
+    ) -> Result<()> {
         self.check(Command::Function)?;
         fields.validate()?;
         self.object_mut()
@@ -815,7 +821,7 @@ impl Library {
     /// on or off, for benchmarks, and sets early termination's threshold; at library or scene
     /// scope like the other settings. A threshold outside [0, 1) (NaN included) is refused
     /// with `BadValue` and nothing changes. Not a command of the C API.
-    pub fn set_optimise(&mut self, optimise: crate::scene::Optimise) -> Result<()> {
+    pub fn set_optimise(&mut self, optimise: crate::model::scene::Optimise) -> Result<()> {
         if !matches!(self.scope(), Scope::Library | Scope::Scene) {
             return err(
                 ErrorCode::BadScope,

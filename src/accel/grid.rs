@@ -4,8 +4,8 @@
 //! blocks. Owns the grid's construction and layout; the walk along a ray (`walk`), the passing
 //! boxes (`passing`) and the entry map (`entry`) read it.
 
-use crate::dataset::{bc_abs_sum, Bricks, Dataset, Filter, BRICK};
-use crate::program::Instr;
+use crate::data::{bc_abs_sum, Bricks, Dataset, Filter, BRICK};
+use crate::model::program::Instr;
 use crate::types::FIELD_COUNT;
 use glam::DVec3;
 use rayon::prelude::*;

@@ -3,6 +3,7 @@
 //! bit.
 
 use super::*;
+use crate::data::filter::bc_kernel;
 
 #[test]
 fn trilinear_reproduces_linear_functions() {

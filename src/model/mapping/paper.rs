@@ -2,12 +2,9 @@
 //! with a linear scan, at thousands of points per table, including every edge case: values at
 //! and between the a_i, v = 0 and v = 1, a_1 = 0, a_n = 1, single-row tables, several outputs.
 
-use vlib::mapping::Mapping;
-use vlib::MappingType;
-
-#[path = "common/lcg.rs"]
-mod lcg;
-use lcg::Lcg;
+use super::Mapping;
+use crate::testing::Lcg;
+use crate::MappingType;
 
 /// Φ_t of the paper: 0 if v ≤ a_1 or v > a_n; b_{i+1,j} if a_i < v ≤ a_{i+1}.
 fn phi_t(a: &[f64], b: &[Vec<f64>], v: f64, j: usize) -> f64 {

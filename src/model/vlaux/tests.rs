@@ -283,8 +283,8 @@ fn sweep_coords_measure_the_radius() {
 
 #[test]
 fn sweep_samples_the_profile() {
-    use crate::dataset::{Dataset, Filter, Voxels};
-    use crate::program::{Datasets, SampleEnv};
+    use crate::data::{Dataset, Filter, Voxels};
+    use crate::model::program::{Datasets, SampleEnv};
     use crate::ErrorCode;
     use std::sync::Arc;
     // A 3 × 2 profile: bottom row (y = 0) 255, 255, 0; top row (y = 1) 255, 0, 0.

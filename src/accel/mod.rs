@@ -4,8 +4,8 @@
 //! `vlMap` and `vlSet` instructions), the part of its program that determines opacity is
 //! evaluated over *intervals*, once per block of the object: each dataset contributes the range
 //! of node values its filter can read anywhere in the block
-//! ([`crate::dataset::Dataset::bricks`]), each mapping the exact range of Φ over its input
-//! interval ([`crate::mapping::Mapping::range`]), each constant itself, and each field
+//! ([`crate::data::Dataset::bricks`]), each mapping the exact range of Φ over its input
+//! interval ([`crate::model::mapping::Mapping::range`]), each constant itself, and each field
 //! function the whole [0, 1] (nothing is known of it). A block whose opacity interval is
 //! [0, 0] is *empty*: every sample in it has o = 0 and contributes nothing. Rays walk the block
 //! grid (a 3D DDA) and skip the segments whose sample points lie in empty blocks; the remaining

@@ -7,7 +7,7 @@
 //! finite result; `sweep` reads a dataset through the sample it is given.
 
 use crate::error::Result;
-use crate::program::Sample;
+use crate::model::program::Sample;
 
 /// Ken Perlin's reference permutation of 0..=255 (from the "Improved Noise" reference code, 2002).
 pub const PERLIN_PERMUTATION: [u8; 256] = [

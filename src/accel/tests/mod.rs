@@ -14,7 +14,7 @@ use super::grid::{chessboard, Boxes, SkipGrid, MAX_LEAP};
 use super::passing::{passing_boxes, passing_groups_row, GroupCode};
 use super::rect::lower_rect;
 use super::walk::{block_index, outside, Walk};
-use crate::dataset::{CellMask, Dataset, BRICK};
+use crate::data::{CellMask, Dataset, BRICK};
 use glam::{DMat3, DMat4, DVec3};
 
 /// A small deterministic generator (xorshift64*), uniform in [0, 1).
@@ -176,7 +176,7 @@ fn spheres(rng: &mut Rng, dims: [usize; 3], count: usize) -> Dataset {
             }
         }
     }
-    Dataset::new(dims, crate::dataset::Voxels::U8(raw), 0.0, 255.0).unwrap()
+    Dataset::new(dims, crate::data::Voxels::U8(raw), 0.0, 255.0).unwrap()
 }
 
 #[cfg(test)]
