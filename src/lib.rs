@@ -45,7 +45,6 @@ mod skip;
 mod testing;
 pub mod types;
 pub mod vlaux;
-pub mod voxel;
 
 pub use error::{Error, ErrorCode, Result};
 pub use library::{Closed, Library};
