@@ -9,7 +9,7 @@ use super::*;
 /// The lanes of [`HeadlitLanes`]: samples of a run side by side.
 pub(super) type Lanes = wide::f64x2;
 
-pub(super) const LANES: usize = 2;
+const LANES: usize = 2;
 
 /// [`Headlit`] under a single light, its constants spread across lanes once per ray, for the
 /// lighting of a run's samples side by side ([`HeadlitLanes::colours`]).

@@ -59,7 +59,7 @@ impl CObj {
 
     /// [`CObj::field_gradient`] by world-space central differences of the field.
     #[inline(never)]
-    pub(super) fn sampled_gradient(&self, w: DVec3, field: usize) -> (DVec3, bool) {
+    fn sampled_gradient(&self, w: DVec3, field: usize) -> (DVec3, bool) {
         let mut diff = DVec3::ZERO;
         let mut grad = DVec3::ZERO;
         for i in 0..3 {
@@ -345,13 +345,13 @@ impl Compiled {
             return None;
         }
         run(&obj.program[obj.o_prefix..], &mut s);
-        let alpha = 1.0 - obj.segment_transmittance(o, len);
+        let alpha = obj.alpha(o, len);
         Some((alpha, self.illuminate(obj, w, dir, &mut s, 9)))
     }
 
     /// [`Compiled::shade`] by the lean kernel: the same fields, bit for bit, so the same colour.
     #[inline]
-    pub(super) fn shade_lean(
+    fn shade_lean(
         &self,
         obj: &CObj,
         lean: &Lean,
@@ -386,7 +386,7 @@ impl Compiled {
         cache: &mut CellGradients,
     ) -> (f64, DVec3) {
         lean.rest(p, f);
-        let alpha = 1.0 - obj.segment_transmittance(o, len);
+        let alpha = obj.alpha(o, len);
         let colour = if obj.normals.is_empty() {
             self.illuminate_with(obj, w, dir, f, || obj.gradient_normal(w, -dir, p, 9, cache))
         } else {
@@ -401,7 +401,7 @@ impl Compiled {
     /// gradient of field `normal_field`:
     /// `ka·I_amb·C + Σ att·I·L·T·(kd·C·max(N·L, 0) + ks·(R·V)^e)`, T the transmittance towards
     /// the light where shadows are simulated.
-    pub(super) fn illuminate(
+    fn illuminate(
         &self,
         obj: &CObj,
         w: DVec3,

@@ -994,7 +994,7 @@ fn index_f64_is_the_unsigned_conversion() {
 #[test]
 fn transmit_at_most_one_is_the_tested_transmit() {
     // (The opaque medium's test first, then `transmit`.)
-    let old = |o: f64, e: f64| if o >= 1.0 { 0.0 } else { transmit(1.0 - o, e) };
+    let tested = |o: f64, e: f64| if o >= 1.0 { 0.0 } else { transmit(1.0 - o, e) };
     let rng = Xorshift::new(0x2545_f491_4f6c_dd1d);
     let mut os = vec![
         0.0,
@@ -1055,7 +1055,7 @@ fn transmit_at_most_one_is_the_tested_transmit() {
     es.extend((0..40).map(|_| f64::from_bits(rng.bits())));
     for &o in &os {
         for &e in &es {
-            let (a, b) = (transmit_at_most_one(o, e), old(o, e));
+            let (a, b) = (transmit_at_most_one(o, e), tested(o, e));
             assert!(
                 a.to_bits() == b.to_bits(),
                 "o {o:e} e {e:e}: {a:e} against {b:e}"
@@ -1142,8 +1142,9 @@ fn cursor(t0: f64, t1: f64, step: f64, n: u64, k: u64, occupied_until: f64) -> C
     }
 }
 
-/// The batched march's run before `Cursor::next_run` (the oracle of
-/// `joined_runs_are_peek_and_run`): from the sample `Cursor::peek` chose, the samples
+/// A run that ends where the walk's block does, the next `Cursor::peek` asking the walk
+/// about the sample past it (the oracle of `joined_runs_are_peek_and_run`, which
+/// `Cursor::next_run` joins across occupied blocks): from the sample `Cursor::peek` chose, the samples
 /// after it in the occupied block the walk last reported (all unless `unbounded`), up to
 /// eight; their number, their midpoints and lengths written into `mids` and `lens`.
 fn run(c: &Cursor, unbounded: bool, mids: &mut [f64; 8], lens: &mut [f64; 8]) -> usize {
@@ -1159,9 +1160,10 @@ fn run(c: &Cursor, unbounded: bool, mids: &mut [f64; 8], lens: &mut [f64; 8]) ->
     }
 }
 
-/// `Cursor::segments` as it was before its last lane was made apart (the oracle of
-/// `segments_last_lane_apart_is_the_old_run`), verbatim.
-fn segments_old(c: &Cursor, mids: &mut [f64; 8], lens: &mut [f64; 8]) -> usize {
+/// `Cursor::segments` with the last segment's end set in its lane of the ends (rather than
+/// its sample made again from its start): the oracle of
+/// `segments_last_lane_apart_is_the_lane_set_run`.
+fn segments_lane_set(c: &Cursor, mids: &mut [f64; 8], lens: &mut [f64; 8]) -> usize {
     let left = (c.n - c.k).min(8) as usize; // k < n
     let last = c.k + left as u64 == c.n; // the run may reach the last segment
     let k = index_f64(c.k, c.n);
@@ -1221,11 +1223,12 @@ fn segment_span(rng: &Xorshift, case: usize) -> (f64, f64, f64) {
     }
 }
 
-/// The run's segments with the last lane made apart are the old ones bit for bit: every
+/// The run's segments with the last lane made apart are those of the lane set in place bit for
+/// bit ([`segments_lane_set`]): every
 /// run length, near the start, the end and 2⁵³, for ordinary and awkward ends and steps
 /// (±0, subnormal, huge, infinite, NaN, random bits). A NaN is any NaN ([`nan_any`]).
 #[test]
-fn segments_last_lane_apart_is_the_old_run() {
+fn segments_last_lane_apart_is_the_lane_set_run() {
     let rng = Xorshift::new(0x0dd5_e9e5_1a57_1a9e);
     let mut checked = 0;
     for case in 0..4000 {
@@ -1245,7 +1248,7 @@ fn segments_last_lane_apart_is_the_old_run() {
             let c = cursor(t0, t1, step, n, k, f64::NEG_INFINITY);
             let (mut m0, mut l0) = ([0.5; 8], [0.5; 8]);
             let (mut m1, mut l1) = ([0.5; 8], [0.5; 8]);
-            let a = segments_old(&c, &mut m0, &mut l0);
+            let a = segments_lane_set(&c, &mut m0, &mut l0);
             let b = c.segments(&mut m1, &mut l1);
             assert_eq!(a, b);
             assert_eq!(m0.map(nan_any), m1.map(nan_any), "{t0} {t1} {step} {k}/{n}");
@@ -1257,7 +1260,7 @@ fn segments_last_lane_apart_is_the_old_run() {
 }
 
 /// The packet march's segments in lanes are the cursor's, bit for bit, on the cases of
-/// `segments_last_lane_apart_is_the_old_run` (every run length, near the start, the end
+/// `segments_last_lane_apart_is_the_lane_set_run` (every run length, near the start, the end
 /// and 2⁵³, ordinary and awkward ends and steps). A NaN is any NaN ([`nan_any`]).
 #[cfg(target_arch = "x86_64")]
 #[test]
@@ -1426,8 +1429,7 @@ fn runs_are_the_cursors_segments() {
 }
 
 /// The batched march's runs (`Cursor::next_run`, joined across occupied blocks) take
-/// exactly the samples of `Cursor::peek` and the run (`run`, the march before them, kept
-/// here as the oracle), in the same order, bit for bit: on random grids of every fill,
+/// exactly the samples of `Cursor::peek` and the run (`run`, the oracle), in the same order, bit for bit: on random grids of every fill,
 /// for rays from outside and inside the grid, along axes and diagonals (zero direction
 /// parts), with entry bounds before, inside and past the span, small and large steps, and
 /// without a walk or a grid.

@@ -1,7 +1,9 @@
 //! Direct volume rendering: the opacity correction of a segment ([`transmit`], the segment's
-//! transmittance `(1 − o)^(ℓ / reference)`) and the single-volume marches:
-//! [`Compiled::march_one`] sample by sample and [`Compiled::march_batched`] for a scanned
-//! volume's lean program, a run of samples at a time. Lighting is `shade`'s.
+//! transmittance `(1 − o)^(ℓ / reference)`), the one front-to-back composite every DVR march
+//! shares ([`Integral`]: weight, accumulation and early termination), and the single-volume
+//! marches: [`Compiled::march_one`] sample by sample and [`Compiled::march_batched`] for a
+//! scanned volume's lean program, a run of samples at a time. The general loop of
+//! [`Compiled::trace_ray`] composites through the same [`Integral`]. Lighting is `shade`'s.
 
 use crate::render::*;
 
@@ -66,8 +68,83 @@ impl CObj {
     /// [`CObj::segment_transmittance`] of an opacity not above 1 (or NaN): a table's, which
     /// the clamp keeps in [0, 1]. See [`transmit_at_most_one`].
     #[inline(always)]
-    pub(in crate::render) fn segment_transmittance_at_most_one(&self, o: f64, len: f64) -> f64 {
+    fn segment_transmittance_at_most_one(&self, o: f64, len: f64) -> f64 {
         transmit_at_most_one(o, len * self.inv_ref)
+    }
+
+    /// The opacity correction: the α of a segment `len` long of medium with opacity `o` per
+    /// reference length, `1 − (1 − o)^(len / reference)`.
+    #[inline(always)]
+    pub(in crate::render) fn alpha(&self, o: f64, len: f64) -> f64 {
+        1.0 - self.segment_transmittance(o, len)
+    }
+
+    /// [`CObj::alpha`] of an opacity not above 1 (or NaN): a table's (see
+    /// [`CObj::segment_transmittance_at_most_one`]).
+    #[inline(always)]
+    fn alpha_at_most_one(&self, o: f64, len: f64) -> f64 {
+        1.0 - self.segment_transmittance_at_most_one(o, len)
+    }
+}
+
+/// The front-to-back composite along one ray, the one every scalar march uses: the colour
+/// gathered and the transmittance left, each sample weighted by `t·α` and the transmittance
+/// carried on as `t·(1 − α)`, the ray ending (its transmittance set to 0) once that falls below
+/// the scene's termination threshold. Always inlined into the marches, its three numbers kept
+/// in registers: the same arithmetic in the same order as a loop that holds them itself.
+#[derive(Clone, Copy, Debug)]
+pub(in crate::render) struct Integral {
+    /// The colour gathered so far.
+    colour: DVec3,
+    /// The transmittance left; 0 once the ray has ended.
+    t: f64,
+    /// The termination threshold ([`crate::scene::Optimise::stop_below`]).
+    stop: f64,
+}
+
+impl Integral {
+    /// Nothing gathered yet, for a ray of `scene`.
+    #[inline(always)]
+    pub(in crate::render) fn new(scene: &Compiled) -> Integral {
+        Integral {
+            colour: DVec3::ZERO,
+            t: 1.0,
+            stop: scene.settings.optimise.stop_below(),
+        }
+    }
+
+    /// Takes a sample of opacity `alpha` whose colour comes later ([`Integral::add_weighted`]):
+    /// its weight `t·α`, and whether the ray ends there.
+    #[inline(always)]
+    fn weigh(&mut self, alpha: f64) -> (f64, bool) {
+        let w = self.t * alpha;
+        self.t *= 1.0 - alpha;
+        if self.t < self.stop {
+            self.t = 0.0;
+            (w, true)
+        } else {
+            (w, false)
+        }
+    }
+
+    /// Adds the colour of a sample weighed by [`Integral::weigh`] (weight `w`).
+    #[inline(always)]
+    fn add_weighted(&mut self, w: f64, colour: DVec3) {
+        self.colour += w * colour;
+    }
+
+    /// Composites a sample of opacity `alpha` and colour `colour`; whether the ray ends there.
+    #[inline(always)]
+    pub(in crate::render) fn add(&mut self, alpha: f64, colour: DVec3) -> bool {
+        let (w, ends) = self.weigh(alpha);
+        self.add_weighted(w, colour);
+        ends
+    }
+
+    /// The colour gathered and the transmittance left.
+    #[inline(always)]
+    pub(in crate::render) fn result(self) -> (DVec3, f64) {
+        (self.colour, self.t)
     }
 }
 
@@ -90,9 +167,7 @@ impl Compiled {
             }
         }
         let grid = obj.skip.as_deref();
-        let stop = self.settings.optimise.stop_below();
-        let mut col = DVec3::ZERO;
-        let mut t = 1.0f64;
+        let mut acc = Integral::new(self);
         while let Some(mid) = c.peek(grid) {
             let len = c.take();
             if len <= 0.0 {
@@ -101,15 +176,12 @@ impl Compiled {
             if let Some((alpha, colour)) =
                 self.shade(obj, origin + mid * dir, c.object_point(mid), dir, len)
             {
-                col += t * alpha * colour;
-                t *= 1.0 - alpha;
-                if t < stop {
-                    t = 0.0;
+                if acc.add(alpha, colour) {
                     break;
                 }
             }
         }
-        (col, t)
+        acc.result()
     }
 
     /// [`Compiled::march_one`] for a lean program with a value head (a scanned volume) and no
@@ -132,10 +204,8 @@ impl Compiled {
         dir: DVec3,
     ) -> (DVec3, f64) {
         let grid = obj.skip.as_deref();
-        let stop = self.settings.optimise.stop_below();
         let cells = obj.cells.as_deref();
-        let mut col = DVec3::ZERO;
-        let mut t = 1.0f64;
+        let mut acc = Integral::new(self);
         let mut f = [0.0f32; FIELD_COUNT];
         // The object-space ray in registers: `Cursor::object_point` without the loads.
         let (ro, rd) = (c.o.to_array(), c.d.to_array());
@@ -201,7 +271,7 @@ impl Compiled {
                 // order up to where the ray ends (no sample after that is shaded); under a
                 // single light, then those samples' gradients and their lighting in lanes
                 // across them; then the composite.
-                let (mut count, mut ends) = (0, false);
+                let (mut count, mut run_ends) = (0, false);
                 if let Some(h) = &lanes {
                     // Under a single light: the opacities, colours and weights first, in
                     // order up to where the ray ends, noting each shaded sample's place in
@@ -213,16 +283,14 @@ impl Compiled {
                     macro_rules! shade {
                         ($i:expr, $o:expr, $rgb:expr) => {{
                             let (i, o, rgb): (usize, f32, [f32; 3]) = ($i, $o, $rgb);
-                            let alpha =
-                                1.0 - obj.segment_transmittance_at_most_one(o as f64, lens[i]);
+                            let (w, ends) = acc.weigh(obj.alpha_at_most_one(o as f64, lens[i]));
                             for (a, x) in rgb32.iter_mut().zip(rgb) {
                                 a[count] = x;
                             }
                             at[count] = i as u8;
-                            weights[count] = t * alpha;
+                            weights[count] = w;
                             count += 1;
-                            t *= 1.0 - alpha;
-                            t < stop
+                            ends
                         }};
                     }
                     // The samples whose buckets have a segment pair in an inner loop
@@ -240,7 +308,7 @@ impl Compiled {
                                 continue;
                             };
                             if shade!(i, o, rgb) {
-                                ends = true;
+                                run_ends = true;
                                 break 'samples;
                             }
                         }
@@ -253,7 +321,7 @@ impl Compiled {
                             continue;
                         };
                         if shade!(i, o, rgb) {
-                            ends = true;
+                            run_ends = true;
                             break;
                         }
                     }
@@ -290,7 +358,7 @@ impl Compiled {
                         let (o, Some(rgb)) = tables.opacity_colour(vs[i]) else {
                             continue;
                         };
-                        let alpha = 1.0 - obj.segment_transmittance_at_most_one(o as f64, lens[i]);
+                        let (weight, ends) = acc.weigh(obj.alpha_at_most_one(o as f64, lens[i]));
                         let c = DVec3::from_array(rgb.map(|x| x as f64));
                         let (p, w) = ([ps[0][i], ps[1][i], ps[2][i]], origin + mids[i] * dir);
                         let normal = || obj.gradient_normal(w, -dir, p, 9, &mut cache);
@@ -301,20 +369,19 @@ impl Compiled {
                         for (a, x) in colours.iter_mut().zip(c.to_array()) {
                             a[count] = x;
                         }
-                        weights[count] = t * alpha;
+                        weights[count] = weight;
                         count += 1;
-                        t *= 1.0 - alpha;
-                        if t < stop {
-                            ends = true;
+                        if ends {
+                            run_ends = true;
                             break;
                         }
                     }
                 }
                 for (j, &w) in weights[..count].iter().enumerate() {
-                    col += w * DVec3::new(colours[0][j], colours[1][j], colours[2][j]);
+                    acc.add_weighted(w, DVec3::new(colours[0][j], colours[1][j], colours[2][j]));
                 }
-                if ends {
-                    return (col, 0.0);
+                if run_ends {
+                    return acc.result();
                 }
                 continue;
             }
@@ -329,13 +396,11 @@ impl Compiled {
                 }
                 let (alpha, colour) =
                     self.finish_lean(obj, lean, o, p, w, dir, len, &mut f, &mut cache);
-                col += t * alpha * colour;
-                t *= 1.0 - alpha;
-                if t < stop {
-                    return (col, 0.0);
+                if acc.add(alpha, colour) {
+                    return acc.result();
                 }
             }
         }
-        (col, t)
+        acc.result()
     }
 }

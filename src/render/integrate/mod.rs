@@ -216,14 +216,7 @@ impl Compiled {
         }
         layers.sort_by(|a, b| a.t.total_cmp(&b.t));
         let mut layers = layers.into_iter().peekable();
-        let stop = self.settings.optimise.stop_below();
-        let mut col = DVec3::ZERO;
-        let mut t = 1.0f64;
-        let composite = |alpha: f64, colour: DVec3, col: &mut DVec3, t: &mut f64| {
-            *col += *t * alpha * colour;
-            *t *= 1.0 - alpha;
-            *t < stop
-        };
+        let mut acc = Integral::new(self);
         'march: loop {
             // The next segment in depth order (ties: object order).
             let mut best: Option<(usize, f64)> = None;
@@ -241,8 +234,7 @@ impl Compiled {
                     break;
                 }
                 layers.next();
-                if composite(layer.alpha, layer.colour, &mut col, &mut t) {
-                    t = 0.0;
+                if acc.add(layer.alpha, layer.colour) {
                     break 'march;
                 }
                 if let Some((from, to)) = layer.bend {
@@ -257,6 +249,7 @@ impl Compiled {
                         },
                         f64::NEG_INFINITY,
                     );
+                    let (col, t) = acc.result();
                     return col + t * behind;
                 }
             }
@@ -270,12 +263,12 @@ impl Compiled {
             if let Some((alpha, colour)) =
                 self.shade(obj, origin + mid * dir, c.object_point(mid), dir, len)
             {
-                if composite(alpha, colour, &mut col, &mut t) {
-                    t = 0.0;
+                if acc.add(alpha, colour) {
                     break;
                 }
             }
         }
+        let (col, t) = acc.result();
         col + t * background
     }
 }
