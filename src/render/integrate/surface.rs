@@ -1,8 +1,9 @@
 //! Direct surface rendering: the iso-surface hits of a DSR object along a ray, found between
-//! consecutive samples and refined by bisection, each shaded where the ray is a camera ray and
-//! followed by its mirror ray and refracted direction where the object asks for them (the
-//! secondary rays are traced by [`Compiled::trace_ray`]). Shadow rays use the same hits for
-//! their opacity only. Compositing the hits is the caller's.
+//! consecutive samples and refined by bisection. On rays that show colour each hit is shaded,
+//! and followed by its mirror ray and its refracted direction where the object asks for them
+//! (the mirror ray is traced by [`Compiled::trace_ray`]; the refracted one is the caller's to
+//! follow, as the hit's `bend`); shadow rays take only each hit's opacity. Compositing the hits
+//! is the caller's.
 
 use crate::render::*;
 
