@@ -3,7 +3,7 @@
 //! [`render_outputs`] compiles a finished scene once, renders each requested image with the
 //! renderer ([`crate::render`], which computes pixels and writes nothing) and voxelizes each
 //! requested volume ([`voxel`]), then writes the files: images through [`write_image`] (PPM or
-//! PNG by extension, [`files`]), datasets through [`crate::dataset::Dataset::save`]; every
+//! PNG by extension, `files`), datasets through [`crate::dataset::Dataset::save`]; every
 //! file atomically ([`write_atomic`]). It does not trace rays or evaluate fields itself.
 
 use crate::error::{Error, Result};

@@ -8,6 +8,7 @@
 
 use super::*;
 
+/// One object of a scene compiled for tracing: immutable, read by every ray that meets it.
 pub(super) struct CObj {
     pub(super) program: Vec<Instr>,
     /// The program up to its last instruction that may write opacity: where that leaves o = 0

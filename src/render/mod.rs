@@ -25,6 +25,8 @@
 //! Where it applies, primary rays of a scanned volume are traced in SIMD packets (`packet`,
 //! x86-64), giving the same image bit for bit; everything else takes the scalar path here.
 
+// What the renderer's modules share of the crate: each of them (the packet march too) takes
+// the render module's names with `use super::*` (or `use crate::render::*`).
 use crate::dataset::{CellGradients, Cells8, Dataset, Filter};
 use crate::error::{Error, ErrorCode, Result};
 use crate::kernel::Lean;
