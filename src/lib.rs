@@ -40,7 +40,6 @@ mod accel;
 mod api;
 mod data;
 mod error;
-mod kernel;
 mod model;
 mod num;
 mod output;
@@ -48,7 +47,6 @@ mod render;
 #[cfg(test)]
 mod testing;
 pub mod types;
-mod voxel;
 
 pub use api::library::{Closed, Library};
 pub use api::scope;

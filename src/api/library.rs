@@ -183,7 +183,7 @@ impl Library {
                     objects: s.objects,
                     datasets: Arc::new(self.datasets.clone()),
                 };
-                crate::render::render_outputs(&desc)?;
+                crate::output::render_outputs(&desc)?;
                 Ok(Closed::Scene)
             }
             _ => {

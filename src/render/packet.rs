@@ -63,8 +63,8 @@
 
 use super::*;
 use crate::data::{Filter, Voxels};
-use crate::kernel::DirectShading;
 use crate::model::mapping::Mapping;
+use crate::render::kernel::DirectShading;
 use crate::types::MappingType;
 use std::arch::x86_64::*;
 

@@ -1,0 +1,408 @@
+//! Compiling a scene: a finished [`SceneDesc`] becomes the immutable [`Compiled`] scene that
+//! every worker thread shares, and each object a [`CObj`] holding what tracing needs of it
+//! (its matrices, box, step, opacity exponent, program prefixes, empty-space grid and cell
+//! mask, toggles), with the object-level queries on it that do not shade: the ray's interval in
+//! its box ([`CObj::clip`]) and its fields and opacity at a point. It also decides the scene's
+//! [`Plan`]. It does not trace, shade or composite (`integrate`, `shade`), and it takes the
+//! empty-space grid ready-made from `skip`.
+
+use super::*;
+
+/// One object of a scene compiled for tracing: immutable, read by every ray that meets it.
+pub(super) struct CObj {
+    pub(super) program: Vec<Instr>,
+    /// The program up to its last instruction that may write opacity: where that leaves o = 0
+    /// the rest cannot change it, and is skipped.
+    pub(super) o_prefix: usize,
+    pub(super) to_object: DMat4,
+    /// Its inverse, object → world (for [`EntryMap`]).
+    pub(super) to_world: DMat4,
+    pub(super) box_min: DVec3,
+    pub(super) box_max: DVec3,
+    pub(super) step: f64,
+    pub(super) inv_ref: f64,
+    pub(super) delta: DVec3,
+    pub(super) visible: bool,
+    pub(super) flip_normals: bool,
+    pub(super) normals: Vec<NormalFn>,
+    /// Where the geometry field is a dataset's value (its last writer is `vlDataset`), normals
+    /// come from that dataset's interpolated grid gradients.
+    pub(super) f_dataset: Option<(Arc<Dataset>, Filter)>,
+    /// The linear part of object → world for gradients: ∇_world F = Aᵀ ∇_object F, A the linear
+    /// part of world → object.
+    pub(super) grad_to_world: glam::DMat3,
+    /// The program compiled for the lean kernel, where it reads only constants, datasets and
+    /// transfer functions (and the kernel is not switched off).
+    pub(super) lean: Option<Lean>,
+    pub(super) env: SampleEnv,
+    /// Blocks where opacity is provably 0.
+    pub(super) skip: Option<Arc<SkipGrid>>,
+    /// For a lean program with a value head rendered by the batched march, under empty-space
+    /// skipping: the cells of its dataset whose samples can pass the zero test (see
+    /// [`crate::data::CellMask`]).
+    pub(super) cells: Option<Arc<crate::data::CellMask>>,
+    /// The rendering algorithm the object captured.
+    pub(super) render_type: RenderType,
+    /// Iso-surfaces (field index, threshold) for DSR.
+    pub(super) surfaces: Vec<(usize, f32)>,
+    /// Per field: the program up to its last instruction that may write it.
+    pub(super) prefixes: [usize; FIELD_COUNT],
+    /// Per field: its value where that last instruction is a constant `vlSet` (the field is
+    /// then that constant inside the boundary, folded once instead of run per evaluation).
+    pub(super) constants: [Option<f32>; FIELD_COUNT],
+    pub(super) cast_shadows: bool,
+    pub(super) receive_shadows: bool,
+    pub(super) cast_reflections: bool,
+    pub(super) receive_reflections: bool,
+    pub(super) refract: bool,
+    pub(super) reflect_background: bool,
+    pub(super) recursion: i32,
+}
+
+/// One axis of [`CObj::clip`]: the interval `(t0, t1)` narrowed to where the ray's coordinate
+/// `o + t·d` lies in [min, max]; `None` where `d` is 0 and `o` is outside.
+#[inline(always)]
+pub(super) fn slab(
+    (mut t0, mut t1): (f64, f64),
+    o: f64,
+    d: f64,
+    min: f64,
+    max: f64,
+) -> Option<(f64, f64)> {
+    if d == 0.0 {
+        // (A NaN `o` is not outside.)
+        if o < min || o > max {
+            return None;
+        }
+        return Some((t0, t1));
+    }
+    let inv = 1.0 / d;
+    let (a, b) = ((min - o) * inv, (max - o) * inv);
+    // `a.min(b)` and `a.max(b)`: b where a is NaN, a where b is. Neither NaN (one comparison
+    // tells), a `minsd` and a `maxsd`: the same values as with the NaN terms.
+    let (lo, hi) = if a.is_nan() || b.is_nan() {
+        let x = if a.is_nan() { b } else { a };
+        (x, x)
+    } else {
+        (if b < a { b } else { a }, if b > a { b } else { a })
+    };
+    if lo > t0 {
+        t0 = lo;
+    }
+    if hi < t1 {
+        t1 = hi;
+    }
+    Some((t0, t1))
+}
+
+impl CObj {
+    pub(super) fn new(
+        o: &ObjectDesc,
+        datasets: &Arc<crate::model::program::Datasets>,
+        optimise: crate::model::scene::Optimise,
+    ) -> CObj {
+        let to_world = o.matrix();
+        let b = crate::model::scene::v3(o.boundary);
+        let box_min = DVec3::splat(0.5) - b * 0.5;
+        let box_max = DVec3::splat(0.5) + b * 0.5;
+        let step = o.state.step as f64;
+        let delta = match o.state.neighborhood {
+            Some(d) => crate::model::scene::v3(d),
+            None => {
+                let extent = (0..3)
+                    .map(|i| to_world.col(i).truncate().length() * b[i])
+                    .fold(f64::INFINITY, f64::min);
+                DVec3::splat((step * 0.5).max(extent * 1e-3))
+            }
+        };
+        let f_prefix = prefix_for(&o.program, Fields::F);
+        // Grid gradients apply where F is a dataset's value at the sample point itself, i.e. no
+        // spatial function moved the point first.
+        let moved = o.program[..f_prefix]
+            .iter()
+            .any(|i| matches!(i, Instr::Spatial { .. }));
+        let f_dataset = match f_prefix.checked_sub(1).map(|i| &o.program[i]) {
+            Some(Instr::Dataset { data, filter, .. }) if !moved => Some((data.clone(), *filter)),
+            _ => None,
+        };
+        let to_object = to_world.inverse();
+        let r = &o.state;
+        let o_prefix = prefix_for(&o.program, Fields::O);
+        let lean = if optimise.lean_kernel {
+            Lean::new(&o.program, o_prefix)
+        } else {
+            None
+        };
+        let prefixes: [usize; FIELD_COUNT] =
+            std::array::from_fn(|i| prefix_for(&o.program, Fields::from_index(i)));
+        let constants =
+            std::array::from_fn(
+                |i| match prefixes[i].checked_sub(1).map(|k| &o.program[k]) {
+                    Some(Instr::Set { value, .. }) => Some(*value),
+                    _ => None,
+                },
+            );
+        CObj {
+            render_type: r.render_type,
+            surfaces: r.surfaces.clone(),
+            prefixes,
+            constants,
+            cast_shadows: r.toggle(Feature::CastShadows),
+            receive_shadows: r.toggle(Feature::ReceiveShadows),
+            cast_reflections: r.toggle(Feature::CastReflections),
+            receive_reflections: r.toggle(Feature::ReceiveReflections),
+            refract: r.toggle(Feature::Refract),
+            reflect_background: r.toggle(Feature::ReflectBackground),
+            recursion: r.recursion,
+            skip: o
+                .skip
+                .get_or_init(|| {
+                    SkipGrid::build(&o.program[..o_prefix], box_min, box_max).map(Arc::new)
+                })
+                .clone(),
+            o_prefix,
+            f_dataset,
+            grad_to_world: glam::DMat3::from_mat4(to_object).transpose(),
+            // Only the batched march reads the mask: direct volume rendering of a value-head
+            // program without normal functions (see `Compiled::march_one`).
+            cells: lean
+                .as_ref()
+                .and_then(Lean::value_head)
+                .filter(|_| {
+                    optimise.skip_empty && r.render_type == RenderType::Dvr && o.normals.is_empty()
+                })
+                .map(|(data, z)| data.cells_above(z)),
+            lean,
+            env: SampleEnv {
+                datasets: datasets.clone(),
+                filter: Filter::new(r.interpolation, r.cubic),
+                children: Arc::new(compile_children(o, to_object, datasets)),
+            },
+            program: o.program.clone(),
+            to_object,
+            to_world,
+            box_min,
+            box_max,
+            step,
+            inv_ref: 1.0 / o.state.reference as f64,
+            delta,
+            visible: o.state.toggle(Feature::Visible),
+            flip_normals: o.state.toggle(Feature::FlipNormals),
+            normals: o.normals.clone(),
+        }
+    }
+
+    /// The world ray `origin + t·dir` in the object's coordinates, `o + t·d` (the same t).
+    #[inline]
+    pub(super) fn object_ray(&self, origin: DVec3, dir: DVec3) -> (DVec3, DVec3) {
+        (
+            self.to_object.transform_point3(origin),
+            self.to_object.transform_vector3(dir),
+        )
+    }
+
+    /// Whether a ray of this kind sees the object (mirror rays: `cast_reflections`).
+    #[inline]
+    pub(super) fn seen_by(&self, ray: Ray) -> bool {
+        if ray.mirror {
+            self.cast_reflections
+        } else {
+            self.visible
+        }
+    }
+
+    /// The parameter interval [t0, t1] (t ≥ 0) where the object-space ray `o + t·d` lies
+    /// inside the boundary box.
+    ///
+    /// Per axis, the slab's entry `lo` and exit `hi` are the minimum and maximum of its two
+    /// face parameters with NaN ignored (either NaN: the other; both: NaN), as `f64::min` and
+    /// `f64::max` give them, and t0 and t1 then take them with comparisons, which ignore a NaN
+    /// too: t0 starts at +0 and only ever takes a larger value, t1 starts at +∞, so neither is
+    /// NaN, and the NaN-aware `f64::max` / `f64::min` on them (7 instructions each, twice an axis
+    /// a ray) give the same values. Only the sign of a zero can differ (a tie of +0 and −0, where
+    /// `f64::min` and `f64::max` may answer either): t0 is never −0 in either form (it starts at
+    /// +0 and moves only to a value above it), and a t1 of ±0 fails `t0 < t1` in both.
+    /// (`clip_is_the_nan_aware_clip` checks them bit for bit, special values included.)
+    /// Always inlined: a call left to the compiler's choice is kept out of line in
+    /// [`Compiled::trace_ray`], passing the ray and the interval through memory.
+    #[inline(always)]
+    pub(super) fn clip(&self, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
+        let (min, max) = (self.box_min, self.box_max);
+        // Axis by axis, written out: as a loop the compiler keeps the loop and picks each
+        // axis's values by index.
+        let t = slab((0.0, f64::INFINITY), o.x, d.x, min.x, max.x)?;
+        let t = slab(t, o.y, d.y, min.y, max.y)?;
+        let (t0, t1) = slab(t, o.z, d.z, min.z, max.z)?;
+        (t0 < t1 && t1.is_finite()).then_some((t0, t1))
+    }
+
+    pub(super) fn inside(&self, p: DVec3) -> bool {
+        p.cmpge(self.box_min).all() && p.cmple(self.box_max).all()
+    }
+
+    /// The opacity at world point `w` (inside the boundary), by the lean kernel where it applies.
+    #[inline]
+    pub(super) fn opacity_at(&self, w: DVec3) -> f64 {
+        if let Some(lean) = &self.lean {
+            let p = self.to_object.transform_point3(w).as_vec3().to_array();
+            let mut f = [0.0f32; FIELD_COUNT];
+            return lean.opacity(p, &mut f) as f64;
+        }
+        let mut s = self.sample_at(w);
+        run(&self.program[..self.o_prefix], &mut s);
+        s.value(0) as f64
+    }
+
+    pub(super) fn sample_at(&self, w: DVec3) -> Sample<'_> {
+        let p = self.to_object.transform_point3(w);
+        Sample::with_env(p.as_vec3().to_array(), w.to_array(), &self.env)
+    }
+
+    /// Field `field` at world point `w` (0 outside the boundary: fields are bounded), running
+    /// only the part of the program that can change it.
+    pub(super) fn field_at(&self, w: DVec3, field: usize) -> f64 {
+        let p = self.to_object.transform_point3(w);
+        if !self.inside(p) {
+            return 0.0;
+        }
+        if let Some(v) = self.constants[field] {
+            return v as f64;
+        }
+        let mut s = Sample::with_env(p.as_vec3().to_array(), w.to_array(), &self.env);
+        run(&self.program[..self.prefixes[field]], &mut s);
+        s.value(field) as f64
+    }
+}
+
+/// The children of `o` as its functions see them; `world_to_o` maps the world to `o`'s space.
+fn compile_children(
+    o: &ObjectDesc,
+    world_to_o: DMat4,
+    datasets: &Arc<crate::model::program::Datasets>,
+) -> Vec<crate::model::program::Child> {
+    o.children
+        .iter()
+        .map(|c| {
+            let to_child = c.matrix().inverse();
+            let world_to_child = to_child * world_to_o;
+            let b = crate::model::scene::v3(c.boundary);
+            let r = &c.state;
+            crate::model::program::Child {
+                program: c.program.clone(),
+                to_child,
+                world_to_child,
+                box_min: DVec3::splat(0.5) - b * 0.5,
+                box_max: DVec3::splat(0.5) + b * 0.5,
+                env: SampleEnv {
+                    datasets: datasets.clone(),
+                    filter: Filter::new(r.interpolation, r.cubic),
+                    children: Arc::new(compile_children(c, world_to_child, datasets)),
+                },
+            }
+        })
+        .collect()
+}
+
+/// What a scene calls for: effects its objects, toggles and lights can actually show. An
+/// effect that nothing in the scene can exhibit costs nothing (see `docs/dev/render-plan.md`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Plan {
+    /// Shadow rays: some object casts, some object receives, and a light exists.
+    pub shadows: bool,
+    /// Mirror rays: some object receives reflections (with recursion above 0).
+    pub reflections: bool,
+    /// Refracted rays: some object refracts (with recursion above 0).
+    pub refraction: bool,
+}
+
+/// A scene compiled for tracing: immutable, shared by all worker threads.
+pub struct Compiled {
+    pub(super) objects: Vec<CObj>,
+    /// The lights, each with its radiance in f64.
+    pub(super) lights: Vec<(Light, DVec3)>,
+    /// The ambient light's radiance in f64.
+    pub(super) ambient: DVec3,
+    /// Where every light is directional: each light's direction towards it and radiance (see
+    /// [`Headlit`]).
+    pub(super) directional: Option<Vec<(DVec3, DVec3)>>,
+    /// Per object, the lighting lanes of its direct shading (`DirectShading`) where every
+    /// light is directional and there is one ([`HeadlitLanes`]): what [`Headlit::new`] and
+    /// [`HeadlitLanes::new`] would give every ray, but for its view, prepared once.
+    pub(super) lanes: Vec<Option<HeadlitLanes>>,
+    pub(super) settings: Settings,
+    pub(super) plan: Plan,
+}
+
+impl Compiled {
+    /// Compiles a scene description.
+    pub fn new(desc: &SceneDesc) -> Compiled {
+        let objects: Vec<CObj> = desc
+            .objects
+            .iter()
+            .map(|o| CObj::new(o, &desc.datasets, desc.settings.optimise))
+            .collect();
+        let plan = Plan {
+            shadows: !desc.lights.is_empty()
+                && objects.iter().any(|o| o.cast_shadows)
+                && objects.iter().any(|o| o.receive_shadows),
+            reflections: objects
+                .iter()
+                .any(|o| o.receive_reflections && o.recursion > 0),
+            refraction: objects.iter().any(|o| o.refract && o.recursion > 0),
+        };
+        let lights: Vec<(Light, DVec3)> = desc
+            .lights
+            .iter()
+            .map(|&light| {
+                let (Light::Point { radiance, .. } | Light::Directional { radiance, .. }) = light;
+                (light, crate::model::scene::v3(radiance))
+            })
+            .collect();
+        let directional = lights
+            .iter()
+            .map(|&(light, radiance)| match light {
+                Light::Directional { to_light, .. } => Some((to_light, radiance)),
+                Light::Point { .. } => None,
+            })
+            .collect();
+        let mut scene = Compiled {
+            objects,
+            lights,
+            directional,
+            lanes: Vec::new(),
+            ambient: crate::model::scene::v3(desc.settings.ambient),
+            settings: desc.settings.clone(),
+            plan,
+        };
+        scene.lanes = scene
+            .objects
+            .iter()
+            .map(|o| scene.headlit_lanes(o))
+            .collect();
+        scene
+    }
+
+    /// The render plan: which effects this scene calls for.
+    pub fn plan(&self) -> Plan {
+        self.plan
+    }
+
+    /// All fields of the scene at world point `w`: those of the root object containing it with
+    /// the largest opacity (the first on ties), or all 0 (see [`crate::output::voxel`]).
+    pub fn fields_at(&self, w: DVec3) -> [f32; crate::types::FIELD_COUNT] {
+        let mut best: Option<[f32; crate::types::FIELD_COUNT]> = None;
+        for obj in &self.objects {
+            let p = obj.to_object.transform_point3(w);
+            if !obj.inside(p) {
+                continue;
+            }
+            let mut s = Sample::with_env(p.as_vec3().to_array(), w.to_array(), &obj.env);
+            run(&obj.program, &mut s);
+            let f = s.values();
+            if best.is_none_or(|b| f[0] > b[0]) {
+                best = Some(f);
+            }
+        }
+        best.unwrap_or([0.0; crate::types::FIELD_COUNT])
+    }
+}

@@ -1,0 +1,274 @@
+//! The integrators: what a ray shows. [`Compiled::trace_ray`] gathers, for every object the
+//! ray meets, DVR samples through cursors, DSR surface hits ([`surface`], with mirror and
+//! refracted secondary rays) and MIP layers ([`mip`]), and composites them front to back in
+//! depth order, following a refracting surface's bent ray; a scene of one DVR volume takes the
+//! DVR march ([`dvr`]) directly. Also the per-image preparations of primary rays
+//! ([`ImageRays`], the [`EntryMap`] bound, the colour of rays that meet nothing). Where samples
+//! lie is the cursor's, what colour a sample has is `shade`'s; the packet march (primary rays
+//! of one volume in SIMD lanes) is `packet`'s.
+
+use crate::render::*;
+
+mod dvr;
+mod mip;
+mod surface;
+
+pub(in crate::render) use dvr::*;
+
+/// What kind of ray is being traced: how many bounces it has made, whether it is a mirror ray
+/// (it then sees only objects that cast reflections) and what it shows where it escapes.
+#[derive(Clone, Copy, Debug)]
+pub(in crate::render) struct Ray {
+    pub(in crate::render) depth: i32,
+    pub(in crate::render) mirror: bool,
+    pub(in crate::render) background: bool,
+}
+
+impl Ray {
+    pub(in crate::render) const PRIMARY: Ray = Ray {
+        depth: 0,
+        mirror: false,
+        background: true,
+    };
+}
+
+/// A contribution at one depth along a ray: a surface hit or a MIP layer; `bend` is the new
+/// direction of a refracting surface (the ray continues that way behind it).
+#[derive(Clone, Copy, Debug)]
+pub(in crate::render) struct Layer {
+    pub(in crate::render) t: f64,
+    pub(in crate::render) alpha: f64,
+    pub(in crate::render) colour: DVec3,
+    pub(in crate::render) bend: Option<(DVec3, DVec3)>,
+}
+
+/// What [`Compiled::trace_ray`] makes of the scene and the origin of an image's primary rays
+/// (the eye) on each of them ([`Compiled::image_rays`]), made once per image: the same numbers.
+pub(in crate::render) struct ImageRays {
+    /// The origin in the coordinates of the scene's object where it has one only
+    /// ([`CObj::object_ray`]; zero, not read, otherwise).
+    pub(in crate::render) origin_o: DVec3,
+    /// The background colour.
+    pub(in crate::render) background: DVec3,
+}
+
+impl Compiled {
+    /// The [`EntryMap`] of an image: for a scene of one DVR volume with a skip grid (the
+    /// only case [`Compiled::trace_ray`] uses it), when the map can be built.
+    pub(in crate::render) fn entry_map(&self, camera: &Pinhole) -> Option<EntryMap> {
+        let [obj] = self.objects.as_slice() else {
+            return None;
+        };
+        if !(self.settings.optimise.skip_empty
+            && obj.seen_by(Ray::PRIMARY)
+            && obj.render_type == RenderType::Dvr)
+        {
+            return None;
+        }
+        let grid = obj.skip.as_deref()?;
+        // Where the batched march consults a cell mask, the boxes of the cells that can pass
+        // its zero test bound where rays meet opacity more tightly than the shell's blocks.
+        let passing = match (&obj.cells, obj.lean.as_ref().and_then(Lean::value_head)) {
+            (Some(mask), Some((data, _))) => {
+                grid.passing_boxes(data, mask, obj.box_min, obj.box_max)
+            }
+            _ => None,
+        };
+        // (Too many of them for the image: the shell's blocks, which may be fewer.)
+        passing
+            .and_then(|boxes| EntryMap::of_boxes(&boxes, obj.to_world, camera))
+            .or_else(|| EntryMap::build(grid, obj.to_world, camera))
+    }
+
+    /// The colour [`Compiled::trace`] gives every primary ray whose bound is +∞, whatever its
+    /// origin and direction, where [`Compiled::trace_ray`]'s one-volume path answers it
+    /// without looking at the ray (`None` where it does look): the per-pixel loop then
+    /// neither makes the ray nor calls the trace for such a pixel.
+    pub(in crate::render) fn unbounded_colour(&self) -> Option<DVec3> {
+        let ray = Ray::PRIMARY;
+        let background = if ray.background {
+            crate::model::scene::v3(self.settings.background)
+        } else {
+            DVec3::ZERO
+        };
+        let [obj] = self.objects.as_slice() else {
+            return None;
+        };
+        if !(obj.seen_by(ray) && obj.render_type == RenderType::Dvr) {
+            return None;
+        }
+        // `trace_ray`'s test, the same numbers.
+        let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+        let shown = DVec3::ZERO + 1.0 * background;
+        (bits(shown) == bits(background)).then_some(shown)
+    }
+
+    /// Traces one primary ray whose pixel has the [`EntryMap`] bound `bound` (−∞ without a
+    /// map); returns the pixel colour.
+    ///
+    /// `image`: [`Compiled::image_rays`] of `origin` (the same for every ray of an image).
+    pub(in crate::render) fn trace(
+        &self,
+        origin: DVec3,
+        image: &ImageRays,
+        dir: DVec3,
+        bound: f64,
+    ) -> DVec3 {
+        self.trace_ray(origin, Some(image), dir, Ray::PRIMARY, bound)
+    }
+
+    /// What [`Compiled::trace_ray`] makes of the scene and the ray origin `origin` on every
+    /// primary ray from it, made once per image.
+    pub(in crate::render) fn image_rays(&self, origin: DVec3) -> ImageRays {
+        ImageRays {
+            origin_o: match self.objects.as_slice() {
+                [obj] => obj.object_ray(origin, DVec3::ZERO).0,
+                _ => DVec3::ZERO,
+            },
+            background: crate::model::scene::v3(self.settings.background),
+        }
+    }
+
+    /// Traces a ray. DVR objects contribute their samples, DSR objects their surface hits and
+    /// MIP objects their maximum-intensity layer, all composited front to back in depth order.
+    /// At a refracting surface the rest of the ray continues along the refracted direction.
+    ///
+    /// `bound`: no block of the scene's one object that may hold opacity meets the ray before
+    /// this parameter (its [`EntryMap`] bound; −∞ when nothing is known): the walk starts
+    /// there, and a ray whose bound is +∞ shows the background. Only a primary ray of a scene
+    /// of one DVR volume is given a bound.
+    ///
+    /// `image`: what is made of `origin` and the scene once per image where known
+    /// ([`Compiled::image_rays`]; `None`: made here).
+    pub(in crate::render) fn trace_ray(
+        &self,
+        origin: DVec3,
+        image: Option<&ImageRays>,
+        dir: DVec3,
+        ray: Ray,
+        bound: f64,
+    ) -> DVec3 {
+        let background = if ray.background {
+            match image {
+                Some(i) => i.background,
+                None => crate::model::scene::v3(self.settings.background),
+            }
+        } else {
+            DVec3::ZERO
+        };
+        if let [obj] = self.objects.as_slice() {
+            // A scene of one volume (the usual scanned-data case): what the general path below
+            // does for it, without building its lists.
+            if obj.seen_by(ray) && obj.render_type == RenderType::Dvr {
+                // What the march gives when it takes no sample.
+                let unsampled = || DVec3::ZERO + 1.0 * background;
+                if bound == f64::INFINITY {
+                    // Without the clip: a ray that misses the box shows `background`, one that
+                    // meets it takes no sample (its bound is past t1, which is finite) and shows
+                    // `unsampled`. The two differ only in a component that is −0 (0 + −0 is
+                    // +0); where none is, either is the answer.
+                    let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+                    let shown = unsampled();
+                    if bits(shown) == bits(background) {
+                        return shown;
+                    }
+                }
+                let (o, d) = match image {
+                    Some(i) => (i.origin_o, obj.to_object.transform_vector3(dir)),
+                    None => obj.object_ray(origin, dir),
+                };
+                let Some((t0, t1)) = obj.clip(o, d) else {
+                    return background;
+                };
+                if bound >= t1 {
+                    return unsampled();
+                }
+                // In place (see `Cursor::unstarted`).
+                let mut c = Cursor::unstarted(obj, 0, (o, d), (t0, t1));
+                c.start(self, obj, bound);
+                let (col, t) = self.march_one(&mut c, origin, dir);
+                return col + t * background;
+            }
+        }
+        let mut cursors: Vec<Cursor> = Vec::new();
+        let mut layers: Vec<Layer> = Vec::new();
+        for (i, obj) in self.objects.iter().enumerate() {
+            if !obj.seen_by(ray) {
+                continue;
+            }
+            let (o, d) = obj.object_ray(origin, dir);
+            if let Some((t0, t1)) = obj.clip(o, d) {
+                let mut c = Cursor::new(self, obj, i, (o, d), (t0, t1), f64::NEG_INFINITY);
+                match obj.render_type {
+                    RenderType::Dvr => cursors.push(c),
+                    RenderType::Dsr => {
+                        layers.extend(self.surface_hits(obj, &c, origin, dir, ray, true))
+                    }
+                    RenderType::Mip => layers.extend(self.mip_layer(obj, &mut c, origin, dir)),
+                }
+            }
+        }
+        if layers.is_empty() && cursors.len() == 1 {
+            // One volume along the ray and nothing else: its own tight loop.
+            let mut c = cursors.pop().expect("one cursor");
+            let (col, t) = self.march_one(&mut c, origin, dir);
+            return col + t * background;
+        }
+        layers.sort_by(|a, b| a.t.total_cmp(&b.t));
+        let mut layers = layers.into_iter().peekable();
+        let mut acc = Integral::new(self);
+        'march: loop {
+            // The next segment in depth order (ties: object order).
+            let mut best: Option<(usize, f64)> = None;
+            for (ci, c) in cursors.iter_mut().enumerate() {
+                let grid = self.objects[c.object].skip.as_deref();
+                if let Some(mid) = c.peek(grid) {
+                    if best.is_none_or(|(_, m)| mid < m) {
+                        best = Some((ci, mid));
+                    }
+                }
+            }
+            // Layers in front of that sample come first.
+            while let Some(&layer) = layers.peek() {
+                if best.is_some_and(|(_, m)| layer.t > m) {
+                    break;
+                }
+                layers.next();
+                if acc.add(layer.alpha, layer.colour) {
+                    break 'march;
+                }
+                if let Some((from, to)) = layer.bend {
+                    // Everything behind a refracting surface is seen along the bent ray.
+                    let behind = self.trace_ray(
+                        from,
+                        None,
+                        to,
+                        Ray {
+                            depth: ray.depth + 1,
+                            ..ray
+                        },
+                        f64::NEG_INFINITY,
+                    );
+                    let (col, t) = acc.result();
+                    return col + t * behind;
+                }
+            }
+            let Some((ci, mid)) = best else { break };
+            let c = &mut cursors[ci];
+            let len = c.take();
+            if len <= 0.0 {
+                continue;
+            }
+            let obj = &self.objects[c.object];
+            if let Some((alpha, colour)) =
+                self.shade(obj, origin + mid * dir, c.object_point(mid), dir, len)
+            {
+                if acc.add(alpha, colour) {
+                    break;
+                }
+            }
+        }
+        let (col, t) = acc.result();
+        col + t * background
+    }
+}

@@ -1,0 +1,182 @@
+//! The discrete ray tracer: DVR, DSR and MIP, shadows, reflection and refraction.
+//!
+//! The renderer owns turning a finished [`SceneDesc`] into pixels: it compiles the scene once
+//! into an immutable [`Compiled`] scene (`compile`: each object's world-to-object matrix,
+//! boundary box, step and opacity exponent, normal neighbourhood, the prefix of its program
+//! that determines each field, its empty-space grid, and the scene's [`Plan`] of the effects it
+//! can show, see `docs/dev/render-plan.md`), then traces rays over image tiles in parallel
+//! (rayon, `tiles`); every pixel is computed independently in a fixed order, so the bytes of
+//! an image do not depend on the number of threads. [`render_image`] is the entry point and
+//! returns an [`Image`]. It does not write files (the output layer, [`crate::output`], does),
+//! nor does it build the scene description, evaluate programs (`program`, `kernel`) or build
+//! the empty-space structures (`skip`); it only uses them.
+//!
+//! Along a ray, each object's box is clipped exactly; its interval is cut into segments of the
+//! step size, the last one shorter (`cursor`), and each segment is represented by the sample
+//! at its midpoint with opacity `α = 1 − (1 − o)^(ℓ / reference)` for its true length ℓ. For
+//! constant media the product of the transmittances is therefore exactly the Beer–Lambert value
+//! `(1 − o)^(L/ref)` for any step. Samples of overlapping objects are merged in order of depth,
+//! together with the surface hits of DSR objects and the layers of MIP objects (`integrate`).
+//! Compositing is front to back with early termination once the transmittance falls below
+//! `Optimise::termination` (default [`crate::T_MIN`]). Shadow rays use the same segments; mirror and
+//! refracted rays start at surface hits. Lighting, normals and shadow transmittance are
+//! `shade`'s (`lanes`: the same lighting for several samples at once).
+//!
+//! Where it applies, primary rays of a scanned volume are traced in SIMD packets (`packet`,
+//! x86-64), giving the same image bit for bit; everything else takes the scalar path here.
+
+// What the renderer's modules share of the crate: each of them (the packet march too) takes
+// the render module's names with `use super::*` (or `use crate::render::*`).
+use crate::accel::{EntryMap, Pinhole, SkipGrid, Walk};
+use crate::data::{CellGradients, Cells8, Dataset, Filter};
+use crate::error::{Error, ErrorCode, Result};
+use crate::model::program::{prefix_for, run, Instr, NormalFn, Sample, SampleEnv, SampleRole};
+use crate::model::scene::{Light, ObjectDesc, SceneDesc, Settings};
+use crate::render::kernel::Lean;
+use crate::types::{Attenuation, Feature, Fields, RenderType, FIELD_COUNT, MAX_SPECULAR};
+use glam::{DMat4, DVec3};
+use rayon::prelude::*;
+use std::sync::Arc;
+
+mod compile;
+mod cursor;
+mod integrate;
+mod kernel;
+mod lanes;
+mod shade;
+mod tiles;
+
+pub use compile::{Compiled, Plan};
+pub(crate) use shade::{reflect, refract};
+
+// The renderer's own items, reachable as `super::NAME` from its submodules (the packet march
+// and the tests among them).
+use compile::*;
+use cursor::*;
+use integrate::*;
+use lanes::*;
+use shade::*;
+use tiles::*;
+
+/// Super-sampling refines a pixel when a colour channel differs from a 4-neighbour's by more
+/// than this.
+pub const SUPER_SAMPLE_CONTRAST: f32 = 4.0 / 255.0;
+
+#[cfg(target_arch = "x86_64")]
+mod packet;
+
+/// A rendered image: linear RGB in [0, 1], row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Pixels, `width * height` of them.
+    pub pixels: Vec<[f32; 3]>,
+}
+
+impl Image {
+    /// The pixel at column `x`, row `y` (row 0 at the top).
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    /// 8-bit RGB, rounded; anything non-finite becomes 0.
+    pub fn to_rgb8(&self) -> Vec<u8> {
+        self.pixels.iter().flat_map(|p| p.map(to_u8)).collect()
+    }
+}
+
+fn to_u8(v: f32) -> u8 {
+    if v.is_finite() {
+        (v.clamp(0.0, 1.0) * 255.0).round() as u8
+    } else {
+        0
+    }
+}
+
+/// Renders the compiled scene to an image of `width × height` pixels whose view plane has the
+/// given width / height `aspect`. Adaptive super-sampling: one ray through each pixel centre,
+/// then pixels that differ from a neighbour by more than [`SUPER_SAMPLE_CONTRAST`] are replaced
+/// by the mean of an n×n grid of rays.
+pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> Result<Image> {
+    let run = || {
+        let view = view(&scene.settings, width, height, aspect);
+        let entry = scene.entry_map(&view);
+        let from = |x: u32, y: u32| entry.as_ref().map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
+        // What a pixel whose bound is +∞ shows, where that is known without its ray.
+        let unbounded = scene.unbounded_colour().map(to_f32);
+        let image = scene.image_rays(view.eye);
+        // Rays in packets of SIMD lanes, where that applies (one ray per pixel).
+        #[cfg(target_arch = "x86_64")]
+        if let Some(p) = packet::Packets::new(scene) {
+            return per_tile(width, height, packet_tile(width, height), |tile| {
+                p.tile(&view, entry.as_ref(), &image, unbounded, tile)
+            });
+        }
+        let first = per_pixel(width, height, |x, y| {
+            let bound = from(x, y);
+            if let (Some(c), true) = (unbounded, bound == f64::INFINITY) {
+                return c;
+            }
+            let dir = view.ray(x as f64 + 0.5, y as f64 + 0.5);
+            to_f32(scene.trace(view.eye, &image, dir, bound))
+        });
+        let n = scene.settings.super_sample.max(1) as u32;
+        if n == 1 {
+            return first;
+        }
+        let differs = |x: u32, y: u32| {
+            let p = first[(y * width + x) as usize];
+            let neighbours = [
+                (x.wrapping_sub(1), y),
+                (x + 1, y),
+                (x, y.wrapping_sub(1)),
+                (x, y + 1),
+            ];
+            neighbours.iter().any(|&(nx, ny)| {
+                nx < width && ny < height && {
+                    let q = first[(ny * width + nx) as usize];
+                    (0..3).any(|c| (p[c] - q[c]).abs() > SUPER_SAMPLE_CONTRAST)
+                }
+            })
+        };
+        per_pixel(width, height, |x, y| {
+            if !differs(x, y) {
+                return first[(y * width + x) as usize];
+            }
+            let mut sum = DVec3::ZERO;
+            for j in 0..n {
+                for i in 0..n {
+                    let sx = x as f64 + (i as f64 + 0.5) / n as f64;
+                    let sy = y as f64 + (j as f64 + 0.5) / n as f64;
+                    let c = scene.trace(view.eye, &image, view.ray(sx, sy), from(x, y));
+                    sum += crate::model::scene::v3(to_f32(c));
+                }
+            }
+            to_f32(sum / (n * n) as f64)
+        })
+    };
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(run)) {
+        Ok(pixels) => Ok(Image {
+            width,
+            height,
+            pixels,
+        }),
+        Err(payload) => {
+            let msg = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            Err(Error::new(
+                ErrorCode::Internal,
+                format!("rendering stopped by a panic (in a field function?): {msg}"),
+            ))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,119 @@
+//! Tile scheduling: the primary-ray generator of an image ([`view`]), the split of the image
+//! into square tiles traced in parallel (rayon) and reassembled in a fixed order, so that an
+//! image's bytes do not depend on the number of threads ([`per_pixel`], [`per_tile`]), and the
+//! tile side of the packet march ([`packet_tile`]). The super-sampling driver that uses them is
+//! [`super::render_image`]; what a ray shows is `integrate`'s.
+
+use super::*;
+
+/// Side of the square pixel tiles traced in parallel.
+pub(super) const TILE: u32 = 16;
+
+/// Side of the packet march's tiles where the image has enough of them ([`packet_tile`]): a
+/// tile's 32 lanes stay full for longer before its last rays drain them.
+pub(super) const PACKET_TILE: u32 = 32;
+
+/// The packet march's tile side for an image of `width × height`: [`PACKET_TILE`] where that
+/// gives at least 16 tiles a thread (work-stealing balances tiles of unequal cost only when
+/// there are many), else [`TILE`]. Only the order of the work depends on it, not a pixel.
+pub(super) fn packet_tile(width: u32, height: u32) -> u32 {
+    let big = width.div_ceil(PACKET_TILE) as usize * height.div_ceil(PACKET_TILE) as usize;
+    if big >= 16 * rayon::current_num_threads() {
+        PACKET_TILE
+    } else {
+        TILE
+    }
+}
+
+/// The primary-ray generator of a `width × height` image whose view plane has the given
+/// width / height `aspect`, for the scene's camera.
+pub(super) fn view(settings: &Settings, width: u32, height: u32, aspect: f32) -> Pinhole {
+    let cam = &settings.camera;
+    let (r, u, f) = cam.basis();
+    let half = (cam.fov as f64 * 0.5).to_radians().tan();
+    let aspect = aspect as f64;
+    let (hw, hh) = if aspect >= 1.0 {
+        (half * aspect, half)
+    } else {
+        (half, half / aspect)
+    };
+    Pinhole {
+        eye: crate::model::scene::v3(cam.eye),
+        right: r * hw,
+        up: u * hh,
+        forward: f,
+        width,
+        height,
+    }
+}
+
+pub(super) fn tiles(width: u32, height: u32, side: u32) -> Vec<(u32, u32)> {
+    let mut v = Vec::new();
+    for ty in (0..height).step_by(side as usize) {
+        for tx in (0..width).step_by(side as usize) {
+            v.push((tx, ty));
+        }
+    }
+    v
+}
+
+/// Evaluates `f` for every pixel, in parallel over tiles, deterministically.
+pub(super) fn per_pixel<F>(width: u32, height: u32, f: F) -> Vec<[f32; 3]>
+where
+    F: Fn(u32, u32) -> [f32; 3] + Sync,
+{
+    per_tile(width, height, TILE, |(tx, ty, tw, th)| {
+        let mut out = Vec::with_capacity((tw * th) as usize);
+        for y in ty..ty + th {
+            for x in tx..tx + tw {
+                out.push(f(x, y));
+            }
+        }
+        out
+    })
+}
+
+/// Evaluates `f` for every tile (x, y, width, height) of `side × side` pixels (fewer at the
+/// right and bottom edges), which gives its pixels row by row, in parallel over tiles,
+/// deterministically.
+pub(super) fn per_tile<F>(width: u32, height: u32, side: u32, f: F) -> Vec<[f32; 3]>
+where
+    F: Fn((u32, u32, u32, u32)) -> Vec<[f32; 3]> + Sync,
+{
+    type Tile = ((u32, u32), Vec<[f32; 3]>);
+    let results: Vec<Tile> = tiles(width, height, side)
+        .into_par_iter()
+        .map(|(tx, ty)| {
+            let (tw, th) = ((tx + side).min(width) - tx, (ty + side).min(height) - ty);
+            ((tx, ty), f((tx, ty, tw, th)))
+        })
+        .collect();
+    // The tiles come in row-major order: each band of `side` rows is a row of tiles, copied
+    // into place in parallel, a tile row at a time.
+    let per_row = width.div_ceil(side) as usize;
+    let mut pixels = vec![[0.0f32; 3]; (width * height) as usize];
+    pixels
+        .par_chunks_mut((width * side) as usize)
+        .zip(results.par_chunks(per_row))
+        .for_each(|(band, row)| {
+            for ((tx, _), out) in row {
+                let tw = ((tx + side).min(width) - tx) as usize;
+                for (y, src) in out.chunks(tw).enumerate() {
+                    let at = y * width as usize + *tx as usize;
+                    band[at..at + tw].copy_from_slice(src);
+                }
+            }
+        });
+    pixels
+}
+
+pub(super) fn to_f32(c: DVec3) -> [f32; 3] {
+    let f = |v: f64| {
+        if v.is_finite() {
+            v.clamp(0.0, 1.0) as f32
+        } else {
+            0.0
+        }
+    };
+    [f(c.x), f(c.y), f(c.z)]
+}
