@@ -2,7 +2,7 @@
 //! the dataset's f32 node values by per-lane loads clamped into the values ([`Nodes`], eight
 //! lanes) or from its 8-bit voxels by gathers of four bytes ([`Raw8`], generic over [`Simd`]),
 //! and the clamped gathers of tables ([`gather`]). Not here: what is done with the values
-//! ([`step`](super::step), [`shade`](super::shade)).
+//! ([`step`], [`shade`]).
 
 use super::*;
 

@@ -3,7 +3,7 @@
 //! or taken on trust ([`TRUSTED_RUNS`]), the block walk asked after a run of which nothing is
 //! taken ([`Packets::next_taken`]), and the next segment to take of each lane's run
 //! ([`next_segments`]). Written once over [`Simd`] but for [`next_segments`] (see the module
-//! docs of [`simd`](super)). Not here: the samples' arithmetic ([`step`](super::step)).
+//! docs of [`simd`](super)). Not here: the samples' arithmetic ([`step`]).
 
 use super::*;
 

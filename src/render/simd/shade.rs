@@ -3,7 +3,7 @@
 //! Phong terms ([`Packets::lit`]), the opacity correction's common powers ([`transmit_lanes`]) and
 //! the colour's finiteness test ([`finite`]), written once over [`Simd`]; and the lane-by-lane
 //! scalar fallbacks for the rare samples they do not take. Not here: the reads of the
-//! differences' nodes and voxels ([`nodes`](super::nodes)).
+//! differences' nodes and voxels ([`nodes`]).
 
 use super::*;
 

@@ -2,7 +2,7 @@
 //! march's direction, object-space direction, box clip, segment count and first segment past
 //! the entry map's bound, lane for lane the same numbers, and the pixels whose ray takes no
 //! sample. The same for both widths (AVX2 f64 lanes). Not here: the march of the started rays
-//! ([`runs`](super::runs), [`step`](super::step)).
+//! ([`runs`], [`step`]).
 
 use super::*;
 

@@ -1,9 +1,9 @@
 //! One sample in every active lane of a packet, in either width: the object point, its cell,
 //! the trilinear value and the zero test, opacity and colour, the opacity correction, the
-//! lighting ([`shade`](super::shade)) and the front-to-back composite ([`Packets::step`]),
+//! lighting ([`shade`]) and the front-to-back composite ([`Packets::step`]),
 //! written once over [`Simd`] and compiled per width by [`Packets::step8`] and
-//! [`Packets::step16`]. Not here: which samples the lanes take ([`runs`](super::runs)), the
-//! reads of nodes and voxels ([`nodes`](super::nodes)), the tables ([`tables`](super::tables)).
+//! [`Packets::step16`]. Not here: which samples the lanes take ([`runs`]), the
+//! reads of nodes and voxels ([`nodes`]), the tables ([`tables`]).
 
 use super::*;
 
