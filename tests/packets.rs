@@ -1,5 +1,6 @@
-//! The packet march (`Optimise::packets`: eight primary rays in AVX2 lanes) against the scalar
-//! march: random volumes, cameras far, grazing the box and inside it, several steps (each
+//! The packet march (`Optimise::packets`: primary rays eight at a time in AVX2 lanes, or sixteen
+//! in AVX-512 lanes, `Optimise::wide_lanes`) against the scalar march and the two widths against
+//! each other: random volumes, cameras far, grazing the box and inside it, several steps (each
 //! exponent the packet march corrects opacity for in lanes, and one it does not), with and
 //! without skipping and termination, shaded and unshaded, and (as property tests with a fixed
 //! seed) the hard cases of issue #7 for scanned volumes. Every pixel within a small

@@ -152,7 +152,7 @@ fn predictions() -> Vec<(&'static str, Want)> {
         // A NaN normal counts as none: isotropic, (ka + kd) C = 1 on o = 0.5.
         ("normal_nan.ppm", Centre(half)),
         // Φ_r {(0, 0.2), (1, 0.8)}: Φ(0) = 0, Φ(0.5) = 0.5, Φ(1) = 0.8; Φ_t {(0, 0.9), (1, 0.6)}:
-        // Φ(0) = 0 (at or below a_1), Φ(1) = 0.6 (src/mapping.rs, docs/compat.md).
+        // Φ(0) = 0 (at or below a_1), Φ(1) = 0.6 (src/model/mapping.rs, docs/compat.md).
         ("ramp_a1_0_f0.ppm", All(grey(0.0))),
         ("ramp_a1_0_f0.5.ppm", Centre(half)),
         ("ramp_an_1_f1.ppm", Centre(grey(0.8))),

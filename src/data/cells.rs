@@ -6,7 +6,7 @@
 //! in parallel, a run of words a task), and its queries (one cell, a run of cells, the bits as
 //! 32-bit words for the packet march's gathers). Not here: choosing the bound (the zero test of an
 //! object's transfer function; the renderer asks for the mask), and the marches that read the masks (the `lanes`
-//! module's [`Dataset::trilinear8`], and `render::packet`).
+//! module's [`Dataset::trilinear8`], and `render::simd`).
 
 use super::{normaliser, Dataset, Voxels};
 
@@ -64,7 +64,7 @@ pub(super) type CellMasks = Vec<(u32, std::sync::Arc<CellMask>)>;
 impl CellMask {
     /// The mask's bits as 32-bit words: bit `c & 31` of word `c >> 5` for the cell with first
     /// node `c` (a cell past their end may reach the bound). For the packet march
-    /// (`render::packet`), made once per mask.
+    /// (`render::simd`), made once per mask.
     pub(crate) fn words32(&self) -> &[u32] {
         self.words32.get_or_init(|| {
             self.bits

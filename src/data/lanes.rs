@@ -6,7 +6,7 @@
 //! ([`Dataset::interior8`]) and the gradient in one of them
 //! ([`Dataset::trilinear_gradient_in`]). Each lane performs the operations of the one-point
 //! path, so the values are [`Dataset::trilinear`]'s bit for bit. Not here: the march itself
-//! (`render`), nor the packet march's own gathers (`render::packet`).
+//! (`render`), nor the packet march's own gathers (`render::simd`).
 
 use super::cells::reaches;
 use super::{CellGradients, CellMask, Dataset, Filter};

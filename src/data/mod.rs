@@ -21,7 +21,7 @@
 //!
 //! Not here: what the values mean (transfer functions and field programs, `program`), the
 //! skipping structures built from the brick ranges (`skip`), the packet march that reads the
-//! values or voxels directly (`render::packet`, through `Dataset::packet_parts`), other file
+//! values or voxels directly (`render::simd`, through `Dataset::packet_parts`), other file
 //! formats (the `vlconvert` tool converts them to `.vlb`), and atomic file output (`output`).
 //!
 //! The caches a render fills (node values, brick ranges, cell masks) are made once per dataset
@@ -230,7 +230,7 @@ impl Dataset {
     }
 
     /// The node strides (1, nx, nx·ny; 0 along an axis of one node) and 0.5·(n − 1) per axis:
-    /// what the packet march (`render::packet`) reads besides the values or voxels.
+    /// what the packet march (`render::simd`) reads besides the values or voxels.
     pub(crate) fn packet_parts(&self) -> ([usize; 3], [f64; 3]) {
         (self.strides, self.half_last)
     }

@@ -200,12 +200,11 @@ pub struct Optimise {
     /// (the same values, bit for bit, computed faster; see `docs/performance.md`).
     pub lean_kernel: bool,
     /// Trace the primary rays of a scanned volume eight at a time in SIMD lanes (AVX2 and FMA,
-    /// where the processor has them; see `docs/performance.md`, "The packet march (AVX2),
-    /// measured", and the rounds after it). On by default: about 2.1× the scalar march's
-    /// speed shaded on the measured host (2.6× in sixteen lanes, `wide_lanes`), with images
-    /// that differ from the scalar march's in the last bits of f32 arithmetic (a level of 255
-    /// in a handful of pixels at most), so images on processors with and without AVX2 may
-    /// differ by as much.
+    /// where the processor has them), or sixteen (`wide_lanes`); `docs/performance.md`
+    /// measures the speed-up and `docs/dev/simd.md` describes the design. On by default, with
+    /// images that differ from the scalar march's in the last bits of f32 arithmetic (a level
+    /// of 255 in a handful of pixels at most), so images on processors with and without AVX2
+    /// may differ by as much.
     /// Off, every ray takes the scalar march, whose images are the same on every processor.
     pub packets: bool,
     /// Where the processor has AVX-512 and the scene fits (8-bit voxels read as voxels, tables

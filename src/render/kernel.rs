@@ -257,12 +257,12 @@ impl DirectShading {
     }
 
     /// The opacity table and its column, and the colour table and its columns of r, g and b
-    /// (for the packet march, `render::packet`).
+    /// (for the packet march, `render::simd`).
     pub(crate) fn tables(&self) -> ((&Mapping, usize), (&Mapping, [usize; 3])) {
         ((&self.opacity.0, self.opacity.1), (&self.colour, self.rgb))
     }
 
-    /// The segment pairs for the packet march (`render::packet`): per input bucket (see
+    /// The segment pairs for the packet march (`render::simd`): per input bucket (see
     /// [`Mapping::clamp_and_bucket`]) its pair's number, or −1 where it has none; per pair its
     /// numbers as f32, `[start (o), start (colour), base (o, r, g, b), slope (o, r, g, b)]`
     /// (the starts are f32 breakpoints, exact; the bases and slopes rounded to f32).

@@ -22,8 +22,9 @@
 //! refracted rays start at surface hits. Lighting, normals and shadow transmittance are
 //! `shade`'s (`lanes`: the same lighting for several samples at once).
 //!
-//! Where it applies, primary rays of a scanned volume are traced in SIMD packets (`packet`,
-//! x86-64), giving the same image bit for bit; everything else takes the scalar path here.
+//! Where it applies, primary rays of a scanned volume are traced in SIMD packets (`simd`,
+//! x86-64; its arithmetic against the scalar march's: `docs/dev/simd.md`); everything else
+//! takes the scalar path here.
 
 // What the renderer's modules share of the crate: each of them (the packet march too) takes
 // the render module's names with `use super::*` (or `use crate::render::*`).
@@ -63,7 +64,7 @@ use tiles::*;
 pub const SUPER_SAMPLE_CONTRAST: f32 = 4.0 / 255.0;
 
 #[cfg(target_arch = "x86_64")]
-mod packet;
+mod simd;
 
 /// A rendered image: linear RGB in [0, 1], row-major, top row first.
 #[derive(Clone, Debug, PartialEq)]
@@ -110,7 +111,7 @@ pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> R
         let image = scene.image_rays(view.eye);
         // Rays in packets of SIMD lanes, where that applies (one ray per pixel).
         #[cfg(target_arch = "x86_64")]
-        if let Some(p) = packet::Packets::new(scene) {
+        if let Some(p) = simd::Packets::new(scene) {
             return per_tile(width, height, packet_tile(width, height), |tile| {
                 p.tile(&view, entry.as_ref(), &image, unbounded, tile)
             });

@@ -703,8 +703,8 @@ fn clip_is_the_nan_aware_clip() {
                 let lanes = unsafe {
                     use std::arch::x86_64::_mm256_set1_pd as splat;
                     let (t0, t1, ok) =
-                        packet::clip_lanes(o, &[splat(d.x), splat(d.y), splat(d.z)], min, max);
-                    (ok & 1 != 0).then(|| (packet::st4d(t0)[0], packet::st4d(t1)[0]))
+                        simd::clip_lanes(o, &[splat(d.x), splat(d.y), splat(d.z)], min, max);
+                    (ok & 1 != 0).then(|| (simd::st4d(t0)[0], simd::st4d(t1)[0]))
                 };
                 assert_eq!(bits(lanes), bits(got), "lanes: {o} {d}");
             }
@@ -777,9 +777,8 @@ fn ray_start_lanes_are_the_scalar_starts() {
         for y in 0..h {
             for x0 in (0..w).step_by(4) {
                 // SAFETY: AVX2 was detected above.
-                let (dir, d) = unsafe { packet::ray_lanes(&view, &to_object, x0, y) };
-                let (dir, d) =
-                    unsafe { (dir.map(|v| packet::st4d(v)), d.map(|v| packet::st4d(v))) };
+                let (dir, d) = unsafe { simd::ray_lanes(&view, &to_object, x0, y) };
+                let (dir, d) = unsafe { (dir.map(|v| simd::st4d(v)), d.map(|v| simd::st4d(v))) };
                 for l in 0..4 {
                     let want = view.ray((x0 + l as u32) as f64 + 0.5, y as f64 + 0.5);
                     let want_d = to_object.transform_vector3(want);
@@ -826,7 +825,7 @@ fn ray_start_lanes_are_the_scalar_starts() {
         let lanes = |x: [f64; 4]| unsafe { _mm256_loadu_pd(x.as_ptr()) };
         let n_scalar = segment_count((t1 - t0) / step);
         // SAFETY: AVX2 was detected above.
-        let n = unsafe { packet::count_lanes(lanes([t0; 4]), lanes([t1; 4]), step) };
+        let n = unsafe { simd::count_lanes(lanes([t0; 4]), lanes([t1; 4]), step) };
         if n[0] != 0 {
             assert_eq!(n[0], n_scalar, "{t0} {t1} {step}");
             counted += 1;
@@ -848,7 +847,7 @@ fn ray_start_lanes_are_the_scalar_starts() {
             let t: [f64; 4] = chunk.try_into().unwrap();
             // SAFETY: AVX2 was detected above.
             let got = unsafe {
-                packet::first_segments(lanes([t0; 4]), lanes([t1; 4]), step, [n[0]; 4], lanes(t))
+                simd::first_segments(lanes([t0; 4]), lanes([t1; 4]), step, [n[0]; 4], lanes(t))
             };
             for (l, &t) in t.iter().enumerate() {
                 let mut want = cursor(t0, t1, step, n_scalar, 0, f64::NEG_INFINITY);
@@ -1291,7 +1290,7 @@ fn lanes_segments_are_the_cursors() {
             let (mut m1, mut l1) = ([0.5; 8], [0.5; 8]);
             let a = c.segments(&mut m0, &mut l0);
             // SAFETY: AVX2 was detected above.
-            let b = unsafe { packet::segments_lanes(&c, &mut m1, &mut l1) };
+            let b = unsafe { simd::segments_lanes(&c, &mut m1, &mut l1) };
             assert_eq!(a, b);
             let bits = |x: &[f64; 8]| x[..a].iter().map(|&v| nan_any(v)).collect::<Vec<_>>();
             assert_eq!(bits(&m0), bits(&m1), "{t0} {t1} {step} {k}/{n}");
@@ -1308,7 +1307,7 @@ fn lanes_segments_are_the_cursors() {
 #[cfg(target_arch = "x86_64")]
 #[test]
 fn wide_segments_are_the_cursors() {
-    if !packet::wide::detected() {
+    if !simd::detected() {
         return;
     }
     let rng = Xorshift::new(0x51de_5e9e_a11e_0016);
@@ -1341,9 +1340,9 @@ fn wide_segments_are_the_cursors() {
                 continue;
             }
             let c = cursor(t0, t1, step, n, k, f64::NEG_INFINITY);
-            let mut run = packet::Run16::default();
+            let mut run = simd::Run16::default();
             // SAFETY: every feature the function enables was detected above.
-            let m = unsafe { packet::wide::segments16(&c, &mut run) };
+            let m = unsafe { simd::segments16(&c, &mut run) };
             assert_eq!(m, (n - k).min(16) as usize);
             for (h, from) in [(0, k), (8, k + 8)] {
                 if from >= n {

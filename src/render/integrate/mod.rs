@@ -5,7 +5,7 @@
 //! DVR march ([`dvr`]) directly. Also the per-image preparations of primary rays
 //! ([`ImageRays`], the [`EntryMap`] bound, the colour of rays that meet nothing). Where samples
 //! lie is the cursor's, what colour a sample has is `shade`'s; the packet march (primary rays
-//! of one volume in SIMD lanes) is `packet`'s.
+//! of one volume in SIMD lanes) is `simd`'s.
 
 use crate::render::*;
 

@@ -1,0 +1,213 @@
+//! Unit tests of the packet march as a whole: runs on trust and the packets a step carries
+//! change no pixel, and the lanes' opacity correction is the powers it stands for. The lane
+//! routines against the scalar code they mirror are tested in `render`'s tests; the march
+//! against the scalar march in `tests/packets.rs`.
+
+use super::*;
+
+/// The test scene of slabs: slabs along x of 5 voxels (with some texture) between empty
+/// ones of 3 (whole runs inside the slabs, cut runs at their faces), faint or, if
+/// `opaque`, dense enough that most rays end early, before a grey-blue background, seen
+/// at `step`, shaded or not, with `optimise`: the library with the scene open.
+fn slabs_scene(
+    step: f32,
+    shaded: bool,
+    opaque: bool,
+    optimise: crate::model::scene::Optimise,
+) -> crate::Library {
+    use crate::data::{Dataset, Voxels};
+    use crate::{Camera, Fields, Library, MappingType};
+    let dims = [40usize, 36, 30];
+    let voxels = (0..dims.iter().product::<usize>())
+        .map(|i| {
+            let (x, y, z) = (i % dims[0], i / dims[0] % dims[1], i / (dims[0] * dims[1]));
+            if x % 8 < 5 {
+                (150 + (x * 7 + y * 13 + z * 29) % 100) as u8
+            } else {
+                (x * 3 + y) as u8 % 60
+            }
+        })
+        .collect();
+    let data = Dataset::new(dims, Voxels::U8(voxels), 0.0, 255.0).unwrap();
+    let mut vl = Library::new();
+    vl.add_dataset(1, data).unwrap();
+    let density = if opaque {
+        [0.3, 0.0, 0.6, 0.6, 1.0, 0.95]
+    } else {
+        [0.3, 0.0, 0.6, 0.05, 1.0, 0.08]
+    };
+    vl.mapping(1, MappingType::Ramp, 3, 1, &density).unwrap();
+    vl.mapping(
+        2,
+        MappingType::Ramp,
+        2,
+        3,
+        &[0.0, 0.2, 0.4, 0.6, 1.0, 1.0, 0.9, 0.5],
+    )
+    .unwrap();
+    vl.scene().unwrap();
+    vl.set_optimise(optimise).unwrap();
+    vl.background(0.1, 0.2, 0.3).unwrap();
+    vl.camera(&Camera {
+        eye: [90.0, -40.0, 70.0],
+        at: [20.0, 18.0, 15.0],
+        up: [0.0, 0.0, 1.0],
+        fov: 40.0,
+    })
+    .unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.directional_light([0.3, -1.0, 0.2], [1.0, 0.95, 0.9], 1.0)
+        .unwrap();
+    vl.step_size(step, 1.0).unwrap();
+    vl.object().unwrap();
+    vl.scale(39.0, 35.0, 29.0).unwrap();
+    vl.dataset(Fields::F, 1).unwrap();
+    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+    vl.map(Fields::R, Fields::F, 2, 1).unwrap();
+    vl.map(Fields::G, Fields::F, 2, 2).unwrap();
+    vl.map(Fields::B, Fields::F, 2, 3).unwrap();
+    if shaded {
+        vl.set(Fields::KA, 0.2).unwrap();
+        vl.set(Fields::KD, 0.7).unwrap();
+        vl.set(Fields::KS, 0.3).unwrap();
+    } else {
+        vl.set(Fields::KA, 1.0).unwrap();
+    }
+    vl.end().unwrap();
+    vl
+}
+
+/// The bits of the pixels of `image`.
+fn bits(image: &[[f32; 3]]) -> Vec<u32> {
+    image.iter().flatten().map(|v| v.to_bits()).collect()
+}
+
+/// The packet march's image of the scene open in `vl` (where the march applies), of
+/// `(width, height)` pixels, as `render_image` makes it but in `packets` packets a step (0:
+/// each width's own number, `Packets::packets`): the bits of its pixels, and the runs the
+/// march took on trust.
+fn march(vl: &crate::Library, (width, height): (u32, u32), packets: usize) -> (Vec<u32>, u64) {
+    let scene = vl.compiled().unwrap();
+    let view = view(&scene.settings, width, height, 1.2);
+    let entry = scene.entry_map(&view);
+    let unbounded = scene.unbounded_colour().map(to_f32);
+    let image = scene.image_rays(view.eye);
+    let mut p = Packets::new(&scene).expect("the packet march applies");
+    p.packets = packets;
+    let pixels = per_tile(width, height, packet_tile(width, height), |tile| {
+        p.tile(&view, entry.as_ref(), &image, unbounded, tile)
+    });
+    let untested = p.untested.load(std::sync::atomic::Ordering::Relaxed);
+    (bits(&pixels), untested)
+}
+
+/// Runs taken on trust ([`TRUSTED_RUNS`]) are taken, and change no pixel: the slabs
+/// ([`slabs_scene`]) at fine and coarse steps, shaded and not, in sixteen lanes and in eight,
+/// with `Optimise::trust_whole_runs` on and off.
+#[test]
+fn runs_on_trust_change_nothing() {
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        return;
+    }
+    let render = |step: f32, shaded: bool, wide_lanes: bool, trust: bool| {
+        let optimise = crate::model::scene::Optimise {
+            wide_lanes,
+            trust_whole_runs: trust,
+            ..Default::default()
+        };
+        march(&slabs_scene(step, shaded, false, optimise), (64, 48), 0)
+    };
+    for step in [0.125, 0.5, 2.0] {
+        for shaded in [false, true] {
+            for wide_lanes in [true, false] {
+                let (tested, none) = render(step, shaded, wide_lanes, false);
+                let (trusted, taken) = render(step, shaded, wide_lanes, true);
+                let what = format!("step {step}, shaded {shaded}, wide {wide_lanes}");
+                assert_eq!(tested, trusted, "{what}: runs on trust changed the image");
+                assert_eq!(none, 0, "{what}: runs on trust with trust off");
+                if step == 0.125 {
+                    assert!(taken > 100, "{what}: {taken} runs on trust");
+                }
+            }
+        }
+    }
+}
+
+/// How many packets a step carries, and so which lane or packet a ray is marched in,
+/// changes no pixel ([`Packets::march_tile`]): the slabs, faint and opaque (rays ending
+/// early in every packet), at fine and coarse steps, shaded and not, in sixteen lanes and
+/// in eight, in one, two and four packets and by default, byte for byte; in an image of
+/// few tiles (16×16 pixels) and, on up to two threads, of many (32×32, `packet_tile`).
+#[test]
+fn packets_carry_rays_without_changing_them() {
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        return;
+    }
+    for size in [(64, 48), (256, 160)] {
+        for opaque in [false, true] {
+            for step in [0.125, 0.5, 2.0] {
+                for shaded in [false, true] {
+                    for wide_lanes in [true, false] {
+                        let optimise = crate::model::scene::Optimise {
+                            wide_lanes,
+                            ..Default::default()
+                        };
+                        let vl = slabs_scene(step, shaded, opaque, optimise);
+                        let by = |packets: usize| march(&vl, size, packets).0;
+                        let (one, two, four) = (by(1), by(2), by(4));
+                        let default = bits(&vl.render_preview(size.0, size.1, 1.2).unwrap().pixels);
+                        let what = format!(
+                            "{size:?}, opaque {opaque}, step {step}, shaded {shaded}, \
+                             wide {wide_lanes}"
+                        );
+                        assert_eq!(one, two, "{what}: one packet and two differ");
+                        assert_eq!(four, two, "{what}: four packets and two differ");
+                        assert_eq!(default, two, "{what}: the default and two packets differ");
+                        let background = [0.1f32, 0.2, 0.3].map(f32::to_bits);
+                        let shown = default.chunks(3).filter(|p| *p != background).count();
+                        let least = (size.0 * size.1 / 6) as usize;
+                        assert!(shown > least, "{what}: {shown} pixels show the slabs");
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The lanes' opacity correction is `t^e` for every exponent `Packets::new` admits, within
+/// the f32 rounding of its square roots and products (a few units in the last place of
+/// f32: each rounds once, and a square root halves the relative error it is given), in
+/// eight lanes and, where the processor has them, sixteen.
+#[test]
+fn transmit_lanes_are_the_powers() {
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        return;
+    }
+    // SAFETY: AVX2 and FMA were detected above.
+    powers(unsafe { Avx2::new() });
+    if detected() {
+        // SAFETY: `detected` found every feature `Avx512` stands for.
+        powers(unsafe { Avx512::new() });
+    }
+}
+
+/// [`transmit_lanes_are_the_powers`] in the lanes of `s`.
+fn powers<S: Simd<N>, const N: usize>(s: S) {
+    for e in [0.5, 1.0, 0.25, 2.0, 0.125, 4.0] {
+        for i in 0..=1000 {
+            let t: [f32; N] = std::array::from_fn(|k| (i * N + k) as f32 / (1000 * N) as f32);
+            let mut got = [0f32; N];
+            s.st(&mut got, transmit_lanes(s, e, s.ld(&t)));
+            for k in 0..N {
+                let want = (t[k] as f64).powf(e);
+                let tol = 4.0 * f32::EPSILON as f64 * want;
+                assert!(
+                    (got[k] as f64 - want).abs() <= tol,
+                    "{}^{e}: {} against {want}",
+                    t[k],
+                    got[k]
+                );
+            }
+        }
+    }
+}
