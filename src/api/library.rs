@@ -44,7 +44,7 @@ pub enum Closed {
     Library,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 struct OpenScene {
     settings: Settings,
     lights: Vec<Light>,
@@ -53,6 +53,8 @@ struct OpenScene {
     objects: Vec<ObjectDesc>,
     /// Objects being specified (nested ones after their parents).
     open: Vec<ObjectDesc>,
+    /// The empty-space grids of `objects`, shared by every render of the scene.
+    grids: crate::render::Grids,
 }
 
 /// One session of the API (`vlInit` … `vlEnd`).
@@ -183,7 +185,7 @@ impl Library {
                     objects: s.objects,
                     datasets: Arc::new(self.datasets.clone()),
                 };
-                crate::output::render_outputs(&desc)?;
+                crate::output::render_outputs(&desc, &s.grids)?;
                 Ok(Closed::Scene)
             }
             _ => {
@@ -206,6 +208,7 @@ impl Library {
             volumes: Vec::new(),
             objects: Vec::new(),
             open: Vec::new(),
+            grids: Default::default(),
         });
         Ok(())
     }
@@ -781,18 +784,24 @@ impl Library {
                 format!("render_preview: size {width}x{height}"),
             );
         }
-        crate::render::render_image(&crate::render::Compiled::new(&desc), width, height, aspect)
+        crate::render::render_image(&self.compile(&desc), width, height, aspect)
     }
 
     /// The open scene (at scene scope) compiled as it would render now (for tests of the
     /// renderer's internals).
     #[cfg(test)]
     pub(crate) fn compiled(&self) -> Result<crate::render::Compiled> {
-        Ok(crate::render::Compiled::new(&self.open_scene("compiled")?))
+        Ok(self.compile(&self.open_scene("compiled")?))
+    }
+
+    /// `desc`, the open scene, compiled with the scene's empty-space grids.
+    fn compile(&self, desc: &SceneDesc) -> crate::render::Compiled {
+        let grids = &self.scene.as_ref().expect("scene scope").grids;
+        crate::render::Compiled::new(desc, grids)
     }
 
     /// The open scene (at scene scope) as it would render now, without its outputs.
-    fn open_scene(&self, what: &str) -> Result<SceneDesc> {
+    pub(crate) fn open_scene(&self, what: &str) -> Result<SceneDesc> {
         if self.scope() != Scope::Scene {
             return err(
                 ErrorCode::BadScope,
@@ -814,7 +823,7 @@ impl Library {
     /// Not a command of the C API.
     pub fn render_plan(&self) -> Result<crate::render::Plan> {
         let desc = self.open_scene("render_plan")?;
-        Ok(crate::render::Compiled::new(&desc).plan())
+        Ok(self.compile(&desc).plan())
     }
 
     /// Switches the pixel-preserving speed-ups (empty-space skipping, early ray termination)

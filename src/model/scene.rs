@@ -306,10 +306,6 @@ pub struct ObjectDesc {
     pub state: RenderState,
     /// Children (nested objects), in declaration order; placed in this object's space.
     pub children: Vec<ObjectDesc>,
-    /// The empty-space grid, built by the first render after the object is closed (its
-    /// program and boundary no longer change then) and shared by later renders.
-    pub(crate) skip:
-        std::sync::Arc<std::sync::OnceLock<Option<std::sync::Arc<crate::accel::SkipGrid>>>>,
 }
 
 impl ObjectDesc {
@@ -323,7 +319,6 @@ impl ObjectDesc {
             normals: Vec::new(),
             state,
             children: Vec::new(),
-            skip: Default::default(),
         }
     }
 

@@ -8,7 +8,7 @@
 
 use crate::error::{Error, Result};
 use crate::model::scene::SceneDesc;
-use crate::render::{render_image, Compiled};
+use crate::render::{render_image, Compiled, Grids};
 
 mod files;
 mod voxel;
@@ -21,11 +21,11 @@ mod tests;
 
 /// Renders every image and voxelization a scene requested and writes the files. Every output
 /// is attempted; the first failure is returned (its message counts the others).
-pub fn render_outputs(desc: &SceneDesc) -> Result<()> {
+pub fn render_outputs(desc: &SceneDesc, grids: &Grids) -> Result<()> {
     if desc.images.is_empty() && desc.volumes.is_empty() {
         return Ok(());
     }
-    let compiled = Compiled::new(desc);
+    let compiled = Compiled::new(desc, grids);
     let mut errors: Vec<Error> = Vec::new();
     for req in &desc.images {
         let result = render_image(&compiled, req.width, req.height, req.aspect)

@@ -100,6 +100,7 @@ impl CObj {
         o: &ObjectDesc,
         datasets: &Arc<crate::model::program::Datasets>,
         optimise: crate::model::scene::Optimise,
+        grid: &GridCell,
     ) -> CObj {
         let to_world = o.matrix();
         let b = crate::model::scene::v3(o.boundary);
@@ -154,8 +155,7 @@ impl CObj {
             refract: r.toggle(Feature::Refract),
             reflect_background: r.toggle(Feature::ReflectBackground),
             recursion: r.recursion,
-            skip: o
-                .skip
+            skip: grid
                 .get_or_init(|| {
                     SkipGrid::build(&o.program[..o_prefix], box_min, box_max).map(Arc::new)
                 })
@@ -303,6 +303,37 @@ fn compile_children(
         .collect()
 }
 
+/// One root object's empty-space grid, built once (`None`: the object has no grid).
+type GridCell = Arc<std::sync::OnceLock<Option<Arc<SkipGrid>>>>;
+
+/// The empty-space grids of a scene's root objects, by their index in the scene, each built by
+/// the first compilation that needs it and shared by later ones. The state machine keeps one
+/// for each open scene (a root object no longer changes once it is closed, and objects are
+/// only appended), so scene data holds no cache; a fresh `Grids` builds every grid anew.
+#[derive(Default)]
+pub(crate) struct Grids(std::sync::Mutex<Vec<GridCell>>);
+
+impl Grids {
+    /// The cell of root object `i`.
+    fn cell(&self, i: usize) -> GridCell {
+        let mut cells = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if cells.len() <= i {
+            cells.resize_with(i + 1, Default::default);
+        }
+        cells[i].clone()
+    }
+}
+
+impl std::fmt::Debug for Grids {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let built = self
+            .0
+            .lock()
+            .map_or(0, |c| c.iter().filter(|g| g.get().is_some()).count());
+        write!(f, "Grids({built} built)")
+    }
+}
+
 /// What a scene calls for: effects its objects, toggles and lights can actually show. An
 /// effect that nothing in the scene can exhibit costs nothing (see `docs/dev/render-plan.md`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -334,12 +365,14 @@ pub struct Compiled {
 }
 
 impl Compiled {
-    /// Compiles a scene description.
-    pub fn new(desc: &SceneDesc) -> Compiled {
+    /// Compiles a scene description; its root objects' empty-space grids come from `grids`
+    /// (built there by the first compilation that needs them).
+    pub fn new(desc: &SceneDesc, grids: &Grids) -> Compiled {
         let objects: Vec<CObj> = desc
             .objects
             .iter()
-            .map(|o| CObj::new(o, &desc.datasets, desc.settings.optimise))
+            .enumerate()
+            .map(|(i, o)| CObj::new(o, &desc.datasets, desc.settings.optimise, &grids.cell(i)))
             .collect();
         let plan = Plan {
             shadows: !desc.lights.is_empty()

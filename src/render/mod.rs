@@ -47,6 +47,7 @@ mod lanes;
 mod shade;
 mod tiles;
 
+pub(crate) use compile::Grids;
 pub use compile::{Compiled, Plan};
 pub(crate) use shade::{reflect, refract};
 

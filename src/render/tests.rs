@@ -126,17 +126,20 @@ fn lit_scene(lights: Vec<Light>, shadows: bool) -> Compiled {
     let mut state = crate::model::scene::RenderState::default();
     state.toggles[Feature::CastShadows as usize] = shadows;
     state.toggles[Feature::ReceiveShadows as usize] = shadows;
-    Compiled::new(&SceneDesc {
-        settings: Settings {
-            ambient: [0.3, 0.5, 1.0],
-            ..Settings::default()
+    Compiled::new(
+        &SceneDesc {
+            settings: Settings {
+                ambient: [0.3, 0.5, 1.0],
+                ..Settings::default()
+            },
+            lights,
+            images: Vec::new(),
+            volumes: Vec::new(),
+            objects: vec![ObjectDesc::new(state)],
+            datasets: Default::default(),
         },
-        lights,
-        images: Vec::new(),
-        volumes: Vec::new(),
-        objects: vec![ObjectDesc::new(state)],
-        datasets: Default::default(),
-    })
+        &Grids::default(),
+    )
 }
 
 /// [`Headlit`] gives [`Compiled::illuminate_colour`]'s colour bit for bit, and asks for the
@@ -599,6 +602,13 @@ fn lanes_march_is_the_march() {
 /// A scene of one DVR volume with a skip grid: random spheres in a 20³ dataset, scaled
 /// to a box 19 wide.
 fn sphere_scene() -> Compiled {
+    let scene = sphere_library().compiled().unwrap();
+    assert!(scene.objects[0].skip.is_some(), "a skip grid");
+    scene
+}
+
+/// The library of [`sphere_scene`], its scene open.
+fn sphere_library() -> crate::Library {
     use crate::types::MappingType;
     let n = 20usize;
     let centres = [
@@ -632,9 +642,7 @@ fn sphere_scene() -> Compiled {
     vl.map(Fields::O, Fields::F, 2, 1).unwrap();
     vl.set(Fields::R, 1.0).unwrap();
     vl.end().unwrap();
-    let scene = vl.compiled().unwrap();
-    assert!(scene.objects[0].skip.is_some(), "a skip grid");
-    scene
+    vl
 }
 
 /// Ray parts that make trouble: zeros of both signs, magnitudes below 10⁻³⁰⁸ (whose
@@ -1652,5 +1660,21 @@ fn snell_and_total_internal_reflection() {
     assert_eq!(
         refract(d, DVec3::Z, 1.0, 1.33),
         refract(d, -DVec3::Z, 1.0, 1.33)
+    );
+}
+
+/// The empty-space grid of a closed object is built once per scene and shared by every later
+/// compilation of that scene (the state machine's `Grids`); a fresh `Grids` builds its own.
+#[test]
+fn skip_grids_are_built_once_per_scene() {
+    let vl = sphere_library();
+    let (a, b) = (vl.compiled().unwrap(), vl.compiled().unwrap());
+    let grid = |c: &Compiled| c.objects[0].skip.clone().expect("a skip grid");
+    assert!(Arc::ptr_eq(&grid(&a), &grid(&b)), "one grid for the scene");
+    let desc = vl.open_scene("test").unwrap();
+    let fresh = Compiled::new(&desc, &Grids::default());
+    assert!(
+        !Arc::ptr_eq(&grid(&a), &grid(&fresh)),
+        "a fresh cache builds its own"
     );
 }
