@@ -1,18 +1,21 @@
 //! The state machine: one [`Library`] value is one `vlInit … vlEnd` session.
 //!
 //! Every method is one command of the API. Each first checks its scope against the table in
-//! [`crate::api::scope`], then validates every argument, and only then changes state, so a call that
-//! returns `Err` has changed nothing. The C interface calls these methods one to one; Rust users
-//! call them directly (field functions are closures).
+//! [`crate::api::scope`], then validates every argument, and only then changes state, so a call
+//! that returns `Err` has changed nothing. The C interface calls these methods one to one; Rust
+//! users call them directly (field functions are closures). This file holds the state, the
+//! session commands (`vlEnd`, `vlScene`), the scene-scope commands and the datasets and
+//! transfer functions; the object-scope commands are in `object`, the Rust-only additions in
+//! `preview`. The state machine builds plain scene data and hands it to the output layer when
+//! a scene closes; it neither renders nor writes files itself.
 
 use crate::api::scope::{require, Command, Scope};
 use crate::data::{Dataset, Filter};
-use crate::error::{err, Error, ErrorCode, Result};
+use crate::error::{err, ErrorCode, Result};
 use crate::model::mapping::Mapping;
-use crate::model::program::{clamp_field, Instr, NormalFn, Sample};
 use crate::model::scene::{Camera, ImageRequest, Light, ObjectDesc, SceneDesc, Settings};
-use crate::types::{axes, Attenuation, Feature, Fields, Interpolation, MappingType, RenderType};
-use glam::{DMat4, DVec4};
+use crate::types::{Attenuation, Feature, Fields, Interpolation, MappingType, RenderType};
+use glam::DMat4;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -45,37 +48,37 @@ pub enum Closed {
 }
 
 #[derive(Debug)]
-struct OpenScene {
-    settings: Settings,
-    lights: Vec<Light>,
-    images: Vec<ImageRequest>,
-    volumes: Vec<crate::model::scene::VolumeRequest>,
-    objects: Vec<ObjectDesc>,
+pub(super) struct OpenScene {
+    pub(super) settings: Settings,
+    pub(super) lights: Vec<Light>,
+    pub(super) images: Vec<ImageRequest>,
+    pub(super) volumes: Vec<crate::model::scene::VolumeRequest>,
+    pub(super) objects: Vec<ObjectDesc>,
     /// Objects being specified (nested ones after their parents).
-    open: Vec<ObjectDesc>,
+    pub(super) open: Vec<ObjectDesc>,
     /// The empty-space grids of `objects`, shared by every render of the scene.
-    grids: crate::render::Grids,
+    pub(super) grids: crate::render::Grids,
 }
 
 /// One session of the API (`vlInit` … `vlEnd`).
 #[derive(Debug, Default)]
 pub struct Library {
     /// Defaults that each new scene starts from (set at library scope).
-    defaults: Settings,
-    mappings: BTreeMap<i32, Arc<Mapping>>,
-    datasets: crate::model::program::Datasets,
-    scene: Option<OpenScene>,
-    ended: bool,
+    pub(super) defaults: Settings,
+    pub(super) mappings: BTreeMap<i32, Arc<Mapping>>,
+    pub(super) datasets: crate::model::program::Datasets,
+    pub(super) scene: Option<OpenScene>,
+    pub(super) ended: bool,
 }
 
-fn finite(cmd: &str, vals: &[f32]) -> Result<()> {
+pub(super) fn finite(cmd: &str, vals: &[f32]) -> Result<()> {
     if let Some(v) = vals.iter().find(|v| !v.is_finite()) {
         return err(ErrorCode::BadValue, format!("{cmd}: {v} is not finite"));
     }
     Ok(())
 }
 
-fn colour(cmd: &str, c: [f32; 3]) -> Result<()> {
+pub(super) fn colour(cmd: &str, c: [f32; 3]) -> Result<()> {
     finite(cmd, &c)?;
     if c.iter().any(|v| !(0.0..=1.0).contains(v)) {
         return err(
@@ -86,7 +89,7 @@ fn colour(cmd: &str, c: [f32; 3]) -> Result<()> {
     Ok(())
 }
 
-fn intensity(cmd: &str, i: f32) -> Result<()> {
+pub(super) fn intensity(cmd: &str, i: f32) -> Result<()> {
     finite(cmd, &[i])?;
     if i < 0.0 {
         return err(
@@ -97,7 +100,7 @@ fn intensity(cmd: &str, i: f32) -> Result<()> {
     Ok(())
 }
 
-fn positive(cmd: &str, vals: &[f32]) -> Result<()> {
+pub(super) fn positive(cmd: &str, vals: &[f32]) -> Result<()> {
     finite(cmd, vals)?;
     if let Some(v) = vals.iter().find(|v| **v <= 0.0) {
         return err(ErrorCode::BadValue, format!("{cmd}: {v} must be positive"));
@@ -107,7 +110,7 @@ fn positive(cmd: &str, vals: &[f32]) -> Result<()> {
 
 /// Accepts an affine transform whose matrix and inverse are finite and whose determinant is not
 /// negligible against the size of its entries.
-fn invertible(cmd: &str, m: &DMat4) -> Result<()> {
+pub(super) fn invertible(cmd: &str, m: &DMat4) -> Result<()> {
     let det = m.determinant();
     let scale =
         m.x_axis.truncate().length() * m.y_axis.truncate().length() * m.z_axis.truncate().length();
@@ -137,23 +140,23 @@ impl Library {
         }
     }
 
-    fn check(&self, cmd: Command) -> Result<()> {
+    pub(super) fn check(&self, cmd: Command) -> Result<()> {
         require(cmd, self.scope())
     }
 
     /// The settings a command at the current scope changes: the scene's, or the defaults.
-    fn settings_mut(&mut self) -> &mut Settings {
+    pub(super) fn settings_mut(&mut self) -> &mut Settings {
         match &mut self.scene {
             Some(s) => &mut s.settings,
             None => &mut self.defaults,
         }
     }
 
-    fn scene_mut(&mut self) -> &mut OpenScene {
+    pub(super) fn scene_mut(&mut self) -> &mut OpenScene {
         self.scene.as_mut().expect("scope checked: a scene is open")
     }
 
-    fn object_mut(&mut self) -> &mut ObjectDesc {
+    pub(super) fn object_mut(&mut self) -> &mut ObjectDesc {
         self.scene_mut()
             .open
             .last_mut()
@@ -511,14 +514,14 @@ impl Library {
         }
     }
 
-    fn settings(&self) -> &Settings {
+    pub(super) fn settings(&self) -> &Settings {
         match &self.scene {
             Some(s) => &s.settings,
             None => &self.defaults,
         }
     }
 
-    fn filter(&self) -> Filter {
+    pub(super) fn filter(&self) -> Filter {
         let r = &self.settings().render;
         Filter::new(r.interpolation, r.cubic)
     }
@@ -544,313 +547,5 @@ impl Library {
         let m = Mapping::new(kind, points, outputs, table)?;
         self.mappings.insert(id, Arc::new(m));
         Ok(())
-    }
-
-    /// `vlObject`: opens an object capturing the rendering state in force. Inside an object it
-    /// opens a child, placed in its parent's space; only root objects are rendered.
-    pub fn object(&mut self) -> Result<()> {
-        self.check(Command::Object)?;
-        if self.scene_mut().open.len() >= MAX_DEPTH {
-            return err(
-                ErrorCode::BadValue,
-                format!("vlObject: objects nest at most {MAX_DEPTH} deep"),
-            );
-        }
-        let s = self.scene_mut();
-        let state = s.settings.render.clone();
-        s.open.push(ObjectDesc::new(state));
-        Ok(())
-    }
-
-    fn transform(&mut self, cmd: Command, m: DMat4) -> Result<()> {
-        self.check(cmd)?;
-        let obj = self.object_mut();
-        let next = m * obj.to_world;
-        invertible(cmd.name(), &next)?;
-        obj.to_world = next;
-        Ok(())
-    }
-
-    /// `vlScale`: non-zero finite factors (negative mirrors).
-    pub fn scale(&mut self, x: f32, y: f32, z: f32) -> Result<()> {
-        self.check(Command::Scale)?;
-        finite("vlScale", &[x, y, z])?;
-        if [x, y, z].contains(&0.0) {
-            return err(
-                ErrorCode::BadValue,
-                "vlScale: a factor of 0 makes the object flat",
-            );
-        }
-        self.transform(
-            Command::Scale,
-            DMat4::from_scale(crate::model::scene::v3([x, y, z])),
-        )
-    }
-
-    /// `vlTranslate`.
-    pub fn translate(&mut self, x: f32, y: f32, z: f32) -> Result<()> {
-        self.check(Command::Translate)?;
-        finite("vlTranslate", &[x, y, z])?;
-        self.transform(
-            Command::Translate,
-            DMat4::from_translation(crate::model::scene::v3([x, y, z])),
-        )
-    }
-
-    /// `vlRotate`: degrees about x, then y, then z.
-    pub fn rotate(&mut self, x: f32, y: f32, z: f32) -> Result<()> {
-        self.check(Command::Rotate)?;
-        finite("vlRotate", &[x, y, z])?;
-        let r = |d: f32| (d as f64).to_radians();
-        let m = DMat4::from_rotation_z(r(z))
-            * DMat4::from_rotation_y(r(y))
-            * DMat4::from_rotation_x(r(x));
-        self.transform(Command::Rotate, m)
-    }
-
-    /// `vlFlip`: mirrors object space (p → 1 − p) on the axes of the mask (`VL_X|VL_Y|VL_Z`).
-    /// Flips act in object space, before every other transform, whenever they are issued.
-    pub fn flip(&mut self, axes_mask: i32) -> Result<()> {
-        self.check(Command::Flip)?;
-        if axes_mask & !(axes::X | axes::Y | axes::Z) != 0 {
-            return err(
-                ErrorCode::BadEnum,
-                format!("vlFlip: axis mask {axes_mask:#x} has unknown bits"),
-            );
-        }
-        let obj = self.object_mut();
-        for (i, bit) in [axes::X, axes::Y, axes::Z].iter().enumerate() {
-            if axes_mask & bit != 0 {
-                obj.flip[i] = !obj.flip[i];
-            }
-        }
-        Ok(())
-    }
-
-    /// `vlMatrix`: a general affine 4×4 transform, row-major, acting on column vectors
-    /// (translation in the last column); the bottom row must be (0, 0, 0, 1).
-    pub fn matrix(&mut self, m: &[f32; 16]) -> Result<()> {
-        self.check(Command::Matrix)?;
-        finite("vlMatrix", m)?;
-        if m[12..16] != [0.0, 0.0, 0.0, 1.0] {
-            return err(
-                ErrorCode::BadValue,
-                "vlMatrix: only affine transforms (bottom row 0 0 0 1) are supported",
-            );
-        }
-        let row = |i: usize| {
-            DVec4::new(
-                m[4 * i] as f64,
-                m[4 * i + 1] as f64,
-                m[4 * i + 2] as f64,
-                m[4 * i + 3] as f64,
-            )
-        };
-        let mat = DMat4::from_cols(row(0), row(1), row(2), row(3)).transpose();
-        self.transform(Command::Matrix, mat)
-    }
-
-    /// `vlBoundary`: scales the boundary box about the cube centre (positive factors).
-    pub fn boundary(&mut self, x: f32, y: f32, z: f32) -> Result<()> {
-        self.check(Command::Boundary)?;
-        positive("vlBoundary", &[x, y, z])?;
-        self.object_mut().boundary = [x, y, z];
-        Ok(())
-    }
-
-    /// `vlSpatial`: an instruction running a spatial transfer function, which may move the
-    /// sample point ([`Sample::set_position`]); later instructions see the new point.
-    pub fn spatial<F>(&mut self, f: F) -> Result<()>
-    where
-        F: Fn(&mut Sample) + Send + Sync + 'static,
-    {
-        self.spatial_arc(Arc::new(f))
-    }
-
-    /// `vlSpatial` with a shared function.
-    pub fn spatial_arc(&mut self, f: crate::model::program::FieldFn) -> Result<()> {
-        self.check(Command::Spatial)?;
-        self.object_mut().program.push(Instr::Spatial { f });
-        Ok(())
-    }
-
-    /// `vlSet` in an object: an instruction assigning a constant (clamped to [0, 1], NaN → 0).
-    pub fn set(&mut self, fields: Fields, value: f32) -> Result<()> {
-        self.check(Command::Set)?;
-        fields.validate()?;
-        self.object_mut().program.push(Instr::Set {
-            fields,
-            value: clamp_field(value),
-        });
-        Ok(())
-    }
-
-    /// `vlFunction`: an instruction running `f` at each sample; it may write `fields`.
-    pub fn function<F>(&mut self, fields: Fields, f: F) -> Result<()>
-    where
-        F: Fn(&mut Sample) + Send + Sync + 'static,
-    {
-        self.function_arc(fields, Arc::new(f))
-    }
-
-    /// `vlFunction` with a shared function.
-    pub fn function_arc(
-        &mut self,
-        fields: Fields,
-        f: crate::model::program::FieldFn,
-    ) -> Result<()> {
-        self.check(Command::Function)?;
-        fields.validate()?;
-        self.object_mut()
-            .program
-            .push(Instr::Function { fields, f });
-        Ok(())
-    }
-
-    /// `vlDataset`: an instruction writing dataset `id`, interpolated with the filter in force
-    /// now, to `fields`.
-    pub fn dataset(&mut self, fields: Fields, id: i32) -> Result<()> {
-        self.check(Command::Dataset)?;
-        fields.validate()?;
-        let data =
-            self.datasets.get(&id).cloned().ok_or_else(|| {
-                Error::new(ErrorCode::BadId, format!("vlDataset: no dataset {id}"))
-            })?;
-        let filter = self.filter();
-        self.object_mut().program.push(Instr::Dataset {
-            fields,
-            data,
-            filter,
-        });
-        Ok(())
-    }
-
-    /// `vlMap`: targets = Φ(mapping)(source), with `output` counted from 1.
-    pub fn map(
-        &mut self,
-        targets: Fields,
-        source: Fields,
-        mapping: i32,
-        output: i32,
-    ) -> Result<()> {
-        self.check(Command::Map)?;
-        targets.validate()?;
-        let source = source.validate_single()?;
-        let m =
-            self.mappings.get(&mapping).cloned().ok_or_else(|| {
-                Error::new(ErrorCode::BadId, format!("vlMap: no mapping {mapping}"))
-            })?;
-        if output < 1 || output as usize > m.outputs() {
-            return err(
-                ErrorCode::BadIndex,
-                format!(
-                    "vlMap: output {output} of mapping {mapping}, which has {} output(s)",
-                    m.outputs()
-                ),
-            );
-        }
-        self.object_mut().program.push(Instr::Map {
-            targets,
-            source,
-            mapping: m,
-            output: output as usize - 1,
-        });
-        Ok(())
-    }
-
-    /// `vlNormal`: appends a normal function to the object's chain.
-    pub fn normal<F>(&mut self, f: F) -> Result<()>
-    where
-        F: Fn(&mut [f32; 3], &mut Sample) + Send + Sync + 'static,
-    {
-        self.normal_arc(Arc::new(f))
-    }
-
-    /// `vlNormal` with a shared function.
-    pub fn normal_arc(&mut self, f: NormalFn) -> Result<()> {
-        self.check(Command::Normal)?;
-        self.object_mut().normals.push(f);
-        Ok(())
-    }
-
-    /// Renders the open scene (at scene scope) to an image in memory without closing it or
-    /// writing its outputs: a preview for Rust users and tests. Not a command of the C API.
-    pub fn render_preview(&self, width: u32, height: u32, aspect: f32) -> Result<crate::Image> {
-        let desc = self.open_scene("render_preview")?;
-        positive("render_preview", &[aspect])?;
-        if width == 0 || height == 0 || width as u64 * height as u64 > MAX_IMAGE_PIXELS {
-            return err(
-                ErrorCode::BadValue,
-                format!("render_preview: size {width}x{height}"),
-            );
-        }
-        crate::render::render_image(&self.compile(&desc), width, height, aspect)
-    }
-
-    /// The open scene (at scene scope) compiled as it would render now (for tests of the
-    /// renderer's internals).
-    #[cfg(test)]
-    pub(crate) fn compiled(&self) -> Result<crate::render::Compiled> {
-        Ok(self.compile(&self.open_scene("compiled")?))
-    }
-
-    /// `desc`, the open scene, compiled with the scene's empty-space grids.
-    fn compile(&self, desc: &SceneDesc) -> crate::render::Compiled {
-        let grids = &self.scene.as_ref().expect("scene scope").grids;
-        crate::render::Compiled::new(desc, grids)
-    }
-
-    /// The open scene (at scene scope) as it would render now, without its outputs.
-    pub(crate) fn open_scene(&self, what: &str) -> Result<SceneDesc> {
-        if self.scope() != Scope::Scene {
-            return err(
-                ErrorCode::BadScope,
-                format!("{what} needs an open scene outside objects"),
-            );
-        }
-        let s = self.scene.as_ref().expect("scene scope");
-        Ok(SceneDesc {
-            settings: s.settings.clone(),
-            lights: s.lights.clone(),
-            images: Vec::new(),
-            volumes: Vec::new(),
-            objects: s.objects.clone(),
-            datasets: Arc::new(self.datasets.clone()),
-        })
-    }
-
-    /// The render plan the open scene compiles to (which effects it calls for); at scene scope.
-    /// Not a command of the C API.
-    pub fn render_plan(&self) -> Result<crate::render::Plan> {
-        let desc = self.open_scene("render_plan")?;
-        Ok(self.compile(&desc).plan())
-    }
-
-    /// Switches the pixel-preserving speed-ups (empty-space skipping, early ray termination)
-    /// on or off, for benchmarks, and sets early termination's threshold; at library or scene
-    /// scope like the other settings. A threshold outside [0, 1) (NaN included) is refused
-    /// with `BadValue` and nothing changes. Not a command of the C API.
-    pub fn set_optimise(&mut self, optimise: crate::model::scene::Optimise) -> Result<()> {
-        if !matches!(self.scope(), Scope::Library | Scope::Scene) {
-            return err(
-                ErrorCode::BadScope,
-                "set_optimise: library or scene scope only",
-            );
-        }
-        let t = optimise.termination;
-        if !(0.0..1.0).contains(&t) {
-            return err(
-                ErrorCode::BadValue,
-                format!("set_optimise: termination {t} (a transmittance in [0, 1))"),
-            );
-        }
-        self.settings_mut().optimise = optimise;
-        Ok(())
-    }
-
-    /// A textual snapshot of the whole state, for tests that check a refused call changed
-    /// nothing.
-    pub fn fingerprint(&self) -> String {
-        format!("{self:?}")
     }
 }

@@ -6,4 +6,6 @@
 //! not render or write: a closing `vlEnd` hands the finished scene to the output layer.
 
 pub(crate) mod library;
+mod object;
+mod preview;
 pub mod scope;

@@ -1,0 +1,94 @@
+//! What the Rust API adds to the commands, at library or scene scope: rendering the open scene
+//! to memory ([`Library::render_preview`]), its render plan ([`Library::render_plan`]), the
+//! pixel-preserving speed-ups ([`Library::set_optimise`]) and a snapshot of the state for tests
+//! ([`Library::fingerprint`]). None of these is a command of the C API, and none changes the
+//! scene.
+
+use super::library::{positive, Library, MAX_IMAGE_PIXELS};
+use crate::api::scope::Scope;
+use crate::error::{err, ErrorCode, Result};
+use crate::model::scene::SceneDesc;
+use std::sync::Arc;
+
+impl Library {
+    /// Renders the open scene (at scene scope) to an image in memory without closing it or
+    /// writing its outputs: a preview for Rust users and tests. Not a command of the C API.
+    pub fn render_preview(&self, width: u32, height: u32, aspect: f32) -> Result<crate::Image> {
+        let desc = self.open_scene("render_preview")?;
+        positive("render_preview", &[aspect])?;
+        if width == 0 || height == 0 || width as u64 * height as u64 > MAX_IMAGE_PIXELS {
+            return err(
+                ErrorCode::BadValue,
+                format!("render_preview: size {width}x{height}"),
+            );
+        }
+        crate::render::render_image(&self.compile(&desc), width, height, aspect)
+    }
+
+    /// The open scene (at scene scope) compiled as it would render now (for tests of the
+    /// renderer's internals).
+    #[cfg(test)]
+    pub(crate) fn compiled(&self) -> Result<crate::render::Compiled> {
+        Ok(self.compile(&self.open_scene("compiled")?))
+    }
+
+    /// `desc`, the open scene, compiled with the scene's empty-space grids.
+    fn compile(&self, desc: &SceneDesc) -> crate::render::Compiled {
+        let grids = &self.scene.as_ref().expect("scene scope").grids;
+        crate::render::Compiled::new(desc, grids)
+    }
+
+    /// The open scene (at scene scope) as it would render now, without its outputs.
+    pub(crate) fn open_scene(&self, what: &str) -> Result<SceneDesc> {
+        if self.scope() != Scope::Scene {
+            return err(
+                ErrorCode::BadScope,
+                format!("{what} needs an open scene outside objects"),
+            );
+        }
+        let s = self.scene.as_ref().expect("scene scope");
+        Ok(SceneDesc {
+            settings: s.settings.clone(),
+            lights: s.lights.clone(),
+            images: Vec::new(),
+            volumes: Vec::new(),
+            objects: s.objects.clone(),
+            datasets: Arc::new(self.datasets.clone()),
+        })
+    }
+
+    /// The render plan the open scene compiles to (which effects it calls for); at scene scope.
+    /// Not a command of the C API.
+    pub fn render_plan(&self) -> Result<crate::render::Plan> {
+        let desc = self.open_scene("render_plan")?;
+        Ok(self.compile(&desc).plan())
+    }
+
+    /// Switches the pixel-preserving speed-ups (empty-space skipping, early ray termination)
+    /// on or off, for benchmarks, and sets early termination's threshold; at library or scene
+    /// scope like the other settings. A threshold outside [0, 1) (NaN included) is refused
+    /// with `BadValue` and nothing changes. Not a command of the C API.
+    pub fn set_optimise(&mut self, optimise: crate::model::scene::Optimise) -> Result<()> {
+        if !matches!(self.scope(), Scope::Library | Scope::Scene) {
+            return err(
+                ErrorCode::BadScope,
+                "set_optimise: library or scene scope only",
+            );
+        }
+        let t = optimise.termination;
+        if !(0.0..1.0).contains(&t) {
+            return err(
+                ErrorCode::BadValue,
+                format!("set_optimise: termination {t} (a transmittance in [0, 1))"),
+            );
+        }
+        self.settings_mut().optimise = optimise;
+        Ok(())
+    }
+
+    /// A textual snapshot of the whole state, for tests that check a refused call changed
+    /// nothing.
+    pub fn fingerprint(&self) -> String {
+        format!("{self:?}")
+    }
+}
