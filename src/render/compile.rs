@@ -421,7 +421,7 @@ impl Compiled {
     }
 
     /// All fields of the scene at world point `w`: those of the root object containing it with
-    /// the largest opacity (the first on ties), or all 0 (see [`crate::output::voxel`]).
+    /// the largest opacity (the first on ties), or all 0 (voxelization samples the scene with it).
     pub fn fields_at(&self, w: DVec3) -> [f32; crate::types::FIELD_COUNT] {
         let mut best: Option<[f32; crate::types::FIELD_COUNT]> = None;
         for obj in &self.objects {
