@@ -1,3 +1,5 @@
+//! Unit tests of the output layer: image encoding and atomic writes.
+
 use super::files::*;
 use crate::error::ErrorCode;
 use std::fs;
