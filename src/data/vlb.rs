@@ -105,11 +105,6 @@ impl Dataset {
         }
         out
     }
-
-    /// Writes the dataset as a `.vlb` file, atomically.
-    pub fn save(&self, path: &Path) -> Result<()> {
-        crate::output::write_atomic(path, &self.to_vlb_bytes())
-    }
 }
 
 /// What a `.vlb` header claims: dimensions, bytes per voxel, and the normalisation a, b.

@@ -3,8 +3,9 @@
 //! [`render_outputs`] compiles a finished scene once, renders each requested image with the
 //! renderer ([`crate::render`], which computes pixels and writes nothing) and voxelizes each
 //! requested volume ([`voxel`]), then writes the files: images through [`write_image`] (PPM or
-//! PNG by extension, `files`), datasets through [`crate::data::Dataset::save`]; every
-//! file atomically ([`write_atomic`]). It does not trace rays or evaluate fields itself.
+//! PNG by extension, `files`), datasets through [`crate::data::Dataset::save`] (defined here,
+//! so that no layer below this one writes a file); every file atomically ([`write_atomic`]). It
+//! does not trace rays or evaluate fields itself.
 
 use crate::error::{Error, Result};
 use crate::model::scene::SceneDesc;
@@ -18,6 +19,15 @@ pub use files::{write_atomic, write_image};
 
 #[cfg(test)]
 mod tests;
+
+impl crate::data::Dataset {
+    /// Writes the dataset as a `.vlb` file, atomically (the format: [`Dataset::to_vlb_bytes`]).
+    ///
+    /// [`Dataset::to_vlb_bytes`]: crate::data::Dataset::to_vlb_bytes
+    pub fn save(&self, path: &std::path::Path) -> Result<()> {
+        write_atomic(path, &self.to_vlb_bytes())
+    }
+}
 
 /// Renders every image and voxelization a scene requested and writes the files. Every output
 /// is attempted; the first failure is returned (its message counts the others).
