@@ -3,7 +3,7 @@
 //!
 //! This file owns [`Bricks`] and their computation from a dataset's raw voxels (per dataset and
 //! filter reach, once, in parallel). Not here: the skipping structures and decisions built from
-//! the ranges (`skip`), and the finer per-cell test of one bound (the `cells` module's
+//! the ranges (`accel`), and the finer per-cell test of one bound (the `cells` module's
 //! [`CellMask`](super::CellMask)).
 
 use super::{normaliser, Dataset, Filter, Voxels};

@@ -20,7 +20,7 @@
 //! - `cells`: the `CellMask`s, which trilinear cells may reach a bound.
 //!
 //! Not here: what the values mean (transfer functions and field programs, `program`), the
-//! skipping structures built from the brick ranges (`skip`), the packet march that reads the
+//! skipping structures built from the brick ranges (`accel`), the packet march that reads the
 //! values or voxels directly (`render::simd`, through `Dataset::packet_parts`), other file
 //! formats (the `vlconvert` tool converts them to `.vlb`), and atomic file output (`output`).
 //!

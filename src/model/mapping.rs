@@ -350,6 +350,4 @@ impl Mapping {
 }
 
 #[cfg(test)]
-mod paper;
-#[cfg(test)]
 mod tests;

@@ -4,7 +4,7 @@
 //! mask, toggles), with the object-level queries on it that do not shade: the ray's interval in
 //! its box ([`CObj::clip`]) and its fields and opacity at a point. It also decides the scene's
 //! [`Plan`]. It does not trace, shade or composite (`integrate`, `shade`), and it takes the
-//! empty-space grid ready-made from `skip`.
+//! empty-space grid ready-made from `accel`.
 
 use super::*;
 

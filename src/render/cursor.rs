@@ -81,7 +81,7 @@ impl Cursor {
 
     /// [`Cursor::new`] before its walk is started ([`Cursor::start`]). Apart, so that a caller
     /// that starts it in place builds the cursor where it keeps it: a cursor whose address was
-    /// taken (by the walk's start) before it was returned was built on the callee's stack and
+    /// taken (by the walk's start) before it is returned is built on the callee's stack and
     /// copied (a `memcpy` of the whole cursor a ray).
     #[inline]
     pub(super) fn unstarted(

@@ -7,9 +7,11 @@
 //! can show, see `docs/dev/render-plan.md`), then traces rays over image tiles in parallel
 //! (rayon, `tiles`); every pixel is computed independently in a fixed order, so the bytes of
 //! an image do not depend on the number of threads. [`render_image`] is the entry point and
-//! returns an [`Image`]. It does not write files (the output layer, [`crate::output`], does),
-//! nor does it build the scene description, evaluate programs (`program`, `kernel`) or build
-//! the empty-space structures (`skip`); it only uses them.
+//! returns an [`Image`]. It does not write files (the output layer above it does), nor does it
+//! build the scene description (`model`) or the empty-space structures (`accel`); it uses them.
+//! It owns the evaluation of programs during a render: the general interpreter is `model`'s
+//! (`program::run`), the lean kernel for programs of constants, datasets and transfer functions
+//! is the renderer's own (`kernel`).
 //!
 //! Along a ray, each object's box is clipped exactly; its interval is cut into segments of the
 //! step size, the last one shorter (`cursor`), and each segment is represented by the sample

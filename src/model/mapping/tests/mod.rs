@@ -1,5 +1,7 @@
 //! Unit tests of `mapping`.
 
+mod paper;
+
 use super::*;
 use crate::num::clamp_field;
 

@@ -2,7 +2,7 @@
 //! with a linear scan, at thousands of points per table, including every edge case: values at
 //! and between the a_i, v = 0 and v = 1, a_1 = 0, a_n = 1, single-row tables, several outputs.
 
-use super::Mapping;
+use crate::model::mapping::Mapping;
 use crate::testing::Lcg;
 use crate::MappingType;
 
