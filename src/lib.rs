@@ -14,8 +14,8 @@
 //! [`scope`], the base [`types`], and two file helpers ([`write_image`], [`write_atomic`]).
 //! Everything else is internal, in layers that import downward only (`docs/dev/architecture.md`):
 //! `api` (the state machine) → `output` (the one place that writes files) → `render` (scene →
-//! immutable plan → pixels) → `accel` (empty-space skipping) → `data` (datasets) and `model`
-//! (plain scene data and the object model) → the base types (`types`, `error`, `num`).
+//! immutable plan → pixels) → `accel` (empty-space skipping) → `model` (plain scene data and the
+//! object model) → `data` (datasets) → the base types (`types`, `error`, `num`).
 //!
 //! ```no_run
 //! use vlib::{Camera, Fields, Library};

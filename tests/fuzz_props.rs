@@ -9,7 +9,7 @@
 //!   field functions that panic (caught, reported as `Internal`).
 //!
 //! `VLIB_FUZZ_CASES` multiplies the case counts (a longer local run); the seed is fixed unless
-//! `VLIB_FUZZ_SEED` gives another. See docs/robustness.md.
+//! `VLIB_FUZZ_SEED` gives another. See docs/dev/robustness.md.
 
 #[path = "../fuzz/src/driver.rs"]
 mod driver;
@@ -121,7 +121,7 @@ impl Vlb {
     }
 
     /// The code the reader must give, by the documented checks in their documented order
-    /// (docs/robustness.md): magic, header length, dimensions, voxel width, range, file length.
+    /// (docs/dev/robustness.md): magic, header length, dimensions, voxel width, range, file length.
     fn expected(&self) -> ErrorCode {
         let bytes = self.bytes();
         let n = bytes.len().min(4);
@@ -226,7 +226,7 @@ fn vlb_reader_structured_headers_give_the_documented_code() {
 }
 
 /// Dimensions whose product overflows u64 (2^22 × 2^22 × 2^22 wraps to 0) are refused as too
-/// large, never wrapped: once a gap, found by the fuzzer (docs/robustness.md).
+/// large, never wrapped: once a gap, found by the fuzzer (docs/dev/robustness.md).
 #[test]
 fn vlb_header_dims_product_overflow() {
     for dims in [[1u32 << 22; 3], [u32::MAX; 3], [1 << 21, 1 << 21, 1 << 22]] {

@@ -2,8 +2,10 @@
 //!
 //! Every method is one command of the API. Each first checks its scope against the table in
 //! [`crate::api::scope`], then validates every argument, and only then changes state, so a call
-//! that returns `Err` has changed nothing. The C interface calls these methods one to one; Rust
-//! users call them directly (field functions are closures). This file holds the state, the
+//! that returns `Err` has changed nothing (the one exception: a scene's `vlEnd` closes the
+//! scene even when writing an output fails, and says what was not written). The C interface
+//! calls these methods one to one; Rust users call them directly (field functions are
+//! closures). This file holds the state, the
 //! session commands (`vlEnd`, `vlScene`), the scene-scope commands and the datasets and
 //! transfer functions; the object-scope commands are in `object`, the Rust-only additions in
 //! `preview`. The state machine builds plain scene data and hands it to the output layer when

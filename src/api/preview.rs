@@ -1,8 +1,8 @@
 //! What the Rust API adds to the commands, at library or scene scope: rendering the open scene
 //! to memory ([`Library::render_preview`]), its render plan ([`Library::render_plan`]), the
 //! pixel-preserving speed-ups ([`Library::set_optimise`]) and a snapshot of the state for tests
-//! ([`Library::fingerprint`]). None of these is a command of the C API, and none changes the
-//! scene.
+//! ([`Library::fingerprint`]). None of these is a command of the C API; only `set_optimise`
+//! changes state (the settings), and a render fills the open scene's caches, nothing else.
 
 use super::library::{positive, Library, MAX_IMAGE_PIXELS};
 use crate::api::scope::Scope;
@@ -88,6 +88,7 @@ impl Library {
 
     /// A textual snapshot of the whole state, for tests that check a refused call changed
     /// nothing.
+    #[doc(hidden)]
     pub fn fingerprint(&self) -> String {
         format!("{self:?}")
     }

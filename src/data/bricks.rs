@@ -49,8 +49,14 @@ fn widen<T: Copy + PartialOrd>(min: &mut [T], max: &mut [T], lo: &[T], hi: &[T])
 }
 
 impl Dataset {
+    /// Computes now what a render with `filter` would compute on first use and keep (the brick
+    /// ranges its empty-space grids are built from), so that a first frame does not pay for it.
+    pub fn precompute(&self, filter: Filter) {
+        self.bricks(filter);
+    }
+
     /// The brick ranges for `filter` (computed once per dataset and reach, then shared).
-    pub fn bricks(&self, filter: Filter) -> &Bricks {
+    pub(crate) fn bricks(&self, filter: Filter) -> &Bricks {
         let reach = match filter {
             Filter::Nearest | Filter::Trilinear => 1,
             Filter::Cubic { .. } => 2,

@@ -10,7 +10,8 @@
 //! the raw [`Voxels`], the normalisation, and the node values made from the voxels on first use.
 //! The concerns built on it live in submodules, each adding its own `impl Dataset` block:
 //!
-//! - `vlb`: the `.vlb` file format ([`MAGIC`], [`HEADER_LEN`], parsing, loading and saving);
+//! - `vlb`: the `.vlb` file format ([`MAGIC`], [`HEADER_LEN`], parsing, loading, the bytes to
+//!   save; the file itself is written by the output layer, `Dataset::save`);
 //! - `filter`: the [`Filter`]s (nearest node, trilinear, the Mitchell–Netravali BC family of
 //!   tricubic filters) and the generic value and gradient paths;
 //! - `trilinear`: the specialised trilinear path the renderer's inner loops call (the cell in
@@ -19,7 +20,7 @@
 //! - `bricks`: the brick ranges ([`Bricks`], [`BRICK`]) of empty-space skipping;
 //! - `cells`: the `CellMask`s, which trilinear cells may reach a bound.
 //!
-//! Not here: what the values mean (transfer functions and field programs, `program`), the
+//! Not here: what the values mean (transfer functions and field programs, `model`), the
 //! skipping structures built from the brick ranges (`accel`), the packet march that reads the
 //! values or voxels directly (`render::simd`, through `Dataset::packet_parts`), other file
 //! formats (the `vlconvert` tool converts them to `.vlb`), and atomic file output (`output`).
@@ -275,6 +276,7 @@ impl Dataset {
 
     /// Whether the node values have been made ([`Dataset::values`]): a render that reads only
     /// the voxels leaves them unmade.
+    #[doc(hidden)]
     pub fn values_made(&self) -> bool {
         self.values.get().is_some()
     }

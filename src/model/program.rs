@@ -33,7 +33,7 @@ pub type Datasets = BTreeMap<i32, Arc<Dataset>>;
 /// What a sample can reach besides its own point: the library's datasets (for `vlSample`), the
 /// interpolation filter of the object being evaluated, and its children (for `vlChild*`).
 #[derive(Clone, Debug, Default)]
-pub struct SampleEnv {
+pub(crate) struct SampleEnv {
     pub(crate) datasets: Arc<Datasets>,
     pub(crate) filter: Filter,
     pub(crate) children: Arc<Vec<Child>>,
@@ -41,7 +41,8 @@ pub struct SampleEnv {
 
 impl SampleEnv {
     /// An environment with these datasets and filter, and no children.
-    pub fn new(datasets: Arc<Datasets>, filter: Filter) -> SampleEnv {
+    #[cfg(test)]
+    pub(crate) fn new(datasets: Arc<Datasets>, filter: Filter) -> SampleEnv {
         SampleEnv {
             datasets,
             filter,
@@ -150,7 +151,7 @@ impl Sample<'static> {
 
 impl<'a> Sample<'a> {
     /// A fresh sample that can reach the datasets and filter of `env`.
-    pub fn with_env(p: [f32; 3], world: [f64; 3], env: &'a SampleEnv) -> Sample<'a> {
+    pub(crate) fn with_env(p: [f32; 3], world: [f64; 3], env: &'a SampleEnv) -> Sample<'a> {
         Sample {
             p,
             world,

@@ -1,8 +1,9 @@
 //! The description of a scene as the state machine builds it: camera, lights, rendering state,
 //! outputs, and objects with their programs and transforms.
 //!
-//! These are plain data; [`crate::Library`] fills them in command by command and hands a finished
-//! [`SceneDesc`] to the renderer when the scene closes.
+//! These are plain data, with no caches and nothing compiled: the state machine fills them in
+//! command by command and hands a finished [`SceneDesc`] to the output layer when the scene
+//! closes. How they are rendered is not this module's business.
 
 use crate::error::{err, ErrorCode, Result};
 use crate::model::program::{Instr, NormalFn};
@@ -80,7 +81,7 @@ impl Camera {
 
     /// The orthonormal basis (right, up, forward) of the view, left-handed as in RenderMan:
     /// looking along +z with +y up, +x is to the right.
-    pub fn basis(&self) -> (DVec3, DVec3, DVec3) {
+    pub(crate) fn basis(&self) -> (DVec3, DVec3, DVec3) {
         let f = self.forward_raw().normalize();
         let r = v3(self.up).cross(f).normalize();
         let u = f.cross(r);
@@ -193,7 +194,7 @@ pub struct Optimise {
     pub early_termination: bool,
     /// The transmittance below which early termination stops a ray (primary and shadow rays):
     /// what the rest of the ray could still add to a pixel is at most this fraction of the
-    /// light behind it. Default `render::T_MIN` = 1/512 (under half an 8-bit level); VTK's
+    /// light behind it. Default [`crate::T_MIN`] = 1/512 (under half an 8-bit level); VTK's
     /// CPU ray caster stops at 255/32767 ≈ 1/128. In [0, 1); `set_optimise` refuses others.
     pub termination: f64,
     /// Evaluate programs of constants, datasets and transfer functions with the lean kernel
