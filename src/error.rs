@@ -4,6 +4,9 @@
 //! that the C interface exposes as a `VL_*` constant; numbers are never renumbered or reused (see
 //! `docs/errors.md`). The C layer turns an `Err` into an entry of the `vlError` queue; Rust users
 //! get the error value directly.
+//!
+//! This module owns the codes and the error value; which call fails with which code is decided
+//! where the call is validated.
 
 use std::fmt;
 

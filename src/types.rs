@@ -2,6 +2,9 @@
 //!
 //! The integers are the values of the C constants (`VL_O`, `VL_DVR`, …); the C layer passes raw
 //! integers to the `from_raw` constructors here, so validation of every enum lives in one place.
+//!
+//! It owns these values and their encodings, nothing that uses them: the base layer below
+//! every other module.
 
 use crate::error::{err, ErrorCode, Result};
 use std::fmt;

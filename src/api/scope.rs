@@ -4,6 +4,9 @@
 //! field and normal functions run in a fourth scope, the sample scope. Before `vlInit` (and after
 //! the final `vlEnd`) the library is uninitialised. Every command checks [`legal`] first; an
 //! illegal call changes nothing and reports [`ErrorCode::BadScope`](crate::ErrorCode::BadScope).
+//!
+//! It owns the scopes and the table; the validation of arguments and the state each command
+//! changes are the `Library`'s.
 
 /// Where the caller is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

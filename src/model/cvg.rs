@@ -13,6 +13,9 @@
 //!   opacity-weighted mean of the children's (0 where every child is transparent).
 //!
 //! Each writes only the fields its `vlFunction` call named. With no children every field is 0.
+//!
+//! These are field functions like any user's: they read the children through the sample's
+//! `vlChild*` queries and know nothing of how children are compiled or rendered.
 
 use crate::model::program::Sample;
 use crate::types::{Fields, FIELD_COUNT};

@@ -5,6 +5,9 @@
 //! evaluation follows the paper's case analysis literally; where the formulas leave a value open
 //! (Φ_r at v = 1 when a_n < 1, v = 0 when a_1 = 0) the choice is documented on [`Mapping::eval`]
 //! and in `docs/compat.md`.
+//!
+//! It owns the tables and their evaluation; the lean kernel's fused forms of the same
+//! arithmetic (segments located once for several outputs, segment pairs) are the renderer's.
 
 use crate::error::{err, ErrorCode, Result};
 use crate::num::clamp_fields;

@@ -5,6 +5,9 @@
 //! sweep of a 2D profile dataset (`sweep`, `sweep_coords`). Every function but `sweep` is pure,
 //! deterministic and total: any input, including NaN, infinities and huge values, yields a
 //! finite result; `sweep` reads a dataset through the sample it is given.
+//!
+//! It owns nothing of the state machine or the renderer: these are functions a field
+//! function may call, and the C layer exports them as `vlaux.h`.
 
 use crate::error::Result;
 use crate::model::program::Sample;

@@ -3,6 +3,9 @@
 //! Every file is written to a temporary file in the destination directory and renamed over the
 //! destination only when complete, so a failed write leaves no partial file and an existing file
 //! is replaced only by a complete new one.
+//!
+//! It owns the encodings and the writing; which files a scene asks for, and their pixels, are
+//! decided above it (`render_outputs`) and below it (the renderer).
 
 use crate::error::{err, Error, ErrorCode, Result};
 use std::fs;

@@ -6,6 +6,9 @@
 //! opacity there, the first declared on ties; outside every object all fields are 0. Values in
 //! [0, 1] are quantised to the nearest of 0 … 255 or 0 … 65535, and the files carry a = 0 and
 //! b = 255 or 65535, so loading one gives back the values to within half a quantum.
+//!
+//! The fields at a node come from the compiled scene (`render::Compiled::fields_at`); this
+//! module owns only the grid, the quantisation and the datasets it makes.
 
 use crate::data::{Dataset, Voxels};
 use crate::error::{Error, Result};

@@ -21,6 +21,10 @@
 //!   [`DirectShading::opacity_colour`]): the batched march then uses no registers at all.
 //!   Where an input's bucket lies inside one ramp segment of each table, both segments are
 //!   found by one lookup ([`SegmentPairs`]) and evaluated without the tables' case analysis.
+//!
+//! It owns only this compiled form of a program and its evaluation at a sample; which
+//! programs it applies to is decided when a scene is compiled (`compile`), and what the fields
+//! mean, the general program and the transfer functions themselves are `model`'s.
 
 use crate::data::{Dataset, Filter};
 use crate::model::mapping::{segment_value, Mapping};
