@@ -1,8 +1,9 @@
 //! Image files: binary PPM (P6) and PNG encoding, and the atomic write of any file.
 //!
-//! Every file is written to a temporary file in the destination directory and renamed over the
-//! destination only when complete, so a failed write leaves no partial file and an existing file
-//! is replaced only by a complete new one.
+//! Every file is written to a temporary file in the destination directory, created exclusively
+//! under an unpredictable name, and renamed over the destination only when complete, so a failed
+//! write leaves no partial file and an existing file is replaced only by a complete new one
+//! ([`write_atomic`] lists the rules).
 //!
 //! It owns the encodings and the writing; which files a scene asks for, and their pixels, are
 //! decided above it (`render_outputs`) and below it (the renderer).
@@ -71,33 +72,160 @@ pub fn encode(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8
     }
 }
 
-/// Writes `bytes` to `path` atomically: a temporary file beside it, then a rename.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+/// How many links [`destination`] follows before it gives up (as the kernel's `ELOOP`).
+const MAX_LINKS: usize = 40;
+
+/// The file a write to `path` replaces: `path` itself, or, where `path` is a symbolic link, the
+/// file the chain of links ends at (which need not exist yet), so that the link stays a link
+/// and its target is updated.
+fn destination(path: &Path) -> std::io::Result<PathBuf> {
+    let mut p = path.to_path_buf();
+    for _ in 0..MAX_LINKS {
+        match fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let target = fs::read_link(&p)?;
+                p = match p.parent() {
+                    Some(dir) if target.is_relative() => dir.join(target),
+                    _ => target,
+                };
+            }
+            _ => return Ok(p),
+        }
+    }
+    Err(std::io::Error::other("too many levels of symbolic links"))
+}
+
+/// A name for a temporary file: `.vl-` and 16 hexadecimal digits that no other process or call
+/// can predict (a randomly keyed hash of the process, a counter and the time), and `.tmp`.
+/// Short, so that any name legal for the output leaves room for it.
+pub(super) fn temporary_name() -> String {
+    use std::hash::{BuildHasher, Hasher};
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let dir = match path.parent() {
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    h.write_u32(std::process::id());
+    h.write_u64(COUNTER.fetch_add(1, Ordering::Relaxed));
+    if let Ok(t) = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH) {
+        h.write_u128(t.as_nanos());
+    }
+    format!(".vl-{:016x}.tmp", h.finish())
+}
+
+/// How many names [`create_temporary`] tries before it reports the last failure.
+const TEMPORARY_TRIES: usize = 16;
+
+/// Creates a new temporary file in `dir`, exclusively: `O_CREAT | O_EXCL`, so an existing file
+/// or link at the name (even a dangling one) is never opened or followed; another name is
+/// tried instead.
+pub(super) fn create_temporary(
+    dir: &Path,
+    name: impl Fn() -> String,
+) -> std::io::Result<(PathBuf, fs::File)> {
+    let mut last = None;
+    for _ in 0..TEMPORARY_TRIES {
+        let tmp = dir.join(name());
+        match fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+        {
+            Ok(f) => return Ok((tmp, f)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
+            Err(e) => return Err(e),
+        }
+    }
+    Err(last.unwrap_or_else(|| std::io::Error::other("no temporary name")))
+}
+
+/// The directory `dest` is in, as a path to create a temporary in: where the path is long,
+/// the directory reached through `/proc/self/fd` (so that a path near `PATH_MAX` leaves room
+/// for the temporary's name); the open directory is returned with it to keep that path valid.
+fn directory_of(dest: &Path) -> (PathBuf, Option<fs::File>) {
+    let dir = match dest.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let name = path.file_name().ok_or_else(|| {
+    // Room for "/" and the longest file name, within Linux's PATH_MAX of 4096 with its NUL.
+    if dir.as_os_str().len() + 1 + 255 < 4095 {
+        return (dir, None);
+    }
+    match fs::File::open(&dir) {
+        Ok(f) => {
+            use std::os::fd::AsRawFd;
+            let via = PathBuf::from(format!("/proc/self/fd/{}", f.as_raw_fd()));
+            if via.is_dir() {
+                (via, Some(f))
+            } else {
+                (dir, None)
+            }
+        }
+        Err(_) => (dir, None),
+    }
+}
+
+/// Writes `bytes` to `path` atomically, the one way every file of the library is written:
+///
+/// - the bytes go to a new temporary file in the destination's directory, created exclusively
+///   under a name nobody can predict (never through a link planted at it), flushed to disk, and
+///   renamed over the destination only when complete: a failed write leaves no partial file and
+///   no temporary, and an existing file is replaced only by a complete new one;
+/// - where `path` is a symbolic link, the file it leads to is replaced and the link kept;
+/// - an existing destination that may not be written (no write permission bit, or one this
+///   process cannot open for writing) is kept, and the write fails with `VL_IOERROR`; so is one
+///   that is not a regular file (a directory, a device, a FIFO); a replaced file's permissions
+///   pass to the new one;
+/// - any path legal for the output works (a file name of 255 bytes, a path near `PATH_MAX`).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    if path.file_name().is_none() {
+        return err(
+            ErrorCode::BadFile,
+            format!("{}: not a file name", path.display()),
+        );
+    }
+    let io = |e: std::io::Error| Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()));
+    let dest = destination(path).map_err(io)?;
+    let name = dest.file_name().ok_or_else(|| {
         Error::new(
             ErrorCode::BadFile,
             format!("{}: not a file name", path.display()),
         )
     })?;
-    let tmp = dir.join(format!(
-        ".{}.{}.{}.tmp",
-        name.to_string_lossy(),
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let io = |e: std::io::Error| Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()));
+    let existing = match fs::metadata(&dest) {
+        Ok(m) if m.is_dir() => {
+            return err(
+                ErrorCode::IoError,
+                format!("{}: is a directory", path.display()),
+            )
+        }
+        Ok(m) if !m.is_file() => {
+            return err(
+                ErrorCode::IoError,
+                format!("{}: not a regular file", path.display()),
+            )
+        }
+        Ok(m) => {
+            let denied = m.permissions().readonly()
+                || fs::OpenOptions::new().write(true).open(&dest).is_err();
+            if denied {
+                return err(
+                    ErrorCode::IoError,
+                    format!("{}: the existing file may not be written", path.display()),
+                );
+            }
+            Some(m.permissions())
+        }
+        Err(_) => None,
+    };
+    let (dir, _open_dir) = directory_of(&dest);
+    let (tmp, mut f) = create_temporary(&dir, temporary_name).map_err(io)?;
     let result = (|| {
-        let mut f = fs::File::create(&tmp).map_err(io)?;
         f.write_all(bytes).map_err(io)?;
+        if let Some(p) = existing {
+            f.set_permissions(p).map_err(io)?;
+        }
         f.sync_all().map_err(io)?;
-        drop(f);
-        fs::rename(&tmp, path).map_err(io)
+        fs::rename(&tmp, dir.join(name)).map_err(io)
     })();
+    drop(f);
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
     }

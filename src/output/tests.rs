@@ -3,6 +3,7 @@
 use super::files::*;
 use crate::error::ErrorCode;
 use std::fs;
+use std::os::unix::fs::FileTypeExt;
 use std::path::Path;
 
 #[test]
@@ -43,5 +44,164 @@ fn ppm_layout_and_atomic_write() {
         write_image(&bad, 2, 1, &rgb).unwrap_err().code,
         ErrorCode::IoError
     );
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A fresh empty directory for one test.
+fn scratch(tag: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("vlib-out-{tag}-{}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The names in `dir`, sorted.
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// A link planted at any name the temporary file could take is never written through: the
+/// names of earlier versions (`.<name>.<pid>.<n>.tmp`) are not used, and a link at the chosen
+/// name makes the exclusive creation try another.
+#[test]
+fn planted_links_are_never_followed() {
+    use std::os::unix::fs::symlink;
+    let dir = scratch("planted");
+    let victim = dir.join("victim");
+    fs::write(&victim, b"precious").unwrap();
+    for n in 0..64 {
+        let planted = dir.join(format!(".out.ppm.{}.{n}.tmp", std::process::id()));
+        symlink(&victim, planted).unwrap();
+    }
+    write_atomic(&dir.join("out.ppm"), b"new").unwrap();
+    assert_eq!(fs::read(&victim).unwrap(), b"precious");
+    assert_eq!(fs::read(dir.join("out.ppm")).unwrap(), b"new");
+    // The exclusive creation itself: a link at the first name tried is left alone.
+    let first = std::cell::Cell::new(true);
+    let name = || {
+        if first.replace(false) {
+            ".taken".to_string()
+        } else {
+            ".free".to_string()
+        }
+    };
+    symlink(&victim, dir.join(".taken")).unwrap();
+    let (tmp, _) = create_temporary(&dir, name).unwrap();
+    assert_eq!(tmp, dir.join(".free"));
+    assert_eq!(fs::read(&victim).unwrap(), b"precious");
+    // Every name taken: the last failure is reported, nothing written.
+    let e = create_temporary(&dir, || ".taken".to_string()).unwrap_err();
+    assert_eq!(e.kind(), std::io::ErrorKind::AlreadyExists);
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Temporary names differ from call to call and leave room for any legal output name.
+#[test]
+fn temporary_names_are_short_and_distinct() {
+    let names: std::collections::HashSet<String> = (0..1000).map(|_| temporary_name()).collect();
+    assert_eq!(names.len(), 1000);
+    assert!(names
+        .iter()
+        .all(|n| n.len() == 24 && n.starts_with(".vl-") && n.ends_with(".tmp")));
+}
+
+/// An output that is a symbolic link (to a file, through a chain of links, or dangling) keeps
+/// the link and gets its target written.
+#[test]
+fn an_output_link_updates_its_target() {
+    use std::os::unix::fs::symlink;
+    let dir = scratch("link");
+    fs::create_dir(dir.join("real")).unwrap();
+    fs::write(dir.join("real/a.ppm"), b"old").unwrap();
+    symlink("real/a.ppm", dir.join("a.ppm")).unwrap();
+    symlink("a.ppm", dir.join("b.ppm")).unwrap();
+    write_atomic(&dir.join("b.ppm"), b"new").unwrap();
+    assert_eq!(fs::read(dir.join("real/a.ppm")).unwrap(), b"new");
+    for l in ["a.ppm", "b.ppm"] {
+        assert!(fs::symlink_metadata(dir.join(l))
+            .unwrap()
+            .file_type()
+            .is_symlink());
+    }
+    symlink("real/c.ppm", dir.join("c.ppm")).unwrap();
+    write_atomic(&dir.join("c.ppm"), b"made").unwrap();
+    assert_eq!(fs::read(dir.join("real/c.ppm")).unwrap(), b"made");
+    symlink("loop2", dir.join("loop1")).unwrap();
+    symlink("loop1", dir.join("loop2")).unwrap();
+    assert_eq!(
+        write_atomic(&dir.join("loop1"), b"x").unwrap_err().code,
+        ErrorCode::IoError
+    );
+    assert_eq!(
+        names(&dir),
+        ["a.ppm", "b.ppm", "c.ppm", "loop1", "loop2", "real"]
+    );
+    assert_eq!(names(&dir.join("real")), ["a.ppm", "c.ppm"]);
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// An existing output without write permission, or one that is not a regular file, is kept
+/// and the write reported as an I/O error; a replaced file keeps its permissions.
+#[test]
+fn protected_outputs_are_kept() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = scratch("protected");
+    let p = dir.join("ro.ppm");
+    fs::write(&p, b"keep").unwrap();
+    fs::set_permissions(&p, fs::Permissions::from_mode(0o444)).unwrap();
+    assert_eq!(
+        write_atomic(&p, b"new").unwrap_err().code,
+        ErrorCode::IoError
+    );
+    assert_eq!(fs::read(&p).unwrap(), b"keep");
+    let q = dir.join("mode.ppm");
+    fs::write(&q, b"old").unwrap();
+    fs::set_permissions(&q, fs::Permissions::from_mode(0o640)).unwrap();
+    write_atomic(&q, b"new").unwrap();
+    assert_eq!(fs::read(&q).unwrap(), b"new");
+    assert_eq!(
+        fs::metadata(&q).unwrap().permissions().mode() & 0o777,
+        0o640
+    );
+    let fifo = dir.join("fifo.ppm");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if made.is_ok_and(|s| s.success()) {
+        assert_eq!(
+            write_atomic(&fifo, b"x").unwrap_err().code,
+            ErrorCode::IoError
+        );
+        assert!(fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+    }
+    assert_eq!(
+        names(&dir).iter().filter(|n| n.ends_with(".tmp")).count(),
+        0
+    );
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Any name legal for the output works: a file name of 255 bytes, and a path of 4 090 bytes
+/// (the temporary's name does not make it longer than the system allows).
+#[test]
+fn long_names_and_paths_work() {
+    let dir = scratch("long");
+    let long = dir.join(format!("{}.ppm", "n".repeat(251)));
+    write_atomic(&long, b"long name").unwrap();
+    assert_eq!(fs::read(&long).unwrap(), b"long name");
+    let mut deep = dir.clone();
+    while deep.as_os_str().len() < 4090 - 260 {
+        deep.push("d".repeat(200));
+    }
+    fs::create_dir_all(&deep).unwrap();
+    let pad = 4090 - deep.as_os_str().len() - 1;
+    let file = deep.join(format!("{}.ppm", "p".repeat(pad - 4)));
+    assert_eq!(file.as_os_str().len(), 4090);
+    write_atomic(&file, b"deep").unwrap();
+    assert_eq!(fs::read(&file).unwrap(), b"deep");
+    assert_eq!(names(&deep).len(), 1, "no temporary left");
     fs::remove_dir_all(&dir).unwrap();
 }

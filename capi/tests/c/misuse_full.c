@@ -79,7 +79,7 @@ static int exists(const char *path)
 }
 
 /* Whether the current directory holds a file whose name contains `part` (temporaries are named
-   .<file>.<pid>.<n>.tmp beside their destination). */
+   .vl-<16 hex digits>.tmp beside their destination). */
 static int dir_has(const char *dir, const char *part)
 {
     DIR *d = opendir(dir);
