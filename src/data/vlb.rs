@@ -13,6 +13,7 @@
 use super::{Dataset, Voxels, MAX_VOXELS};
 use crate::error::{Error, ErrorCode, Result};
 use std::io::Read;
+use std::os::unix::fs::OpenOptionsExt;
 use std::path::Path;
 
 /// The magic number of a `.vlb` file.
@@ -24,6 +25,12 @@ pub const HEADER_LEN: usize = 28;
 fn bad(code: ErrorCode, msg: impl Into<String>) -> Error {
     Error::new(code, msg)
 }
+
+/// `O_NONBLOCK`, for opening a dataset without waiting on a FIFO or a device.
+#[cfg(any(target_os = "linux", target_os = "android"))]
+const O_NONBLOCK: i32 = 0o4000;
+#[cfg(not(any(target_os = "linux", target_os = "android")))]
+const O_NONBLOCK: i32 = 0x0004;
 
 impl Dataset {
     /// Parses a `.vlb` file held in memory.
@@ -59,12 +66,24 @@ impl Dataset {
     pub fn load(path: &Path) -> Result<Dataset> {
         let io =
             |e: std::io::Error| Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()));
-        let mut f = std::fs::File::open(path).map_err(io)?;
+        // Opened without blocking, so that a FIFO with no writer (or a device that would wait)
+        // is refused below instead of hanging; the flag changes nothing for regular files.
+        let mut f = std::fs::OpenOptions::new()
+            .read(true)
+            .custom_flags(O_NONBLOCK)
+            .open(path)
+            .map_err(io)?;
         let meta = f.metadata().map_err(io)?;
         if meta.is_dir() {
             return Err(Error::new(
                 ErrorCode::IoError,
                 format!("{}: is a directory", path.display()),
+            ));
+        }
+        if !meta.is_file() {
+            return Err(Error::new(
+                ErrorCode::IoError,
+                format!("{}: not a regular file", path.display()),
             ));
         }
         let len = meta.len();

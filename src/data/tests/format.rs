@@ -112,3 +112,31 @@ fn malformed_files_are_refused_with_the_right_error() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Files that are not regular files are refused with `VL_IOERROR` without waiting: a FIFO with
+/// no writer (whose plain open would block forever), a character device, a directory.
+#[test]
+fn non_regular_files_are_refused_without_blocking() {
+    let dir = std::env::temp_dir().join(format!("vlib-fifo-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let fifo = dir.join("pipe.vlb");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+    let mut paths = vec![fifo, dir.clone()];
+    if std::path::Path::new("/dev/null").exists() {
+        paths.push("/dev/null".into());
+    }
+    for p in paths {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let q = p.clone();
+        std::thread::spawn(move || {
+            let _ = tx.send(Dataset::load(&q).map(|_| ()).map_err(|e| e.code));
+        });
+        let got = rx
+            .recv_timeout(std::time::Duration::from_secs(10))
+            .unwrap_or_else(|_| panic!("{}: vlLoad blocked", p.display()));
+        assert_eq!(got, Err(ErrorCode::IoError), "{}", p.display());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
