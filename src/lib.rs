@@ -48,7 +48,7 @@ mod render;
 mod testing;
 pub mod types;
 
-pub use api::library::{Closed, Library};
+pub use api::library::{Closed, Library, Sampler};
 pub use api::scope;
 pub use api::scope::{Command, Scope};
 pub use data::{Dataset, Filter, Voxels};

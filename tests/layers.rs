@@ -21,9 +21,10 @@ const LAYERS: [&[&str]; 7] = [
 
 /// The names `src/lib.rs` re-exports at the crate root, with the layer each comes from, so that
 /// `crate::Library` counts as a path into `api`.
-const ROOT: [(&str, &str); 27] = [
+const ROOT: [(&str, &str); 28] = [
     ("Library", "api"),
     ("Closed", "api"),
+    ("Sampler", "api"),
     ("Command", "api"),
     ("Scope", "api"),
     ("scope", "api"),

@@ -2,7 +2,7 @@
 //! functions. Each converts its C arguments and calls the core, which reads the files and owns
 //! the datasets and mappings.
 
-use crate::ffi::{c_path, either, ffi_boundary, library, null};
+use crate::ffi::{c_path, either, ffi_boundary, library, null, render_sampler};
 use crate::types::{vlfloat, vlint};
 use std::os::raw::c_char;
 use vlib_core::limits::{MAX_OUTPUTS, MAX_POINTS};
@@ -38,6 +38,13 @@ pub extern "C" fn vlSample(id: vlint, x: vlfloat, y: vlfloat, z: vlfloat) -> vlf
 
 /// `vlSample` inside the caller's panic boundary (`VLU_SWEEP` samples through it).
 pub(crate) fn sample(id: vlint, x: vlfloat, y: vlfloat, z: vlfloat) -> Result<vlfloat> {
+    // A thread outside sample scope during a render (a field function's helper thread) samples
+    // the rendering scene's datasets without waiting for the state the render holds.
+    if !crate::sample::active() {
+        if let Some(s) = render_sampler() {
+            return s.sample(id, x, y, z);
+        }
+    }
     either(
         Command::Sample,
         |s| s.dataset(id, [x, y, z]),

@@ -23,9 +23,9 @@ use std::ffi::{CStr, OsStr};
 use std::os::raw::c_char;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
-use std::sync::{Mutex, MutexGuard};
+use std::sync::{Mutex, MutexGuard, RwLock};
 use vlib_core::scope::require;
-use vlib_core::{Command, Error, ErrorCode, Library, Result, Sample, Scope};
+use vlib_core::{Command, Error, ErrorCode, Library, Result, Sample, Sampler, Scope};
 
 /// The library of the process, `None` when uninitialised.
 static STATE: Mutex<Option<Library>> = Mutex::new(None);
@@ -74,7 +74,42 @@ pub(crate) fn dispatch<T>(
     });
     match sampled {
         Some(r) => r,
+        None if render_sampler().is_some() => Err(Error::new(
+            ErrorCode::BadScope,
+            format!(
+                "{} while a scene renders: only its field functions' sample-scope commands, \
+                 vlSample, vlError and vlErrorString are legal then",
+                cmd.name()
+            ),
+        )),
         None => outside(&mut lock_state()),
+    }
+}
+
+/// While a scene renders (its `vlEnd` holds the state), what `vlSample` reads; `None` otherwise.
+/// A thread outside the render's sample scope, such as a helper thread a field function starts,
+/// reads this instead of waiting for the state, which the render holds until it ends.
+static RENDERING: RwLock<Option<Sampler>> = RwLock::new(None);
+
+/// The sampler of the scene being rendered, if one is.
+pub(crate) fn render_sampler() -> Option<Sampler> {
+    RENDERING.read().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
+/// Marks a render as running until dropped (also when the render panics).
+pub(crate) struct Rendering(());
+
+impl Rendering {
+    /// Publishes `sampler` for the threads outside the render.
+    pub(crate) fn start(sampler: Sampler) -> Rendering {
+        *RENDERING.write().unwrap_or_else(|e| e.into_inner()) = Some(sampler);
+        Rendering(())
+    }
+}
+
+impl Drop for Rendering {
+    fn drop(&mut self) {
+        *RENDERING.write().unwrap_or_else(|e| e.into_inner()) = None;
     }
 }
 

@@ -3,11 +3,11 @@
 //! `errors`; what `vlEnd` closes and renders is decided by the core.
 
 use crate::errors;
-use crate::ffi::{dispatch, ffi_boundary, never, scope_of};
+use crate::ffi::{dispatch, ffi_boundary, never, scope_of, Rendering};
 use crate::types::vlint;
 use std::os::raw::c_char;
 use vlib_core::scope::require;
-use vlib_core::{Closed, Command, ErrorCode, Library};
+use vlib_core::{Closed, Command, ErrorCode, Library, Scope};
 
 /// Starts the library. Legal only when it is not running.
 #[no_mangle]
@@ -39,6 +39,10 @@ pub extern "C" fn vlEnd() {
                 let Some(lib) = state.as_mut() else {
                     return never(Command::End);
                 };
+                // Closing a scene renders it: threads outside its sample scope sample without
+                // the state until the render ends.
+                let _rendering =
+                    (lib.scope() == Scope::Scene).then(|| Rendering::start(lib.sampler()));
                 if lib.end()? == Closed::Library {
                     *state = None;
                 }

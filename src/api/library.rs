@@ -38,6 +38,22 @@ pub const MAX_DEPTH: usize = 64;
 /// runs, 5 GiB at this size).
 pub const MAX_VOLUME_NODES: u64 = 1 << 27;
 
+/// The datasets and interpolation of a [`Library`] at one moment ([`Library::sampler`]):
+/// `vlSample` without the library.
+#[derive(Clone, Debug)]
+pub struct Sampler {
+    datasets: Arc<crate::model::program::Datasets>,
+    filter: Filter,
+}
+
+impl Sampler {
+    /// `vlSample`: dataset `id`'s normalised value at dataset coordinates (x, y, z), as
+    /// [`Library::sample`] gives it (the same errors, without the scope check).
+    pub fn sample(&self, id: i32, x: f32, y: f32, z: f32) -> Result<f32> {
+        crate::model::program::sample_dataset(&self.datasets, id, [x, y, z], self.filter)
+    }
+}
+
 /// What a successful `vlEnd` closed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Closed {
@@ -533,6 +549,16 @@ impl Library {
     pub fn sample(&self, id: i32, x: f32, y: f32, z: f32) -> Result<f32> {
         self.check(Command::Sample)?;
         crate::model::program::sample_dataset(&self.datasets, id, [x, y, z], self.filter())
+    }
+
+    /// A snapshot of what `vlSample` reads (the datasets and the interpolation in force), for
+    /// sampling from any thread while this library is busy, such as a helper thread of a field
+    /// function during a render. Cheap: the datasets are shared, not copied.
+    pub fn sampler(&self) -> Sampler {
+        Sampler {
+            datasets: Arc::new(self.datasets.clone()),
+            filter: self.filter(),
+        }
     }
 
     /// `vlMapping`: declares (or replaces) transfer function `id`. Objects that already mapped
