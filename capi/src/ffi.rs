@@ -6,8 +6,9 @@
 //! ## The panic boundary
 //! Every exported function, command or vlaux, has a body that is one call of [`ffi_boundary`]:
 //! an `Err` from the core or from argument checks is recorded for `vlError` and a neutral value
-//! returned; a panic is caught and recorded as `VL_INTERNAL`. No error ever crosses into C as
-//! anything but a queued code. The helpers below return a `Result` and run inside that call;
+//! returned; a panic is caught and recorded as `VL_INTERNAL`, and its message is not printed
+//! (the library never writes to stderr). No error ever crosses into C as anything but a
+//! queued code. The helpers below return a `Result` and run inside that call;
 //! none of them catches anything itself. A unit test (`tests/exports.rs`) reads the sources and
 //! fails on an export whose body does not start with `ffi_boundary(`.
 //!
@@ -23,7 +24,8 @@ use std::ffi::{CStr, OsStr};
 use std::os::raw::c_char;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
-use std::sync::{Mutex, MutexGuard, RwLock};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Mutex, MutexGuard, Once, RwLock};
 use vlib_core::scope::require;
 use vlib_core::{Command, Error, ErrorCode, Library, Result, Sample, Sampler, Scope};
 
@@ -37,8 +39,46 @@ pub(crate) fn lock_state() -> MutexGuard<'static, Option<Library>> {
     STATE.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// How many calls are inside [`ffi_boundary`] now, on any thread.
+static INSIDE: AtomicUsize = AtomicUsize::new(0);
+
+/// Counts a call inside the boundary until dropped (also when it unwinds).
+struct Inside;
+
+impl Inside {
+    fn enter() -> Inside {
+        INSIDE.fetch_add(1, Ordering::SeqCst);
+        Inside
+    }
+}
+
+impl Drop for Inside {
+    fn drop(&mut self) {
+        INSIDE.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+/// Installs, once, a panic hook that prints nothing while a call is inside the boundary (on the
+/// calling thread or on the render's worker threads) and hands every other panic to the hook
+/// that was there before. The library never writes to stderr: a panic's message reaches the
+/// user as a `VL_INTERNAL` error (`vlErrorString`), and a host whose stderr is a closed pipe is
+/// not killed by `SIGPIPE`.
+fn quiet_panics() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if INSIDE.load(Ordering::SeqCst) == 0 {
+                previous(info);
+            }
+        }));
+    });
+}
+
 /// The panic boundary: runs `f`, turning an `Err` or a panic into a recorded error and `neutral`.
 pub(crate) fn ffi_boundary<T>(neutral: T, f: impl FnOnce() -> Result<T>) -> T {
+    quiet_panics();
+    let _inside = Inside::enter();
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(Ok(v)) => v,
         Ok(Err(e)) => {
