@@ -1098,8 +1098,8 @@ fn mni_study(p: &Params, cache: &mut Cache, start: Instant) -> Res<(Study, Brain
     let path = mni_dataset()?;
     let data = Dataset::load(&path)?;
     // Fill the brick-range caches once (every scene shares the dataset), not in every scene's first frame.
-    data.precompute(vlib::Filter::Trilinear);
-    data.precompute(vlib::Filter::Cubic { b: 0.0, c: 0.5 });
+    data.precompute(vlib::Filter::Trilinear)?;
+    data.precompute(vlib::Filter::Cubic { b: 0.0, c: 0.5 })?;
     let brain = Brain {
         data: Arc::new(data),
         path,

@@ -15,7 +15,7 @@
 //! Everything else is internal, in layers that import downward only (`docs/dev/architecture.md`):
 //! `api` (the state machine) → `output` (the one place that writes files) → `render` (scene →
 //! immutable plan → pixels) → `accel` (empty-space skipping) → `model` (plain scene data and the
-//! object model) → `data` (datasets) → the base types (`types`, `error`, `num`).
+//! object model) → `data` (datasets) → the base (`types`, `error`, `num`, `pool`).
 //!
 //! ```no_run
 //! use vlib::{Camera, Fields, Library};
@@ -43,6 +43,7 @@ mod error;
 mod model;
 mod num;
 mod output;
+mod pool;
 mod render;
 #[cfg(test)]
 mod testing;

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 /// The layers, lowest first; a layer may use its own and every lower one.
 const LAYERS: [&[&str]; 7] = [
-    &["types", "error", "num"],
+    &["types", "error", "num", "pool"],
     &["data"],
     &["model"],
     &["accel"],

@@ -1302,7 +1302,7 @@ pub fn check_vlb(data: &[u8], scratch: Option<&Path>) {
                     let g = d.gradient(p, f);
                     assert!(g.iter().all(|c| c.is_finite()), "gradient {g:?}");
                 }
-                d.precompute(f);
+                d.precompute(f).expect("threads");
             }
         }
         Err(e) => assert!(

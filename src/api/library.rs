@@ -206,7 +206,7 @@ impl Library {
                     objects: s.objects,
                     datasets: Arc::new(self.datasets.clone()),
                 };
-                crate::output::render_outputs(&desc, &s.grids)?;
+                crate::pool::install(|| crate::output::render_outputs(&desc, &s.grids))?;
                 Ok(Closed::Scene)
             }
             _ => {

@@ -22,7 +22,9 @@ impl Library {
                 format!("render_preview: size {width}x{height}"),
             );
         }
-        crate::render::render_image(&self.compile(&desc), width, height, aspect)
+        crate::pool::install(|| {
+            crate::render::render_image(&self.compile(&desc), width, height, aspect)
+        })
     }
 
     /// The open scene (at scene scope) compiled as it would render now (for tests of the
@@ -61,7 +63,7 @@ impl Library {
     /// Not a command of the C API.
     pub fn render_plan(&self) -> Result<crate::render::Plan> {
         let desc = self.open_scene("render_plan")?;
-        Ok(self.compile(&desc).plan())
+        crate::pool::install(|| Ok(self.compile(&desc).plan()))
     }
 
     /// Switches the pixel-preserving speed-ups (empty-space skipping, early ray termination)

@@ -50,9 +50,13 @@ fn widen<T: Copy + PartialOrd>(min: &mut [T], max: &mut [T], lo: &[T], hi: &[T])
 
 impl Dataset {
     /// Computes now what a render with `filter` would compute on first use and keep (the brick
-    /// ranges its empty-space grids are built from), so that a first frame does not pay for it.
-    pub fn precompute(&self, filter: Filter) {
-        self.bricks(filter);
+    /// ranges its empty-space grids are built from), so that a first frame does not pay for it;
+    /// on the library's threads, so it fails only where they cannot be started (`NoMemory`).
+    pub fn precompute(&self, filter: Filter) -> crate::error::Result<()> {
+        crate::pool::install(|| {
+            self.bricks(filter);
+            Ok(())
+        })
     }
 
     /// The brick ranges for `filter` (computed once per dataset and reach, then shared).

@@ -1,0 +1,71 @@
+/* A process that forks after a render: the child renders again, as any program may, and must
+ * finish (the library's threads are not in the child, so it starts its own), and the parent
+ * renders on afterwards. An alarm in each process turns a hang into a failure. Prints one line
+ * per check and exits non-zero if any fails. C89 (with POSIX); built and run by
+ * capi/tests/c_examples.rs, under valgrind by capi/tests/memcheck.rs. */
+#include <signal.h>
+#include <stdio.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <vlib.h>
+#include <vlaux.h>
+
+static int failures = 0;
+
+static void check(const char *what, int ok)
+{
+    printf("%-4s %s\n", ok ? "ok" : "FAIL", what);
+    fflush(stdout);
+    if (!ok)
+        failures++;
+}
+
+static void on_alarm(int sig)
+{
+    (void)sig;
+    fputs("FAIL a render did not finish\n", stdout);
+    fflush(stdout);
+    _exit(2);
+}
+
+/* A 64×64 image of a sphere: large enough to run on the library's threads. */
+static int render(const char *path)
+{
+    vlScene();
+    vlImage(path, 1.0, 64, 64);
+    vlAmbient(1.0, 1.0, 1.0, 1.0);
+    vlObject();
+    vlScale(100.0, 100.0, 100.0);
+    vlFunction(VL_O | VL_R | VL_G | VL_B, VLU_SPHERE, NULL);
+    vlEnd();
+    vlEnd();
+    return vlError() == VL_NOERROR && access(path, F_OK) == 0;
+}
+
+int main(void)
+{
+    pid_t child;
+    int status = 0;
+    signal(SIGALRM, on_alarm);
+    alarm(120);
+    vlInit();
+    check("the parent renders before the fork", render("before.ppm"));
+    child = fork();
+    if (child == 0) {
+        alarm(60);
+        if (!render("child.ppm"))
+            _exit(1);
+        vlEnd();
+        _exit(0);
+    }
+    check("fork", child > 0);
+    if (child > 0) {
+        check("waited for the child", waitpid(child, &status, 0) == child);
+        check("the child rendered and exited 0", WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    }
+    check("the parent renders after the fork", render("after.ppm"));
+    vlEnd();
+    printf("%d failure(s)\n", failures);
+    return failures != 0;
+}

@@ -1,0 +1,58 @@
+//! The library's own thread pool: every parallel part of a render (compiling a scene, the skip
+//! grids, the tiles, voxelization) runs on it rather than on rayon's global pool.
+//!
+//! It is built on first use with rayon's defaults (`RAYON_NUM_THREADS`, else one thread a core,
+//! so the thread count is what rayon's global pool would have) and kept for later renders. A
+//! process that forked after the pool was made has none of its threads, so a pool made by
+//! another process is left alone and a new one built. A failure to start the threads is an
+//! error of the render that needed them (`VL_NOMEMORY`), and the next render tries again. Part
+//! of the base layer: it knows nothing of scenes.
+
+use crate::error::{Error, ErrorCode, Result};
+use std::sync::{Arc, Mutex};
+
+/// The pool and the process that built it.
+static POOL: Mutex<Option<(u32, Arc<rayon::ThreadPool>)>> = Mutex::new(None);
+
+/// Pools inherited from a parent process, kept (not dropped) and never used.
+static STALE: Mutex<Vec<Arc<rayon::ThreadPool>>> = Mutex::new(Vec::new());
+
+/// The pool of this process, built now if there is none.
+fn pool() -> Result<Arc<rayon::ThreadPool>> {
+    let mut slot = POOL.lock().unwrap_or_else(|e| e.into_inner());
+    let pid = std::process::id();
+    match slot.take() {
+        Some((p, pool)) if p == pid => {
+            *slot = Some((p, pool.clone()));
+            return Ok(pool);
+        }
+        // Built by the parent of a fork: its threads are not in this process, and dropping it
+        // would signal them, so it is kept aside, never used again.
+        Some(other) => STALE
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(other.1),
+        None => {}
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .thread_name(|i| format!("vlib-{i}"))
+        .build()
+        .map_err(|e| {
+            Error::new(
+                ErrorCode::NoMemory,
+                format!("could not start the render's threads: {e}"),
+            )
+        })?;
+    let pool = Arc::new(pool);
+    *slot = Some((pid, pool.clone()));
+    Ok(pool)
+}
+
+/// Runs `f` on the library's pool (on the caller's pool when the caller is a pool's thread
+/// already, so that a render inside `ThreadPool::install` uses that pool).
+pub(crate) fn install<T: Send>(f: impl FnOnce() -> Result<T> + Send) -> Result<T> {
+    if rayon::current_thread_index().is_some() {
+        return f();
+    }
+    pool()?.install(f)
+}
