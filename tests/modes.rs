@@ -242,3 +242,73 @@ fn a_surface_shadows_by_the_opacity_of_each_crossing() {
         assert!((got - want).abs() < 1e-5, "o {o}: {got} vs {want}");
     }
 }
+
+/// Nested iso-surfaces whose colours come from a lookup table stepping exactly at their
+/// thresholds (the paper's Figure 8b with breaks at 0.2, 0.35 and 0.5): a hit is shaded with the
+/// fields measurably inside its surface, so the outer, opaque shell (blue, the row of
+/// 0.2 < F ≤ 0.35) covers the sphere's whole disc without a speckle of the inner shells or of
+/// the background. `MappingType::Lookup`: Φ_t(F) is 0 for F ≤ 0.2, so a shading point whose F
+/// rounds to the threshold would make the hit transparent.
+#[test]
+fn surfaces_are_shaded_inside_where_a_table_steps_at_their_threshold() {
+    let size = 96u32;
+    let mut vl = Library::new();
+    #[rustfmt::skip]
+    let table = [
+        0.2, 1.0, 0.0, 0.0, 0.0,
+        0.35, 1.0, 0.0, 0.0, 1.0,
+        0.5, 1.0, 1.0, 1.0, 0.0,
+        1.0, 1.0, 1.0, 0.0, 0.0,
+    ];
+    vl.mapping(1, vlib::MappingType::Lookup, 4, 4, &table)
+        .unwrap();
+    vl.scene().unwrap();
+    vl.camera(&Camera {
+        eye: [0.0, 0.0, -200.0],
+        at: [0.0; 3],
+        up: [0.0, 1.0, 0.0],
+        fov: 40.0,
+    })
+    .unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.render_type(RenderType::Dsr).unwrap();
+    for thr in [0.2, 0.35, 0.5] {
+        vl.surface(Fields::F, thr).unwrap();
+    }
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, -0.5).unwrap();
+    vl.scale(100.0, 100.0, 100.0).unwrap();
+    vl.function(Fields::F, radial).unwrap();
+    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+    vl.map(Fields::R, Fields::F, 1, 2).unwrap();
+    vl.map(Fields::G, Fields::F, 1, 3).unwrap();
+    vl.map(Fields::B, Fields::F, 1, 4).unwrap();
+    vl.set(Fields::KA, 1.0).unwrap();
+    vl.end().unwrap();
+    let img = vl.render_preview(size, size, 1.0).unwrap();
+    // The outer shell: radius 40 world units (F = 1 − 2r = 0.2 at r = 0.4 of the cube), seen
+    // from 200: pixels well inside its projected disc must be pure blue.
+    let half = (40.0f64 / (200.0f64.powi(2) - 40.0f64.powi(2)).sqrt()) / (20f64.to_radians().tan());
+    let (mut disc, mut wrong) = (0, Vec::new());
+    for y in 0..size {
+        for x in 0..size {
+            let nx = (x as f64 + 0.5) / size as f64 * 2.0 - 1.0;
+            let ny = (y as f64 + 0.5) / size as f64 * 2.0 - 1.0;
+            if (nx * nx + ny * ny).sqrt() > 0.9 * half {
+                continue;
+            }
+            disc += 1;
+            let p = img.pixel(x, y);
+            if !(p[0] < 0.01 && p[1] < 0.01 && p[2] > 0.99) {
+                wrong.push((x, y, p));
+            }
+        }
+    }
+    assert!(disc > 1000, "{disc} pixels in the disc");
+    assert!(
+        wrong.is_empty(),
+        "{} of {disc} pixels not the outer shell's blue, e.g. {:?}",
+        wrong.len(),
+        &wrong[..wrong.len().min(5)]
+    );
+}

@@ -46,7 +46,7 @@ impl Compiled {
                 if (prev_v < 0.0) != (v < 0.0) && !(prev_v == 0.0 && v == 0.0) {
                     // Bisection on [prev_t, t]; the ends are the box faces where the field
                     // jumps from or to 0.
-                    let (mut a, mut b, mut va) = (prev_t, t, prev_v);
+                    let (mut a, mut b, mut va, mut vb) = (prev_t, t, prev_v, v);
                     let tol = obj.step * 1e-6;
                     for _ in 0..60 {
                         if b - a <= tol {
@@ -59,19 +59,38 @@ impl Compiled {
                             va = vm;
                         } else {
                             b = m;
+                            vb = vm;
                         }
                     }
                     let hit = 0.5 * (a + b);
                     let w = origin + hit * dir;
                     // Shade with the fields just inside the surface (on the side above the
-                    // threshold), so a surface on the box face sees the object's fields.
-                    let side = if va >= 0.0 { a } else { b };
-                    let (lo, hi) = (c.t0 + tol * 0.5, c.t1 - tol * 0.5);
-                    let side = if lo < hi {
-                        side.clamp(lo, hi)
+                    // threshold), so a surface on the box face sees the object's fields, and
+                    // measurably inside: where the field at the bracket's inner end equals the
+                    // threshold (closer than f32 resolves), a transfer function stepping exactly
+                    // there would read the outside's row, so the point moves further in, by
+                    // doubling distances up to half a step, until the field is above it.
+                    let (end, end_v, inward) = if va >= 0.0 {
+                        (a, va, -1.0)
                     } else {
-                        0.5 * (c.t0 + c.t1)
+                        (b, vb, 1.0)
                     };
+                    let (lo, hi) = (c.t0 + tol * 0.5, c.t1 - tol * 0.5);
+                    let clamp = |t: f64| {
+                        if lo < hi {
+                            t.clamp(lo, hi)
+                        } else {
+                            0.5 * (c.t0 + c.t1)
+                        }
+                    };
+                    let mut side = clamp(end);
+                    let mut side_v = if side == end { end_v } else { value(side) };
+                    let mut d = tol;
+                    while side_v <= 0.0 && d <= 0.5 * obj.step {
+                        side = clamp(end + inward * d);
+                        side_v = if inside(side) { value(side) } else { -thr };
+                        d *= 2.0;
+                    }
                     let ws = origin + side * dir;
                     let mut s = obj.sample_at(ws);
                     run(&obj.program, &mut s);
