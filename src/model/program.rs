@@ -462,7 +462,7 @@ pub fn run(program: &[Instr], s: &mut Sample<'_>) {
     }
 }
 
-/// The shortest prefix of `program` after which `field` can no longer change: everything after
+/// The shortest prefix of `program` after which `field` cannot change: everything after
 /// the last instruction that may write it is irrelevant to that field.
 pub fn prefix_for(program: &[Instr], field: Fields) -> usize {
     program

@@ -309,7 +309,7 @@ type GridCell = Arc<std::sync::OnceLock<Option<Arc<SkipGrid>>>>;
 
 /// The empty-space grids of a scene's root objects, by their index in the scene, each built by
 /// the first compilation that needs it and shared by later ones. The state machine keeps one
-/// for each open scene (a root object no longer changes once it is closed, and objects are
+/// for each open scene (a closed root object does not change, and objects are
 /// only appended), so scene data holds no cache; a fresh `Grids` builds every grid anew.
 #[derive(Default)]
 pub(crate) struct Grids(std::sync::Mutex<Vec<GridCell>>);
