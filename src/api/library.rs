@@ -84,7 +84,9 @@ pub struct Library {
     /// Defaults that each new scene starts from (set at library scope).
     pub(super) defaults: Settings,
     pub(super) mappings: BTreeMap<i32, Arc<Mapping>>,
-    pub(super) datasets: crate::model::program::Datasets,
+    /// The loaded datasets, shared with the scenes and samplers made from them (changed by
+    /// copy on write, so a scene being rendered keeps the map it was given).
+    pub(super) datasets: Arc<crate::model::program::Datasets>,
     pub(super) scene: Option<OpenScene>,
     pub(super) ended: bool,
 }
@@ -204,7 +206,7 @@ impl Library {
                     images: s.images,
                     volumes: s.volumes,
                     objects: s.objects,
-                    datasets: Arc::new(self.datasets.clone()),
+                    datasets: self.datasets.clone(),
                 };
                 crate::pool::install(|| crate::output::render_outputs(&desc, &s.grids))?;
                 Ok(Closed::Scene)
@@ -213,7 +215,7 @@ impl Library {
                 self.ended = true;
                 self.scene = None;
                 self.mappings.clear();
-                self.datasets.clear();
+                self.datasets = Arc::default();
                 Ok(Closed::Library)
             }
         }
@@ -504,7 +506,7 @@ impl Library {
     pub fn load(&mut self, id: i32, path: impl AsRef<Path>) -> Result<()> {
         self.check(Command::Load)?;
         let d = Dataset::load(path.as_ref())?;
-        self.datasets.insert(id, Arc::new(d));
+        Arc::make_mut(&mut self.datasets).insert(id, Arc::new(d));
         Ok(())
     }
 
@@ -513,7 +515,7 @@ impl Library {
     /// and its caches (brick ranges) are computed once for all of them.
     pub fn add_dataset(&mut self, id: i32, dataset: impl Into<Arc<Dataset>>) -> Result<()> {
         self.check(Command::Load)?;
-        self.datasets.insert(id, dataset.into());
+        Arc::make_mut(&mut self.datasets).insert(id, dataset.into());
         Ok(())
     }
 
@@ -526,7 +528,7 @@ impl Library {
     /// memory is freed when the last of them is gone.
     pub fn unload(&mut self, id: i32) -> Result<()> {
         self.check(Command::Unload)?;
-        match self.datasets.remove(&id) {
+        match Arc::make_mut(&mut self.datasets).remove(&id) {
             Some(_) => Ok(()),
             None => err(ErrorCode::BadId, format!("vlUnload: no dataset {id}")),
         }
@@ -556,7 +558,7 @@ impl Library {
     /// function during a render. Cheap: the datasets are shared, not copied.
     pub fn sampler(&self) -> Sampler {
         Sampler {
-            datasets: Arc::new(self.datasets.clone()),
+            datasets: self.datasets.clone(),
             filter: self.filter(),
         }
     }

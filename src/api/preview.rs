@@ -8,7 +8,6 @@ use super::library::{positive, Library, MAX_IMAGE_PIXELS};
 use crate::api::scope::Scope;
 use crate::error::{err, ErrorCode, Result};
 use crate::model::scene::SceneDesc;
-use std::sync::Arc;
 
 impl Library {
     /// Renders the open scene (at scene scope) to an image in memory without closing it or
@@ -55,7 +54,7 @@ impl Library {
             images: Vec::new(),
             volumes: Vec::new(),
             objects: s.objects.clone(),
-            datasets: Arc::new(self.datasets.clone()),
+            datasets: self.datasets.clone(),
         })
     }
 
