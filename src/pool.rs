@@ -21,18 +21,18 @@ static STALE: Mutex<Vec<Arc<rayon::ThreadPool>>> = Mutex::new(Vec::new());
 fn pool() -> Result<Arc<rayon::ThreadPool>> {
     let mut slot = POOL.lock().unwrap_or_else(|e| e.into_inner());
     let pid = std::process::id();
-    match slot.take() {
-        Some((p, pool)) if p == pid => {
-            *slot = Some((p, pool.clone()));
-            return Ok(pool);
+    if let Some((p, pool)) = slot.as_ref() {
+        if *p == pid {
+            return Ok(pool.clone());
         }
-        // Built by the parent of a fork: its threads are not in this process, and dropping it
-        // would signal them, so it is kept aside, never used again.
-        Some(other) => STALE
+    }
+    // Built by the parent of a fork: its threads are not in this process, and dropping it
+    // would signal them, so it is kept aside, never used again.
+    if let Some((_, inherited)) = slot.take() {
+        STALE
             .lock()
             .unwrap_or_else(|e| e.into_inner())
-            .push(other.1),
-        None => {}
+            .push(inherited);
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .thread_name(|i| format!("vlib-{i}"))

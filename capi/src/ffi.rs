@@ -114,7 +114,7 @@ pub(crate) fn dispatch<T>(
     });
     match sampled {
         Some(r) => r,
-        None if render_sampler().is_some() => Err(Error::new(
+        None if rendering() => Err(Error::new(
             ErrorCode::BadScope,
             format!(
                 "{} while a scene renders: only its field functions' sample-scope commands, \
@@ -130,6 +130,14 @@ pub(crate) fn dispatch<T>(
 /// A thread outside the render's sample scope, such as a helper thread a field function starts,
 /// reads this instead of waiting for the state, which the render holds until it ends.
 static RENDERING: RwLock<Option<Sampler>> = RwLock::new(None);
+
+/// Whether a scene is being rendered.
+fn rendering() -> bool {
+    RENDERING
+        .read()
+        .unwrap_or_else(|e| e.into_inner())
+        .is_some()
+}
 
 /// The sampler of the scene being rendered, if one is.
 pub(crate) fn render_sampler() -> Option<Sampler> {
