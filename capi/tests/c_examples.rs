@@ -16,25 +16,6 @@ use common::{prepare, small_width, Ppm, TempDir, SMALL};
 use std::path::Path;
 use std::process::Command;
 
-/// Runs `exe` with `cwd` as working directory; returns its standard output.
-fn run(exe: &Path, cwd: &Path, args: &[String]) -> String {
-    let out = Command::new(exe)
-        .args(args)
-        .current_dir(cwd)
-        .env("LD_LIBRARY_PATH", common::profile_dir())
-        .output()
-        .unwrap_or_else(|e| panic!("run {}: {e}", exe.display()));
-    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(
-        out.status.success(),
-        "{} exited with {}:\n{stdout}\n{}",
-        exe.display(),
-        out.status,
-        String::from_utf8_lossy(&out.stderr)
-    );
-    stdout
-}
-
 /// Compiles and runs one C program in a fresh directory, after preparing its inputs there;
 /// returns (directory, stdout).
 fn build_and_run(source: &str) -> (TempDir, String) {
@@ -42,7 +23,7 @@ fn build_and_run(source: &str) -> (TempDir, String) {
     let exe = common::compile_c(source, bin.path(), &[]);
     let cwd = TempDir::new("run");
     let args = prepare(source, cwd.path());
-    let stdout = run(&exe, cwd.path(), &args);
+    let stdout = common::run(&exe, cwd.path(), &args);
     (cwd, stdout)
 }
 

@@ -12,7 +12,6 @@ mod common;
 use common::TempDir;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 /// FNV-1a, 64 bits: enough to tell two images apart, no dependency.
 fn fnv1a(bytes: &[u8]) -> u64 {
@@ -41,24 +40,6 @@ fn record(hashes: &mut BTreeMap<String, u64>, tag: &str, dir: &Path, before: &BT
     }
 }
 
-/// Runs `exe args` in `cwd`; panics with its output when it fails.
-fn run(exe: &Path, args: &[String], cwd: &Path) {
-    let out = Command::new(exe)
-        .args(args)
-        .current_dir(cwd)
-        .env("LD_LIBRARY_PATH", common::profile_dir())
-        .output()
-        .unwrap_or_else(|e| panic!("run {}: {e}", exe.display()));
-    assert!(
-        out.status.success(),
-        "{} {args:?} exited with {}:\n{}{}",
-        exe.display(),
-        out.status,
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
 /// The MNI template, when `../shared/data` holds it.
 fn mni_source() -> Option<PathBuf> {
     let p = common::workspace_root()
@@ -75,7 +56,7 @@ fn render_gallery() -> BTreeMap<String, u64> {
         let cwd = TempDir::new("golden-run");
         let args = common::prepare(&source, cwd.path());
         let before = images(cwd.path());
-        run(&exe, &args, cwd.path());
+        common::run(&exe, cwd.path(), &args);
         let tag = Path::new(&source).file_stem().unwrap().to_string_lossy();
         record(&mut hashes, &tag, cwd.path(), &before);
     }
@@ -84,7 +65,7 @@ fn render_gallery() -> BTreeMap<String, u64> {
     let cwd = TempDir::new("golden-rust");
     let dir = cwd.path();
     let before = images(dir);
-    run(&examples.join("figure2"), &["figure2.png".into()], dir);
+    common::run(&examples.join("figure2"), dir, &["figure2.png".into()]);
     record(&mut hashes, "figure2-rust", dir, &before);
     match mni_source() {
         Some(nii) => {
@@ -103,7 +84,7 @@ fn render_gallery() -> BTreeMap<String, u64> {
                 ("mip_brain", "128"),
             ] {
                 let before = images(dir);
-                run(&examples.join(name), &brain(name, size), dir);
+                common::run(&examples.join(name), dir, &brain(name, size));
                 record(&mut hashes, name, dir, &before);
             }
         }

@@ -334,3 +334,23 @@ pub fn ensure_examples(names: &[&str]) -> PathBuf {
     }
     cargo_build(&args)
 }
+
+/// Runs `exe` (a program linked against the library) with `cwd` as working directory;
+/// returns its standard output, and panics with both outputs when it fails.
+pub fn run(exe: &Path, cwd: &Path, args: &[String]) -> String {
+    let out = Command::new(exe)
+        .args(args)
+        .current_dir(cwd)
+        .env("LD_LIBRARY_PATH", profile_dir())
+        .output()
+        .unwrap_or_else(|e| panic!("run {}: {e}", exe.display()));
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{} exited with {}:\n{stdout}\n{}",
+        exe.display(),
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
