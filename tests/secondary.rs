@@ -2,6 +2,11 @@
 //! of the renderer): the lateral offset of a parallel-sided slab, and a mirror's angle in = angle
 //! out checked by where a reflected marker lands, with the mirror's normal as it is and as its
 //! normal functions tilt it.
+//!
+//! The ray tree's bounds: two facing mirrors cost linear work in the recursion depth with the
+//! closed-form pixel (depth + 1)·a, a branch ends where its weight falls below the termination
+//! threshold (the pixel a·(2 − 2⁻⁹) for KS ½), and layered glass stops costing more past the
+//! depth its longest traced branch reaches. The work is counted in field evaluations.
 
 use glam::DVec3;
 use vlib::{Camera, Feature, Fields, Library, RenderType};
@@ -322,5 +327,209 @@ fn dsr_surface_does_not_shadow_itself() {
             render(true, step),
             "step {step}: the surface shadows itself"
         );
+    }
+}
+
+/// Two facing mirrors, opaque DSR slabs (z ∈ [100, 104] and [−104, −100], 1000 wide) whose
+/// colour is `a` everywhere, KA 1 and KS `ks`, under ambient light 1 and no other light, seen
+/// from between them (the eye at z = −50, looking along +z, a field of view of 1°, so
+/// that every ray stays between the mirrors for hundreds of bounces) at 16², with secondary rays up to
+/// `depth` bounces. Returns the image and the number of field evaluations it took (a measure of
+/// the work that does not depend on the machine).
+fn facing_mirrors(depth: i32, ks: f32, a: f32, terminate: bool) -> (vlib::Image, usize) {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    let calls = Arc::new(AtomicUsize::new(0));
+    let mut vl = Library::new();
+    vl.scene().unwrap();
+    vl.camera(&Camera {
+        eye: [0.0, 0.0, -50.0],
+        at: [0.0, 0.0, 100.0],
+        up: [0.0, 1.0, 0.0],
+        fov: 1.0,
+    })
+    .unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.render_type(RenderType::Dsr).unwrap();
+    vl.surface(Fields::F, 0.5).unwrap();
+    vl.step_size(1.0, 1.0).unwrap();
+    vl.recursion(depth).unwrap();
+    vl.toggle(Feature::ReceiveReflections, true).unwrap();
+    vl.toggle(Feature::CastReflections, true).unwrap();
+    for z in [100.0, -104.0] {
+        vl.object().unwrap();
+        vl.translate(-0.5, -0.5, 0.0).unwrap();
+        vl.scale(1000.0, 1000.0, 4.0).unwrap();
+        vl.translate(0.0, 0.0, z).unwrap();
+        let calls = calls.clone();
+        vl.function(Fields::F, move |s| {
+            calls.fetch_add(1, Ordering::Relaxed);
+            let _ = s.set(Fields::F, 1.0);
+        })
+        .unwrap();
+        vl.set(Fields::O | Fields::KA, 1.0).unwrap();
+        vl.set(Fields::KS, ks).unwrap();
+        vl.set(Fields::COLORS, a).unwrap();
+        vl.end().unwrap();
+    }
+    vl.set_optimise(vlib::Optimise {
+        early_termination: terminate,
+        ..Default::default()
+    })
+    .unwrap();
+    let img = vl.render_preview(16, 16, 1.0).unwrap();
+    let n = calls.load(Ordering::Relaxed);
+    (img, n)
+}
+
+/// Perfect mirrors (KS 1) never weaken a branch: each bounce adds `a`, so the pixel is
+/// (depth + 1)·a, and each bounce traces one ray (the surface behind an opaque front face is
+/// not reached, so it spawns none): the work grows linearly with the depth.
+#[test]
+fn facing_mirrors_cost_linear_in_the_depth() {
+    let a = 0.004f32;
+    let cost: Vec<usize> = [8, 16, 24]
+        .iter()
+        .map(|&d| facing_mirrors(d, 1.0, a, true).1)
+        .collect();
+    let (first, second) = ((cost[1] - cost[0]) as f64, (cost[2] - cost[1]) as f64);
+    assert!(first > 0.0, "deeper recursion takes more rays: {cost:?}");
+    assert!(
+        (second / first - 1.0).abs() < 0.05,
+        "eight more bounces cost the same each time: {cost:?}"
+    );
+    for depth in [32, 64] {
+        let (img, n) = facing_mirrors(depth, 1.0, a, true);
+        // Linear: the cost at depth d extrapolated from 8 and 16, within 5 %.
+        let linear = cost[0] as f64 + (depth - 8) as f64 / 8.0 * first;
+        assert!(
+            (n as f64 / linear - 1.0).abs() < 0.05,
+            "depth {depth}: {n} evaluations, linear {linear}"
+        );
+        let want = (depth + 1) as f32 * a;
+        for y in 0..16 {
+            for x in 0..16 {
+                let p = img.pixel(x, y);
+                assert!(
+                    (p[0] - want).abs() < 1e-5 * want.max(1.0),
+                    "pixel ({x}, {y}) at depth {depth}: {} vs (depth + 1)·a = {want}",
+                    p[0]
+                );
+            }
+        }
+    }
+}
+
+/// Mirrors of KS ½ weaken each bounce's branch by half: the branch of bounce i weighs 2⁻ⁱ in
+/// the pixel, and a branch ends where its weight falls below the termination threshold 1/512:
+/// bounces 0 … 9 are traced, the pixel is a·Σ 2⁻ⁱ = a·(2 − 2⁻⁹), and recursion 32 and 64 do
+/// the same work. With early termination off nothing is cut: a·(2 − 2⁻ᵈ).
+#[test]
+fn a_branch_ends_where_its_weight_falls_below_the_threshold() {
+    let a = 0.25f32;
+    let (img32, n32) = facing_mirrors(32, 0.5, a, true);
+    let (img64, n64) = facing_mirrors(64, 0.5, a, true);
+    assert_eq!(n32, n64, "the branches past bounce 9 are cut at any depth");
+    let want = a as f64 * (2.0 - 2f64.powi(-9));
+    for img in [&img32, &img64] {
+        let p = img.pixel(8, 8)[0] as f64;
+        assert!((p - want).abs() < 1e-6, "{p} vs a·(2 − 2⁻⁹) = {want}");
+    }
+    let (full, n_full) = facing_mirrors(20, 0.5, a, false);
+    assert!(n_full > n32, "without termination the tree goes deeper");
+    let want = a as f64 * (2.0 - 2f64.powi(-20));
+    let p = full.pixel(8, 8)[0] as f64;
+    assert!((p - want).abs() < 1e-6, "{p} vs a·(2 − 2⁻²⁰) = {want}");
+}
+
+/// A layered glass block: F = ½ + ½·sin(2π·8z) across its depth (eight layers, sixteen
+/// surfaces F = ½ along a ray through it), opacity `alpha`, KS ½, index 1.5, reflections and
+/// refraction on, in front of a white wall, at 32² with `depth` bounces. Returns the image and
+/// the number of field evaluations.
+fn layered_glass(depth: i32, alpha: f32) -> (vlib::Image, usize) {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    let calls = Arc::new(AtomicUsize::new(0));
+    let mut vl = Library::new();
+    vl.scene().unwrap();
+    vl.camera(&Camera {
+        eye: [30.0, 40.0, -300.0],
+        at: [0.0; 3],
+        up: [0.0, 1.0, 0.0],
+        fov: 30.0,
+    })
+    .unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.directional_light([0.3, 0.5, -1.0], [1.0; 3], 1.0)
+        .unwrap();
+    vl.recursion(depth).unwrap();
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, 0.0).unwrap();
+    vl.scale(400.0, 400.0, 10.0).unwrap();
+    vl.translate(0.0, 0.0, 100.0).unwrap();
+    vl.set(Fields::O | Fields::KA | Fields::COLORS, 1.0)
+        .unwrap();
+    vl.end().unwrap();
+    vl.render_type(RenderType::Dsr).unwrap();
+    vl.surface(Fields::F, 0.5).unwrap();
+    vl.toggle(Feature::Refract, true).unwrap();
+    vl.toggle(Feature::ReceiveReflections, true).unwrap();
+    vl.toggle(Feature::CastReflections, true).unwrap();
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, -0.5).unwrap();
+    vl.scale(120.0, 120.0, 60.0).unwrap();
+    vl.rotate(20.0, 30.0, 0.0).unwrap();
+    let counter = calls.clone();
+    vl.function(Fields::F, move |s| {
+        counter.fetch_add(1, Ordering::Relaxed);
+        let z = s.position()[2];
+        let _ = s.set(
+            Fields::F,
+            0.5 + 0.5 * (2.0 * std::f32::consts::PI * 8.0 * z).sin(),
+        );
+    })
+    .unwrap();
+    vl.set(Fields::O, alpha).unwrap();
+    vl.set(Fields::KS | Fields::KD, 0.5).unwrap();
+    vl.set(Fields::COLORS, 0.6).unwrap();
+    vl.set(Fields::RF, vlib::types::refraction_to_field(1.5))
+        .unwrap();
+    vl.end().unwrap();
+    let img = vl.render_preview(32, 32, 1.0).unwrap();
+    let n = calls.load(Ordering::Relaxed);
+    (img, n)
+}
+
+/// In layered glass every surface both reflects and refracts, so the ray tree may branch at
+/// each of the sixteen surfaces of each ray: only the branches that weigh at least the
+/// termination threshold in the pixel are traced, so the work stops growing once the depth
+/// passes the longest such branch. With opacity 0.3 a branch loses at least 30 % at each
+/// surface it passes or reflects at (KS ½ · 0.3 < 0.7), so none is longer than
+/// log(1/512)/log(0.7) < 18 bounces: depth 32 and 64 trace the same tree and give the same
+/// image. With opacity 0.1 branches reach 59 bounces, but few rays stay in the glass so long.
+#[test]
+fn layered_glass_work_stops_growing_with_the_depth() {
+    let (img32, n32) = layered_glass(32, 0.3);
+    let (img64, n64) = layered_glass(64, 0.3);
+    assert_eq!(n32, n64, "the same tree at depth 32 and 64");
+    for y in 0..32 {
+        for x in 0..32 {
+            assert_eq!(img32.pixel(x, y), img64.pixel(x, y), "({x}, {y})");
+        }
+    }
+    let (_, n32) = layered_glass(32, 0.1);
+    let (img64, n64) = layered_glass(64, 0.1);
+    assert!(
+        n64 as f64 <= 1.01 * n32 as f64,
+        "{n32} evaluations at depth 32, {n64} at 64"
+    );
+    for y in 0..32 {
+        for x in 0..32 {
+            let p = img64.pixel(x, y);
+            assert!(
+                p.iter().all(|c| (0.0..=1.0).contains(c)),
+                "({x}, {y}): {p:?}"
+            );
+        }
     }
 }

@@ -144,6 +144,12 @@ impl Integral {
         ends
     }
 
+    /// The transmittance left.
+    #[inline(always)]
+    pub(in crate::render) fn transmittance(&self) -> f64 {
+        self.t
+    }
+
     /// The colour gathered and the transmittance left.
     #[inline(always)]
     pub(in crate::render) fn result(self) -> (DVec3, f64) {

@@ -35,6 +35,7 @@ impl Compiled {
             alpha: o,
             colour: DVec3::new(f[1] as f64, f[2] as f64, f[3] as f64),
             bend: None,
+            mirror: None,
         })
     }
 }

@@ -16,12 +16,15 @@ mod surface;
 pub(in crate::render) use dvr::*;
 
 /// What kind of ray is being traced: how many bounces it has made, whether it is a mirror ray
-/// (it then sees only objects that cast reflections) and what it shows where it escapes.
+/// (it then sees only objects that cast reflections), what it shows where it escapes, and what
+/// its colour weighs in the pixel (1 for a primary ray; the products of transmittances,
+/// opacities and KS along the ray tree for a secondary one).
 #[derive(Clone, Copy, Debug)]
 pub(in crate::render) struct Ray {
     pub(in crate::render) depth: i32,
     pub(in crate::render) mirror: bool,
     pub(in crate::render) background: bool,
+    pub(in crate::render) weight: f64,
 }
 
 impl Ray {
@@ -29,17 +32,31 @@ impl Ray {
         depth: 0,
         mirror: false,
         background: true,
+        weight: 1.0,
     };
 }
 
+/// The mirror ray of a surface hit: it starts at `from` along `dir`, and its colour adds `ks`
+/// times itself to the hit's; `background`: whether it shows the background where it escapes.
+#[derive(Clone, Copy, Debug)]
+pub(in crate::render) struct Mirror {
+    pub(in crate::render) from: DVec3,
+    pub(in crate::render) dir: DVec3,
+    pub(in crate::render) ks: f64,
+    pub(in crate::render) background: bool,
+}
+
 /// A contribution at one depth along a ray: a surface hit or a MIP layer; `bend` is the new
-/// direction of a refracting surface (the ray continues that way behind it).
+/// direction of a refracting surface (the ray continues that way behind it), `mirror` the
+/// mirror ray of a reflecting one. Both are traced only when the compositing reaches the layer
+/// and their branch weighs enough in the pixel ([`Compiled::branch`]).
 #[derive(Clone, Copy, Debug)]
 pub(in crate::render) struct Layer {
     pub(in crate::render) t: f64,
     pub(in crate::render) alpha: f64,
     pub(in crate::render) colour: DVec3,
     pub(in crate::render) bend: Option<(DVec3, DVec3)>,
+    pub(in crate::render) mirror: Option<Mirror>,
 }
 
 /// What [`Compiled::trace_ray`] makes of the scene and the origin of an image's primary rays
@@ -127,6 +144,16 @@ impl Compiled {
             },
             background: crate::model::scene::v3(self.settings.background),
         }
+    }
+
+    /// Whether a secondary ray whose colour weighs `weight` in the pixel is traced: where that
+    /// weight is positive and at least the termination threshold (with early termination
+    /// off, wherever it is positive); returns the weight then. A branch cut off adds nothing,
+    /// as the rest of a terminated ray does: each bounce's ray traces its own further rays
+    /// only where its composite reaches, so the tree's size is bounded by the number of
+    /// branches that can weigh that much, not by 2 to the recursion depth.
+    fn branch(&self, weight: f64) -> Option<f64> {
+        (weight > 0.0 && weight >= self.settings.optimise.stop_below()).then_some(weight)
     }
 
     /// Traces a ray. DVR objects contribute their samples, DSR objects their surface hits and
@@ -234,22 +261,41 @@ impl Compiled {
                     break;
                 }
                 layers.next();
-                if acc.add(layer.alpha, layer.colour) {
+                // The layer's weight in the pixel, before it is composited.
+                let reached = ray.weight * acc.transmittance() * layer.alpha;
+                let mut colour = layer.colour;
+                if let Some(m) = layer.mirror {
+                    if let Some(weight) = self.branch(reached * m.ks) {
+                        let mirror = Ray {
+                            depth: ray.depth + 1,
+                            mirror: true,
+                            background: m.background,
+                            weight,
+                        };
+                        colour +=
+                            m.ks * self.trace_ray(m.from, None, m.dir, mirror, f64::NEG_INFINITY);
+                    }
+                }
+                if acc.add(layer.alpha, colour) {
                     break 'march;
                 }
                 if let Some((from, to)) = layer.bend {
                     // Everything behind a refracting surface is seen along the bent ray.
+                    let (col, t) = acc.result();
+                    let Some(weight) = self.branch(ray.weight * t) else {
+                        return col;
+                    };
                     let behind = self.trace_ray(
                         from,
                         None,
                         to,
                         Ray {
                             depth: ray.depth + 1,
+                            weight,
                             ..ray
                         },
                         f64::NEG_INFINITY,
                     );
-                    let (col, t) = acc.result();
                     return col + t * behind;
                 }
             }

@@ -1,9 +1,8 @@
 //! Direct surface rendering: the iso-surface hits of a DSR object along a ray, found between
 //! consecutive samples and refined by bisection. On rays that show colour each hit is shaded,
-//! and followed by its mirror ray and its refracted direction where the object asks for them
-//! (the mirror ray is traced by [`Compiled::trace_ray`]; the refracted one is the caller's to
-//! follow, as the hit's `bend`); shadow rays take only each hit's opacity. Compositing the hits
-//! is the caller's.
+//! and given its mirror ray and its refracted direction where the object asks for them (the
+//! hit's `mirror` and `bend`: tracing them is the compositing's, which knows whether the hit is
+//! reached and what it weighs in the pixel); shadow rays take only each hit's opacity.
 
 use crate::render::*;
 
@@ -104,17 +103,19 @@ impl Compiled {
                                 alpha: o.min(1.0),
                                 colour: DVec3::ZERO,
                                 bend: None,
+                                mirror: None,
                             });
                         }
                     } else if o > 0.0 || bends {
                         let mut bend = None;
+                        let mut mirror = None;
                         let secondary = (self.plan.reflections && obj.receive_reflections || bends)
                             && ray.depth < obj.recursion;
                         // Secondary rays leave along the normal the shading uses (the
                         // gradient's, then the object's normal functions): computed once.
                         let normal = secondary.then(|| obj.normal(w, -dir, &mut s, field));
                         let f = s.values();
-                        let mut col = self.illuminate_with(obj, w, dir, &f, || {
+                        let col = self.illuminate_with(obj, w, dir, &f, || {
                             normal.unwrap_or_else(|| obj.normal(w, -dir, &mut s, field))
                         });
                         if let Some(Some(n)) = normal {
@@ -123,19 +124,12 @@ impl Compiled {
                                 let ks = s.value(6) as f64;
                                 if ks > 0.0 {
                                     let r = reflect(dir, if n.dot(dir) > 0.0 { -n } else { n });
-                                    let mirror = Ray {
-                                        depth: ray.depth + 1,
-                                        mirror: true,
+                                    mirror = Some(Mirror {
+                                        from: w + eps * r,
+                                        dir: r,
+                                        ks,
                                         background: obj.reflect_background,
-                                    };
-                                    col += ks
-                                        * self.trace_ray(
-                                            w + eps * r,
-                                            None,
-                                            r,
-                                            mirror,
-                                            f64::NEG_INFINITY,
-                                        );
+                                    });
                                 }
                             }
                             if bends {
@@ -155,6 +149,7 @@ impl Compiled {
                             alpha: o.min(1.0),
                             colour: col,
                             bend,
+                            mirror,
                         });
                     }
                 }
