@@ -52,11 +52,15 @@ pub enum ErrorCode {
     /// A dataset file's size disagrees with its header (truncated or trailing data)
     /// (`VL_BADSIZE`).
     BadSize = 17,
+    /// The render was cancelled, by `vlCancel`, a progress function or a cancel flag
+    /// (`VL_CANCELLED`, an extension: no command of the paper's API reports it unless the
+    /// program used the extensions).
+    Cancelled = 18,
 }
 
 impl ErrorCode {
     /// Every code, in numeric order.
-    pub const ALL: [ErrorCode; 18] = [
+    pub const ALL: [ErrorCode; 19] = [
         ErrorCode::NoError,
         ErrorCode::BadScope,
         ErrorCode::BadValue,
@@ -75,6 +79,7 @@ impl ErrorCode {
         ErrorCode::BadVoxelWidth,
         ErrorCode::BadRange,
         ErrorCode::BadSize,
+        ErrorCode::Cancelled,
     ];
 
     /// The code with this number, if there is one.
@@ -104,6 +109,7 @@ impl ErrorCode {
             ErrorCode::BadVoxelWidth => "dataset voxel width is not 1 or 2 bytes\0",
             ErrorCode::BadRange => "dataset normalisation a, b is not finite or a = b\0",
             ErrorCode::BadSize => "dataset file size disagrees with its header\0",
+            ErrorCode::Cancelled => "rendering cancelled\0",
         }
     }
 

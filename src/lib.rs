@@ -15,7 +15,7 @@
 //! Everything else is internal, in layers that import downward only (`docs/dev/architecture.md`):
 //! `api` (the state machine) → `output` (the one place that writes files) → `render` (scene →
 //! immutable plan → pixels) → `accel` (empty-space skipping) → `model` (plain scene data and the
-//! object model) → `data` (datasets) → the base (`types`, `error`, `num`, `pool`).
+//! object model) → `data` (datasets) → the base (`types`, `error`, `num`, `pool`, `control`).
 //!
 //! ```no_run
 //! use vlib::{Camera, Fields, Library};
@@ -38,6 +38,7 @@
 
 mod accel;
 mod api;
+mod control;
 mod data;
 mod error;
 mod model;
@@ -52,6 +53,7 @@ pub mod types;
 pub use api::library::{Closed, Library, Sampler};
 pub use api::scope;
 pub use api::scope::{Command, Scope};
+pub use control::{CancelFlag, ProgressFn, RenderControl};
 pub use data::{Dataset, Filter, Voxels};
 pub use error::{Error, ErrorCode, Result};
 pub use model::program::{FieldFn, NormalFn, Sample, SampleRole};

@@ -1,6 +1,7 @@
 //! The crate's layers import downward only (`docs/dev/architecture.md`): the state machine
 //! (`api`) → output (`output`) → the renderer (`render`) → empty-space skipping (`accel`) → the
-//! object model (`model`) → datasets (`data`) → the base types (`types`, `error`, `num`). This
+//! object model (`model`) → datasets (`data`) → the base types (`types`, `error`, `num`, `pool`,
+//! `control`). This
 //! reads every production source file under `src/` (unit tests excluded: they may reach any
 //! layer) and fails on a `crate::` path into a higher layer, whether in code or in a doc link,
 //! through a module or a name the crate root re-exports. Paths by `super::super::…` are not
@@ -10,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 /// The layers, lowest first; a layer may use its own and every lower one.
 const LAYERS: [&[&str]; 7] = [
-    &["types", "error", "num", "pool"],
+    &["types", "error", "num", "pool", "control"],
     &["data"],
     &["model"],
     &["accel"],
@@ -21,7 +22,7 @@ const LAYERS: [&[&str]; 7] = [
 
 /// The names `src/lib.rs` re-exports at the crate root, with the layer each comes from, so that
 /// `crate::Library` counts as a path into `api`.
-const ROOT: [(&str, &str); 28] = [
+const ROOT: [(&str, &str); 31] = [
     ("Library", "api"),
     ("Closed", "api"),
     ("Sampler", "api"),
@@ -50,6 +51,9 @@ const ROOT: [(&str, &str); 28] = [
     ("ErrorCode", "error"),
     ("Result", "error"),
     ("T_MIN", "types"),
+    ("CancelFlag", "control"),
+    ("ProgressFn", "control"),
+    ("RenderControl", "control"),
 ];
 
 /// The top-level modules that belong to no layer: the crate root, the binaries and the unit

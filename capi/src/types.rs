@@ -105,6 +105,8 @@ pub const VL_BADVOXELWIDTH: vlint = 15;
 pub const VL_BADRANGE: vlint = 16;
 /// A dataset file's size disagrees with its header (truncated or trailing data).
 pub const VL_BADSIZE: vlint = 17;
+/// Extension: the render was cancelled (`vlCancel`, or a progress function that returned 0).
+pub const VL_CANCELLED: vlint = 18;
 
 // ---------------------------------------------------------------------------------------------
 // Render types
@@ -257,6 +259,7 @@ mod checks {
         VL_BADVOXELWIDTH => ErrorCode::BadVoxelWidth,
         VL_BADRANGE => ErrorCode::BadRange,
         VL_BADSIZE => ErrorCode::BadSize,
+        VL_CANCELLED => ErrorCode::Cancelled,
         VL_DVR => RenderType::Dvr,
         VL_DSR => RenderType::Dsr,
         VL_MIP => RenderType::Mip,

@@ -50,28 +50,6 @@ impl ImageFormat {
     }
 }
 
-/// Encodes 8-bit RGB pixels (row-major, top row first) in the format of `path`.
-pub fn encode(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>> {
-    assert_eq!(rgb.len(), width as usize * height as usize * 3);
-    match ImageFormat::from_path(path)? {
-        ImageFormat::Ppm => {
-            let mut out = format!("P6\n{width} {height}\n255\n").into_bytes();
-            out.extend_from_slice(rgb);
-            Ok(out)
-        }
-        ImageFormat::Png => {
-            use image::ImageEncoder;
-            let mut out = Vec::new();
-            image::codecs::png::PngEncoder::new(&mut out)
-                .write_image(rgb, width, height, image::ExtendedColorType::Rgb8)
-                .map_err(|e| {
-                    Error::new(ErrorCode::Internal, format!("PNG encoding failed: {e}"))
-                })?;
-            Ok(out)
-        }
-    }
-}
-
 /// How many links [`destination`] follows before it gives up (as the kernel's `ELOOP`).
 const MAX_LINKS: usize = 40;
 
@@ -162,7 +140,133 @@ fn directory_of(dest: &Path) -> (PathBuf, Option<fs::File>) {
     }
 }
 
-/// Writes `bytes` to `path` atomically, the one way every file of the library is written:
+/// A file being written atomically ([`write_atomic`] lists the rules): the bytes go to a
+/// temporary in the destination's directory, and [`AtomicFile::commit`] renames it over the
+/// destination once complete. Dropped without a commit (a failed or cancelled write), it
+/// removes the temporary: nothing of it is left. Writes are buffered.
+pub(crate) struct AtomicFile {
+    /// The path the caller named (for messages).
+    path: PathBuf,
+    /// The temporary and its directory, the destination's file name, the permissions of the
+    /// file it replaces.
+    tmp: PathBuf,
+    dir: PathBuf,
+    name: std::ffi::OsString,
+    existing: Option<fs::Permissions>,
+    /// `None` once committed.
+    file: Option<std::io::BufWriter<fs::File>>,
+    /// Keeps `dir` valid where it is a `/proc/self/fd` path.
+    _open_dir: Option<fs::File>,
+}
+
+impl AtomicFile {
+    /// Starts writing `path`: checks the destination and creates the temporary.
+    pub(crate) fn create(path: &Path) -> Result<AtomicFile> {
+        if path.file_name().is_none() {
+            return err(
+                ErrorCode::BadFile,
+                format!("{}: not a file name", path.display()),
+            );
+        }
+        let io =
+            |e: std::io::Error| Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()));
+        let dest = destination(path).map_err(io)?;
+        let name = dest.file_name().ok_or_else(|| {
+            Error::new(
+                ErrorCode::BadFile,
+                format!("{}: not a file name", path.display()),
+            )
+        })?;
+        let existing = match fs::metadata(&dest) {
+            Ok(m) if m.is_dir() => {
+                return err(
+                    ErrorCode::IoError,
+                    format!("{}: is a directory", path.display()),
+                )
+            }
+            Ok(m) if !m.is_file() => {
+                return err(
+                    ErrorCode::IoError,
+                    format!("{}: not a regular file", path.display()),
+                )
+            }
+            Ok(m) => {
+                let denied = m.permissions().readonly()
+                    || fs::OpenOptions::new().write(true).open(&dest).is_err();
+                if denied {
+                    return err(
+                        ErrorCode::IoError,
+                        format!("{}: the existing file may not be written", path.display()),
+                    );
+                }
+                Some(m.permissions())
+            }
+            Err(_) => None,
+        };
+        let (dir, open_dir) = directory_of(&dest);
+        let (tmp, f) = create_temporary(&dir, temporary_name).map_err(io)?;
+        Ok(AtomicFile {
+            path: path.to_path_buf(),
+            tmp,
+            dir,
+            name: name.to_owned(),
+            existing,
+            file: Some(std::io::BufWriter::with_capacity(1 << 16, f)),
+            _open_dir: open_dir,
+        })
+    }
+
+    /// The error of a failed write, with the caller's path.
+    fn io(&self, e: std::io::Error) -> Error {
+        Error::new(ErrorCode::IoError, format!("{}: {e}", self.path.display()))
+    }
+
+    /// Appends `bytes`; `VL_IOERROR` if they cannot be written.
+    pub(crate) fn write(&mut self, bytes: &[u8]) -> Result<()> {
+        let f = self.file.as_mut().expect("not committed");
+        f.write_all(bytes).map_err(|e| {
+            Error::new(ErrorCode::IoError, format!("{}: {e}", self.path.display()))
+        })
+    }
+
+    /// The buffered file, for encoders that write through [`std::io::Write`].
+    pub(crate) fn writer(&mut self) -> &mut impl Write {
+        self.file.as_mut().expect("not committed")
+    }
+
+    /// Completes the file: flushes it to disk, gives it the replaced file's permissions and
+    /// renames it over the destination.
+    pub(crate) fn commit(mut self) -> Result<()> {
+        let f = self.file.take().expect("not committed");
+        let result = (|| {
+            let f = f.into_inner().map_err(|e| e.into_error())?;
+            if let Some(p) = &self.existing {
+                f.set_permissions(p.clone())?;
+            }
+            f.sync_all()?;
+            drop(f);
+            fs::rename(&self.tmp, self.dir.join(&self.name))
+        })();
+        result.map_err(|e| {
+            let _ = fs::remove_file(&self.tmp);
+            self.io(e)
+        })?;
+        self.tmp = PathBuf::new();
+        Ok(())
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if !self.tmp.as_os_str().is_empty() {
+            self.file = None;
+            let _ = fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Writes `bytes` to `path` atomically, the one way every file of the library is written
+/// (through an [`AtomicFile`]):
 ///
 /// - the bytes go to a new temporary file in the destination's directory, created exclusively
 ///   under a name nobody can predict (never through a link planted at it), flushed to disk, and
@@ -175,65 +279,34 @@ fn directory_of(dest: &Path) -> (PathBuf, Option<fs::File>) {
 ///   pass to the new one;
 /// - any path legal for the output works (a file name of 255 bytes, a path near `PATH_MAX`).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    if path.file_name().is_none() {
-        return err(
-            ErrorCode::BadFile,
-            format!("{}: not a file name", path.display()),
-        );
-    }
-    let io = |e: std::io::Error| Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()));
-    let dest = destination(path).map_err(io)?;
-    let name = dest.file_name().ok_or_else(|| {
-        Error::new(
-            ErrorCode::BadFile,
-            format!("{}: not a file name", path.display()),
-        )
-    })?;
-    let existing = match fs::metadata(&dest) {
-        Ok(m) if m.is_dir() => {
-            return err(
-                ErrorCode::IoError,
-                format!("{}: is a directory", path.display()),
-            )
-        }
-        Ok(m) if !m.is_file() => {
-            return err(
-                ErrorCode::IoError,
-                format!("{}: not a regular file", path.display()),
-            )
-        }
-        Ok(m) => {
-            let denied = m.permissions().readonly()
-                || fs::OpenOptions::new().write(true).open(&dest).is_err();
-            if denied {
-                return err(
-                    ErrorCode::IoError,
-                    format!("{}: the existing file may not be written", path.display()),
-                );
-            }
-            Some(m.permissions())
-        }
-        Err(_) => None,
-    };
-    let (dir, _open_dir) = directory_of(&dest);
-    let (tmp, mut f) = create_temporary(&dir, temporary_name).map_err(io)?;
-    let result = (|| {
-        f.write_all(bytes).map_err(io)?;
-        if let Some(p) = existing {
-            f.set_permissions(p).map_err(io)?;
-        }
-        f.sync_all().map_err(io)?;
-        fs::rename(&tmp, dir.join(name)).map_err(io)
-    })();
-    drop(f);
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result
+    let mut f = AtomicFile::create(path)?;
+    f.write(bytes)?;
+    f.commit()
 }
 
-/// Encodes and writes an image atomically.
+/// Encodes 8-bit RGB pixels (row-major, top row first) in the format of `path` (by its
+/// extension) and writes them atomically, encoding straight into the file: PPM with no copy of
+/// the pixels, PNG with the compressed stream (at most about the pixels' size) held once.
 pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
-    let bytes = encode(path, width, height, rgb)?;
-    write_atomic(path, &bytes)
+    assert_eq!(rgb.len(), width as usize * height as usize * 3);
+    let format = ImageFormat::from_path(path)?;
+    let mut f = AtomicFile::create(path)?;
+    match format {
+        ImageFormat::Ppm => {
+            f.write(format!("P6\n{width} {height}\n255\n").as_bytes())?;
+            f.write(rgb)?;
+        }
+        ImageFormat::Png => {
+            use image::ImageEncoder;
+            image::codecs::png::PngEncoder::new(f.writer())
+                .write_image(rgb, width, height, image::ExtendedColorType::Rgb8)
+                .map_err(|e| match e {
+                    image::ImageError::IoError(e) => {
+                        Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()))
+                    }
+                    e => Error::new(ErrorCode::Internal, format!("PNG encoding failed: {e}")),
+                })?;
+        }
+    }
+    f.commit()
 }

@@ -1,0 +1,128 @@
+//! Progress and cancellation of a render: the options a caller gives ([`RenderControl`]: a
+//! [`CancelFlag`] and a progress function) and, per render, the counter of work done that
+//! reports to them ([`Progress`]). Part of the base layer: it counts units of work (pixels,
+//! voxelized nodes) and knows nothing of scenes; the renderer and the output layer say what a
+//! unit is and check for cancellation between and within their pieces of work.
+
+use crate::error::{Error, ErrorCode, Result};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Arc;
+
+/// A flag that stops renders: cloned to any thread, [`CancelFlag::cancel`] makes the render in
+/// progress (and every later one, until [`CancelFlag::reset`]) stop within a tile of work and
+/// fail with [`ErrorCode::Cancelled`], writing no file.
+#[derive(Clone, Debug, Default)]
+pub struct CancelFlag(Arc<AtomicBool>);
+
+impl CancelFlag {
+    /// A flag not set.
+    pub fn new() -> CancelFlag {
+        CancelFlag::default()
+    }
+
+    /// Sets the flag.
+    pub fn cancel(&self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+
+    /// Clears the flag.
+    pub fn reset(&self) {
+        self.0.store(false, Ordering::Relaxed);
+    }
+
+    /// Whether the flag is set.
+    pub fn is_cancelled(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
+/// A progress function: called with the fraction of a scene's outputs done, in [0, 1],
+/// increasing, from the thread that renders (the one that called the scene's `end` or
+/// `render_preview`), between pieces of work (a strip of image rows, a slab of voxelized
+/// nodes) and once with 1 at the end; returning `false` cancels the render.
+pub type ProgressFn = Arc<dyn Fn(f32) -> bool + Send + Sync>;
+
+/// How a caller follows and stops renders ([`crate::Library::set_render_control`]).
+#[derive(Clone, Default)]
+pub struct RenderControl {
+    /// Renders stop when it is set.
+    pub cancel: Option<CancelFlag>,
+    /// Told the progress of each render.
+    pub progress: Option<ProgressFn>,
+}
+
+impl std::fmt::Debug for RenderControl {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RenderControl")
+            .field("cancel", &self.cancel)
+            .field("progress", &self.progress.as_ref().map(|_| "fn"))
+            .finish()
+    }
+}
+
+/// One render's progress: the units of work it has, those done, and whether it was
+/// cancelled. Shared by the threads of the render (checks are atomic loads).
+pub(crate) struct Progress {
+    control: RenderControl,
+    total: u64,
+    done: AtomicU64,
+    stopped: AtomicBool,
+}
+
+impl Progress {
+    /// A render of `total` units of work followed by `control`.
+    pub(crate) fn new(control: &RenderControl, total: u64) -> Progress {
+        Progress {
+            control: control.clone(),
+            total,
+            done: AtomicU64::new(0),
+            stopped: AtomicBool::new(false),
+        }
+    }
+
+    /// A render nobody follows (tests, internal renders).
+    #[cfg(test)]
+    pub(crate) fn none() -> Progress {
+        Progress::new(&RenderControl::default(), 0)
+    }
+
+    /// Whether the render is to stop (its flag set, or its progress function said so).
+    #[inline]
+    pub(crate) fn cancelled(&self) -> bool {
+        self.stopped.load(Ordering::Relaxed)
+            || self.control.cancel.as_ref().is_some_and(|c| c.is_cancelled())
+    }
+
+    /// `Err(Cancelled)` where the render is to stop.
+    pub(crate) fn check(&self) -> Result<()> {
+        if self.cancelled() {
+            Err(cancelled())
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Counts `units` more done and tells the progress function (on the calling thread, which
+    /// is the rendering one: the callers call it between pieces of work); `Err(Cancelled)`
+    /// where the render is to stop.
+    pub(crate) fn advance(&self, units: u64) -> Result<()> {
+        let done = self.done.fetch_add(units, Ordering::Relaxed) + units;
+        if let Some(f) = &self.control.progress {
+            let fraction = if self.total == 0 {
+                1.0
+            } else {
+                (done.min(self.total) as f64 / self.total as f64) as f32
+            };
+            // A panic in the function is the render's (caught where the render's are).
+            if !f(fraction) {
+                self.stopped.store(true, Ordering::Relaxed);
+            }
+        }
+        self.check()
+    }
+}
+
+/// The error of a cancelled render.
+pub(crate) fn cancelled() -> Error {
+    Error::new(ErrorCode::Cancelled, "the render was cancelled")
+}
