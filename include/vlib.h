@@ -1,4 +1,5 @@
-/* vlib: a volume graphics library (Winter & Chen, 2001). The C interface: 44 commands. */
+/* vlib: a volume graphics library (Winter & Chen, 2001). The C interface: 44 commands,
+   then the extensions beyond them (docs/extensions.md). */
 
 #ifndef VLIB_H
 #define VLIB_H
@@ -208,6 +209,11 @@ typedef vlfloat vlvector[3];
  A dataset file's size disagrees with its header (truncated or trailing data).
  */
 #define VL_BADSIZE 17
+
+/*
+ Extension: the render was cancelled (`vlCancel`, or a progress function that returned 0).
+ */
+#define VL_CANCELLED 18
 
 /*
  Direct volume rendering (the default).
@@ -621,6 +627,29 @@ vlfloat vlChildField(vlint child, vlint field);
  `n` must be NULL or point to 3 writable floats.
  */
 void vlChildNormal(vlint child, vlfloat *n);
+
+/*
+ ======== Extensions: functions beyond the 44 commands of the paper's API ========
+ (`docs/extensions.md`). A program that uses none of them sees the paper's API.
+
+ Extension. Registers `f` as the progress function of the library's renders: while a scene's `vlEnd`
+ renders its images and volumes, `f` is called on that thread with the fraction done, in
+ [0, 1] and increasing (after each strip of image rows and each slab of voxelized nodes, and
+ with 1 at the end), and with `misc`; returning 0 cancels the render, which then fails with
+ `VL_CANCELLED` and writes no file of the output it was making. Inside `f` only `vlCancel`,
+ `vlSample`, `vlError` and `vlErrorString` are legal. NULL removes the function. Legal at
+ library and scene scope; kept until the library's final `vlEnd`.
+ */
+void vlProgress(vlint (*f)(vlfloat done, void *misc), void *misc);
+
+/*
+ Extension. Stops the render in progress, if a scene is rendering, within a tile of work: its `vlEnd` records
+ `VL_CANCELLED` and writes no file of the output it was making (outputs it finished before
+ are written). Legal anywhere and from any thread (a field function, a progress function,
+ another thread of the program); it never waits. Without a render in progress it does
+ nothing.
+ */
+void vlCancel(void);
 
 /* Field value encoding a specular exponent e. */
 #define VLSPECULAR(e) ((vlfloat)(e) / VL_MAXSPECULAR)

@@ -42,7 +42,7 @@ impl CancelFlag {
 /// nodes) and once with 1 at the end; returning `false` cancels the render.
 pub type ProgressFn = Arc<dyn Fn(f32) -> bool + Send + Sync>;
 
-/// How a caller follows and stops renders ([`crate::Library::set_render_control`]).
+/// How a caller follows and stops renders (`Library::set_render_control`).
 #[derive(Clone, Default)]
 pub struct RenderControl {
     /// Renders stop when it is set.
@@ -90,7 +90,11 @@ impl Progress {
     #[inline]
     pub(crate) fn cancelled(&self) -> bool {
         self.stopped.load(Ordering::Relaxed)
-            || self.control.cancel.as_ref().is_some_and(|c| c.is_cancelled())
+            || self
+                .control
+                .cancel
+                .as_ref()
+                .is_some_and(|c| c.is_cancelled())
     }
 
     /// `Err(Cancelled)` where the render is to stop.

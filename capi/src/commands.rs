@@ -1,4 +1,4 @@
-//! The list of the commands of `vlib.h`: each command once, with the module of its API area, in
+//! The list of the commands of `vlib.h` (and, apart, of its extensions): each command once, with the module of its API area, in
 //! the order the header declares them (the order of the API, `docs/commands.md`). The number of
 //! commands, the re-exports in `lib.rs` and the lists the tests check against all come from it.
 //! This module owns the list only: the commands are defined in their area modules, the header
@@ -74,3 +74,7 @@ pub const COMMANDS: &[&str] = &for_each_command!(names);
 
 /// The number of commands.
 pub const COMMAND_COUNT: usize = COMMANDS.len();
+
+/// The C names of the extensions (`extensions`: functions beyond the commands, declared after
+/// them in `vlib.h`), in header order.
+pub const EXTENSIONS: [&str; 2] = ["vlProgress", "vlCancel"];

@@ -132,7 +132,7 @@ pub(crate) fn dispatch<T>(
 static RENDERING: RwLock<Option<Sampler>> = RwLock::new(None);
 
 /// Whether a scene is being rendered.
-fn rendering() -> bool {
+pub(crate) fn rendering() -> bool {
     RENDERING
         .read()
         .unwrap_or_else(|e| e.into_inner())
@@ -148,8 +148,10 @@ pub(crate) fn render_sampler() -> Option<Sampler> {
 pub(crate) struct Rendering(());
 
 impl Rendering {
-    /// Publishes `sampler` for the threads outside the render.
+    /// Publishes `sampler` for the threads outside the render, and clears the cancel flag
+    /// (`vlCancel` stops only the render in progress).
     pub(crate) fn start(sampler: Sampler) -> Rendering {
+        crate::extensions::cancel_flag().reset();
         *RENDERING.write().unwrap_or_else(|e| e.into_inner()) = Some(sampler);
         Rendering(())
     }
@@ -158,6 +160,7 @@ impl Rendering {
 impl Drop for Rendering {
     fn drop(&mut self) {
         *RENDERING.write().unwrap_or_else(|e| e.into_inner()) = None;
+        crate::extensions::cancel_flag().reset();
     }
 }
 

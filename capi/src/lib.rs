@@ -37,6 +37,8 @@ mod object;
 
 mod sampling;
 
+mod extensions;
+
 /// cbindgen:ignore
 mod callbacks;
 /// cbindgen:ignore
@@ -62,7 +64,10 @@ macro_rules! reexport {
 
 // The commands, from the one list in `commands`.
 for_each_command!(reexport);
-pub use commands::{COMMANDS, COMMAND_COUNT};
+pub use commands::{COMMANDS, COMMAND_COUNT, EXTENSIONS};
+
+// The extensions (after the commands in `vlib.h`).
+pub use extensions::{vlCancel, vlProgress};
 
 // vlaux (`vlaux.h`).
 pub use vlaux::{

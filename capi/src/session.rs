@@ -18,7 +18,9 @@ pub extern "C" fn vlInit() {
             |_| never(Command::Init),
             |state| {
                 require(Command::Init, scope_of(state))?;
-                *state = Some(Library::new());
+                let mut lib = Library::new();
+                lib.set_render_control(crate::extensions::initial_control());
+                *state = Some(lib);
                 Ok(())
             },
         )

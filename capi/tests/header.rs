@@ -83,4 +83,11 @@ fn header_has_the_contract_macros_and_types() {
         "include/vlib.h must include nothing"
     );
     assert!(!header.contains("vlu"), "vlaux functions belong in vlaux.h");
+    for name in commands::EXTENSIONS {
+        assert!(
+            header.contains(&format!("{name}(")),
+            "vlib.h declares {name}"
+        );
+    }
+    assert!(header.contains("void vlProgress(vlint (*f)(vlfloat done, void *misc), void *misc);"));
 }

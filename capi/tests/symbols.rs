@@ -1,13 +1,13 @@
 //! The exported surface: the commands (the one list in `capi/src/commands.rs`, compiled in
 //! here) and the vlaux functions are defined by both `libvlib.so` and `libvlib.a`;
-//! `include/vlib.h` declares exactly the commands, in the order of the list; the list is the
-//! core's `vlib_core::Command::ALL`.
+//! `include/vlib.h` declares exactly the commands, in the order of the list, and after them,
+//! under their banner, the extensions; the list is the core's `vlib_core::Command::ALL`.
 
 #[path = "../src/commands.rs"]
 mod commands;
 mod common;
 
-use commands::{COMMANDS, COMMAND_COUNT};
+use commands::{COMMANDS, COMMAND_COUNT, EXTENSIONS};
 use std::collections::BTreeSet;
 use std::process::Command;
 
@@ -66,7 +66,7 @@ fn libraries_export_every_command() {
         ("libvlib.a", &["--defined-only"][..]),
     ] {
         let symbols = defined_text_symbols(args, &dir.join(lib));
-        for name in COMMANDS.iter().chain(VLAUX.iter()) {
+        for name in COMMANDS.iter().chain(&EXTENSIONS).chain(VLAUX.iter()) {
             assert!(symbols.contains(*name), "{lib} does not export {name}");
         }
     }
@@ -92,10 +92,21 @@ fn the_header_declares_exactly_the_commands_in_the_order_of_the_list() {
         let head = &line[..open];
         declared.push(head.rsplit([' ', '*']).next().unwrap_or("").to_string());
     }
+    let want: Vec<&str> = COMMANDS.iter().chain(&EXTENSIONS).copied().collect();
     assert_eq!(
-        declared, COMMANDS,
-        "functions declared in include/vlib.h, in order"
+        declared, want,
+        "functions declared in include/vlib.h, in order: the commands, then the extensions"
     );
+    // The extensions come after the banner that sets them apart.
+    let banner = header
+        .find("Extensions: functions beyond the")
+        .expect("the extensions' banner");
+    for name in EXTENSIONS {
+        assert!(header.find(&format!("{name}(")).unwrap() > banner, "{name}");
+    }
+    for name in COMMANDS {
+        assert!(header.find(&format!("{name}(")).unwrap() < banner, "{name}");
+    }
 }
 
 #[test]

@@ -50,9 +50,25 @@ impl Pinhole {
 /// eye, or where it enters the box, in an edge block: shell) or entered from a neighbour the
 /// ray crossed before, which is then empty (shell again). An eye inside such a block is
 /// enclosed by shell blocks, some of whose corners are then not in front of it: no map.
+///
+/// The map is made in two parts, so that an image rendered in strips holds the bounds of one
+/// strip at a time: [`EntryMarks`], the projection of the boxes (once per image), and its
+/// [`EntryMarks::rows`], the bounds of a range of rows.
 pub(crate) struct EntryMap {
     pub(super) width: usize,
+    /// The image row of the map's first row.
+    pub(super) first_row: usize,
     pub(super) bound: Vec<f64>,
+}
+
+/// An image's projected boxes, by bands of [`ENTRY_BAND`] rows: what [`EntryMap`]s of any of
+/// its rows are filled from.
+pub(crate) struct EntryMarks {
+    width: usize,
+    height: usize,
+    marks: Vec<Mark>,
+    /// Per band of rows, the marks that meet it.
+    in_band: Vec<Vec<u32>>,
 }
 
 /// Rows per parallel task filling an entry map.
@@ -76,20 +92,51 @@ const ENTRY_BUDGET: usize = 64;
 const ENTRY_BOXES_PER_PIXEL: usize = 1;
 
 impl EntryMap {
-    /// The map of `grid`'s object (whose object-to-world transform is `to_world`) seen by
+    /// The map of every row of the image ([`EntryMarks::build`] and its rows).
+    #[cfg(test)]
+    pub(crate) fn build(grid: &SkipGrid, to_world: DMat4, camera: &Pinhole) -> Option<EntryMap> {
+        EntryMarks::build(grid, to_world, camera)?.all_rows()
+    }
+
+    /// The map of every row of the image ([`EntryMarks::of_boxes`] and its rows).
+    #[cfg(test)]
+    pub(crate) fn of_boxes(boxes: &Boxes, to_world: DMat4, camera: &Pinhole) -> Option<EntryMap> {
+        EntryMarks::of_boxes(boxes, to_world, camera)?.all_rows()
+    }
+
+    /// The map of every row of the image ([`EntryMarks::build_within`] and its rows).
+    #[cfg(test)]
+    pub(super) fn build_within(
+        boxes: &Boxes,
+        to_world: DMat4,
+        camera: &Pinhole,
+        budget: usize,
+    ) -> Option<EntryMap> {
+        EntryMarks::build_within(boxes, to_world, camera, budget)?.all_rows()
+    }
+
+    /// The bound of pixel (x, y) (a row the map holds).
+    #[inline]
+    pub(crate) fn bound(&self, x: u32, y: u32) -> f64 {
+        self.bound[(y as usize - self.first_row) * self.width + x as usize]
+    }
+}
+
+impl EntryMarks {
+    /// The projection of `grid`'s object (whose object-to-world transform is `to_world`) seen by
     /// `camera`; `None` when it cannot help or cannot be proved: a shell corner not clearly
     /// in front of the eye (an eye in or next to a block that may hold opacity, a volume
     /// around or behind the eye), a singular camera basis, or more marking than
     /// [`ENTRY_BUDGET`] allows.
-    pub(crate) fn build(grid: &SkipGrid, to_world: DMat4, camera: &Pinhole) -> Option<EntryMap> {
+    pub(crate) fn build(grid: &SkipGrid, to_world: DMat4, camera: &Pinhole) -> Option<EntryMarks> {
         Self::of_boxes(&grid.shell, to_world, camera)
     }
 
     /// The map of `boxes`, each grown by an eighth of their unit on every side, that hold the
     /// first sample with opacity above 0 of any ray (the shell's blocks, or
-    /// [`SkipGrid::passing_boxes`]); `None` as for [`EntryMap::build`], and for more boxes
+    /// [`SkipGrid::passing_boxes`]); `None` as for [`EntryMarks::build`], and for more boxes
     /// than [`ENTRY_BOXES_PER_PIXEL`] allows.
-    pub(crate) fn of_boxes(boxes: &Boxes, to_world: DMat4, camera: &Pinhole) -> Option<EntryMap> {
+    pub(crate) fn of_boxes(boxes: &Boxes, to_world: DMat4, camera: &Pinhole) -> Option<EntryMarks> {
         let pixels = (camera.width as usize).saturating_mul(camera.height as usize);
         if boxes.corners.len() > pixels.saturating_mul(ENTRY_BOXES_PER_PIXEL) {
             return None;
@@ -98,13 +145,13 @@ impl EntryMap {
         Self::build_within(boxes, to_world, camera, budget)
     }
 
-    /// [`EntryMap::of_boxes`], giving up past `budget` marked rectangle pixels.
+    /// [`EntryMarks::of_boxes`], giving up past `budget` marked rectangle pixels.
     pub(super) fn build_within(
         boxes: &Boxes,
         to_world: DMat4,
         camera: &Pinhole,
         budget: usize,
-    ) -> Option<EntryMap> {
+    ) -> Option<EntryMarks> {
         let (w, h) = (camera.width as usize, camera.height as usize);
         if w == 0 || h == 0 || boxes.corners.is_empty() {
             return None;
@@ -223,39 +270,62 @@ impl EntryMap {
         if area > budget {
             return None;
         }
-        // The rectangles' minimum, in parallel over bands of rows (the same numbers in any
-        // order), each band going through the rectangles that meet it.
         let mut in_band: Vec<Vec<u32>> = vec![Vec::new(); h.div_ceil(ENTRY_BAND)];
         for (i, m) in marks.iter().enumerate() {
             for band in &mut in_band[m.y.0 / ENTRY_BAND..=m.y.1 / ENTRY_BAND] {
                 band.push(i as u32);
             }
         }
-        // (Zeroed memory from the allocator, each band filled with +∞ by its own task: a
-        // first touch of fresh pages, in parallel.)
-        let mut bound = vec![0.0f64; w * h];
-        bound
-            .par_chunks_mut(ENTRY_BAND * w)
-            .zip(&in_band)
-            .enumerate()
-            .for_each(|(band, (rows, in_band))| {
-                rows.fill(f64::INFINITY);
-                let first = band * ENTRY_BAND;
-                let last = first + rows.len() / w - 1;
-                for m in in_band.iter().map(|&i| &marks[i as usize]) {
-                    let (y0, y1) = (m.y.0.max(first), m.y.1.min(last));
-                    if y0 <= y1 {
-                        let ys = y0 - first..=y1 - first;
-                        lower_rect(rows, w, m.x.0..=m.x.1, ys, m.near);
-                    }
-                }
-            });
-        Some(EntryMap { width: w, bound })
+        Some(EntryMarks {
+            width: w,
+            height: h,
+            marks,
+            in_band,
+        })
     }
 
-    /// The bound of pixel (x, y).
-    #[inline]
-    pub(crate) fn bound(&self, x: u32, y: u32) -> f64 {
-        self.bound[y as usize * self.width + x as usize]
+    /// The map of the image's rows `rows` (within its height): the rectangles' minimum, in
+    /// parallel over bands of rows (the same numbers in any order), each band going through
+    /// the rectangles that meet it. `None` where its memory cannot be had.
+    pub(crate) fn rows(&self, rows: std::ops::Range<usize>) -> Option<EntryMap> {
+        let w = self.width;
+        let (first, last) = (rows.start, rows.end.min(self.height));
+        let len = last.saturating_sub(first) * w;
+        let mut bound: Vec<f64> = Vec::new();
+        bound.try_reserve_exact(len).ok()?;
+        bound.resize(len, f64::INFINITY);
+        // The strip's pieces of bands: the first from `first` to its band's end, then whole
+        // bands.
+        let mut pieces = Vec::new();
+        let mut rest = bound.as_mut_slice();
+        let mut y = first;
+        while y < last {
+            let end = ((y / ENTRY_BAND + 1) * ENTRY_BAND).min(last);
+            let (piece, tail) = rest.split_at_mut((end - y) * w);
+            pieces.push((y, piece));
+            rest = tail;
+            y = end;
+        }
+        pieces.into_par_iter().for_each(|(top, rows)| {
+            let bottom = top + rows.len() / w - 1;
+            let band = &self.in_band[top / ENTRY_BAND];
+            for m in band.iter().map(|&i| &self.marks[i as usize]) {
+                let (y0, y1) = (m.y.0.max(top), m.y.1.min(bottom));
+                if y0 <= y1 {
+                    lower_rect(rows, w, m.x.0..=m.x.1, y0 - top..=y1 - top, m.near);
+                }
+            }
+        });
+        Some(EntryMap {
+            width: w,
+            first_row: first,
+            bound,
+        })
+    }
+
+    /// The map of every row.
+    #[cfg(test)]
+    fn all_rows(&self) -> Option<EntryMap> {
+        self.rows(0..self.height)
     }
 }

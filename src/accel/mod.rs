@@ -35,6 +35,6 @@ mod rect;
 mod tests;
 mod walk;
 
-pub(crate) use entry::{EntryMap, Pinhole};
+pub(crate) use entry::{EntryMap, EntryMarks, Pinhole};
 pub(crate) use grid::SkipGrid;
 pub(crate) use walk::Walk;

@@ -89,6 +89,8 @@ pub struct Library {
     pub(super) datasets: Arc<crate::model::program::Datasets>,
     pub(super) scene: Option<OpenScene>,
     pub(super) ended: bool,
+    /// How renders are followed and stopped ([`Library::set_render_control`]).
+    pub(super) control: crate::control::RenderControl,
 }
 
 pub(super) fn finite(cmd: &str, vals: &[f32]) -> Result<()> {
@@ -208,7 +210,9 @@ impl Library {
                     objects: s.objects,
                     datasets: self.datasets.clone(),
                 };
-                crate::pool::install(|| crate::output::render_outputs(&desc, &s.grids))?;
+                crate::pool::install(|| {
+                    crate::output::render_outputs(&desc, &s.grids, &self.control)
+                })?;
                 Ok(Closed::Scene)
             }
             _ => {

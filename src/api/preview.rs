@@ -1,8 +1,10 @@
 //! What the Rust API adds to the commands, at library or scene scope: rendering the open scene
 //! to memory ([`Library::render_preview`]), its render plan ([`Library::render_plan`]), the
-//! pixel-preserving speed-ups ([`Library::set_optimise`]) and a snapshot of the state for tests
+//! pixel-preserving speed-ups ([`Library::set_optimise`]), progress and cancellation
+//! ([`Library::set_render_control`]) and a snapshot of the state for tests
 //! ([`Library::fingerprint`]). None of these is a command of the C API; only `set_optimise`
-//! changes state (the settings), and a render fills the open scene's caches, nothing else.
+//! and `set_render_control` change state, and a render fills the open scene's caches, nothing
+//! else.
 
 use super::library::{positive, Library, MAX_IMAGE_PIXELS};
 use crate::api::scope::Scope;
@@ -22,7 +24,9 @@ impl Library {
             );
         }
         crate::pool::install(|| {
-            crate::render::render_image(&self.compile(&desc), width, height, aspect)
+            let progress =
+                crate::control::Progress::new(&self.control, width as u64 * height as u64);
+            crate::render::render_image(&self.compile(&desc), width, height, aspect, &progress)
         })
     }
 
@@ -85,6 +89,17 @@ impl Library {
         }
         self.settings_mut().optimise = optimise;
         Ok(())
+    }
+
+    /// Sets how renders are followed and stopped, at any scope: a [`crate::CancelFlag`] that
+    /// stops a render from any thread, and a progress function called on the rendering thread
+    /// with the fraction done (returning `false` cancels). They apply to the scene's outputs at
+    /// its `end` and to [`Library::render_preview`]; a cancelled render fails with
+    /// [`ErrorCode::Cancelled`] and writes no file of the output it was making (outputs
+    /// finished before it are written). Not a command of the C API (its extensions
+    /// `vlProgress` and `vlCancel` use it).
+    pub fn set_render_control(&mut self, control: crate::control::RenderControl) {
+        self.control = control;
     }
 
     /// A textual snapshot of the whole state, for tests that check a refused call changed

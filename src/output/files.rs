@@ -224,9 +224,8 @@ impl AtomicFile {
     /// Appends `bytes`; `VL_IOERROR` if they cannot be written.
     pub(crate) fn write(&mut self, bytes: &[u8]) -> Result<()> {
         let f = self.file.as_mut().expect("not committed");
-        f.write_all(bytes).map_err(|e| {
-            Error::new(ErrorCode::IoError, format!("{}: {e}", self.path.display()))
-        })
+        f.write_all(bytes)
+            .map_err(|e| Error::new(ErrorCode::IoError, format!("{}: {e}", self.path.display())))
     }
 
     /// The buffered file, for encoders that write through [`std::io::Write`].
@@ -266,7 +265,7 @@ impl Drop for AtomicFile {
 }
 
 /// Writes `bytes` to `path` atomically, the one way every file of the library is written
-/// (through an [`AtomicFile`]):
+/// (through an `AtomicFile`):
 ///
 /// - the bytes go to a new temporary file in the destination's directory, created exclusively
 ///   under a name nobody can predict (never through a link planted at it), flushed to disk, and

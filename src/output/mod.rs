@@ -7,9 +7,10 @@
 //! so that no layer below this one writes a file); every file atomically ([`write_atomic`]). It
 //! does not trace rays or evaluate fields itself.
 
-use crate::error::{Error, Result};
-use crate::model::scene::SceneDesc;
-use crate::render::{render_image, Compiled, Grids};
+use crate::control::{Progress, RenderControl};
+use crate::error::{Error, ErrorCode, Result};
+use crate::model::scene::{ImageRequest, SceneDesc};
+use crate::render::{render_strips, try_vec, Compiled, Grids};
 
 mod files;
 mod voxel;
@@ -30,17 +31,31 @@ impl crate::data::Dataset {
 }
 
 /// Renders every image and voxelization a scene requested and writes the files. Every output
-/// is attempted; the first failure is returned (its message counts the others).
-pub fn render_outputs(desc: &SceneDesc, grids: &Grids) -> Result<()> {
+/// is attempted; the first failure is returned (its message counts the others). A cancelled
+/// render (`control`) stops at once: the outputs finished before it are written, the one in
+/// progress and the rest are not.
+pub fn render_outputs(desc: &SceneDesc, grids: &Grids, control: &RenderControl) -> Result<()> {
     if desc.images.is_empty() && desc.volumes.is_empty() {
         return Ok(());
     }
+    let total = desc
+        .images
+        .iter()
+        .map(|r| r.width as u64 * r.height as u64)
+        .chain(
+            desc.volumes
+                .iter()
+                .map(|r| r.nodes.iter().product::<usize>() as u64),
+        )
+        .fold(0u64, u64::saturating_add);
+    let progress = Progress::new(control, total);
     let compiled = Compiled::new(desc, grids);
     let mut errors: Vec<Error> = Vec::new();
     for req in &desc.images {
-        let result = render_image(&compiled, req.width, req.height, req.aspect)
-            .and_then(|img| write_image(&req.path, img.width, img.height, &img.to_rgb8()));
-        if let Err(e) = result {
+        if let Err(e) = image(&compiled, req, &progress) {
+            if e.code == ErrorCode::Cancelled {
+                return Err(e);
+            }
             errors.push(e);
         }
     }
@@ -58,4 +73,19 @@ pub fn render_outputs(desc: &SceneDesc, grids: &Grids) -> Result<()> {
             Err(e)
         }
     }
+}
+
+/// Renders one requested image and writes it. The memory it takes is the file's 8-bit pixels
+/// (the output's own bytes, held whole for the encoder), a strip of the render, and for PNG
+/// the compressed stream.
+fn image(compiled: &Compiled, req: &ImageRequest, progress: &Progress) -> Result<()> {
+    let (w, h) = (req.width, req.height);
+    // Refuse a name the file cannot have before rendering.
+    files::ImageFormat::from_path(&req.path)?;
+    let mut rgb: Vec<u8> = try_vec("the image's pixels", w as usize * h as usize * 3)?;
+    render_strips(compiled, w, h, req.aspect, progress, |_, rows| {
+        rgb.extend(rows.iter().flat_map(|p| p.map(crate::render::to_u8)));
+        Ok(())
+    })?;
+    write_image(&req.path, w, h, &rgb)
 }

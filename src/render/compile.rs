@@ -414,6 +414,46 @@ impl Compiled {
         scene
     }
 
+    /// Whether the scene's rays stay within the work bound: a ray takes at most
+    /// [`MAX_SAMPLES_PER_RAY`] samples through each object (its world diagonal over its step),
+    /// else the render is refused with `VL_BADVALUE` before any pixel (`vlStepSize(1e-9, 1)`
+    /// through a 100-unit object would take 10¹¹ a ray). With it, a render's work grows at
+    /// most linearly with its pixels, super-sampling, lights and recursion.
+    pub(crate) fn check_work(&self) -> Result<()> {
+        for (i, obj) in self.objects.iter().enumerate() {
+            let corner = |k: usize| {
+                let pick = |bit: usize, lo: f64, hi: f64| if k >> bit & 1 == 0 { lo } else { hi };
+                let (lo, hi) = (obj.box_min, obj.box_max);
+                obj.to_world.transform_point3(DVec3::new(
+                    pick(0, lo.x, hi.x),
+                    pick(1, lo.y, hi.y),
+                    pick(2, lo.z, hi.z),
+                ))
+            };
+            // The longest chord of a parallelepiped is one of its four body diagonals.
+            let diagonal =
+                (0..4)
+                    .map(|k| corner(k).distance(corner(7 - k)))
+                    .fold(
+                        0.0f64,
+                        |a, b| if b.is_nan() { f64::INFINITY } else { a.max(b) },
+                    );
+            let samples = diagonal / obj.step;
+            if samples.is_nan() || samples > MAX_SAMPLES_PER_RAY {
+                return Err(Error::new(
+                    ErrorCode::BadValue,
+                    format!(
+                        "object {i}: a ray through it would take up to {samples:.3e} samples \
+                         (world diagonal {diagonal:.3e} over step {:.3e}); at most \
+                         {MAX_SAMPLES_PER_RAY} (a coarser vlStepSize, or a smaller object)",
+                        obj.step
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The render plan: which effects this scene calls for.
     pub fn plan(&self) -> Plan {
         self.plan

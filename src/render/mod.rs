@@ -30,7 +30,8 @@
 
 // What the renderer's modules share of the crate: each of them (the packet march too) takes
 // the render module's names with `use super::*` (or `use crate::render::*`).
-use crate::accel::{EntryMap, Pinhole, SkipGrid, Walk};
+use crate::accel::{EntryMap, EntryMarks, Pinhole, SkipGrid, Walk};
+use crate::control::Progress;
 use crate::data::{CellGradients, Cells8, Dataset, Filter};
 use crate::error::{Error, ErrorCode, Result};
 use crate::model::program::{prefix_for, run, Instr, NormalFn, Sample, SampleEnv, SampleRole};
@@ -92,7 +93,8 @@ impl Image {
     }
 }
 
-fn to_u8(v: f32) -> u8 {
+/// A channel in 8 bits, rounded; anything non-finite becomes 0.
+pub(crate) fn to_u8(v: f32) -> u8 {
     if v.is_finite() {
         (v.clamp(0.0, 1.0) * 255.0).round() as u8
     } else {
@@ -100,74 +102,200 @@ fn to_u8(v: f32) -> u8 {
     }
 }
 
+/// Pixels a strip of an image holds at most (more where one row of tiles is more): an image
+/// is rendered a strip of rows at a time, so the memory a render needs beyond its output is
+/// bounded, whatever the image's size (`docs/dev/robustness.md`).
+const STRIP_PIXELS: u64 = 1 << 20;
+
+/// Rows of a strip of a `width × height` image: whole rows of packet tiles, about
+/// [`STRIP_PIXELS`] pixels.
+fn strip_rows(width: u32, height: u32) -> u32 {
+    let rows = (STRIP_PIXELS / width.max(1) as u64).max(1) as u32;
+    rows.next_multiple_of(PACKET_TILE).min(height.max(1))
+}
+
+/// The most samples one ray may take through one object: a scene whose step is finer than
+/// this fraction of an object's world diagonal is refused before it renders
+/// ([`Compiled::check_work`]).
+pub const MAX_SAMPLES_PER_RAY: f64 = (1u64 << 24) as f64;
+
+/// The error of memory a render could not have.
+fn no_memory(what: &str, bytes: u64) -> Error {
+    Error::new(
+        ErrorCode::NoMemory,
+        format!("{what}: {bytes} bytes could not be allocated"),
+    )
+}
+
+/// An empty vector with room for `len` elements, or `VL_NOMEMORY`.
+pub(crate) fn try_vec<T>(what: &str, len: usize) -> Result<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len)
+        .map_err(|_| no_memory(what, (len as u64).saturating_mul(size_of::<T>() as u64)))?;
+    Ok(v)
+}
+
 /// Renders the compiled scene to an image of `width × height` pixels whose view plane has the
-/// given width / height `aspect`. Adaptive super-sampling: one ray through each pixel centre,
-/// then pixels that differ from a neighbour by more than [`SUPER_SAMPLE_CONTRAST`] are replaced
-/// by the mean of an n×n grid of rays.
-pub fn render_image(scene: &Compiled, width: u32, height: u32, aspect: f32) -> Result<Image> {
-    let run = || {
+/// given width / height `aspect` ([`render_strips`]), into memory.
+pub fn render_image(
+    scene: &Compiled,
+    width: u32,
+    height: u32,
+    aspect: f32,
+    progress: &Progress,
+) -> Result<Image> {
+    let mut pixels = try_vec("the image", width as usize * height as usize)?;
+    render_strips(scene, width, height, aspect, progress, |_, rows| {
+        pixels.extend_from_slice(rows);
+        Ok(())
+    })?;
+    Ok(Image {
+        width,
+        height,
+        pixels,
+    })
+}
+
+/// Renders the compiled scene to an image of `width × height` pixels whose view plane has the
+/// given width / height `aspect`, a strip of rows at a time: `sink(y, rows)` takes each strip,
+/// top first (`y` its first row), and `progress` counts its pixels. Adaptive super-sampling:
+/// one ray through each pixel centre, then pixels that differ from a neighbour by more than
+/// [`SUPER_SAMPLE_CONTRAST`] are replaced by the mean of an n×n grid of rays. Every pixel is
+/// computed on its own, so strips change no pixel.
+///
+/// Errors: the scene's work bound ([`Compiled::check_work`]), `VL_NOMEMORY`, `VL_CANCELLED`
+/// (within a tile of work of the flag), the sink's, and a panic (`VL_INTERNAL`).
+pub(crate) fn render_strips(
+    scene: &Compiled,
+    width: u32,
+    height: u32,
+    aspect: f32,
+    progress: &Progress,
+    sink: impl FnMut(u32, &[[f32; 3]]) -> Result<()>,
+) -> Result<()> {
+    let step = strip_rows(width, height);
+    render_in_strips(scene, (width, height, aspect), step, progress, sink)
+}
+
+/// [`render_strips`] in strips of `step` rows.
+fn render_in_strips(
+    scene: &Compiled,
+    (width, height, aspect): (u32, u32, f32),
+    step: u32,
+    progress: &Progress,
+    mut sink: impl FnMut(u32, &[[f32; 3]]) -> Result<()>,
+) -> Result<()> {
+    scene.check_work()?;
+    progress.check()?;
+    let run = || -> Result<()> {
         let view = view(&scene.settings, width, height, aspect);
-        let entry = scene.entry_map(&view);
-        let from = |x: u32, y: u32| entry.as_ref().map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
+        let marks = scene.entry_marks(&view);
         // What a pixel whose bound is +∞ shows, where that is known without its ray.
         let unbounded = scene.unbounded_colour().map(to_f32);
         let image = scene.image_rays(view.eye);
         // Rays in packets of SIMD lanes, where that applies (one ray per pixel).
         #[cfg(target_arch = "x86_64")]
-        if let Some(p) = simd::Packets::new(scene) {
-            return per_tile(width, height, packet_tile(width, height), |tile| {
-                p.tile(&view, entry.as_ref(), &image, unbounded, tile)
-            });
-        }
-        let first = per_pixel(width, height, |x, y| {
-            let bound = from(x, y);
-            if let (Some(c), true) = (unbounded, bound == f64::INFINITY) {
-                return c;
-            }
-            let dir = view.ray(x as f64 + 0.5, y as f64 + 0.5);
-            to_f32(scene.trace(view.eye, &image, dir, bound))
-        });
+        let packets = simd::Packets::new(scene);
+        #[cfg(target_arch = "x86_64")]
+        let packet_side = packet_tile(width, height);
         let n = scene.settings.super_sample.max(1) as u32;
-        if n == 1 {
-            return first;
-        }
-        let differs = |x: u32, y: u32| {
-            let p = first[(y * width + x) as usize];
-            let neighbours = [
-                (x.wrapping_sub(1), y),
-                (x + 1, y),
-                (x, y.wrapping_sub(1)),
-                (x, y + 1),
-            ];
-            neighbours.iter().any(|&(nx, ny)| {
-                nx < width && ny < height && {
-                    let q = first[(ny * width + nx) as usize];
-                    (0..3).any(|c| (p[c] - q[c]).abs() > SUPER_SAMPLE_CONTRAST)
+        // The first pass of rows `rows`, with an entry map that holds them.
+        let first_pass = |rows: std::ops::Range<u32>, entry: Option<&EntryMap>| {
+            #[cfg(target_arch = "x86_64")]
+            if let Some(p) = &packets {
+                return per_tile(width, rows, packet_side, progress, |tile| {
+                    p.tile(&view, entry, &image, unbounded, tile)
+                });
+            }
+            let from = |x: u32, y: u32| entry.map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
+            per_pixel(width, rows, progress, |x, y| {
+                let bound = from(x, y);
+                if let (Some(c), true) = (unbounded, bound == f64::INFINITY) {
+                    return c;
                 }
+                let dir = view.ray(x as f64 + 0.5, y as f64 + 0.5);
+                to_f32(scene.trace(view.eye, &image, dir, bound))
             })
         };
-        per_pixel(width, height, |x, y| {
-            if !differs(x, y) {
-                return first[(y * width + x) as usize];
+        // The first pass of rows [lo, hi): a strip's rows and, with super-sampling, the row on
+        // either side (the next strip keeps those it has).
+        let mut first: Vec<[f32; 3]> = Vec::new();
+        let (mut lo, mut hi) = (0u32, 0u32);
+        let row = width as usize;
+        for y0 in (0..height).step_by(step as usize) {
+            let y1 = (y0 + step).min(height);
+            let (need_lo, need_hi) = if n > 1 {
+                (y0.saturating_sub(1), (y1 + 1).min(height))
+            } else {
+                (y0, y1)
+            };
+            let entry = match &marks {
+                Some(m) => Some(
+                    m.rows(need_lo as usize..need_hi as usize)
+                        .ok_or_else(|| no_memory("the entry map", 0))?,
+                ),
+                None => None,
+            };
+            // Keep the rows of the last strip's pass this one needs, then trace the rest.
+            let keep = need_lo.clamp(lo, hi);
+            first.drain(..(keep - lo) as usize * row);
+            lo = keep;
+            if lo == hi {
+                lo = need_lo;
+                hi = need_lo;
             }
-            let mut sum = DVec3::ZERO;
-            for j in 0..n {
-                for i in 0..n {
-                    let sx = x as f64 + (i as f64 + 0.5) / n as f64;
-                    let sy = y as f64 + (j as f64 + 0.5) / n as f64;
-                    let c = scene.trace(view.eye, &image, view.ray(sx, sy), from(x, y));
-                    sum += crate::model::scene::v3(to_f32(c));
-                }
+            let fresh = first_pass(hi..need_hi, entry.as_ref())?;
+            if n == 1 {
+                // One ray a pixel: the first pass is the strip, handed on as it is.
+                sink(y0, &fresh)?;
+            } else {
+                first
+                    .try_reserve(fresh.len())
+                    .map_err(|_| no_memory("a strip of the image", (fresh.len() * 12) as u64))?;
+                first.extend_from_slice(&fresh);
+                drop(fresh);
+                hi = need_hi;
+                let at = |x: u32, y: u32| first[(y - lo) as usize * row + x as usize];
+                let from =
+                    |x: u32, y: u32| entry.as_ref().map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
+                let differs = |x: u32, y: u32| {
+                    let p = at(x, y);
+                    let neighbours = [
+                        (x.wrapping_sub(1), y),
+                        (x + 1, y),
+                        (x, y.wrapping_sub(1)),
+                        (x, y + 1),
+                    ];
+                    neighbours.iter().any(|&(nx, ny)| {
+                        nx < width && ny < height && {
+                            let q = at(nx, ny);
+                            (0..3).any(|c| (p[c] - q[c]).abs() > SUPER_SAMPLE_CONTRAST)
+                        }
+                    })
+                };
+                let refined = per_pixel(width, y0..y1, progress, |x, y| {
+                    if !differs(x, y) {
+                        return at(x, y);
+                    }
+                    let mut sum = DVec3::ZERO;
+                    for j in 0..n {
+                        for i in 0..n {
+                            let sx = x as f64 + (i as f64 + 0.5) / n as f64;
+                            let sy = y as f64 + (j as f64 + 0.5) / n as f64;
+                            let c = scene.trace(view.eye, &image, view.ray(sx, sy), from(x, y));
+                            sum += crate::model::scene::v3(to_f32(c));
+                        }
+                    }
+                    to_f32(sum / (n * n) as f64)
+                })?;
+                sink(y0, &refined)?;
             }
-            to_f32(sum / (n * n) as f64)
-        })
+            progress.advance((y1 - y0) as u64 * width as u64)?;
+        }
+        Ok(())
     };
     match std::panic::catch_unwind(std::panic::AssertUnwindSafe(run)) {
-        Ok(pixels) => Ok(Image {
-            width,
-            height,
-            pixels,
-        }),
+        Ok(result) => result,
         Err(payload) => {
             let msg = payload
                 .downcast_ref::<&str>()

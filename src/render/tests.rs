@@ -16,7 +16,7 @@ fn packet_tiles_are_large_only_where_there_are_many() {
     assert_eq!(packet_tile(w - 32, 32), TILE);
     for side in [TILE, PACKET_TILE] {
         let (w, h) = (101u32, 67u32);
-        let t = tiles(w, h, side);
+        let t = tiles(w, 0..h, side);
         assert_eq!(t.len(), (w.div_ceil(side) * h.div_ceil(side)) as usize);
         let mut covered = vec![0u8; (w * h) as usize];
         for &(tx, ty) in &t {
@@ -609,6 +609,12 @@ fn sphere_scene() -> Compiled {
 
 /// The library of [`sphere_scene`], its scene open.
 fn sphere_library() -> crate::Library {
+    sphere_library_with(false)
+}
+
+/// [`sphere_library`], and where `lit`, the spheres lit by ambient light (KA 1) and seen from
+/// above and in front.
+fn sphere_library_with(lit: bool) -> crate::Library {
     use crate::types::MappingType;
     let n = 20usize;
     let centres = [
@@ -636,11 +642,24 @@ fn sphere_library() -> crate::Library {
         .unwrap();
     vl.scene().unwrap();
     vl.step_size(0.5, 1.0).unwrap();
+    if lit {
+        vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+        vl.camera(&crate::Camera {
+            eye: [9.5, 30.0, -40.0],
+            at: [9.5; 3],
+            up: [0.0, 1.0, 0.0],
+            fov: 40.0,
+        })
+        .unwrap();
+    }
     vl.object().unwrap();
     vl.scale(19.0, 19.0, 19.0).unwrap();
     vl.dataset(Fields::F, 1).unwrap();
     vl.map(Fields::O, Fields::F, 2, 1).unwrap();
     vl.set(Fields::R, 1.0).unwrap();
+    if lit {
+        vl.set(Fields::KA, 1.0).unwrap();
+    }
     vl.end().unwrap();
     vl
 }
@@ -1677,4 +1696,205 @@ fn skip_grids_are_built_once_per_scene() {
         !Arc::ptr_eq(&grid(&a), &grid(&fresh)),
         "a fresh cache builds its own"
     );
+}
+
+/// The image of `scene` at `size`, rendered in strips of `step` rows; with the strips' first
+/// rows as the sink saw them.
+pub(super) fn in_strips(
+    scene: &Compiled,
+    (w, h): (u32, u32),
+    step: u32,
+) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let mut pixels = Vec::new();
+    let mut starts = Vec::new();
+    let progress = crate::control::Progress::none();
+    render_in_strips(scene, (w, h, 1.1), step, &progress, |y, rows| {
+        assert_eq!(y as usize * w as usize, pixels.len(), "strips in order");
+        starts.push(y);
+        pixels.extend_from_slice(rows);
+        Ok(())
+    })
+    .unwrap();
+    (pixels, starts)
+}
+
+/// Strips change no pixel: every pixel is computed on its own, so an image rendered in strips
+/// of 32 rows (the last one partial) is the one-strip image bit for bit: one ray a pixel (the
+/// scalar march, with the strips' entry maps), and super-sampling, whose refinement compares
+/// each pixel with the rows above and below across the strips' edges. (The packet march's
+/// strips: `simd::tests`.)
+#[test]
+fn strips_change_no_pixel() {
+    let bits = |p: &[[f32; 3]]| p.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+    let size = (45, 101);
+    let mut images = Vec::new();
+    for (packets, super_sample) in [(false, 1), (false, 3)] {
+        let mut vl = sphere_library_with(true);
+        vl.set_optimise(crate::Optimise {
+            packets,
+            ..Default::default()
+        })
+        .unwrap();
+        vl.super_sample(super_sample).unwrap();
+        let scene = vl.compiled().unwrap();
+        let (whole, starts) = in_strips(&scene, size, 128);
+        assert_eq!(starts, [0]);
+        let (strips, starts) = in_strips(&scene, size, 32);
+        assert_eq!(starts, [0, 32, 64, 96]);
+        assert_eq!(whole.len(), 45 * 101);
+        assert!(
+            bits(&whole) == bits(&strips),
+            "packets {packets}, super-sampling {super_sample}"
+        );
+        // And some pixels were refined, some showed the spheres: the comparison means
+        // something.
+        let (lo, hi) = whole
+            .iter()
+            .fold((f32::MAX, 0f32), |(l, h), p| (l.min(p[0]), h.max(p[0])));
+        assert!(hi - lo > 0.1, "{lo} … {hi}");
+        assert!(scene
+            .entry_marks(&view(&scene.settings, 45, 101, 1.1))
+            .is_some());
+        images.push(bits(&whole));
+    }
+    let refined = images[0]
+        .iter()
+        .zip(&images[1])
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(refined > 10, "super-sampling refined {refined} channels");
+}
+
+/// A strip is at least a row of packet tiles and at most about [`STRIP_PIXELS`] beyond one.
+#[test]
+fn strips_hold_about_a_million_pixels() {
+    assert_eq!(strip_rows(256, 256), 256, "a small image is one strip");
+    assert_eq!(strip_rows(8192, 8192), 128);
+    assert_eq!(strip_rows(1 << 15, 1 << 15), 32, "a row of tiles at least");
+    assert_eq!(strip_rows(1000, 5), 5);
+    for w in [1u32, 7, 1000, 3000, 32768] {
+        let rows = strip_rows(w, 1 << 15);
+        assert_eq!(rows % PACKET_TILE, 0);
+        assert!(rows as u64 * w as u64 <= STRIP_PIXELS + PACKET_TILE as u64 * w as u64);
+    }
+}
+
+/// Progress counts every pixel once, strip by strip, and reaches 1; a progress function that
+/// returns false stops the render with `Cancelled` before the next strip, and so does a cancel
+/// flag set before (or during) the render.
+#[test]
+fn progress_reaches_one_and_cancels() {
+    use crate::control::{CancelFlag, Progress, RenderControl};
+    use std::sync::{Arc, Mutex};
+    let scene = sphere_scene();
+    let (w, h) = (40u32, 100u32);
+    let seen = Arc::new(Mutex::new(Vec::new()));
+    let log = seen.clone();
+    let control = RenderControl {
+        cancel: None,
+        progress: Some(Arc::new(move |f| {
+            log.lock().unwrap().push(f);
+            true
+        })),
+    };
+    let progress = Progress::new(&control, (w * h) as u64);
+    let mut strips = 0;
+    render_in_strips(&scene, (w, h, 1.0), 32, &progress, |_, _| {
+        strips += 1;
+        Ok(())
+    })
+    .unwrap();
+    let want: Vec<f32> = [32u32, 64, 96, 100]
+        .iter()
+        .map(|&rows| (rows as f64 / 100.0) as f32)
+        .collect();
+    assert_eq!(*seen.lock().unwrap(), want);
+    assert_eq!(strips, 4);
+    // Stop after the second strip.
+    let calls = Arc::new(Mutex::new(0));
+    let count = calls.clone();
+    let control = RenderControl {
+        cancel: None,
+        progress: Some(Arc::new(move |_| {
+            let mut c = count.lock().unwrap();
+            *c += 1;
+            *c < 2
+        })),
+    };
+    let progress = Progress::new(&control, (w * h) as u64);
+    let mut strips = 0;
+    let e = render_in_strips(&scene, (w, h, 1.0), 32, &progress, |_, _| {
+        strips += 1;
+        Ok(())
+    })
+    .unwrap_err();
+    assert_eq!(e.code, ErrorCode::Cancelled);
+    assert_eq!((strips, *calls.lock().unwrap()), (2, 2));
+    // A flag set before: nothing rendered.
+    let flag = CancelFlag::new();
+    flag.cancel();
+    let control = RenderControl {
+        cancel: Some(flag.clone()),
+        progress: None,
+    };
+    let progress = Progress::new(&control, 1);
+    let e = render_in_strips(&scene, (w, h, 1.0), 32, &progress, |_, _| {
+        panic!("no strip after a cancel")
+    })
+    .unwrap_err();
+    assert_eq!(e.code, ErrorCode::Cancelled);
+    // A flag set by a field function, in the middle of the first strip: the render stops
+    // within the strip (the tiles not started are skipped), and the sink sees nothing.
+    flag.reset();
+    let mut vl = crate::Library::new();
+    vl.scene().unwrap();
+    vl.object().unwrap();
+    let (trip, evaluations) = (flag.clone(), Arc::new(Mutex::new(0u64)));
+    let counted = evaluations.clone();
+    vl.function(Fields::O, move |s| {
+        *counted.lock().unwrap() += 1;
+        trip.cancel();
+        let _ = s.set(Fields::O, 0.0);
+    })
+    .unwrap();
+    vl.end().unwrap();
+    let scene = vl.compiled().unwrap();
+    let progress = Progress::new(&control, 1);
+    let e = render_in_strips(&scene, (64, 64, 1.0), 64, &progress, |_, _| {
+        panic!("no strip after a cancel")
+    })
+    .unwrap_err();
+    assert_eq!(e.code, ErrorCode::Cancelled);
+    let tiles_started = (64 / TILE) * (64 / TILE);
+    assert!(
+        *evaluations.lock().unwrap() < tiles_started as u64 * (TILE * TILE) as u64 * 2,
+        "most tiles were skipped"
+    );
+}
+
+/// A step finer than 2⁻²⁴ of an object's world diagonal is refused before any pixel, with
+/// `BadValue`; the same object at a step just coarser renders.
+#[test]
+fn absurd_sample_counts_are_refused() {
+    let build = |step: f32| {
+        let mut vl = crate::Library::new();
+        vl.scene().unwrap();
+        vl.step_size(step, 1.0).unwrap();
+        vl.object().unwrap();
+        vl.scale(100.0, 100.0, 100.0).unwrap();
+        vl.set(Fields::O, 0.0).unwrap();
+        vl.end().unwrap();
+        vl.compiled().unwrap()
+    };
+    // The diagonal is 100·√3.
+    let diagonal = 100.0 * 3f64.sqrt();
+    let fine = (diagonal / MAX_SAMPLES_PER_RAY * 0.9) as f32;
+    let e = build(fine).check_work().unwrap_err();
+    assert_eq!(e.code, ErrorCode::BadValue);
+    assert!(e.message.contains("samples"), "{}", e.message);
+    assert!(build((diagonal / MAX_SAMPLES_PER_RAY * 1.1) as f32)
+        .check_work()
+        .is_ok());
+    let e = build(1e-9).check_work().unwrap_err();
+    assert_eq!(e.code, ErrorCode::BadValue);
 }

@@ -47,9 +47,11 @@ pub(super) fn view(settings: &Settings, width: u32, height: u32, aspect: f32) ->
     }
 }
 
-pub(super) fn tiles(width: u32, height: u32, side: u32) -> Vec<(u32, u32)> {
+/// The top-left corners of the `side × side` tiles of rows `rows` of an image `width` wide,
+/// row-major.
+pub(super) fn tiles(width: u32, rows: std::ops::Range<u32>, side: u32) -> Vec<(u32, u32)> {
     let mut v = Vec::new();
-    for ty in (0..height).step_by(side as usize) {
+    for ty in rows.step_by(side as usize) {
         for tx in (0..width).step_by(side as usize) {
             v.push((tx, ty));
         }
@@ -57,16 +59,27 @@ pub(super) fn tiles(width: u32, height: u32, side: u32) -> Vec<(u32, u32)> {
     v
 }
 
-/// Evaluates `f` for every pixel, in parallel over tiles, deterministically.
-pub(super) fn per_pixel<F>(width: u32, height: u32, f: F) -> Vec<[f32; 3]>
+/// Evaluates `f` for every pixel of rows `rows`, in parallel over tiles, deterministically;
+/// `VL_CANCELLED` once `progress` is cancelled (no pixel is started after that).
+pub(super) fn per_pixel<F>(
+    width: u32,
+    rows: std::ops::Range<u32>,
+    progress: &Progress,
+    f: F,
+) -> Result<Vec<[f32; 3]>>
 where
     F: Fn(u32, u32) -> [f32; 3] + Sync,
 {
-    per_tile(width, height, TILE, |(tx, ty, tw, th)| {
+    per_tile(width, rows, TILE, progress, |(tx, ty, tw, th)| {
         let mut out = Vec::with_capacity((tw * th) as usize);
         for y in ty..ty + th {
             for x in tx..tx + tw {
-                out.push(f(x, y));
+                // A cancelled render stops within a pixel's work (the rest is discarded).
+                out.push(if progress.cancelled() {
+                    [0.0; 3]
+                } else {
+                    f(x, y)
+                });
             }
         }
         out
@@ -74,24 +87,38 @@ where
 }
 
 /// Evaluates `f` for every tile (x, y, width, height) of `side × side` pixels (fewer at the
-/// right and bottom edges), which gives its pixels row by row, in parallel over tiles,
-/// deterministically.
-pub(super) fn per_tile<F>(width: u32, height: u32, side: u32, f: F) -> Vec<[f32; 3]>
+/// right and bottom edges) of rows `rows`, which gives its pixels row by row, in parallel over
+/// tiles, deterministically; the pixels of the rows. A tile not yet started when `progress`
+/// is cancelled is skipped, and the call fails with `VL_CANCELLED`.
+pub(super) fn per_tile<F>(
+    width: u32,
+    rows: std::ops::Range<u32>,
+    side: u32,
+    progress: &Progress,
+    f: F,
+) -> Result<Vec<[f32; 3]>>
 where
     F: Fn((u32, u32, u32, u32)) -> Vec<[f32; 3]> + Sync,
 {
     type Tile = ((u32, u32), Vec<[f32; 3]>);
-    let results: Vec<Tile> = tiles(width, height, side)
+    let (top, bottom) = (rows.start, rows.end);
+    let results: Vec<Tile> = tiles(width, rows, side)
         .into_par_iter()
         .map(|(tx, ty)| {
-            let (tw, th) = ((tx + side).min(width) - tx, (ty + side).min(height) - ty);
+            if progress.cancelled() {
+                return ((tx, ty), Vec::new());
+            }
+            let (tw, th) = ((tx + side).min(width) - tx, (ty + side).min(bottom) - ty);
             ((tx, ty), f((tx, ty, tw, th)))
         })
         .collect();
+    progress.check()?;
     // The tiles come in row-major order: each band of `side` rows is a row of tiles, copied
     // into place in parallel, a tile row at a time.
     let per_row = width.div_ceil(side) as usize;
-    let mut pixels = vec![[0.0f32; 3]; (width * height) as usize];
+    let len = width as usize * (bottom - top) as usize;
+    let mut pixels = super::try_vec("a strip of the image", len)?;
+    pixels.resize(len, [0.0f32; 3]);
     pixels
         .par_chunks_mut((width * side) as usize)
         .zip(results.par_chunks(per_row))
@@ -104,7 +131,7 @@ where
                 }
             }
         });
-    pixels
+    Ok(pixels)
 }
 
 pub(super) fn to_f32(c: DVec3) -> [f32; 3] {

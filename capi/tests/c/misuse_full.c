@@ -758,7 +758,7 @@ int main(void)
           "1100 errors: the oldest 1024 are kept, the rest dropped");
     {
         int distinct = 1, known = 1;
-        for (i = 0; i <= VL_BADSIZE; i++) {
+        for (i = 0; i <= VL_CANCELLED; i++) {
             int j;
             if (vlErrorString(i) == NULL || strcmp(vlErrorString(i), "unknown error code") == 0)
                 known = 0;
@@ -766,8 +766,8 @@ int main(void)
                 if (strcmp(vlErrorString(i), vlErrorString(j)) == 0)
                     distinct = 0;
         }
-        check(known && distinct, "vlErrorString: codes 0 to 17 each have their own text");
-        check(strcmp(vlErrorString(VL_BADSIZE + 1), "unknown error code") == 0 &&
+        check(known && distinct, "vlErrorString: codes 0 to 18 each have their own text");
+        check(strcmp(vlErrorString(VL_CANCELLED + 1), "unknown error code") == 0 &&
                   strcmp(vlErrorString(-1), "unknown error code") == 0,
               "vlErrorString of unknown codes");
     }

@@ -110,7 +110,7 @@ fn entry_map_refuses_what_it_cannot_prove() {
     assert!(EntryMap::build(&empty, to_world, &outside).is_none());
 }
 
-/// [`EntryMap::build_within`] with `f64::min` / `f64::max` for the rectangles and each
+/// [`EntryMarks::build_within`] with `f64::min` / `f64::max` for the rectangles and each
 /// corner transformed on its own, picked by mask (sequential: the parallel form gives the
 /// same numbers).
 fn build_within_reference(
@@ -214,7 +214,11 @@ fn build_within_reference(
                 }
             }
         });
-    Some(EntryMap { width: w, bound })
+    Some(EntryMap {
+        width: w,
+        first_row: 0,
+        bound,
+    })
 }
 
 /// The map is the one the NaN-aware minima and maxima and each corner's own transform

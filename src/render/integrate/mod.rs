@@ -70,9 +70,10 @@ pub(in crate::render) struct ImageRays {
 }
 
 impl Compiled {
-    /// The [`EntryMap`] of an image: for a scene of one DVR volume with a skip grid (the
-    /// only case [`Compiled::trace_ray`] uses it), when the map can be built.
-    pub(in crate::render) fn entry_map(&self, camera: &Pinhole) -> Option<EntryMap> {
+    /// The [`EntryMarks`] of an image (its [`EntryMap`]s are made of them): for a scene of one
+    /// DVR volume with a skip grid (the only case [`Compiled::trace_ray`] uses a map), when
+    /// the map can be built.
+    pub(in crate::render) fn entry_marks(&self, camera: &Pinhole) -> Option<EntryMarks> {
         let [obj] = self.objects.as_slice() else {
             return None;
         };
@@ -93,8 +94,8 @@ impl Compiled {
         };
         // (Too many of them for the image: the shell's blocks, which may be fewer.)
         passing
-            .and_then(|boxes| EntryMap::of_boxes(&boxes, obj.to_world, camera))
-            .or_else(|| EntryMap::build(grid, obj.to_world, camera))
+            .and_then(|boxes| EntryMarks::of_boxes(&boxes, obj.to_world, camera))
+            .or_else(|| EntryMarks::build(grid, obj.to_world, camera))
     }
 
     /// The colour [`Compiled::trace`] gives every primary ray whose bound is +∞, whatever its

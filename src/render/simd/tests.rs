@@ -89,14 +89,19 @@ fn bits(image: &[[f32; 3]]) -> Vec<u32> {
 fn march(vl: &crate::Library, (width, height): (u32, u32), packets: usize) -> (Vec<u32>, u64) {
     let scene = vl.compiled().unwrap();
     let view = view(&scene.settings, width, height, 1.2);
-    let entry = scene.entry_map(&view);
+    let entry = scene
+        .entry_marks(&view)
+        .map(|m| m.rows(0..height as usize).unwrap());
     let unbounded = scene.unbounded_colour().map(to_f32);
     let image = scene.image_rays(view.eye);
     let mut p = Packets::new(&scene).expect("the packet march applies");
     p.packets = packets;
-    let pixels = per_tile(width, height, packet_tile(width, height), |tile| {
+    let progress = crate::control::Progress::none();
+    let side = packet_tile(width, height);
+    let pixels = per_tile(width, 0..height, side, &progress, |tile| {
         p.tile(&view, entry.as_ref(), &image, unbounded, tile)
-    });
+    })
+    .unwrap();
     let untested = p.untested.load(std::sync::atomic::Ordering::Relaxed);
     (bits(&pixels), untested)
 }
@@ -210,4 +215,25 @@ fn powers<S: Simd<N>, const N: usize>(s: S) {
             }
         }
     }
+}
+
+/// The packet march in strips: an image rendered in strips of 32 rows is the one-strip image
+/// bit for bit.
+#[test]
+fn packet_strips_change_no_pixel() {
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        return;
+    }
+    let vl = slabs_scene(0.5, true, false, Default::default());
+    let scene = vl.compiled().unwrap();
+    assert!(Packets::new(&scene).is_some());
+    let size = (70, 101);
+    let (whole, _) = crate::render::tests::in_strips(&scene, size, 128);
+    let (strips, starts) = crate::render::tests::in_strips(&scene, size, 32);
+    assert_eq!(starts, [0, 32, 64, 96]);
+    assert!(bits(&whole) == bits(&strips));
+    assert!(
+        whole.iter().any(|p| p != &whole[0]),
+        "an image, not a colour"
+    );
 }
