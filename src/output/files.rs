@@ -224,9 +224,8 @@ impl AtomicFile {
     /// Appends `bytes`; `VL_IOERROR` if they cannot be written.
     pub(crate) fn write(&mut self, bytes: &[u8]) -> Result<()> {
         let f = self.file.as_mut().expect("not committed");
-        f.write_all(bytes).map_err(|e| {
-            Error::new(ErrorCode::IoError, format!("{}: {e}", self.path.display()))
-        })
+        f.write_all(bytes)
+            .map_err(|e| Error::new(ErrorCode::IoError, format!("{}: {e}", self.path.display())))
     }
 
     /// The buffered file, for encoders that write through [`std::io::Write`].

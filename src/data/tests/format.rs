@@ -6,11 +6,11 @@ use crate::error::ErrorCode;
 #[test]
 fn vlb_round_trip_is_bit_exact() {
     let d8 = random_u8([7, 3, 5], 6);
-    let back = Dataset::from_vlb_bytes(&d8.to_vlb_bytes()).unwrap();
+    let back = Dataset::from_vlb_bytes(&d8.to_vlb_bytes().unwrap()).unwrap();
     assert_eq!(back, d8);
-    assert_eq!(back.to_vlb_bytes(), d8.to_vlb_bytes());
+    assert_eq!(back.to_vlb_bytes().unwrap(), d8.to_vlb_bytes().unwrap());
     let (d16, _) = linear([4, 3, 2]);
-    let bytes = d16.to_vlb_bytes();
+    let bytes = d16.to_vlb_bytes().unwrap();
     assert_eq!(bytes.len(), HEADER_LEN + 4 * 3 * 2 * 2);
     assert_eq!(&bytes[..4], b"VLB1");
     assert_eq!(Dataset::from_vlb_bytes(&bytes).unwrap(), d16);
@@ -23,7 +23,7 @@ fn vlb_round_trip_is_bit_exact() {
 
 #[test]
 fn malformed_files_are_refused_with_the_right_error() {
-    let good = random_u8([3, 2, 2], 7).to_vlb_bytes();
+    let good = random_u8([3, 2, 2], 7).to_vlb_bytes().unwrap();
     let patch = |at: usize, bytes: &[u8]| {
         let mut v = good.clone();
         v[at..at + bytes.len()].copy_from_slice(bytes);
