@@ -90,7 +90,11 @@ impl Progress {
     #[inline]
     pub(crate) fn cancelled(&self) -> bool {
         self.stopped.load(Ordering::Relaxed)
-            || self.control.cancel.as_ref().is_some_and(|c| c.is_cancelled())
+            || self
+                .control
+                .cancel
+                .as_ref()
+                .is_some_and(|c| c.is_cancelled())
     }
 
     /// `Err(Cancelled)` where the render is to stop.

@@ -45,6 +45,7 @@ pub(crate) use filter::bc_abs_sum;
 pub use filter::Filter;
 pub(crate) use lanes::Cells8;
 pub(crate) use trilinear::CellGradients;
+pub(crate) use vlb::header as vlb_header;
 pub use vlb::{HEADER_LEN, MAGIC};
 
 use crate::error::{err, Error, ErrorCode, Result};

@@ -7,6 +7,7 @@
 //! so that no layer below this one writes a file); every file atomically ([`write_atomic`]). It
 //! does not trace rays or evaluate fields itself.
 
+use crate::control::Progress;
 use crate::error::{Error, Result};
 use crate::model::scene::SceneDesc;
 use crate::render::{render_image, Compiled, Grids};
@@ -35,7 +36,10 @@ impl crate::data::Dataset {
 
 /// Renders every image and voxelization a scene requested and writes the files. Every output
 /// is attempted; the first failure is returned (its message counts the others).
-pub fn render_outputs(desc: &SceneDesc, grids: &Grids) -> Result<()> {
+///
+/// Voxelizations report their nodes to `progress` and stop where it says the render is
+/// cancelled (writing none of their files).
+pub fn render_outputs(desc: &SceneDesc, grids: &Grids, progress: &Progress) -> Result<()> {
     if desc.images.is_empty() && desc.volumes.is_empty() {
         return Ok(());
     }
@@ -49,7 +53,7 @@ pub fn render_outputs(desc: &SceneDesc, grids: &Grids) -> Result<()> {
         }
     }
     for req in &desc.volumes {
-        if let Err(e) = voxel::write(&compiled, req) {
+        if let Err(e) = voxel::write(&compiled, req, progress) {
             errors.push(e);
         }
     }
