@@ -271,8 +271,8 @@ impl Dataset {
     }
 
     /// The normalised node values, x fastest: made on first use (in parallel), then kept.
-    /// Where they cannot be allocated this unwinds (see [`or_unwind`]); [`Dataset::try_values`]
-    /// reports it instead.
+    /// Where they cannot be allocated this unwinds (with the error's message, printing
+    /// nothing) instead of aborting; [`Dataset::try_values`] reports it as `NoMemory`.
     pub fn values(&self) -> &[f32] {
         or_unwind(self.try_values())
     }

@@ -265,7 +265,7 @@ impl Drop for AtomicFile {
 }
 
 /// Writes `bytes` to `path` atomically, the one way every file of the library is written
-/// (through an [`AtomicFile`]):
+/// (through an `AtomicFile`):
 ///
 /// - the bytes go to a new temporary file in the destination's directory, created exclusively
 ///   under a name nobody can predict (never through a link planted at it), flushed to disk, and
