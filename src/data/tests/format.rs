@@ -140,3 +140,35 @@ fn non_regular_files_are_refused_without_blocking() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A cache whose computation fails is left empty and the error returned (a later call
+/// computes it again), and the infallible form unwinds with the message instead of aborting.
+#[test]
+fn failed_caches_stay_empty_and_report_their_error() {
+    use crate::error::{Error, ErrorCode};
+    let cell = std::sync::OnceLock::new();
+    let fail = || {
+        Err(Error::new(
+            ErrorCode::NoMemory,
+            "a cache: 8 bytes could not be allocated",
+        ))
+    };
+    let e = super::super::get_or_try_init(&cell, fail).unwrap_err();
+    assert_eq!(e.code, ErrorCode::NoMemory);
+    assert!(cell.get().is_none());
+    assert_eq!(
+        *super::super::get_or_try_init(&cell, || Ok(7u64)).unwrap(),
+        7
+    );
+    assert_eq!(
+        *super::super::get_or_try_init(&cell, fail).unwrap(),
+        7,
+        "kept"
+    );
+    let unwound = std::panic::catch_unwind(|| super::super::or_unwind(fail()));
+    let payload = unwound.unwrap_err();
+    assert_eq!(
+        payload.downcast_ref::<String>().map(String::as_str),
+        Some("a cache: 8 bytes could not be allocated")
+    );
+}
