@@ -1,6 +1,6 @@
-//! Small numeric helpers of the base layer: rounding to integers without a library call, and
-//! the clamp of a value written to a field (scalar and in lanes). Owns no state and knows no
-//! scene types.
+//! Small numeric helpers of the base layer: rounding to integers without a library call, the
+//! clamp of a value written to a field (scalar and in lanes), and the fallible allocation of
+//! buffers whose size a user chose ([`try_vec`]). Owns no state and knows no scene types.
 //!
 //! On the x86-64 baseline (SSE2) `f64::floor` and `f64::ceil` are calls into libm; the block
 //! walk rounds several times per leap, and noise three times per octave, so they use these
@@ -48,6 +48,36 @@ pub(crate) fn clamp_field(v: f32) -> f32 {
 pub(crate) fn clamp_fields(v: wide::f32x4) -> wide::f32x4 {
     use wide::f32x4;
     (v.simd_ge(f32x4::ZERO) & v).fast_min(f32x4::ONE)
+}
+
+/// The error of an allocation of `bytes` bytes that failed (or whose size overflows): `what`
+/// names the buffer.
+pub(crate) fn no_memory(what: &str, bytes: Option<usize>) -> crate::error::Error {
+    let size = match bytes {
+        Some(b) => format!("{b} bytes"),
+        None => "more bytes than an address space holds".to_string(),
+    };
+    crate::error::Error::new(
+        crate::error::ErrorCode::NoMemory,
+        format!("{what}: {size} could not be allocated"),
+    )
+}
+
+/// An empty vector with room for exactly `len` elements, or `NoMemory` where they cannot be
+/// allocated (instead of the abort of `Vec::with_capacity`): for every buffer whose size
+/// grows with what a user asked for (a dataset's voxels, a voxelization's slabs).
+pub(crate) fn try_with_capacity<T>(len: usize, what: &str) -> crate::error::Result<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len)
+        .map_err(|_| no_memory(what, len.checked_mul(std::mem::size_of::<T>())))?;
+    Ok(v)
+}
+
+/// `vec![value; len]`, or `NoMemory` where it cannot be allocated ([`try_with_capacity`]).
+pub(crate) fn try_vec<T: Clone>(len: usize, value: T, what: &str) -> crate::error::Result<Vec<T>> {
+    let mut v = try_with_capacity(len, what)?;
+    v.resize(len, value);
+    Ok(v)
 }
 
 #[cfg(test)]

@@ -482,11 +482,23 @@ fn sizes_whose_product_overflows_are_refused_before_allocating() {
             Fields::O,
             [0.0; 3],
             [1.0; 3],
-            [1024, 1024, 129],
+            [1 << 16, 1 << 16, 2],
             1,
         )
         .unwrap_err();
-    assert_eq!(e.code, ErrorCode::NoMemory, "2^27 nodes at most");
+    assert_eq!(e.code, ErrorCode::NoMemory, "2^32 nodes at most");
+    assert_eq!(vlib::limits::MAX_VOLUME_NODES, vlib::limits::MAX_VOXELS);
+    // The largest grid a .vlb holds is accepted (it is voxelized slab by slab when the scene
+    // closes; this one is not closed).
+    vl.volume(
+        "/tmp/x",
+        Fields::O,
+        [0.0; 3],
+        [1.0; 3],
+        [1 << 16, 1 << 15, 2],
+        1,
+    )
+    .unwrap();
 }
 
 /// The lean kernel (programs of constants, datasets and transfer functions evaluated without the

@@ -34,9 +34,11 @@ pub const MAX_RECURSION: i32 = 64;
 pub const MAX_SURFACES: usize = 64;
 /// The deepest nesting of objects.
 pub const MAX_DEPTH: usize = 64;
-/// The most nodes one voxelization may have (2²⁷: it holds ten f32 fields per node while it
-/// runs, 5 GiB at this size).
-pub const MAX_VOLUME_NODES: u64 = 1 << 27;
+/// The most nodes one voxelization may have: the most voxels a `.vlb` file holds
+/// ([`crate::data::MAX_VOXELS`], 2³²), as each field is written as one. Its memory does not
+/// grow with the nodes (it samples a slab of 2¹⁶ nodes at a time and writes as it goes), so a
+/// larger request is refused for what the format can say, not for memory.
+pub const MAX_VOLUME_NODES: u64 = crate::data::MAX_VOXELS;
 
 /// The datasets and interpolation of a [`Library`] at one moment ([`Library::sampler`]):
 /// `vlSample` without the library.

@@ -54,33 +54,40 @@ impl Dataset {
     /// on the library's threads, so it fails only where they cannot be started (`NoMemory`).
     pub fn precompute(&self, filter: Filter) -> crate::error::Result<()> {
         crate::pool::install(|| {
-            self.bricks(filter);
+            self.try_bricks(filter)?;
             Ok(())
         })
     }
 
     /// The brick ranges for `filter` (computed once per dataset and reach, then shared).
+    /// Where they cannot be allocated this unwinds ([`super::or_unwind`]);
+    /// [`Dataset::try_bricks`] reports it instead.
     pub(crate) fn bricks(&self, filter: Filter) -> &Bricks {
+        super::or_unwind(self.try_bricks(filter))
+    }
+
+    /// [`Dataset::bricks`], or `NoMemory` where they cannot be allocated (nothing is kept).
+    pub(crate) fn try_bricks(&self, filter: Filter) -> crate::error::Result<&Bricks> {
         let reach = match filter {
             Filter::Nearest | Filter::Trilinear => 1,
             Filter::Cubic { .. } => 2,
         };
-        self.bricks[reach - 1].get_or_init(|| self.compute_bricks(reach))
+        super::get_or_try_init(&self.bricks[reach - 1], || self.compute_bricks(reach))
     }
 
-    fn compute_bricks(&self, reach: usize) -> Bricks {
+    fn compute_bricks(&self, reach: usize) -> crate::error::Result<Bricks> {
         // Over the raw voxels (a quarter or half of the node values' memory, compared a byte
         // or two at a time), then normalised: `normaliser` is monotone, so the normalised
         // raw extremes are the extremes of the node values, the same numbers.
         let (min, max) = match &self.raw {
-            Voxels::U8(v) => self.normalised(self.raw_brick_extremes(v, reach)),
-            Voxels::U16(v) => self.normalised(self.raw_brick_extremes(v, reach)),
+            Voxels::U8(v) => self.normalised(self.raw_brick_extremes(v, reach)?)?,
+            Voxels::U16(v) => self.normalised(self.raw_brick_extremes(v, reach)?)?,
         };
-        Bricks {
+        Ok(Bricks {
             dims: self.brick_counts(),
             min,
             max,
-        }
+        })
     }
 
     /// The node-value ranges of raw ranges `(lo, hi)`: each end normalised, the two swapped
@@ -88,24 +95,24 @@ impl Dataset {
     fn normalised<T: Copy + Into<f64> + Sync>(
         &self,
         (lo, hi): (Vec<T>, Vec<T>),
-    ) -> (Vec<f32>, Vec<f32>) {
+    ) -> crate::error::Result<(Vec<f32>, Vec<f32>)> {
         use rayon::prelude::*;
         let norm = normaliser(self.a, self.b);
         let up = self.b > self.a;
+        let what = "a dataset's brick ranges";
+        let mut min = crate::num::try_vec(lo.len(), 0f32, what)?;
+        let mut max = crate::num::try_vec(lo.len(), 0f32, what)?;
         // (In parallel: a brick's normalisation is two divisions, and a scan has some 10⁵
         // bricks.)
-        lo.par_iter()
-            .zip(&hi)
+        min.par_iter_mut()
+            .zip(max.par_iter_mut())
+            .zip(lo.par_iter().zip(&hi))
             .with_min_len(1 << 12)
-            .map(|(&l, &h)| {
+            .for_each(|((mn, mx), (&l, &h))| {
                 let (l, h) = (norm(l.into()), norm(h.into()));
-                if up {
-                    (l, h)
-                } else {
-                    (h, l)
-                }
-            })
-            .unzip()
+                (*mn, *mx) = if up { (l, h) } else { (h, l) };
+            });
+        Ok((min, max))
     }
 
     /// Bricks per axis.
@@ -116,7 +123,7 @@ impl Dataset {
 
     /// The smallest and largest raw voxel of each brick's padded span of nodes (see
     /// [`Bricks`]), x fastest, from the raw voxels `v`.
-    fn raw_brick_extremes<T>(&self, v: &[T], reach: usize) -> (Vec<T>, Vec<T>)
+    fn raw_brick_extremes<T>(&self, v: &[T], reach: usize) -> crate::error::Result<(Vec<T>, Vec<T>)>
     where
         T: Copy + PartialOrd + Default + Send + Sync,
     {
@@ -141,21 +148,20 @@ impl Dataset {
         let [nx, ny, _] = d;
         let plane = counts[0] * counts[1];
         let zero = T::default();
-        let (mut min, mut max) = (vec![zero; plane * counts[2]], vec![zero; plane * counts[2]]);
+        let what = "a dataset's brick ranges";
+        let mut min = crate::num::try_vec(plane * counts[2], zero, what)?;
+        let mut max = crate::num::try_vec(plane * counts[2], zero, what)?;
         let layer = |z: usize| &v[z * nx * ny..(z + 1) * nx * ny];
         min.par_chunks_mut(plane)
             .zip(max.par_chunks_mut(plane))
             .enumerate()
-            .for_each_init(
+            .try_for_each_init(
                 || {
-                    (
-                        vec![zero; nx * ny],
-                        vec![zero; nx * ny],
-                        vec![zero; nx],
-                        vec![zero; nx],
-                    )
+                    let row = |n: usize| crate::num::try_vec(n, zero, "brick ranges' scratch rows");
+                    Ok::<_, crate::error::Error>((row(nx * ny)?, row(nx * ny)?, row(nx)?, row(nx)?))
                 },
-                |(zmin, zmax, ymin, ymax), (k, (min, max))| {
+                |scratch, (k, (min, max))| {
+                    let (zmin, zmax, ymin, ymax) = scratch.as_mut().map_err(|e| e.clone())?;
                     let (z0, z1) = span(k, d[2]);
                     zmin.copy_from_slice(layer(z0));
                     zmax.copy_from_slice(layer(z0));
@@ -185,8 +191,9 @@ impl Dataset {
                             max[bi + counts[0] * bj] = mx;
                         }
                     }
+                    Ok(())
                 },
-            );
-        (min, max)
+            )?;
+        Ok((min, max))
     }
 }

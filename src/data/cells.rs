@@ -65,13 +65,19 @@ impl CellMask {
     /// The mask's bits as 32-bit words: bit `c & 31` of word `c >> 5` for the cell with first
     /// node `c` (a cell past their end may reach the bound). For the packet march
     /// (`render::simd`), made once per mask.
+    /// Where they cannot be allocated this unwinds ([`super::or_unwind`]).
     pub(crate) fn words32(&self) -> &[u32] {
-        self.words32.get_or_init(|| {
-            self.bits
-                .iter()
-                .flat_map(|&w| [w as u32, (w >> 32) as u32])
-                .collect()
+        super::or_unwind(self.try_words32())
+    }
+
+    /// [`CellMask::words32`], or `NoMemory` where they cannot be allocated (nothing is kept).
+    pub(crate) fn try_words32(&self) -> crate::error::Result<&[u32]> {
+        super::get_or_try_init(&self.words32, || {
+            let mut w = crate::num::try_with_capacity(2 * self.bits.len(), "a cell mask's words")?;
+            w.extend(self.bits.iter().flat_map(|&w| [w as u32, (w >> 32) as u32]));
+            Ok(w)
         })
+        .map(|w| w.as_slice())
     }
 
     /// Whether the cell with first node `c` may reach the bound.
@@ -108,7 +114,15 @@ pub(super) fn reaches(bits: &[u64], c: usize) -> bool {
 impl Dataset {
     /// The [`CellMask`] of bound `z`, built on first use (in parallel) and kept for the
     /// dataset's life: an object's zero test asks for one bound, so a dataset holds few.
+    /// Where it cannot be allocated this unwinds ([`super::or_unwind`]);
+    /// [`Dataset::try_cells_above`] reports it instead.
     pub(crate) fn cells_above(&self, z: f32) -> std::sync::Arc<CellMask> {
+        super::or_unwind(self.try_cells_above(z))
+    }
+
+    /// [`Dataset::cells_above`], or `NoMemory` where the mask cannot be allocated (nothing is
+    /// kept: a later call tries again).
+    pub(crate) fn try_cells_above(&self, z: f32) -> crate::error::Result<std::sync::Arc<CellMask>> {
         // A poisoned lock only means another thread panicked while building: the list itself
         // is always in a consistent state (entries are pushed whole).
         let mut masks = self
@@ -116,14 +130,14 @@ impl Dataset {
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
         if let Some((_, m)) = masks.iter().find(|(b, _)| *b == z.to_bits()) {
-            return m.clone();
+            return Ok(m.clone());
         }
-        let m = std::sync::Arc::new(self.compute_cell_mask(z));
+        let m = std::sync::Arc::new(self.compute_cell_mask(z)?);
         masks.push((z.to_bits(), m.clone()));
-        m
+        Ok(m)
     }
 
-    fn compute_cell_mask(&self, z: f32) -> CellMask {
+    fn compute_cell_mask(&self, z: f32) -> crate::error::Result<CellMask> {
         // Over the raw voxels, like the brick ranges: `normaliser` is monotone, so a cell's
         // largest node value is the normalised largest raw voxel of its nodes (smallest, where
         // the normalisation decreases), and "normalised above the bound" is a threshold on raw
@@ -134,17 +148,17 @@ impl Dataset {
             (Voxels::U8(v), false) => self.raw_cell_bits::<_, false>(v, lo),
             (Voxels::U16(v), true) => self.raw_cell_bits::<_, true>(v, lo),
             (Voxels::U16(v), false) => self.raw_cell_bits::<_, false>(v, lo),
-        };
-        CellMask {
+        }?;
+        Ok(CellMask {
             bits,
             words32: Default::default(),
-        }
+        })
     }
 
     /// The bits of [`CellMask`] for bound `lo` (a cell's bit is set where its largest node
     /// value is above `lo`), from the raw voxels `v`; `UP`: the normalisation increases
     /// (b > a). (A constant, so that each loop below compiles to plain minima or maxima.)
-    fn raw_cell_bits<T, const UP: bool>(&self, v: &[T], lo: f32) -> Vec<u64>
+    fn raw_cell_bits<T, const UP: bool>(&self, v: &[T], lo: f32) -> crate::error::Result<Vec<u64>>
     where
         T: Copy + PartialOrd + TryFrom<u32> + Send + Sync,
     {
@@ -178,9 +192,9 @@ impl Dataset {
             }
             Some(at(ok))
         };
-        let mut bits = vec![0u64; v.len().div_ceil(64)];
+        let mut bits = crate::num::try_vec(v.len().div_ceil(64), 0u64, "a cell mask")?;
         let Some(t) = threshold else {
-            return bits;
+            return Ok(bits);
         };
         let t = T::try_from(t).ok().expect("a raw voxel value");
         let [nx, ny, _] = self.dims;
@@ -211,9 +225,16 @@ impl Dataset {
         // threshold; nodes that start no cell keep a flag of 0.
         bits.par_chunks_mut(CELL_MASK_RUN)
             .enumerate()
-            .for_each_init(
-                || (vec![t; nx], vec![0u8; CELL_MASK_RUN * 64]),
-                |(m, flags), (c, out)| {
+            .try_for_each_init(
+                || {
+                    let what = "a cell mask's scratch rows";
+                    Ok::<_, crate::error::Error>((
+                        crate::num::try_vec(nx, t, what)?,
+                        vec![0u8; CELL_MASK_RUN * 64],
+                    ))
+                },
+                |scratch, (c, out)| {
+                    let (m, flags) = scratch.as_mut().map_err(|e| e.clone())?;
                     let first = c * CELL_MASK_RUN * 64;
                     let end = (first + out.len() * 64).min(v.len());
                     let flags = &mut flags[..end - first];
@@ -246,8 +267,9 @@ impl Dataset {
                     for (w, f) in out.iter_mut().zip(flags.chunks(64)) {
                         *w = pack_flags(f);
                     }
+                    Ok(())
                 },
-            );
-        bits
+            )?;
+        Ok(bits)
     }
 }

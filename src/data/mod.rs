@@ -45,9 +45,10 @@ pub(crate) use filter::bc_abs_sum;
 pub use filter::Filter;
 pub(crate) use lanes::Cells8;
 pub(crate) use trilinear::CellGradients;
+pub(crate) use vlb::header as vlb_header;
 pub use vlb::{HEADER_LEN, MAGIC};
 
-use crate::error::{err, ErrorCode, Result};
+use crate::error::{err, Error, ErrorCode, Result};
 
 /// The largest number of voxels a dataset may have (2^32; 16 GiB of normalised values).
 pub const MAX_VOXELS: u64 = 1 << 32;
@@ -270,8 +271,16 @@ impl Dataset {
     }
 
     /// The normalised node values, x fastest: made on first use (in parallel), then kept.
+    /// Where they cannot be allocated this unwinds (with the error's message, printing
+    /// nothing) instead of aborting; [`Dataset::try_values`] reports it as `NoMemory`.
     pub fn values(&self) -> &[f32] {
-        self.values.get_or_init(|| self.compute_values())
+        or_unwind(self.try_values())
+    }
+
+    /// [`Dataset::values`], or `NoMemory` where they cannot be allocated (nothing is kept then:
+    /// a later call tries again).
+    pub fn try_values(&self) -> Result<&[f32]> {
+        get_or_try_init(&self.values, || self.compute_values()).map(|v| v.as_slice())
     }
 
     /// Whether the node values have been made ([`Dataset::values`]): a render that reads only
@@ -285,9 +294,9 @@ impl Dataset {
     /// has, but threads of their own: made from inside a render's parallel loop (a first
     /// read there), a rayon job that waits for its parts may run another part of the render
     /// meanwhile, which would ask for the values again, in the thread that is making them.
-    fn compute_values(&self) -> Vec<f32> {
+    fn compute_values(&self) -> Result<Vec<f32>> {
         let norm = normaliser(self.a, self.b);
-        let mut values = vec![0f32; self.raw.len()];
+        let mut values = crate::num::try_vec(self.raw.len(), 0f32, "a dataset's node values")?;
         let threads = rayon::current_num_threads().clamp(1, 64);
         let chunk = self.raw.len().div_ceil(threads).max(1 << 16);
         let lut: [f32; 256] = std::array::from_fn(|x| norm(x as f64));
@@ -310,11 +319,46 @@ impl Dataset {
                 });
             }
         });
-        values
+        Ok(values)
     }
 
     /// The raw value of node (i, j, k) before normalisation.
     pub fn raw_node(&self, i: usize, j: usize, k: usize) -> f64 {
         self.raw.get(self.node_index([i, j, k]))
     }
+}
+
+/// `cell.get_or_init(init)` for an `init` that may fail: its error is returned and the cell
+/// left empty (a later call tries again). (The failure leaves `get_or_init` by unwinding with
+/// `resume_unwind`, which runs no panic hook and prints nothing, and is caught here; threads
+/// waiting on the cell meanwhile then run their own `init`.)
+fn get_or_try_init<T>(
+    cell: &std::sync::OnceLock<T>,
+    init: impl FnOnce() -> Result<T>,
+) -> Result<&T> {
+    if let Some(v) = cell.get() {
+        return Ok(v);
+    }
+    struct Failed(Error);
+    let run = std::panic::AssertUnwindSafe(|| {
+        cell.get_or_init(|| {
+            init().unwrap_or_else(|e| std::panic::resume_unwind(Box::new(Failed(e))))
+        })
+    });
+    match std::panic::catch_unwind(run) {
+        Ok(v) => Ok(v),
+        Err(payload) => match payload.downcast::<Failed>() {
+            Ok(f) => Err(f.0),
+            Err(other) => std::panic::resume_unwind(other),
+        },
+    }
+}
+
+/// The value of a cache the renderer reads through an infallible accessor ([`Dataset::values`],
+/// [`Dataset::bricks`], [`Dataset::cells_above`], [`CellMask::words32`]), or, where it could not
+/// be allocated, an unwind carrying the error's message (a `String`, as a panic's: the render's
+/// panic boundary reports it) instead of the process's abort. `resume_unwind` runs no panic
+/// hook, so nothing is printed.
+pub(crate) fn or_unwind<T>(r: Result<T>) -> T {
+    r.unwrap_or_else(|e| std::panic::resume_unwind(Box::new(e.message)))
 }

@@ -12,6 +12,7 @@
 
 use super::{Dataset, Voxels, MAX_VOXELS};
 use crate::error::{Error, ErrorCode, Result};
+use crate::num::{no_memory, try_with_capacity};
 use std::io::Read;
 use std::os::unix::fs::OpenOptionsExt;
 use std::path::Path;
@@ -33,7 +34,7 @@ const O_NONBLOCK: i32 = 0o4000;
 const O_NONBLOCK: i32 = 0x0004;
 
 impl Dataset {
-    /// Parses a `.vlb` file held in memory.
+    /// Parses a `.vlb` file held in memory (the voxels are copied once, into the dataset).
     pub fn from_vlb_bytes(bytes: &[u8]) -> Result<Dataset> {
         check_magic(bytes)?;
         let header = parse_header(bytes.get(..HEADER_LEN).ok_or_else(|| {
@@ -43,26 +44,22 @@ impl Dataset {
             )
         })?)?;
         header.check_len(bytes.len() as u64)?;
-        Dataset::from_body(&header, bytes[HEADER_LEN..].to_vec())
-    }
-
-    fn from_body(h: &Header, body: Vec<u8>) -> Result<Dataset> {
-        // 8-bit voxels keep the buffer they were read into: a copy of a scan's bytes costs a
-        // page fault per 4 KiB of fresh memory, a measurable part of the first image.
-        let raw = if h.bytes == 1 {
-            Voxels::U8(body)
+        let body = &bytes[HEADER_LEN..];
+        let raw = if header.bytes == 1 {
+            let mut v = try_with_capacity(body.len(), "the voxels of a .vlb")?;
+            v.extend_from_slice(body);
+            Voxels::U8(v)
         } else {
-            Voxels::U16(
-                body.chunks_exact(2)
-                    .map(|c| u16::from_le_bytes([c[0], c[1]]))
-                    .collect(),
-            )
+            let mut v = try_with_capacity(body.len() / 2, "the voxels of a .vlb")?;
+            extend_le(&mut v, body);
+            Voxels::U16(v)
         };
-        Dataset::new(h.dims, raw, h.a, h.b)
+        Dataset::new(header.dims, raw, header.a, header.b)
     }
 
     /// Reads a `.vlb` file: the header is checked against the file's length before the voxels
-    /// are allocated, and nothing is read past the end.
+    /// are allocated (fallibly: `NoMemory` where they do not fit), and nothing is read past
+    /// the end. The voxels are read straight into the dataset's buffer.
     pub fn load(path: &Path) -> Result<Dataset> {
         let io =
             |e: std::io::Error| Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()));
@@ -101,29 +98,103 @@ impl Dataset {
         }
         let h = parse_header(&head).map_err(named)?;
         h.check_len(len).map_err(named)?;
-        let mut body = vec![0u8; (len - HEADER_LEN as u64) as usize];
-        f.read_exact(&mut body).map_err(io)?;
-        Dataset::from_body(&h, body)
+        let what = format!("{}: its voxels", path.display());
+        // (At most 2^32 voxels: a usize on 64-bit targets.)
+        let n = usize::try_from(len - HEADER_LEN as u64).map_err(|_| no_memory(&what, None))?
+            / h.bytes as usize;
+        let shrank = || {
+            Error::new(
+                ErrorCode::IoError,
+                format!("{}: the file shrank while it was read", path.display()),
+            )
+        };
+        let raw = if h.bytes == 1 {
+            // Into the spare capacity (not zeroed first), and no further than the header says.
+            let mut v = try_with_capacity::<u8>(n, &what)?;
+            (&mut f).take(n as u64).read_to_end(&mut v).map_err(io)?;
+            if v.len() != n {
+                return Err(shrank());
+            }
+            Voxels::U8(v)
+        } else {
+            // Through a small buffer of bytes, converted as they come: the voxels' memory once.
+            let mut v = try_with_capacity::<u16>(n, &what)?;
+            let mut chunk = [0u8; 1 << 14];
+            while v.len() < n {
+                let want = (2 * (n - v.len())).min(chunk.len());
+                f.read_exact(&mut chunk[..want]).map_err(|e| {
+                    if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                        shrank()
+                    } else {
+                        io(e)
+                    }
+                })?;
+                extend_le(&mut v, &chunk[..want]);
+            }
+            Voxels::U16(v)
+        };
+        Dataset::new(h.dims, raw, h.a, h.b)
     }
 
-    /// The `.vlb` encoding of the dataset.
-    pub fn to_vlb_bytes(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(HEADER_LEN + self.raw.len() * self.raw.width() as usize);
-        out.extend_from_slice(MAGIC);
-        for d in self.dims {
-            out.extend_from_slice(&(d as u32).to_le_bytes());
-        }
-        out.extend_from_slice(&self.raw.width().to_le_bytes());
-        out.extend_from_slice(&self.a.to_le_bytes());
-        out.extend_from_slice(&self.b.to_le_bytes());
-        match &self.raw {
-            Voxels::U8(v) => out.extend_from_slice(v),
-            Voxels::U16(v) => v
-                .iter()
-                .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
-        }
-        out
+    /// The `.vlb` encoding of the dataset; `NoMemory` where its bytes cannot be allocated
+    /// (saving a dataset, `Dataset::save`, writes them piece by piece instead).
+    pub fn to_vlb_bytes(&self) -> Result<Vec<u8>> {
+        let len = self.raw.len() * self.raw.width() as usize;
+        let mut out = try_with_capacity(HEADER_LEN + len, "the bytes of a .vlb")?;
+        out.extend_from_slice(&self.vlb_header());
+        self.vlb_body(|b| {
+            out.extend_from_slice(b);
+            Ok(())
+        })?;
+        Ok(out)
     }
+
+    /// The dataset's `.vlb` header.
+    pub(crate) fn vlb_header(&self) -> [u8; HEADER_LEN] {
+        header(self.dims, self.raw.width(), self.a, self.b)
+    }
+
+    /// Gives the dataset's `.vlb` body to `out` in order, in pieces of at most 64 KiB (8-bit
+    /// voxels in one piece: they are their own bytes); stops at `out`'s first error.
+    pub(crate) fn vlb_body(&self, mut out: impl FnMut(&[u8]) -> Result<()>) -> Result<()> {
+        match &self.raw {
+            Voxels::U8(v) => out(v),
+            Voxels::U16(v) => {
+                let mut chunk = [0u8; 1 << 16];
+                for part in v.chunks(chunk.len() / 2) {
+                    for (c, x) in chunk.chunks_exact_mut(2).zip(part) {
+                        c.copy_from_slice(&x.to_le_bytes());
+                    }
+                    out(&chunk[..2 * part.len()])?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// A `.vlb` header: the magic, the dimensions and the voxel width as u32, the normalisation a,
+/// b as f32, all little-endian. The one encoding of it, for saved datasets and for
+/// voxelizations written piece by piece (`output::voxel`).
+pub(crate) fn header(dims: [usize; 3], width: u32, a: f32, b: f32) -> [u8; HEADER_LEN] {
+    let mut h = [0u8; HEADER_LEN];
+    h[..4].copy_from_slice(MAGIC);
+    for (k, d) in dims.iter().enumerate() {
+        h[4 + 4 * k..8 + 4 * k].copy_from_slice(&(*d as u32).to_le_bytes());
+    }
+    h[16..20].copy_from_slice(&width.to_le_bytes());
+    h[20..24].copy_from_slice(&a.to_le_bytes());
+    h[24..28].copy_from_slice(&b.to_le_bytes());
+    h
+}
+
+/// Appends the little-endian 16-bit voxels of `bytes` (of even length) to `v`.
+fn extend_le(v: &mut Vec<u16>, bytes: &[u8]) {
+    v.extend(
+        bytes
+            .chunks_exact(2)
+            .map(|c| u16::from_le_bytes([c[0], c[1]])),
+    );
 }
 
 /// What a `.vlb` header claims: dimensions, bytes per voxel, and the normalisation a, b.

@@ -38,3 +38,17 @@ fn floor_and_ceil_match_the_library() {
     }
     assert!(floor(f64::NAN).is_nan() && ceil(f64::NAN).is_nan());
 }
+
+/// An allocation larger than any address space is `NoMemory`, not an abort; one that fits is
+/// the vector asked for.
+#[test]
+fn impossible_allocations_are_no_memory() {
+    use crate::error::ErrorCode;
+    let e = try_vec(usize::MAX / 2, 0u8, "a test buffer").unwrap_err();
+    assert_eq!(e.code, ErrorCode::NoMemory);
+    assert!(e.message.starts_with("a test buffer: "), "{}", e.message);
+    let e = try_with_capacity::<[f32; 10]>(usize::MAX / 8, "fields").unwrap_err();
+    assert_eq!(e.code, ErrorCode::NoMemory);
+    assert_eq!(try_vec(3, 7u16, "small").unwrap(), vec![7u16; 3]);
+    assert_eq!(try_with_capacity::<u8>(5, "small").unwrap().capacity(), 5);
+}

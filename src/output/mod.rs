@@ -22,11 +22,15 @@ pub use files::{write_atomic, write_image};
 mod tests;
 
 impl crate::data::Dataset {
-    /// Writes the dataset as a `.vlb` file, atomically (the format: [`Dataset::to_vlb_bytes`]).
+    /// Writes the dataset as a `.vlb` file, atomically (the format: [`Dataset::to_vlb_bytes`]),
+    /// piece by piece: no copy of the voxels is made.
     ///
     /// [`Dataset::to_vlb_bytes`]: crate::data::Dataset::to_vlb_bytes
     pub fn save(&self, path: &std::path::Path) -> Result<()> {
-        write_atomic(path, &self.to_vlb_bytes())
+        let mut file = files::AtomicFile::create(path)?;
+        file.write(&self.vlb_header())?;
+        self.vlb_body(|bytes| file.write(bytes))?;
+        file.commit()
     }
 }
 
@@ -60,7 +64,10 @@ pub fn render_outputs(desc: &SceneDesc, grids: &Grids, control: &RenderControl) 
         }
     }
     for req in &desc.volumes {
-        if let Err(e) = voxel::write(&compiled, req) {
+        if let Err(e) = voxel::write(&compiled, req, &progress) {
+            if e.code == ErrorCode::Cancelled {
+                return Err(e);
+            }
             errors.push(e);
         }
     }

@@ -8,16 +8,32 @@
 //! b = 255 or 65535, so loading one gives back the values to within half a quantum.
 //!
 //! The fields at a node come from the compiled scene (`render::Compiled::fields_at`); this
-//! module owns only the grid, the quantisation and the datasets it makes.
+//! module owns only the grid, the quantisation and the files it writes.
+//!
+//! The grid is sampled a slab at a time: [`SLAB_NODES`] consecutive nodes in file order (x
+//! fastest, then y, then z), their ten fields in one buffer reused for every slab, quantised
+//! into each requested field's file as soon as they are known. The files are written through
+//! [`AtomicFile`]s, header first and then slab by slab, and committed only once every slab is
+//! written, so a voxelization that fails (no memory for its buffers, a panic in a field
+//! function, a cancelled render) leaves no file. Besides the files' own write buffers it holds
+//! two buffers of one slab, whatever the grid's size.
 
-use crate::data::{Dataset, Voxels};
-use crate::error::{Error, Result};
+use crate::control::Progress;
+use crate::data::{vlb_header, MAX_VOXELS};
+use crate::error::{Error, ErrorCode, Result};
 use crate::model::scene::VolumeRequest;
+use crate::num::try_vec;
+use crate::output::files::AtomicFile;
 use crate::render::Compiled;
 use crate::types::{FIELD_COUNT, FIELD_NAMES};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::path::PathBuf;
+
+/// The nodes of one slab: its fields take 40 bytes a node (2.5 MiB), enough work per slab for
+/// the library's threads (a slab is shared among them) and little memory beside any output
+/// worth voxelizing.
+pub(crate) const SLAB_NODES: usize = 1 << 16;
 
 /// The world position of node `i` of `n` between `a` and `b`.
 fn node(a: f32, b: f32, i: usize, n: usize) -> f64 {
@@ -35,46 +51,119 @@ pub fn file_name(req: &VolumeRequest, field: usize) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// Samples the scene on the request's grid: all ten fields per node, x fastest.
-pub fn sample_grid(scene: &Compiled, req: &VolumeRequest) -> Vec<[f32; FIELD_COUNT]> {
+/// Samples the scene at the nodes `first`, `first` + 1, … (in file order, x fastest) into
+/// `out`, one node per element, in parallel; a node is skipped once the render is cancelled
+/// (the caller's check after the slab reports it).
+fn sample_slab(
+    scene: &Compiled,
+    req: &VolumeRequest,
+    first: usize,
+    out: &mut [[f32; FIELD_COUNT]],
+    progress: &Progress,
+) {
     let [nx, ny, nz] = req.nodes;
     let (a, b) = (req.corner0, req.corner1);
-    (0..nz)
-        .into_par_iter()
-        .flat_map_iter(|k| {
-            let z = node(a[2], b[2], k, nz);
-            (0..ny).flat_map(move |j| {
-                let y = node(a[1], b[1], j, ny);
-                (0..nx).map(move |i| scene.fields_at(DVec3::new(node(a[0], b[0], i, nx), y, z)))
-            })
-        })
-        .collect()
+    out.par_iter_mut()
+        .with_min_len(64)
+        .enumerate()
+        .for_each(|(t, f)| {
+            if progress.cancelled() {
+                return;
+            }
+            let o = first + t;
+            let (i, j, k) = (o % nx, o / nx % ny, o / (nx * ny));
+            let p = DVec3::new(
+                node(a[0], b[0], i, nx),
+                node(a[1], b[1], j, ny),
+                node(a[2], b[2], k, nz),
+            );
+            *f = scene.fields_at(p);
+        });
 }
 
-/// Voxelizes and writes every requested field; all files are attempted, the first error is
-/// returned.
-pub fn write(scene: &Compiled, req: &VolumeRequest) -> Result<()> {
-    let grid = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| sample_grid(scene, req)))
-        .map_err(|_| {
-        Error::new(
-            crate::ErrorCode::Internal,
-            "voxelization stopped by a panic (in a field function?)",
-        )
-    })?;
-    let max = if req.bytes == 1 { 255.0 } else { 65535.0 };
-    let mut first = None;
-    for field in req.fields.indices() {
-        let q = grid.iter().map(|f| (f[field] as f64 * max).round());
-        let raw = if req.bytes == 1 {
-            Voxels::U8(q.map(|v| v as u8).collect())
-        } else {
-            Voxels::U16(q.map(|v| v as u16).collect())
-        };
-        let result = Dataset::new(req.nodes, raw, 0.0, max as f32)
-            .and_then(|d| d.save(&file_name(req, field)));
-        if let Err(e) = result {
-            first.get_or_insert(e);
+/// Quantises one field of a slab's nodes into `out`: `bytes` (1 or 2) little-endian bytes per
+/// node, the nearest of 0 … 255 or 0 … 65535 to the value times that maximum.
+fn quantise(nodes: &[[f32; FIELD_COUNT]], field: usize, bytes: u32, out: &mut [u8]) {
+    let max = if bytes == 1 { 255.0 } else { 65535.0 };
+    let q = |f: &[f32; FIELD_COUNT]| (f[field] as f64 * max).round();
+    if bytes == 1 {
+        for (o, f) in out.iter_mut().zip(nodes) {
+            *o = q(f) as u8;
+        }
+    } else {
+        for (o, f) in out.chunks_exact_mut(2).zip(nodes) {
+            o.copy_from_slice(&(q(f) as u16).to_le_bytes());
         }
     }
-    first.map_or(Ok(()), Err)
 }
+
+/// Voxelizes and writes every requested field, a slab at a time, reporting each slab's nodes
+/// to `progress`. A field whose file cannot be written is an error of its own and the other
+/// fields are still written (the first error is returned); a failure of the voxelization
+/// itself (`NoMemory` for its buffers, `Internal` for a panic, `Cancelled`) writes no file.
+pub fn write(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Result<()> {
+    let total = req
+        .nodes
+        .iter()
+        .try_fold(1u64, |acc, &n| acc.checked_mul(n as u64))
+        .filter(|&n| n <= MAX_VOXELS)
+        .ok_or_else(|| {
+            Error::new(
+                ErrorCode::NoMemory,
+                format!("vlVolume: {:?} nodes exceed {MAX_VOXELS}", req.nodes),
+            )
+        })? as usize;
+    let max = if req.bytes == 1 { 255.0 } else { 65535.0 };
+    let header = vlb_header(req.nodes, req.bytes, 0.0, max as f32);
+    let mut first_error: Option<Error> = None;
+    let mut files: Vec<(usize, AtomicFile)> = Vec::new();
+    for field in req.fields.indices() {
+        let opened = AtomicFile::create(&file_name(req, field)).and_then(|mut f| {
+            f.write(&header)?;
+            Ok(f)
+        });
+        match opened {
+            Ok(f) => files.push((field, f)),
+            Err(e) => {
+                first_error.get_or_insert(e);
+            }
+        }
+    }
+    let slab = SLAB_NODES.min(total);
+    let mut nodes = try_vec(slab, [0f32; FIELD_COUNT], "a voxelization's slab")?;
+    let mut bytes = try_vec(slab * req.bytes as usize, 0u8, "a voxelization's slab")?;
+    progress.check()?;
+    let mut done = 0;
+    while done < total && !files.is_empty() {
+        let n = slab.min(total - done);
+        let nodes = &mut nodes[..n];
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            sample_slab(scene, req, done, nodes, progress)
+        }))
+        .map_err(|_| {
+            Error::new(
+                ErrorCode::Internal,
+                "voxelization stopped by a panic (in a field function?)",
+            )
+        })?;
+        progress.check()?;
+        let bytes = &mut bytes[..n * req.bytes as usize];
+        files.retain_mut(|(field, file)| {
+            quantise(nodes, *field, req.bytes, bytes);
+            file.write(bytes)
+                .map_err(|e| first_error.get_or_insert(e))
+                .is_ok()
+        });
+        done += n;
+        progress.advance(n as u64)?;
+    }
+    for (_, file) in files {
+        if let Err(e) = file.commit() {
+            first_error.get_or_insert(e);
+        }
+    }
+    first_error.map_or(Ok(()), Err)
+}
+
+#[cfg(test)]
+mod tests;

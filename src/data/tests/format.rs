@@ -6,11 +6,11 @@ use crate::error::ErrorCode;
 #[test]
 fn vlb_round_trip_is_bit_exact() {
     let d8 = random_u8([7, 3, 5], 6);
-    let back = Dataset::from_vlb_bytes(&d8.to_vlb_bytes()).unwrap();
+    let back = Dataset::from_vlb_bytes(&d8.to_vlb_bytes().unwrap()).unwrap();
     assert_eq!(back, d8);
-    assert_eq!(back.to_vlb_bytes(), d8.to_vlb_bytes());
+    assert_eq!(back.to_vlb_bytes().unwrap(), d8.to_vlb_bytes().unwrap());
     let (d16, _) = linear([4, 3, 2]);
-    let bytes = d16.to_vlb_bytes();
+    let bytes = d16.to_vlb_bytes().unwrap();
     assert_eq!(bytes.len(), HEADER_LEN + 4 * 3 * 2 * 2);
     assert_eq!(&bytes[..4], b"VLB1");
     assert_eq!(Dataset::from_vlb_bytes(&bytes).unwrap(), d16);
@@ -23,7 +23,7 @@ fn vlb_round_trip_is_bit_exact() {
 
 #[test]
 fn malformed_files_are_refused_with_the_right_error() {
-    let good = random_u8([3, 2, 2], 7).to_vlb_bytes();
+    let good = random_u8([3, 2, 2], 7).to_vlb_bytes().unwrap();
     let patch = |at: usize, bytes: &[u8]| {
         let mut v = good.clone();
         v[at..at + bytes.len()].copy_from_slice(bytes);
@@ -139,4 +139,36 @@ fn non_regular_files_are_refused_without_blocking() {
         assert_eq!(got, Err(ErrorCode::IoError), "{}", p.display());
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A cache whose computation fails is left empty and the error returned (a later call
+/// computes it again), and the infallible form unwinds with the message instead of aborting.
+#[test]
+fn failed_caches_stay_empty_and_report_their_error() {
+    use crate::error::{Error, ErrorCode};
+    let cell = std::sync::OnceLock::new();
+    let fail = || {
+        Err(Error::new(
+            ErrorCode::NoMemory,
+            "a cache: 8 bytes could not be allocated",
+        ))
+    };
+    let e = super::super::get_or_try_init(&cell, fail).unwrap_err();
+    assert_eq!(e.code, ErrorCode::NoMemory);
+    assert!(cell.get().is_none());
+    assert_eq!(
+        *super::super::get_or_try_init(&cell, || Ok(7u64)).unwrap(),
+        7
+    );
+    assert_eq!(
+        *super::super::get_or_try_init(&cell, fail).unwrap(),
+        7,
+        "kept"
+    );
+    let unwound = std::panic::catch_unwind(|| super::super::or_unwind(fail()));
+    let payload = unwound.unwrap_err();
+    assert_eq!(
+        payload.downcast_ref::<String>().map(String::as_str),
+        Some("a cache: 8 bytes could not be allocated")
+    );
 }

@@ -1,0 +1,186 @@
+/* Allocation failure is an error, not an abort (issue #24, item 3). Under an address-space
+ * limit (setrlimit(RLIMIT_AS) at 1 GiB above what the process has mapped), vlLoad of a sparse
+ * .vlb of 2^31 one-byte voxels must report VL_NOMEMORY, keep the id unloaded and leave the
+ * library usable; and a voxelization larger than the old bound of 2^27 nodes must be written in
+ * full within the limit (it holds one slab of nodes at a time). Before the limit, the peak
+ * memory of a 256^3 × 1-byte voxelization (a 16 MiB file) is measured with getrusage: it must
+ * grow by at most twice the file plus 8 MiB. Prints one line per check and exits non-zero if
+ * any fails. C89 (with POSIX); built and run by capi/tests/nomemory.rs and c_examples.rs, never
+ * under valgrind (which does not run under an address-space limit: see memcheck.rs). */
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/time.h>
+#include <unistd.h>
+#include <vlib.h>
+
+static int failures = 0;
+
+static void check(const char *what, int ok)
+{
+    printf("%-4s %s\n", ok ? "ok" : "FAIL", what);
+    fflush(stdout);
+    if (!ok)
+        failures++;
+}
+
+/* The codes vlError reports now, all of them; 1 if the queue held exactly `code` (or nothing,
+ * for VL_NOERROR). */
+static int only(vlint code)
+{
+    vlint e, first = VL_NOERROR;
+    int n = 0;
+    while ((e = vlError()) != VL_NOERROR) {
+        if (n++ == 0)
+            first = e;
+        printf("     (vlError %d)\n", (int)e);
+    }
+    return code == VL_NOERROR ? n == 0 : n == 1 && first == code;
+}
+
+static void put_u32(unsigned char *p, unsigned long v)
+{
+    p[0] = (unsigned char)(v & 255);
+    p[1] = (unsigned char)((v >> 8) & 255);
+    p[2] = (unsigned char)((v >> 16) & 255);
+    p[3] = (unsigned char)((v >> 24) & 255);
+}
+
+/* A .vlb of nx·ny·nz one-byte voxels (a = 0, b = 255), the voxels a hole (ftruncate): the
+ * 28-byte header of docs/compat.md, then the file extended to its full length. */
+static int sparse_vlb(const char *path, unsigned long nx, unsigned long ny, unsigned long nz)
+{
+    unsigned char h[28];
+    float a = 0.0f, b = 255.0f;
+    int fd, ok;
+    memcpy(h, "VLB1", 4);
+    put_u32(h + 4, nx);
+    put_u32(h + 8, ny);
+    put_u32(h + 12, nz);
+    put_u32(h + 16, 1);
+    memcpy(h + 20, &a, 4); /* little-endian IEEE floats, as on every target vlib builds for */
+    memcpy(h + 24, &b, 4);
+    fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd < 0)
+        return 0;
+    ok = write(fd, h, 28) == 28 && ftruncate(fd, (off_t)(28 + (double)nx * ny * nz)) == 0;
+    return close(fd) == 0 && ok;
+}
+
+static double file_size(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 ? (double)st.st_size : -1.0;
+}
+
+/* The peak resident memory so far, in KiB. */
+static long peak_kib(void)
+{
+    struct rusage u;
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_maxrss;
+}
+
+/* The address space mapped now (VmSize of /proc/self/status), in bytes; 0 if unknown. */
+static double mapped_bytes(void)
+{
+    char line[256];
+    double kib = 0.0;
+    FILE *f = fopen("/proc/self/status", "r");
+    if (!f)
+        return 0.0;
+    while (fgets(line, sizeof line, f))
+        if (strncmp(line, "VmSize:", 7) == 0)
+            kib = atof(line + 7);
+    fclose(f);
+    return kib * 1024.0;
+}
+
+/* A scene of one object of constant fields voxelized at nx·ny·nz nodes over the unit box. */
+static void voxelize(const char *prefix, int nx, int ny, int nz)
+{
+    vlScene();
+    vlVolume(prefix, VL_O, 0, 0, 0, 1, 1, 1, nx, ny, nz, 1);
+    vlObject();
+    vlSet(VL_O, 0.5f);
+    vlEnd();
+    vlEnd();
+}
+
+int main(void)
+{
+    const double MiB = 1024.0 * 1024.0;
+    struct rlimit lim;
+    double limit;
+    long before, growth_kib;
+    char msg[256];
+
+    /* Two threads, unless the caller chose: a thread's stack and malloc arena take address
+     * space, so the headroom under the limit should not depend on the number of cores. */
+    setenv("RAYON_NUM_THREADS", "2", 0);
+    vlInit();
+
+    /* Peak memory of a voxelization, after a small one has started the library's threads. */
+    voxelize("warm", 8, 8, 8);
+    check("a small voxelization", only(VL_NOERROR) && file_size("warm_o.vlb") == 28 + 512);
+    before = peak_kib();
+    voxelize("peak", 256, 256, 256);
+    growth_kib = peak_kib() - before;
+    check("256^3 nodes voxelized", only(VL_NOERROR));
+    check("its file has every voxel", file_size("peak_o.vlb") == 28 + 16 * MiB);
+    sprintf(msg, "peak memory grew by %.1f MiB for a 16 MiB file (at most 2 x 16 + 8)",
+            growth_kib / 1024.0);
+    check(msg, growth_kib <= (long)(2 * 16 + 8) * 1024);
+    unlink("warm_o.vlb");
+    unlink("peak_o.vlb");
+
+    /* The address-space limit: 1 GiB above what is mapped now. */
+    limit = mapped_bytes() + 1024.0 * MiB;
+    lim.rlim_cur = lim.rlim_max = (rlim_t)limit;
+    check("the address space is known", limit > 1024.0 * MiB);
+    check("setrlimit(RLIMIT_AS)", setrlimit(RLIMIT_AS, &lim) == 0);
+    printf("     (limit %.0f MiB)\n", limit / MiB);
+
+    /* A dataset of 2^31 voxels does not fit: VL_NOMEMORY, and nothing is filed under its id. */
+    check("a sparse .vlb of 2^31 voxels", sparse_vlb("huge.vlb", 2048, 1024, 1024));
+    vlLoad(1, "huge.vlb");
+    check("vlLoad of 2^31 voxels reports VL_NOMEMORY", only(VL_NOMEMORY));
+    unlink("huge.vlb");
+    vlScene();
+    vlObject();
+    vlDataset(VL_O, 1);
+    check("the dataset's id stays unloaded (vlDataset: VL_BADID)", only(VL_BADID));
+    vlEnd();
+    vlEnd();
+    only(VL_NOERROR);
+    vlUnload(1);
+    check("vlUnload of it: VL_BADID", only(VL_BADID));
+
+    /* Later commands work: a small dataset loads and renders. */
+    check("a small .vlb", sparse_vlb("small.vlb", 16, 16, 16));
+    vlLoad(2, "small.vlb");
+    check("a small dataset loads after the failure", only(VL_NOERROR));
+    vlScene();
+    vlImage("small.ppm", 1.0, 16, 16);
+    vlObject();
+    vlDataset(VL_O, 2);
+    vlEnd();
+    vlEnd();
+    check("and renders", only(VL_NOERROR) && file_size("small.ppm") > 16 * 16 * 3);
+    unlink("small.vlb");
+    unlink("small.ppm");
+
+    /* More nodes than the old bound of 2^27 (whose ten f32 fields were 5 GiB): written in full
+     * within the limit. */
+    voxelize("big", 1024, 1024, 129);
+    check("1024 x 1024 x 129 nodes voxelized under the limit", only(VL_NOERROR));
+    check("its file has every voxel", file_size("big_o.vlb") == 28 + 129 * MiB);
+    unlink("big_o.vlb");
+
+    vlEnd();
+    printf("%d failure(s)\n", failures);
+    return failures != 0;
+}
