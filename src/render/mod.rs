@@ -114,10 +114,11 @@ fn strip_rows(width: u32, height: u32) -> u32 {
     rows.next_multiple_of(PACKET_TILE).min(height.max(1))
 }
 
-/// The most samples one ray may take through one object: a scene whose step is finer than
-/// this fraction of an object's world diagonal is refused before it renders
-/// ([`Compiled::check_work`]).
-pub const MAX_SAMPLES_PER_RAY: f64 = (1u64 << 24) as f64;
+/// The most samples one ray may take through one object (2³², as many as a `.vlb` dataset has
+/// voxels): a scene whose step is finer than this fraction of an object's world diagonal is
+/// refused before it renders ([`Compiled::check_work`]). The diagonal bounds every ray, a
+/// grazing one too, so a thin, wide object at a fine step is measured by its width.
+pub const MAX_SAMPLES_PER_RAY: f64 = (1u64 << 32) as f64;
 
 /// The error of memory a render could not have.
 fn no_memory(what: &str, bytes: u64) -> Error {

@@ -1872,7 +1872,7 @@ fn progress_reaches_one_and_cancels() {
     );
 }
 
-/// A step finer than 2⁻²⁴ of an object's world diagonal is refused before any pixel, with
+/// A step finer than 2⁻³² of an object's world diagonal is refused before any pixel, with
 /// `BadValue`; the same object at a step just coarser renders.
 #[test]
 fn absurd_sample_counts_are_refused() {

@@ -1,6 +1,7 @@
 //! The exported functions, read from the sources: every `#[no_mangle]` function's body is one
 //! call of the panic boundary (`ffi::ffi_boundary`), and the command modules export exactly the
-//! commands of the list (`crate::COMMANDS`). The C side of the same surface (symbols, headers) is
+//! commands of the list (`crate::COMMANDS`) and the extensions module the extensions
+//! (`crate::EXTENSIONS`). The C side of the same surface (symbols, headers) is
 //! checked by `capi/tests/symbols.rs`.
 
 use std::path::{Path, PathBuf};
@@ -91,13 +92,21 @@ fn every_export_runs_inside_the_panic_boundary() {
 
 #[test]
 fn the_command_modules_export_exactly_the_listed_commands() {
-    let mut exported: Vec<String> = all_exports()
-        .into_iter()
-        .filter(|e| !e.file.ends_with("vlaux.rs"))
-        .map(|e| e.name)
-        .collect();
-    exported.sort();
+    let of = |keep: &dyn Fn(&str) -> bool| {
+        let mut names: Vec<String> = all_exports()
+            .into_iter()
+            .filter(|e| keep(&e.file))
+            .map(|e| e.name)
+            .collect();
+        names.sort();
+        names
+    };
+    let commands = of(&|f| !f.ends_with("vlaux.rs") && !f.ends_with("extensions.rs"));
     let mut listed: Vec<String> = crate::COMMANDS.iter().map(|s| s.to_string()).collect();
     listed.sort();
-    assert_eq!(exported, listed);
+    assert_eq!(commands, listed);
+    let extensions = of(&|f| f.ends_with("extensions.rs"));
+    let mut listed: Vec<String> = crate::EXTENSIONS.iter().map(|s| s.to_string()).collect();
+    listed.sort();
+    assert_eq!(extensions, listed);
 }

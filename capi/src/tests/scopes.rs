@@ -676,7 +676,7 @@ fn error_strings_are_static_and_total() {
         let s = unsafe { CStr::from_ptr(vlErrorString(code as i32)) };
         assert_eq!(s.to_str().unwrap(), code.description());
     }
-    for bad in [-1, 18, 1000, i32::MIN, i32::MAX] {
+    for bad in [-1, 19, 1000, i32::MIN, i32::MAX] {
         // SAFETY: as above.
         let s = unsafe { CStr::from_ptr(vlErrorString(bad)) };
         assert_eq!(s.to_str().unwrap(), "unknown error code");
