@@ -157,3 +157,35 @@ pub(crate) fn err<T>(code: ErrorCode, message: impl Into<String>) -> Result<T> {
 
 #[cfg(test)]
 mod tests;
+
+/// Runs `f`, turning an unwind into an error: one that carries an [`Error`] (raised by
+/// [`raise`], as a cache that could not be allocated is) is that error; any other panic (in a
+/// user's field function, say) is `Internal`, with `what` and the panic's message. The library's
+/// panic boundary for renders and voxelizations, so that neither a Rust caller nor the C layer
+/// sees a panic from them.
+pub(crate) fn catch<T>(what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
+        Ok(result) => result,
+        Err(payload) => Err(match payload.downcast::<Error>() {
+            Ok(e) => *e,
+            Err(payload) => {
+                let msg = payload
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| payload.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "unknown panic".into());
+                Error::new(
+                    ErrorCode::Internal,
+                    format!("{what} stopped by a panic (in a field function?): {msg}"),
+                )
+            }
+        }),
+    }
+}
+
+/// Leaves the current computation by unwinding with `e`, for [`catch`] to return: where an
+/// error arises deep in code that cannot return it (a cache filled on first use inside a
+/// render). `resume_unwind` runs no panic hook, so nothing is printed.
+pub(crate) fn raise(e: Error) -> ! {
+    std::panic::resume_unwind(Box::new(e))
+}

@@ -26,7 +26,7 @@ impl Library {
         crate::pool::install(|| {
             let progress =
                 crate::control::Progress::new(&self.control, width as u64 * height as u64);
-            crate::render::render_image(&self.compile(&desc), width, height, aspect, &progress)
+            crate::render::render_image(&self.compile(&desc)?, width, height, aspect, &progress)
         })
     }
 
@@ -34,13 +34,13 @@ impl Library {
     /// renderer's internals).
     #[cfg(test)]
     pub(crate) fn compiled(&self) -> Result<crate::render::Compiled> {
-        Ok(self.compile(&self.open_scene("compiled")?))
+        self.compile(&self.open_scene("compiled")?)
     }
 
     /// `desc`, the open scene, compiled with the scene's empty-space grids.
-    fn compile(&self, desc: &SceneDesc) -> crate::render::Compiled {
+    fn compile(&self, desc: &SceneDesc) -> Result<crate::render::Compiled> {
         let grids = &self.scene.as_ref().expect("scene scope").grids;
-        crate::render::Compiled::new(desc, grids)
+        crate::render::Compiled::build(desc, grids)
     }
 
     /// The open scene (at scene scope) as it would render now, without its outputs.
@@ -66,7 +66,7 @@ impl Library {
     /// Not a command of the C API.
     pub fn render_plan(&self) -> Result<crate::render::Plan> {
         let desc = self.open_scene("render_plan")?;
-        crate::pool::install(|| Ok(self.compile(&desc).plan()))
+        crate::pool::install(|| Ok(self.compile(&desc)?.plan()))
     }
 
     /// Switches the pixel-preserving speed-ups (empty-space skipping, early ray termination)

@@ -356,9 +356,9 @@ fn get_or_try_init<T>(
 
 /// The value of a cache the renderer reads through an infallible accessor ([`Dataset::values`],
 /// [`Dataset::bricks`], [`Dataset::cells_above`], [`CellMask::words32`]), or, where it could not
-/// be allocated, an unwind carrying the error's message (a `String`, as a panic's: the render's
-/// panic boundary reports it) instead of the process's abort. `resume_unwind` runs no panic
-/// hook, so nothing is printed.
+/// be allocated, an unwind carrying the error ([`crate::error::raise`]) that the render's panic
+/// boundary ([`crate::error::catch`]) returns as it is (`NoMemory`), instead of the process's
+/// abort. Nothing is printed.
 pub(crate) fn or_unwind<T>(r: Result<T>) -> T {
-    r.unwrap_or_else(|e| std::panic::resume_unwind(Box::new(e.message)))
+    r.unwrap_or_else(|e| crate::error::raise(e))
 }

@@ -53,7 +53,7 @@ pub fn render_outputs(desc: &SceneDesc, grids: &Grids, control: &RenderControl) 
         )
         .fold(0u64, u64::saturating_add);
     let progress = Progress::new(control, total);
-    let compiled = Compiled::new(desc, grids);
+    let compiled = Compiled::build(desc, grids)?;
     let mut errors: Vec<Error> = Vec::new();
     for req in &desc.images {
         if let Err(e) = image(&compiled, req, &progress) {

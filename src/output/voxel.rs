@@ -137,14 +137,9 @@ pub fn write(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Resu
     while done < total && !files.is_empty() {
         let n = slab.min(total - done);
         let nodes = &mut nodes[..n];
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            sample_slab(scene, req, done, nodes, progress)
-        }))
-        .map_err(|_| {
-            Error::new(
-                ErrorCode::Internal,
-                "voxelization stopped by a panic (in a field function?)",
-            )
+        crate::error::catch("voxelization", || {
+            sample_slab(scene, req, done, nodes, progress);
+            Ok(())
         })?;
         progress.check()?;
         let bytes = &mut bytes[..n * req.bytes as usize];

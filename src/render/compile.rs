@@ -364,8 +364,16 @@ pub struct Compiled {
 }
 
 impl Compiled {
+    /// [`Compiled::new`], with an error where the compilation cannot complete: `NoMemory` for
+    /// a dataset cache or an empty-space grid that cannot be allocated, `Internal` for a panic
+    /// (in a field function a grid evaluates, say).
+    pub fn build(desc: &SceneDesc, grids: &Grids) -> Result<Compiled> {
+        crate::error::catch("compiling the scene", || Ok(Compiled::new(desc, grids)))
+    }
+
     /// Compiles a scene description; its root objects' empty-space grids come from `grids`
-    /// (built there by the first compilation that needs them).
+    /// (built there by the first compilation that needs them). Unwinds where a cache cannot be
+    /// allocated ([`Compiled::build`] returns that as an error).
     pub fn new(desc: &SceneDesc, grids: &Grids) -> Compiled {
         let objects: Vec<CObj> = desc
             .objects

@@ -295,20 +295,7 @@ fn render_in_strips(
         }
         Ok(())
     };
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(run)) {
-        Ok(result) => result,
-        Err(payload) => {
-            let msg = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".into());
-            Err(Error::new(
-                ErrorCode::Internal,
-                format!("rendering stopped by a panic (in a field function?): {msg}"),
-            ))
-        }
-    }
+    crate::error::catch("rendering", run)
 }
 
 #[cfg(test)]

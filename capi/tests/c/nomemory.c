@@ -5,8 +5,11 @@
  * full within the limit (it holds one slab of nodes at a time). Before the limit, the peak
  * memory of a 256^3 × 1-byte voxelization (a 16 MiB file) is measured with getrusage: it must
  * grow by at most twice the file plus 8 MiB. Prints one line per check and exits non-zero if
- * any fails. C89 (with POSIX); built and run by capi/tests/nomemory.rs and c_examples.rs, never
+ * any fails. Last, under a tighter limit: a render whose dataset's node values (computed on
+ * first use, 4 bytes a voxel) do not fit is VL_NOMEMORY, not VL_INTERNAL; a 16384^2 image is
+ * VL_NOMEMORY; a 4096^2 one renders in strips. C89 (with POSIX); built and run by capi/tests/nomemory.rs and c_examples.rs, never
  * under valgrind (which does not run under an address-space limit: see memcheck.rs). */
+#include <dirent.h>
 #include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,6 +18,7 @@
 #include <sys/stat.h>
 #include <sys/time.h>
 #include <unistd.h>
+#include <vlaux.h>
 #include <vlib.h>
 
 static int failures = 0;
@@ -70,6 +74,19 @@ static int sparse_vlb(const char *path, unsigned long nx, unsigned long ny, unsi
     return close(fd) == 0 && ok;
 }
 
+/* Sets the voxels of the cube of 64^3 at the centre of a one-byte n^3 .vlb to 255. */
+static int poke_centre(const char *path, unsigned long n)
+{
+    unsigned char row[64];
+    unsigned long y, z, c = n / 2 - 32;
+    int fd = open(path, O_WRONLY), ok = fd >= 0;
+    memset(row, 255, sizeof row);
+    for (z = c; ok && z < c + 64; z++)
+        for (y = c; ok && y < c + 64; y++)
+            ok = pwrite(fd, row, 64, (off_t)(28 + ((double)z * n + y) * n + c)) == 64;
+    return fd >= 0 && close(fd) == 0 && ok;
+}
+
 static double file_size(const char *path)
 {
     struct stat st;
@@ -100,6 +117,34 @@ static double mapped_bytes(void)
 }
 
 /* A scene of one object of constant fields voxelized at nx·ny·nz nodes over the unit box. */
+/* Whether the current directory holds a temporary file of the library. */
+static int temporaries_left(void)
+{
+    DIR *d = opendir(".");
+    struct dirent *e;
+    int found = 0;
+    if (!d)
+        return 1;
+    while ((e = readdir(d)) != NULL)
+        if (strncmp(e->d_name, ".vl-", 4) == 0)
+            found = 1;
+    closedir(d);
+    return found;
+}
+
+/* A scene of a small ball, rendered to `path` at side x side. */
+static void image(const char *path, int side)
+{
+    vlScene();
+    vlImage(path, 1.0f, side, side);
+    vlAmbient(1.0f, 1.0f, 1.0f, 1.0f);
+    vlObject(); /* the unit cube, in the middle of the default camera's view */
+    vlFunction(VL_O, VLU_SPHERE, NULL);
+    vlSet(VL_COLORS | VL_KA, 1.0f);
+    vlEnd();
+    vlEnd();
+}
+
 static void voxelize(const char *prefix, int nx, int ny, int nz)
 {
     vlScene();
@@ -179,6 +224,44 @@ int main(void)
     check("1024 x 1024 x 129 nodes voxelized under the limit", only(VL_NOERROR));
     check("its file has every voxel", file_size("big_o.vlb") == 28 + 129 * MiB);
     unlink("big_o.vlb");
+
+    /* A dataset of 512^3 one-byte voxels (128 MiB) loads; under the tighter limit below, the
+     * f32 node values the renderer computes on first use (512 MiB) do not fit: the render
+     * reports VL_NOMEMORY (not VL_INTERNAL) and writes nothing. */
+    check("a sparse .vlb of 512^3 voxels with a bright centre",
+          sparse_vlb("mid.vlb", 512, 512, 512) && poke_centre("mid.vlb", 512));
+    vlLoad(3, "mid.vlb");
+    check("it loads under the limit", only(VL_NOERROR));
+    unlink("mid.vlb");
+
+    /* Under a tighter limit, 256 MiB above what is mapped. */
+    limit = mapped_bytes() + 256.0 * MiB;
+    lim.rlim_cur = lim.rlim_max = (rlim_t)limit;
+    check("setrlimit(RLIMIT_AS) lowered", setrlimit(RLIMIT_AS, &lim) == 0);
+    vlScene();
+    vlImage("mid.ppm", 1.0, 32, 32);
+    vlSuperSample(2); /* the scalar march, which reads the node values */
+    vlAmbient(1.0f, 1.0f, 1.0f, 1.0f);
+    vlObject(); /* the unit cube, in the middle of the default camera's view */
+    vlDataset(VL_O, 3);
+    vlSet(VL_COLORS | VL_KA, 1.0f);
+    vlEnd();
+    vlEnd();
+    check("a render whose node values do not fit reports VL_NOMEMORY", only(VL_NOMEMORY));
+    check("and writes nothing", file_size("mid.ppm") < 0 && !temporaries_left());
+    vlUnload(3);
+    check("the dataset unloads", only(VL_NOERROR));
+
+    /* Images: a 16384^2 image (768 MiB of pixels) does not fit: VL_NOMEMORY, no file and no
+     * temporary; a 4096^2 one (48 MiB) is rendered in strips and written in full. */
+    image("wide.ppm", 16384);
+    check("a 16384^2 image reports VL_NOMEMORY", only(VL_NOMEMORY));
+    check("and writes nothing", file_size("wide.ppm") < 0 && !temporaries_left());
+    image("fits.ppm", 4096);
+    check("a 4096^2 image renders under the limit", only(VL_NOERROR));
+    /* The header "P6\n4096 4096\n255\n" is 17 bytes. */
+    check("its file has every pixel", file_size("fits.ppm") == 4096.0 * 4096.0 * 3 + 17);
+    unlink("fits.ppm");
 
     vlEnd();
     printf("%d failure(s)\n", failures);
