@@ -2,11 +2,13 @@
 //! not grow with its nodes (issue #24, item 3): `capi/tests/c/nomemory.c` measures the peak
 //! memory of a 256³ voxelization (getrusage), then sets an address-space limit
 //! (`RLIMIT_AS`, 1 GiB above what it has mapped) and checks that `vlLoad` of a sparse `.vlb` of
-//! 2³¹ voxels is `VL_NOMEMORY` with the id left unloaded and the library usable, and that a
-//! voxelization beyond the old bound of 2²⁷ nodes is written in full under the limit. This test
-//! compiles it (warnings as errors), runs it in a fresh directory and requires every check to
-//! pass and the directory to be left empty but for the program. It is not run under valgrind
-//! (see `memcheck.rs`).
+//! 2³¹ voxels is `VL_NOMEMORY` with the id left unloaded and the library usable, that a
+//! voxelization beyond the old bound of 2²⁷ nodes is written in full under the limit, and, under
+//! a tighter limit, that a render whose node values do not fit and a 16384² image are
+//! `VL_NOMEMORY` while a 4096² image renders. `capi/tests/c/pool.c` checks that a render whose
+//! threads cannot start (item 6) is `VL_NOMEMORY` and the next one recovers. These tests compile
+//! them (warnings as errors), run them in fresh directories and require every check to pass and
+//! the directory to be left empty. They are not run under valgrind (see `memcheck.rs`).
 
 mod common;
 
@@ -29,6 +31,31 @@ fn allocation_failure_is_no_memory_and_voxelization_memory_is_bounded() {
         "ok   the dataset's id stays unloaded",
         "ok   a small dataset loads after the failure",
         "ok   1024 x 1024 x 129 nodes voxelized under the limit",
+        "ok   a render whose node values do not fit reports VL_NOMEMORY",
+        "ok   a 16384^2 image reports VL_NOMEMORY",
+        "ok   a 4096^2 image renders under the limit",
+        "0 failure(s)",
+    ] {
+        assert!(stdout.contains(line), "missing {line:?} in:\n{stdout}");
+    }
+    let left: Vec<_> = std::fs::read_dir(cwd.path()).unwrap().collect();
+    assert!(left.is_empty(), "files left: {left:?}");
+}
+
+#[test]
+fn a_render_whose_threads_cannot_start_fails_and_the_next_recovers() {
+    let bin = TempDir::new("pool-bin");
+    let exe = common::compile_c(
+        "capi/tests/c/pool.c",
+        bin.path(),
+        &["-Wall", "-Wextra", "-Werror"],
+    );
+    let cwd = TempDir::new("pool-run");
+    let stdout = common::run(&exe, cwd.path(), &[]);
+    assert!(!stdout.contains("FAIL"), "{stdout}");
+    for line in [
+        "ok   a render whose 256 threads cannot start reports VL_NOMEMORY",
+        "ok   the next render starts its threads and completes",
         "0 failure(s)",
     ] {
         assert!(stdout.contains(line), "missing {line:?} in:\n{stdout}");
