@@ -37,9 +37,10 @@ impl CancelFlag {
 }
 
 /// A progress function: called with the fraction of a scene's outputs done, in [0, 1],
-/// increasing, from the thread that renders (the one that called the scene's `end` or
-/// `render_preview`), between pieces of work (a strip of image rows, a slab of voxelized
-/// nodes) and once with 1 at the end; returning `false` cancels the render.
+/// never decreasing, between pieces of work (a strip of image rows, a slab of voxelized
+/// nodes) and with 1 at the end (also where an output failed); returning `false` cancels the
+/// render. It is called on one of the library's rendering threads (the one that called the
+/// scene's `end` or `render_preview` waits meanwhile), one call at a time.
 pub type ProgressFn = Arc<dyn Fn(f32) -> bool + Send + Sync>;
 
 /// How a caller follows and stops renders (`Library::set_render_control`).
@@ -106,11 +107,26 @@ impl Progress {
         }
     }
 
-    /// Counts `units` more done and tells the progress function (on the calling thread, which
-    /// is the rendering one: the callers call it between pieces of work); `Err(Cancelled)`
-    /// where the render is to stop.
+    /// Counts `units` more done and tells the progress function (called between pieces of
+    /// work, never concurrently with itself); `Err(Cancelled)` where the render is to stop.
     pub(crate) fn advance(&self, units: u64) -> Result<()> {
         let done = self.done.fetch_add(units, Ordering::Relaxed) + units;
+        self.tell(done);
+        self.check()
+    }
+
+    /// The render has ended (every output done or failed, none cancelled): where the work
+    /// counted falls short of the total (an output failed), the progress function hears 1.
+    /// Its answer is not asked for: nothing is left to stop.
+    pub(crate) fn finish(&self) {
+        let done = self.done.swap(self.total, Ordering::Relaxed);
+        if done < self.total {
+            self.tell(self.total);
+        }
+    }
+
+    /// Tells the progress function the fraction `done` of the total; records a `false`.
+    fn tell(&self, done: u64) {
         if let Some(f) = &self.control.progress {
             let fraction = if self.total == 0 {
                 1.0
@@ -122,7 +138,6 @@ impl Progress {
                 self.stopped.store(true, Ordering::Relaxed);
             }
         }
-        self.check()
     }
 }
 

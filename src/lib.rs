@@ -63,8 +63,9 @@ pub use output::{write_atomic, write_image};
 pub use render::{Image, Plan};
 pub use types::{Attenuation, Feature, Fields, Interpolation, MappingType, RenderType, T_MIN};
 
-/// The library's limits on what a call may ask for (`docs/commands.md`): larger requests are
-/// refused with `VL_BADVALUE`.
+/// The library's limits on what a call may ask for (`docs/commands.md`,
+/// `docs/dev/robustness.md`): larger requests are refused (with `VL_BADVALUE`, or
+/// `VL_NOMEMORY` for sizes, as each constant says).
 pub mod limits {
     pub use crate::api::library::{
         MAX_DEPTH, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_RECURSION, MAX_SUPER_SAMPLE, MAX_SURFACES,
@@ -72,6 +73,7 @@ pub mod limits {
     };
     pub use crate::data::MAX_VOXELS;
     pub use crate::model::mapping::{MAX_OUTPUTS, MAX_POINTS};
+    pub use crate::render::MAX_SAMPLES_PER_RAY;
 }
 
 /// The `.vlb` dataset format's constants (the format itself: [`Dataset::load`],

@@ -1,10 +1,9 @@
-//! The crate's layers import downward only (`docs/dev/architecture.md`): the state machine
-//! (`api`) → output (`output`) → the renderer (`render`) → empty-space skipping (`accel`) → the
-//! object model (`model`) → datasets (`data`) → the base types (`types`, `error`, `num`, `pool`,
-//! `control`). This
-//! reads every production source file under `src/` (unit tests excluded: they may reach any
-//! layer) and fails on a `crate::` path into a higher layer, whether in code or in a doc link,
-//! through a module or a name the crate root re-exports. Paths by `super::super::…` are not
+//! The crate's layers import downward only (`docs/dev/architecture.md`): the state machine (`api`)
+//! → output (`output`) → the renderer (`render`) → empty-space skipping (`accel`) → the object
+//! model (`model`) → datasets (`data`) → the base types (`types`, `error`, `num`, `pool`,
+//! `control`). This reads every production source file under `src/` (unit tests excluded: they may
+//! reach any layer) and fails on a `crate::` path into a higher layer, whether in code or in a doc
+//! link, through a module or a name the crate root re-exports. Paths by `super::super::…` are not
 //! followed; the code reaches other layers by `crate::` paths.
 
 use std::path::{Path, PathBuf};

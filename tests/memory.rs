@@ -4,7 +4,7 @@
 //! (`VmHWM` in `/proc/self/status`), renders the large image to a file, and reads it again; the
 //! parent asserts the growth. An 8192 × 8192 image is 192 MiB of 8-bit pixels: the render may
 //! grow the peak by at most twice that (the output held whole for the encoder, a strip of
-//! about 2²⁰ pixels at 24 bytes each, and for PNG the compressed stream, small here).
+//! about 2²⁰ pixels at 32 bytes each, and for PNG the compressed stream, small here).
 
 use std::process::Command;
 use vlib::{Camera, Fields, Library};

@@ -1,13 +1,13 @@
-//! The list of the commands of `vlib.h` (and, apart, of its extensions): each command once, with the module of its API area, in
-//! the order the header declares them (the order of the API, `docs/commands.md`). The number of
-//! commands, the re-exports in `lib.rs` and the lists the tests check against all come from it.
-//! This module owns the list only: the commands are defined in their area modules, the header
-//! order follows from the order of those modules and of the functions in them, and the scopes
-//! each command is legal in are the core's (`vlib_core::scope`).
+//! The list of the commands of `vlib.h` (and, apart, of its extensions): each command once, with
+//! the module of its API area, in the order the header declares them (the order of the API,
+//! `docs/commands.md`). The number of commands, the re-exports in `lib.rs` and the lists the tests
+//! check against all come from it. This module owns the list only: the commands are defined in
+//! their area modules, the header order follows from the order of those modules and of the
+//! functions in them, and the scopes each command is legal in are the core's (`vlib_core::scope`).
 //!
-//! The integration tests compile this file too (they cannot link the library as Rust), so it
-//! refers to nothing else in the crate. `capi/tests/symbols.rs` checks the list against the
-//! functions `include/vlib.h` declares, in order, and against the core's `Command::ALL`.
+//! The integration tests compile this file too (they cannot link the library as Rust), so it refers
+//! to nothing else in the crate. `capi/tests/symbols.rs` checks the list against the functions
+//! `include/vlib.h` declares, in order, and against the core's `Command::ALL`.
 
 /// Calls `$then!` with every command as `module::name`, in header order. (`lib.rs` declares this
 /// module with `#[macro_use]`, so the macro is visible after that line.)

@@ -38,9 +38,9 @@ struct CProgress {
     misc: *mut c_void,
 }
 
-// SAFETY: the function is called only on the thread that called the rendering `vlEnd` (the
-// core calls progress functions on the rendering thread), one call at a time; we never
-// dereference `misc` ourselves.
+// SAFETY: the core calls a progress function on one of its rendering threads, one call at a
+// time (never concurrently with itself), as `vlProgress` documents; we never dereference
+// `misc` ourselves.
 unsafe impl Send for CProgress {}
 // SAFETY: as above.
 unsafe impl Sync for CProgress {}
@@ -55,13 +55,15 @@ impl CProgress {
 /// ======== Extensions: functions beyond the 44 commands of the paper's API ========
 /// (`docs/extensions.md`). A program that uses none of them sees the paper's API.
 ///
-/// Extension. Registers `f` as the progress function of the library's renders: while a scene's `vlEnd`
-/// renders its images and volumes, `f` is called on that thread with the fraction done, in
-/// [0, 1] and increasing (after each strip of image rows and each slab of voxelized nodes, and
-/// with 1 at the end), and with `misc`; returning 0 cancels the render, which then fails with
-/// `VL_CANCELLED` and writes no file of the output it was making. Inside `f` only `vlCancel`,
-/// `vlSample`, `vlError` and `vlErrorString` are legal. NULL removes the function. Legal at
-/// library and scene scope; kept until the library's final `vlEnd`.
+/// Extension. Registers `f` as the progress function of the library's renders: while a
+/// scene's `vlEnd` renders its images and volumes, `f` is called with `misc` and the fraction
+/// done, in [0, 1] and never decreasing (after each strip of image rows and each slab of
+/// voxelized nodes, and with 1 at the end, also where an output failed), on one of the
+/// library's rendering threads (the thread that called `vlEnd` waits meanwhile), one call at
+/// a time. Returning 0 cancels the render: its `vlEnd` records `VL_CANCELLED` and writes no
+/// file of the output it was making. Inside `f` only `vlCancel`, `vlSample`, `vlError` and
+/// `vlErrorString` are legal. NULL removes the function. Legal at library and scene scope;
+/// kept until the library's final `vlEnd`.
 #[no_mangle]
 pub extern "C" fn vlProgress(
     f: Option<unsafe extern "C" fn(done: vlfloat, misc: *mut c_void) -> vlint>,
@@ -99,11 +101,12 @@ fn scope_error() -> Result<()> {
     ))
 }
 
-/// Extension. Stops the render in progress, if a scene is rendering, within a tile of work: its `vlEnd` records
-/// `VL_CANCELLED` and writes no file of the output it was making (outputs it finished before
-/// are written). Legal anywhere and from any thread (a field function, a progress function,
-/// another thread of the program); it never waits. Without a render in progress it does
-/// nothing.
+/// Extension. Stops the render in progress, if a scene is rendering: each rendering thread
+/// stops after the pixel (or tile of 32 x 32 rays, or voxelized node) it is working on; the
+/// scene's `vlEnd` records `VL_CANCELLED` and writes no file of the output it was making
+/// (outputs it finished before are written). Legal anywhere and from any thread (a field
+/// function, a progress function, another thread of the program); it never waits. Without a
+/// render in progress it does nothing.
 #[no_mangle]
 pub extern "C" fn vlCancel() {
     ffi_boundary((), || {

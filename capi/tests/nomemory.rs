@@ -3,7 +3,7 @@
 //! memory of a 256³ voxelization (getrusage), then sets an address-space limit
 //! (`RLIMIT_AS`, 1 GiB above what it has mapped) and checks that `vlLoad` of a sparse `.vlb` of
 //! 2³¹ voxels is `VL_NOMEMORY` with the id left unloaded and the library usable, that a
-//! voxelization beyond the old bound of 2²⁷ nodes is written in full under the limit, and, under
+//! voxelization of more than 2²⁷ nodes is written in full under the limit, and, under
 //! a tighter limit, that a render whose node values do not fit and a 16384² image are
 //! `VL_NOMEMORY` while a 4096² image renders. `capi/tests/c/pool.c` checks that a render whose
 //! threads cannot start (item 6) is `VL_NOMEMORY` and the next one recovers. These tests compile

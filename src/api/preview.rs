@@ -6,7 +6,7 @@
 //! and `set_render_control` change state, and a render fills the open scene's caches, nothing
 //! else.
 
-use super::library::{positive, Library, MAX_IMAGE_PIXELS};
+use super::library::{positive, Library, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE};
 use crate::api::scope::Scope;
 use crate::error::{err, ErrorCode, Result};
 use crate::model::scene::SceneDesc;
@@ -17,7 +17,11 @@ impl Library {
     pub fn render_preview(&self, width: u32, height: u32, aspect: f32) -> Result<crate::Image> {
         let desc = self.open_scene("render_preview")?;
         positive("render_preview", &[aspect])?;
-        if width == 0 || height == 0 || width as u64 * height as u64 > MAX_IMAGE_PIXELS {
+        let side = 1..=MAX_IMAGE_SIDE as u32;
+        if !side.contains(&width)
+            || !side.contains(&height)
+            || width as u64 * height as u64 > MAX_IMAGE_PIXELS
+        {
             return err(
                 ErrorCode::BadValue,
                 format!("render_preview: size {width}x{height}"),
@@ -92,8 +96,9 @@ impl Library {
     }
 
     /// Sets how renders are followed and stopped, at any scope: a [`crate::CancelFlag`] that
-    /// stops a render from any thread, and a progress function called on the rendering thread
-    /// with the fraction done (returning `false` cancels). They apply to the scene's outputs at
+    /// stops a render from any thread, and a progress function called with the fraction done
+    /// on one of the library's rendering threads (returning `false` cancels; see
+    /// [`crate::ProgressFn`]). They apply to the scene's outputs at
     /// its `end` and to [`Library::render_preview`]; a cancelled render fails with
     /// [`ErrorCode::Cancelled`] and writes no file of the output it was making (outputs
     /// finished before it are written). Not a command of the C API (its extensions

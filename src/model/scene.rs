@@ -195,8 +195,8 @@ pub struct Optimise {
     /// The transmittance below which early termination stops a ray (primary and shadow rays):
     /// what the rest of the ray could still add to a pixel is at most this fraction of the
     /// light behind it. Also the weight in the pixel below which a mirror or refracted ray is
-    /// not traced (`docs/compat.md`, reflection and refraction). Default [`crate::T_MIN`] = 1/512 (under half an 8-bit level); VTK's
-    /// CPU ray caster stops at 255/32767 ≈ 1/128. In [0, 1); `set_optimise` refuses others.
+    /// not traced (`docs/compat.md`, reflection and refraction). Default [`crate::T_MIN`] =
+    /// 1/512 (under half an 8-bit level); VTK's CPU ray caster stops at 255/32767 ≈ 1/128. In [0, 1); `set_optimise` refuses others.
     pub termination: f64,
     /// Evaluate programs of constants, datasets and transfer functions with the lean kernel
     /// (the same values, bit for bit, computed faster; see `docs/performance.md`).

@@ -246,12 +246,13 @@ impl AtomicFile {
             drop(f);
             fs::rename(&self.tmp, self.dir.join(&self.name))
         })();
+        // Committed or not, the temporary is gone after this (renamed, or removed here), so
+        // `Drop` has nothing left to remove.
+        let tmp = std::mem::take(&mut self.tmp);
         result.map_err(|e| {
-            let _ = fs::remove_file(&self.tmp);
+            let _ = fs::remove_file(&tmp);
             self.io(e)
-        })?;
-        self.tmp = PathBuf::new();
-        Ok(())
+        })
     }
 }
 
@@ -287,9 +288,22 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 /// extension) and writes them atomically, encoding straight into the file: PPM with no copy of
 /// the pixels, PNG with the compressed stream (at most about the pixels' size) held once.
 pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
-    assert_eq!(rgb.len(), width as usize * height as usize * 3);
     let format = ImageFormat::from_path(path)?;
-    let mut f = AtomicFile::create(path)?;
+    encode_into(AtomicFile::create(path)?, format, width, height, rgb)
+}
+
+/// [`write_image`] into a file already started (so that a destination that cannot be written
+/// is known before the pixels are rendered).
+pub(crate) fn encode_into(
+    mut f: AtomicFile,
+    format: ImageFormat,
+    width: u32,
+    height: u32,
+    rgb: &[u8],
+) -> Result<()> {
+    assert_eq!(rgb.len(), width as usize * height as usize * 3);
+    let path = f.path.clone();
+    let path = path.as_path();
     match format {
         ImageFormat::Ppm => {
             f.write(format!("P6\n{width} {height}\n255\n").as_bytes())?;

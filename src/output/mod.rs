@@ -10,7 +10,8 @@
 use crate::control::{Progress, RenderControl};
 use crate::error::{Error, ErrorCode, Result};
 use crate::model::scene::{ImageRequest, SceneDesc};
-use crate::render::{render_strips, try_vec, Compiled, Grids};
+use crate::num::try_with_capacity;
+use crate::render::{render_strips, Compiled, Grids};
 
 mod files;
 mod voxel;
@@ -37,7 +38,9 @@ impl crate::data::Dataset {
 /// Renders every image and voxelization a scene requested and writes the files. Every output
 /// is attempted; the first failure is returned (its message counts the others). A cancelled
 /// render (`control`) stops at once: the outputs finished before it are written, the one in
-/// progress and the rest are not.
+/// progress and the rest are not, and its error counts the outputs that failed before. The
+/// progress function hears 1 at the end whatever failed. A panic anywhere in it, the progress
+/// function's too, is an error ([`crate::error::catch`]).
 pub fn render_outputs(desc: &SceneDesc, grids: &Grids, control: &RenderControl) -> Result<()> {
     if desc.images.is_empty() && desc.volumes.is_empty() {
         return Ok(());
@@ -53,24 +56,33 @@ pub fn render_outputs(desc: &SceneDesc, grids: &Grids, control: &RenderControl) 
         )
         .fold(0u64, u64::saturating_add);
     let progress = Progress::new(control, total);
-    let compiled = Compiled::build(desc, grids)?;
     let mut errors: Vec<Error> = Vec::new();
-    for req in &desc.images {
-        if let Err(e) = image(&compiled, req, &progress) {
-            if e.code == ErrorCode::Cancelled {
-                return Err(e);
+    let cancelled = crate::error::catch("rendering the scene", || {
+        let compiled = Compiled::build(desc, grids)?;
+        let images = desc
+            .images
+            .iter()
+            .map(|req| image(&compiled, req, &progress));
+        let volumes = desc
+            .volumes
+            .iter()
+            .map(|req| voxel::write(&compiled, req, &progress));
+        for result in images.chain(volumes) {
+            match result {
+                Err(e) if e.code == ErrorCode::Cancelled => return Err(e),
+                Err(e) => errors.push(e),
+                Ok(()) => {}
             }
-            errors.push(e);
         }
-    }
-    for req in &desc.volumes {
-        if let Err(e) = voxel::write(&compiled, req, &progress) {
-            if e.code == ErrorCode::Cancelled {
-                return Err(e);
-            }
-            errors.push(e);
+        Ok(())
+    });
+    if let Err(mut e) = cancelled {
+        if !errors.is_empty() {
+            e.message = format!("{} ({} output(s) failed before)", e.message, errors.len());
         }
+        return Err(e);
     }
+    progress.finish();
     match errors.len() {
         0 => Ok(()),
         1 => Err(errors.remove(0)),
@@ -87,12 +99,14 @@ pub fn render_outputs(desc: &SceneDesc, grids: &Grids, control: &RenderControl) 
 /// the compressed stream.
 fn image(compiled: &Compiled, req: &ImageRequest, progress: &Progress) -> Result<()> {
     let (w, h) = (req.width, req.height);
-    // Refuse a name the file cannot have before rendering.
-    files::ImageFormat::from_path(&req.path)?;
-    let mut rgb: Vec<u8> = try_vec("the image's pixels", w as usize * h as usize * 3)?;
+    // A name the file cannot have, or a destination that cannot be written, is refused
+    // before rendering.
+    let format = files::ImageFormat::from_path(&req.path)?;
+    let file = files::AtomicFile::create(&req.path)?;
+    let mut rgb: Vec<u8> = try_with_capacity(w as usize * h as usize * 3, "the image's pixels")?;
     render_strips(compiled, w, h, req.aspect, progress, |_, rows| {
         rgb.extend(rows.iter().flat_map(|p| p.map(crate::render::to_u8)));
         Ok(())
     })?;
-    write_image(&req.path, w, h, &rgb)
+    files::encode_into(file, format, w, h, &rgb)
 }

@@ -116,25 +116,9 @@ fn strip_rows(width: u32, height: u32) -> u32 {
 
 /// The most samples one ray may take through one object (2³², as many as a `.vlb` dataset has
 /// voxels): a scene whose step is finer than this fraction of an object's world diagonal is
-/// refused before it renders ([`Compiled::check_work`]). The diagonal bounds every ray, a
+/// refused with `VL_BADVALUE` before it renders. The diagonal bounds every ray, a
 /// grazing one too, so a thin, wide object at a fine step is measured by its width.
 pub const MAX_SAMPLES_PER_RAY: f64 = (1u64 << 32) as f64;
-
-/// The error of memory a render could not have.
-fn no_memory(what: &str, bytes: u64) -> Error {
-    Error::new(
-        ErrorCode::NoMemory,
-        format!("{what}: {bytes} bytes could not be allocated"),
-    )
-}
-
-/// An empty vector with room for `len` elements, or `VL_NOMEMORY`.
-pub(crate) fn try_vec<T>(what: &str, len: usize) -> Result<Vec<T>> {
-    let mut v = Vec::new();
-    v.try_reserve_exact(len)
-        .map_err(|_| no_memory(what, (len as u64).saturating_mul(size_of::<T>() as u64)))?;
-    Ok(v)
-}
 
 /// Renders the compiled scene to an image of `width × height` pixels whose view plane has the
 /// given width / height `aspect` ([`render_strips`]), into memory.
@@ -145,7 +129,7 @@ pub fn render_image(
     aspect: f32,
     progress: &Progress,
 ) -> Result<Image> {
-    let mut pixels = try_vec("the image", width as usize * height as usize)?;
+    let mut pixels = crate::num::try_with_capacity(width as usize * height as usize, "the image")?;
     render_strips(scene, width, height, aspect, progress, |_, rows| {
         pixels.extend_from_slice(rows);
         Ok(())
@@ -231,10 +215,13 @@ fn render_in_strips(
                 (y0, y1)
             };
             let entry = match &marks {
-                Some(m) => Some(
-                    m.rows(need_lo as usize..need_hi as usize)
-                        .ok_or_else(|| no_memory("the entry map", 0))?,
-                ),
+                Some(m) => {
+                    let rows = need_lo as usize..need_hi as usize;
+                    let bytes = rows.len() * row * size_of::<f64>();
+                    Some(m.rows(rows).ok_or_else(|| {
+                        crate::num::no_memory("a strip of the entry map", Some(bytes))
+                    })?)
+                }
                 None => None,
             };
             // Keep the rows of the last strip's pass this one needs, then trace the rest.
@@ -250,9 +237,9 @@ fn render_in_strips(
                 // One ray a pixel: the first pass is the strip, handed on as it is.
                 sink(y0, &fresh)?;
             } else {
-                first
-                    .try_reserve(fresh.len())
-                    .map_err(|_| no_memory("a strip of the image", (fresh.len() * 12) as u64))?;
+                first.try_reserve(fresh.len()).map_err(|_| {
+                    crate::num::no_memory("a strip of the image", Some(fresh.len() * 12))
+                })?;
                 first.extend_from_slice(&fresh);
                 drop(fresh);
                 hi = need_hi;

@@ -117,10 +117,9 @@ where
     // into place in parallel, a tile row at a time.
     let per_row = width.div_ceil(side) as usize;
     let len = width as usize * (bottom - top) as usize;
-    let mut pixels = super::try_vec("a strip of the image", len)?;
-    pixels.resize(len, [0.0f32; 3]);
+    let mut pixels = crate::num::try_vec(len, [0.0f32; 3], "a strip of the image")?;
     pixels
-        .par_chunks_mut((width * side) as usize)
+        .par_chunks_mut(width as usize * side as usize)
         .zip(results.par_chunks(per_row))
         .for_each(|(band, row)| {
             for ((tx, _), out) in row {

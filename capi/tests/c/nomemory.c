@@ -1,14 +1,14 @@
 /* Allocation failure is an error, not an abort (issue #24, item 3). Under an address-space
  * limit (setrlimit(RLIMIT_AS) at 1 GiB above what the process has mapped), vlLoad of a sparse
  * .vlb of 2^31 one-byte voxels must report VL_NOMEMORY, keep the id unloaded and leave the
- * library usable; and a voxelization larger than the old bound of 2^27 nodes must be written in
- * full within the limit (it holds one slab of nodes at a time). Before the limit, the peak
+ * library usable; and a voxelization of more than 2^27 nodes (5 GiB of fields if held whole)
+ * must be written in full within the limit (it holds one slab of nodes at a time). Before the limit, the peak
  * memory of a 256^3 × 1-byte voxelization (a 16 MiB file) is measured with getrusage: it must
  * grow by at most twice the file plus 8 MiB. Prints one line per check and exits non-zero if
  * any fails. Last, under a tighter limit: a render whose dataset's node values (computed on
  * first use, 4 bytes a voxel) do not fit is VL_NOMEMORY, not VL_INTERNAL; a 16384^2 image is
- * VL_NOMEMORY; a 4096^2 one renders in strips. C89 (with POSIX); built and run by capi/tests/nomemory.rs and c_examples.rs, never
- * under valgrind (which does not run under an address-space limit: see memcheck.rs). */
+ * VL_NOMEMORY; a 4096^2 one renders in strips. C89 (with POSIX); built and run by
+ * capi/tests/nomemory.rs and c_examples.rs, never under valgrind (which does not run under an address-space limit: see memcheck.rs). */
 #include <dirent.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -218,7 +218,7 @@ int main(void)
     unlink("small.vlb");
     unlink("small.ppm");
 
-    /* More nodes than the old bound of 2^27 (whose ten f32 fields were 5 GiB): written in full
+    /* More than 2^27 nodes (their ten f32 fields would be 5 GiB held whole): written in full
      * within the limit. */
     voxelize("big", 1024, 1024, 129);
     check("1024 x 1024 x 129 nodes voxelized under the limit", only(VL_NOERROR));

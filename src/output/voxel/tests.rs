@@ -55,7 +55,7 @@ fn scene(panic_above: f32) -> Compiled {
     vl.compiled().unwrap()
 }
 
-/// The old voxelization, kept as the oracle: the whole grid at once (`z` planes in parallel,
+/// The whole-grid reference: the whole grid at once (`z` planes in parallel,
 /// collected), each field quantised, and the `.vlb` bytes laid out by hand.
 fn whole_grid_files(scene: &Compiled, req: &VolumeRequest) -> Vec<(usize, Vec<u8>)> {
     let [nx, ny, nz] = req.nodes;

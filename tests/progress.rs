@@ -1,0 +1,193 @@
+//! Progress and cancellation through the Rust API (`Library::set_render_control`,
+//! `docs/extensions.md`): the progress function hears every image's pixels and every
+//! voxelization's nodes, never decreasing, and 1 at the end, also where an output failed; a
+//! panicking progress function is an error, not a panic out of `end`; a cancel flag set from
+//! another thread stops a render that would otherwise take minutes, and its error counts the
+//! outputs that failed before it; a preview wider than the largest image side is refused.
+
+use std::sync::{Arc, Mutex};
+use vlib::{CancelFlag, ErrorCode, Fields, Library, RenderControl};
+
+/// A scratch directory, removed when dropped.
+struct Dir(std::path::PathBuf);
+
+impl Dir {
+    fn new(tag: &str) -> Dir {
+        let p = std::env::temp_dir().join(format!("vlib-progress-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).unwrap();
+        Dir(p)
+    }
+}
+
+impl Drop for Dir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// A library whose progress function records what it hears (and answers `go_on`).
+fn recording(go_on: fn(f32) -> bool) -> (Library, Arc<Mutex<Vec<f32>>>) {
+    let heard = Arc::new(Mutex::new(Vec::new()));
+    let log = heard.clone();
+    let mut vl = Library::new();
+    vl.set_render_control(RenderControl {
+        cancel: None,
+        progress: Some(Arc::new(move |f| {
+            log.lock().unwrap().push(f);
+            go_on(f)
+        })),
+    });
+    (vl, heard)
+}
+
+/// Opens a scene of one ball with `step`.
+fn ball(vl: &mut Library, step: f32) {
+    vl.scene().unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.step_size(step, 1.0).unwrap();
+    vl.object().unwrap();
+    vl.function(Fields::O, |s| {
+        let v = vlib::vlaux::sphere(s.position());
+        let _ = s.set(Fields::O, v * 0.1);
+    })
+    .unwrap();
+    vl.set(Fields::COLORS | Fields::KA, 1.0).unwrap();
+    vl.end().unwrap();
+}
+
+/// Two images of 3 000 and 1 000 pixels and a voxelization of 2 000 nodes: the fractions
+/// rise, are the pixels and nodes done over 6 000 after each output, and end at exactly 1.
+#[test]
+fn progress_counts_pixels_and_nodes_and_ends_at_one() {
+    let dir = Dir::new("counts");
+    let (mut vl, heard) = recording(|_| true);
+    ball(&mut vl, 0.05);
+    vl.image(dir.0.join("a.ppm"), 1.0, 60, 50).unwrap();
+    vl.image(dir.0.join("b.png"), 1.0, 40, 25).unwrap();
+    vl.volume(
+        dir.0.join("v"),
+        Fields::O,
+        [0.0; 3],
+        [1.0; 3],
+        [20, 10, 10],
+        1,
+    )
+    .unwrap();
+    vl.end().unwrap();
+    let heard = heard.lock().unwrap().clone();
+    assert!(heard.windows(2).all(|w| w[0] <= w[1]), "{heard:?}");
+    for after in [3000.0 / 6000.0, 4000.0 / 6000.0] {
+        assert!(heard.contains(&(after as f32)), "{after} in {heard:?}");
+    }
+    assert_eq!(heard.last(), Some(&1.0));
+    assert!(dir.0.join("a.ppm").is_file() && dir.0.join("v_o.vlb").is_file());
+}
+
+/// An image that cannot be written (its path is a directory) fails the scene with
+/// `VL_IOERROR`; the others are written, and the progress function still hears 1.
+#[test]
+fn progress_ends_at_one_when_an_output_fails() {
+    let dir = Dir::new("fails");
+    std::fs::create_dir(dir.0.join("taken.ppm")).unwrap();
+    let (mut vl, heard) = recording(|_| true);
+    ball(&mut vl, 0.05);
+    vl.image(dir.0.join("taken.ppm"), 1.0, 20, 20).unwrap();
+    vl.image(dir.0.join("fine.ppm"), 1.0, 20, 20).unwrap();
+    let e = vl.end().unwrap_err();
+    assert_eq!(e.code, ErrorCode::IoError);
+    assert!(dir.0.join("fine.ppm").is_file());
+    assert_eq!(heard.lock().unwrap().last(), Some(&1.0));
+}
+
+/// A progress function that panics (here during a voxelization) makes the scene's `end` fail
+/// with `Internal`; nothing unwinds out of it and no file of that output is written.
+#[test]
+fn a_panicking_progress_function_is_an_error() {
+    let dir = Dir::new("panics");
+    let (mut vl, _) = recording(|f| {
+        assert!(f < 0.5, "a progress function that panics");
+        true
+    });
+    ball(&mut vl, 0.05);
+    vl.volume(
+        dir.0.join("v"),
+        Fields::O,
+        [0.0; 3],
+        [1.0; 3],
+        [300, 300, 2],
+        1,
+    )
+    .unwrap();
+    let e = vl.end().unwrap_err();
+    assert_eq!(e.code, ErrorCode::Internal, "{}", e.message);
+    assert!(!dir.0.join("v_o.vlb").exists());
+}
+
+/// A cancel flag set from another thread, once the render has started, stops a render that
+/// would take minutes (a million samples a ray at 64²): `Cancelled`, no file of that image,
+/// and the image that failed before it counted in the message. The flag stays set: the next
+/// render is cancelled before it starts, until the flag is reset.
+#[test]
+fn a_cancel_flag_stops_a_long_render_from_another_thread() {
+    let dir = Dir::new("cancel");
+    std::fs::create_dir(dir.0.join("taken.ppm")).unwrap();
+    let flag = CancelFlag::new();
+    let mut vl = Library::new();
+    vl.set_render_control(RenderControl {
+        cancel: Some(flag.clone()),
+        progress: None,
+    });
+    let started = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let seen = started.clone();
+    vl.scene().unwrap();
+    vl.step_size(1e-6, 1.0).unwrap();
+    vl.object().unwrap();
+    vl.function(Fields::O, move |s| {
+        seen.store(true, std::sync::atomic::Ordering::Relaxed);
+        let _ = s.set(Fields::O, 1e-7);
+    })
+    .unwrap();
+    vl.end().unwrap();
+    vl.image(dir.0.join("taken.ppm"), 1.0, 8, 8).unwrap();
+    vl.image(dir.0.join("slow.ppm"), 1.0, 64, 64).unwrap();
+    let canceller = {
+        let flag = flag.clone();
+        std::thread::spawn(move || {
+            while !started.load(std::sync::atomic::Ordering::Relaxed) {
+                std::thread::sleep(std::time::Duration::from_millis(1));
+            }
+            flag.cancel();
+        })
+    };
+    let e = vl.end().unwrap_err();
+    canceller.join().unwrap();
+    assert_eq!(e.code, ErrorCode::Cancelled);
+    assert!(
+        e.message.contains("1 output(s) failed before"),
+        "{}",
+        e.message
+    );
+    assert!(!dir.0.join("slow.ppm").exists());
+    let names: Vec<_> = std::fs::read_dir(&dir.0).unwrap().collect();
+    assert_eq!(names.len(), 1, "only the directory in the way: {names:?}");
+    // Still set: the next render does not start.
+    ball(&mut vl, 0.05);
+    assert_eq!(
+        vl.render_preview(8, 8, 1.0).unwrap_err().code,
+        ErrorCode::Cancelled
+    );
+    flag.reset();
+    assert!(vl.render_preview(8, 8, 1.0).is_ok());
+}
+
+/// A preview's sides are bounded like `vlImage`'s, not only its pixel count.
+#[test]
+fn a_preview_wider_than_the_largest_side_is_refused() {
+    let mut vl = Library::new();
+    ball(&mut vl, 0.05);
+    let e = vl.render_preview(1 << 28, 1, 1.0).unwrap_err();
+    assert_eq!(e.code, ErrorCode::BadValue);
+    let side = vlib::limits::MAX_IMAGE_SIDE as u32;
+    assert!(vl.render_preview(side, 1, 1.0).is_ok());
+}
