@@ -632,22 +632,25 @@ void vlChildNormal(vlint child, vlfloat *n);
  ======== Extensions: functions beyond the 44 commands of the paper's API ========
  (`docs/extensions.md`). A program that uses none of them sees the paper's API.
 
- Extension. Registers `f` as the progress function of the library's renders: while a scene's `vlEnd`
- renders its images and volumes, `f` is called on that thread with the fraction done, in
- [0, 1] and increasing (after each strip of image rows and each slab of voxelized nodes, and
- with 1 at the end), and with `misc`; returning 0 cancels the render, which then fails with
- `VL_CANCELLED` and writes no file of the output it was making. Inside `f` only `vlCancel`,
- `vlSample`, `vlError` and `vlErrorString` are legal. NULL removes the function. Legal at
- library and scene scope; kept until the library's final `vlEnd`.
+ Extension. Registers `f` as the progress function of the library's renders: while a
+ scene's `vlEnd` renders its images and volumes, `f` is called with `misc` and the fraction
+ done, in [0, 1] and never decreasing (after each strip of image rows and each slab of
+ voxelized nodes, and with 1 at the end, also where an output failed), on one of the
+ library's rendering threads (the thread that called `vlEnd` waits meanwhile), one call at
+ a time. Returning 0 cancels the render: its `vlEnd` records `VL_CANCELLED` and writes no
+ file of the output it was making. Inside `f` only `vlCancel`, `vlSample`, `vlError` and
+ `vlErrorString` are legal. NULL removes the function. Legal at library and scene scope;
+ kept until the library's final `vlEnd`.
  */
 void vlProgress(vlint (*f)(vlfloat done, void *misc), void *misc);
 
 /*
- Extension. Stops the render in progress, if a scene is rendering, within a tile of work: its `vlEnd` records
- `VL_CANCELLED` and writes no file of the output it was making (outputs it finished before
- are written). Legal anywhere and from any thread (a field function, a progress function,
- another thread of the program); it never waits. Without a render in progress it does
- nothing.
+ Extension. Stops the render in progress, if a scene is rendering: each rendering thread
+ stops after the pixel (or tile of 32 x 32 rays, or voxelized node) it is working on; the
+ scene's `vlEnd` records `VL_CANCELLED` and writes no file of the output it was making
+ (outputs it finished before are written). Legal anywhere and from any thread (a field
+ function, a progress function, another thread of the program); it never waits. Without a
+ render in progress it does nothing.
  */
 void vlCancel(void);
 
