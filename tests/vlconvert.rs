@@ -1,6 +1,7 @@
-//! `vlconvert` end to end: raw volumes (8 and 16 bits, both byte orders), grey and colour
-//! images, `info`, and the exit codes for bad input, bad command lines and an output closed or
-//! full.
+//! `vlconvert` end to end: raw volumes (every element type, both byte orders), NIfTI files of
+//! every data type written by nibabel (`tests/fixtures/nifti`, with the writer's own values
+//! beside each), grey and colour images, `info`, and the exit codes for bad input, bad command
+//! lines and an output closed or full.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -36,7 +37,7 @@ fn raw_volumes_convert_in_both_byte_orders() {
     let v = Dataset::load(&out).unwrap();
     assert_eq!(v.dims(), [4, 3, 2]);
     assert_eq!(v.raw(), &Voxels::U8(bytes.clone()));
-    assert_eq!(v.range(), (0.0, 255.0));
+    assert_eq!(v.range(), (0.0, 23.0), "the data's range by default");
 
     // 16 bits, big-endian, with a header to skip and a custom normalisation.
     let words: Vec<u16> = (0..8).map(|i| 1000 * i + 7).collect();
@@ -198,4 +199,212 @@ fn command_line_errors_exit_2_and_help_exits_0() {
     let help = run(&["--help"]);
     assert_eq!(help.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&help.stdout).contains("nifti"));
+}
+
+/// The normalised value of every node of `v`, from its voxels and a, b as the file states
+/// them: clamp((voxel − a)/(b − a), 0, 1), x fastest.
+fn normalised(v: &Dataset) -> Vec<f64> {
+    let [nx, ny, nz] = v.dims();
+    let (a, b) = v.range();
+    let (a, b) = (a as f64, b as f64);
+    let mut out = Vec::new();
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                out.push(((v.raw_node(i, j, k) - a) / (b - a)).clamp(0.0, 1.0));
+            }
+        }
+    }
+    out
+}
+
+/// Every NIfTI fixture converts, and each node's normalised value is the writer's value
+/// placed in the data's range, (v − min)/(max − min): within 10⁻⁶ where the type is kept
+/// exactly (8- and 16-bit integers, whatever their scaling; the slack is f32's in a and b),
+/// within half a quantum of 16 bits (plus that) where it is quantised. 8-bit types give
+/// 8-bit voxels, wider ones 16-bit. A window in data units (a CT's −1000 … 2000) clamps.
+#[test]
+fn nifti_of_every_type_converts_to_the_writers_values() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/nifti");
+    let d = tmp("nifti");
+    let cases = [
+        ("uint8", 1, true),
+        ("int8", 1, true),
+        ("int16_ct", 2, true),
+        ("int16_scaled", 2, true),
+        ("int16_big", 2, true),
+        ("uint16", 2, true),
+        ("int32", 2, false),
+        ("uint32", 2, false),
+        ("int64", 2, false),
+        ("float32", 2, false),
+        ("float32_scaled", 2, false),
+        ("float64", 2, false),
+    ];
+    for (name, width, exact) in cases {
+        let want: Vec<f64> = std::fs::read_to_string(dir.join(format!("{name}.txt")))
+            .unwrap()
+            .lines()
+            .map(|l| l.parse().unwrap())
+            .collect();
+        let (lo, hi) = want
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                (l.min(v), h.max(v))
+            });
+        let out = d.join(format!("{name}.vlb"));
+        let nii = dir.join(format!("{name}.nii"));
+        let o = run(&["nifti", s(&nii), s(&out)]);
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let v = Dataset::load(&out).unwrap();
+        assert_eq!(v.dims(), [5, 4, 3], "{name}");
+        assert_eq!(v.raw().width(), width, "{name}");
+        let tol = if exact { 1e-6 } else { 0.5 / 65535.0 + 1e-6 };
+        for (n, (got, w)) in normalised(&v).iter().zip(&want).enumerate() {
+            let expect = (w - lo) / (hi - lo);
+            assert!(
+                (got - expect).abs() <= tol,
+                "{name} node {n}: {got} vs ({w} − {lo})/({hi} − {lo}) = {expect}"
+            );
+        }
+    }
+    // A CT window: Hounsfield units −1000 … 2000 to 0 … 1, clamped outside.
+    let want: Vec<f64> = std::fs::read_to_string(dir.join("int16_ct.txt"))
+        .unwrap()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect();
+    let out = d.join("window.vlb");
+    let nii = dir.join("int16_ct.nii");
+    let o = run(&["nifti", s(&nii), s(&out), "--window", "-1000", "2000"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v = Dataset::load(&out).unwrap();
+    for (got, w) in normalised(&v).iter().zip(&want) {
+        let expect = ((w + 1000.0) / 3000.0).clamp(0.0, 1.0);
+        assert!((got - expect).abs() <= 1e-6, "{got} vs {expect} for {w}");
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Raw volumes of signed and float types in either byte order: an int16 −1 is −1 (not 65535),
+/// floats are quantised over their range, and a window maps data values.
+#[test]
+fn raw_volumes_of_every_type_keep_their_values() {
+    let d = tmp("rawtypes");
+    let values = [-1.0f64, 0.0, 250.5, -32768.0, 32767.0, 7.25, -0.5, 1000.0];
+    // The bytes of `v` as type `ty` in either byte order (as the type holds it: integers
+    // truncate, i8 saturates, u64 takes 0 for negatives).
+    fn encode(ty: &str, v: f64, big: bool) -> Vec<u8> {
+        macro_rules! bytes {
+            ($x:expr) => {
+                if big {
+                    $x.to_be_bytes().to_vec()
+                } else {
+                    $x.to_le_bytes().to_vec()
+                }
+            };
+        }
+        match ty {
+            "i16" => bytes!(v as i16),
+            "i32" => bytes!(v as i32),
+            "f32" => bytes!(v as f32),
+            "f64" => bytes!(v),
+            "i8" => bytes!(v as i8),
+            "u64" => bytes!(v as u64),
+            _ => unreachable!(),
+        }
+    }
+    let cases = [
+        ("i16", true),
+        ("i32", false),
+        ("f32", false),
+        ("f64", false),
+        ("i8", true),
+        ("u64", false),
+    ];
+    for (ty, exact) in cases {
+        for big in [false, true] {
+            // What the type holds of each value (integers truncate, i8 saturates, u64 ≥ 0).
+            let held: Vec<f64> = values
+                .iter()
+                .map(|&v| match ty {
+                    "i16" | "i32" => v.trunc(),
+                    "i8" => v.clamp(-128.0, 127.0).trunc(),
+                    "u64" => v.max(0.0).trunc(),
+                    _ => v,
+                })
+                .collect();
+            let file: Vec<u8> = values.iter().flat_map(|&v| encode(ty, v, big)).collect();
+            let raw = d.join(format!("{ty}{big}.raw"));
+            std::fs::write(&raw, &file).unwrap();
+            let out = d.join(format!("{ty}{big}.vlb"));
+            let endian = if big { "big" } else { "little" };
+            let args = [
+                "raw",
+                s(&raw),
+                s(&out),
+                "--dims",
+                "2",
+                "2",
+                "2",
+                "--type",
+                ty,
+                "--endian",
+                endian,
+            ];
+            let o = run(&args);
+            assert!(
+                o.status.success(),
+                "{ty}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+            let v = Dataset::load(&out).unwrap();
+            let (lo, hi) = held
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                    (l.min(v), h.max(v))
+                });
+            let tol = if exact { 1e-6 } else { 0.5 / 65535.0 + 1e-6 };
+            for (got, w) in normalised(&v).iter().zip(&held) {
+                let expect = (w - lo) / (hi - lo);
+                assert!(
+                    (got - expect).abs() <= tol,
+                    "{ty} big {big}: {got} vs {expect} for {w}"
+                );
+            }
+        }
+    }
+    // --bytes 3 is refused (exit 1); --type and --bytes together are a command-line error.
+    let raw = d.join("i16false.raw");
+    let o = run(&[
+        "raw",
+        s(&raw),
+        s(&d.join("x.vlb")),
+        "--dims",
+        "2",
+        "2",
+        "2",
+        "--bytes",
+        "3",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let o = run(&[
+        "raw",
+        s(&raw),
+        s(&d.join("x.vlb")),
+        "--dims",
+        "2",
+        "2",
+        "2",
+        "--bytes",
+        "2",
+        "--type",
+        "i16",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    std::fs::remove_dir_all(&d).unwrap();
 }

@@ -3,10 +3,15 @@
 //!
 //! ```text
 //! vlconvert nifti brain.nii.gz brain.vlb
-//! vlconvert raw ct.raw ct.vlb --dims 256 256 113 --bytes 2 --endian big
+//! vlconvert nifti ct.nii.gz ct.vlb --window -1000 2000   # Hounsfield units to 0 … 1
+//! vlconvert raw ct.raw ct.vlb --dims 256 256 113 --type i16 --endian big
 //! vlconvert image word.png word.vlb        # grey: word.vlb; colour: word_r/_g/_b.vlb
 //! vlconvert info brain.vlb
 //! ```
+//!
+//! Volumes (raw, NIfTI) of any element type become datasets whose normalised value is
+//! clamp((value − A)/(B − A), 0, 1) for a window A … B of data values, by default the data's
+//! smallest and largest value (`volume`: 8-bit sources in 8-bit voxels, others in 16-bit ones).
 //!
 //! Exit codes: 0 success, 1 the conversion failed (unreadable or malformed input, unwritable
 //! output, a report that cannot be written), 2 bad command line. A report whose reader has
@@ -16,6 +21,10 @@ use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use vlib::{Dataset, Voxels};
+
+mod volume;
+
+use volume::{Source, Type};
 
 #[derive(Parser)]
 #[command(
@@ -39,6 +48,36 @@ struct Norm {
     b: Option<f32>,
 }
 
+/// The window of data values a volume's normalised values span: A maps to 0, B to 1.
+#[derive(clap::Args, Clone)]
+struct Window {
+    /// The data value that maps to 0 (default: the data's smallest value).
+    #[arg(long, allow_negative_numbers = true)]
+    a: Option<f64>,
+    /// The data value that maps to 1 (default: the data's largest value).
+    #[arg(long, allow_negative_numbers = true)]
+    b: Option<f64>,
+    /// Both ends at once (as a CT window: --window -1000 2000).
+    #[arg(
+        long,
+        num_args = 2,
+        value_names = ["A", "B"],
+        allow_negative_numbers = true,
+        conflicts_with_all = ["a", "b"]
+    )]
+    window: Vec<f64>,
+}
+
+impl Window {
+    /// The ends given, each `None` for the data's own.
+    fn ends(&self) -> (Option<f64>, Option<f64>) {
+        match self.window.as_slice() {
+            [a, b] => (Some(*a), Some(*b)),
+            _ => (self.a, self.b),
+        }
+    }
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum Endian {
     Little,
@@ -54,17 +93,20 @@ enum Cmd {
         /// Dimensions nx ny nz.
         #[arg(long, num_args = 3, required = true, value_names = ["NX", "NY", "NZ"])]
         dims: Vec<u32>,
-        /// Bytes per voxel (1 or 2).
-        #[arg(long, default_value_t = 1)]
-        bytes: u32,
-        /// Byte order of 16-bit voxels.
+        /// The element type (default u8; --bytes 2 alone means u16).
+        #[arg(long = "type", value_enum, conflicts_with = "bytes")]
+        ty: Option<Type>,
+        /// Bytes per voxel, 1 (u8) or 2 (u16): --type's older form.
+        #[arg(long)]
+        bytes: Option<u32>,
+        /// Byte order of elements wider than a byte.
         #[arg(long, value_enum, default_value_t = Endian::Little)]
         endian: Endian,
         /// Bytes to skip at the start of the file.
         #[arg(long, default_value_t = 0)]
         skip: u64,
         #[command(flatten)]
-        norm: Norm,
+        window: Window,
     },
     /// A 2D image (PGM, PPM or PNG): grey → one slab dataset; colour → OUTPUT_r/_g/_b.vlb.
     Image {
@@ -73,12 +115,13 @@ enum Cmd {
         #[command(flatten)]
         norm: Norm,
     },
-    /// A NIfTI-1 volume (.nii or .nii.gz).
+    /// A NIfTI-1 volume (.nii or .nii.gz) of any integer or float type, its scl_slope and
+    /// scl_inter applied.
     Nifti {
         input: PathBuf,
         output: PathBuf,
         #[command(flatten)]
-        norm: Norm,
+        window: Window,
     },
     /// Print a .vlb file's dimensions, voxel width, normalisation and value range.
     Info { file: PathBuf },
@@ -118,18 +161,23 @@ fn build(dims: [usize; 3], raw: Voxels, (a, b): (f32, f32)) -> Res<Dataset> {
     Dataset::new(dims, raw, a, b).map_err(|e| e.to_string())
 }
 
+/// Converts a volume's elements and writes the dataset.
+fn convert(source: &Source, window: &Window, output: &Path) -> Res<()> {
+    let converted = source.convert(window.ends())?;
+    say(format_args!("{}", converted.report))?;
+    save(&converted.dataset, output)
+}
+
 fn raw(
     input: &Path,
     output: &Path,
     dims: &[u32],
-    bytes: u32,
+    ty: Type,
     endian: Endian,
     skip: u64,
-    norm: Norm,
+    window: &Window,
 ) -> Res<()> {
-    if bytes != 1 && bytes != 2 {
-        return Err(format!("--bytes {bytes}: must be 1 or 2"));
-    }
+    let bytes = ty.bytes() as u64;
     let dims = [dims[0] as usize, dims[1] as usize, dims[2] as usize];
     let n = dims
         .iter()
@@ -141,7 +189,10 @@ fn raw(
     let len = std::fs::metadata(input)
         .map_err(|e| format!("{}: {e}", input.display()))?
         .len();
-    let need = n * bytes as u64 + skip;
+    let need = n
+        .checked_mul(bytes)
+        .and_then(|v| v.checked_add(skip))
+        .ok_or("dimensions overflow")?;
     if len < need {
         return Err(format!(
             "{}: {len} bytes, but {need} are needed for {dims:?} x {bytes} byte(s) + {skip}",
@@ -149,19 +200,6 @@ fn raw(
         ));
     }
     let data = std::fs::read(input).map_err(|e| format!("{}: {e}", input.display()))?;
-    let body = &data[skip as usize..need as usize];
-    let voxels = if bytes == 1 {
-        Voxels::U8(body.to_vec())
-    } else {
-        Voxels::U16(
-            body.chunks_exact(2)
-                .map(|c| match endian {
-                    Endian::Little => u16::from_le_bytes([c[0], c[1]]),
-                    Endian::Big => u16::from_be_bytes([c[0], c[1]]),
-                })
-                .collect(),
-        )
-    };
     if len > need {
         eprintln!(
             "vlconvert: note: {} has {} bytes after the volume (ignored)",
@@ -169,7 +207,15 @@ fn raw(
             len - need
         );
     }
-    save(&build(dims, voxels, norm_for(norm, bytes))?, output)
+    let source = Source {
+        dims,
+        bytes: &data[skip as usize..need as usize],
+        ty,
+        big: matches!(endian, Endian::Big),
+        slope: 1.0,
+        inter: 0.0,
+    };
+    convert(&source, window, output)
 }
 
 /// Image rows run top to bottom; object y runs upwards, so row 0 becomes the top slab row.
@@ -238,8 +284,8 @@ fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
     path.with_file_name(format!("{stem}{suffix}{ext}"))
 }
 
-fn nifti(input: &Path, output: &Path, norm: Norm) -> Res<()> {
-    use nifti::{NiftiObject, NiftiType, NiftiVolume, ReaderOptions};
+fn nifti(input: &Path, output: &Path, window: &Window) -> Res<()> {
+    use nifti::{Endianness, NiftiObject, NiftiType, NiftiVolume, ReaderOptions};
     let obj = ReaderOptions::new()
         .read_file(input)
         .map_err(|e| format!("{}: {e}", input.display()))?;
@@ -253,54 +299,41 @@ fn nifti(input: &Path, output: &Path, norm: Norm) -> Res<()> {
             dim.len()
         ));
     }
-    let dims = [dim[0] as usize, dim[1] as usize, dim[2] as usize];
-    let identity = (header.scl_slope == 0.0 || header.scl_slope == 1.0) && header.scl_inter == 0.0;
-    if volume.data_type() == NiftiType::Uint8 && identity {
-        let raw = volume.into_raw_data();
-        return save(&build(dims, Voxels::U8(raw), norm_for(norm, 1))?, output);
-    }
-    // Anything else: real values (NIfTI order is x fastest, as in .vlb), scaled by the header's
-    // slope and intercept, quantised to 16 bits over [min, max].
-    let n: usize = dims.iter().product();
-    let typed = volume
-        .into_nifti_typed_data::<f64>()
-        .map_err(|e| format!("{}: {e}", input.display()))?;
-    let (slope, inter) = if header.scl_slope == 0.0 {
+    let ty = match volume.data_type() {
+        NiftiType::Uint8 => Type::U8,
+        NiftiType::Int8 => Type::I8,
+        NiftiType::Uint16 => Type::U16,
+        NiftiType::Int16 => Type::I16,
+        NiftiType::Uint32 => Type::U32,
+        NiftiType::Int32 => Type::I32,
+        NiftiType::Uint64 => Type::U64,
+        NiftiType::Int64 => Type::I64,
+        NiftiType::Float32 => Type::F32,
+        NiftiType::Float64 => Type::F64,
+        other => {
+            return Err(format!(
+                "{}: data type {other:?} (complex, RGB, 128-bit) does not convert",
+                input.display()
+            ))
+        }
+    };
+    // NIfTI-1: a slope of 0 means the values are unscaled.
+    let (slope, inter) = if header.scl_slope == 0.0 || !header.scl_slope.is_finite() {
         (1.0, 0.0)
     } else {
         (header.scl_slope as f64, header.scl_inter as f64)
     };
-    let values: Vec<f64> = typed
-        .iter()
-        .take(n)
-        .map(|&v| {
-            let v = v * slope + inter;
-            if v.is_finite() {
-                v
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    if values.len() != n {
-        return Err(format!(
-            "{}: {} values for {dims:?}",
-            input.display(),
-            values.len()
-        ));
-    }
-    let (lo, hi) = values
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
-            (l.min(v), h.max(v))
-        });
-    let span = if hi > lo { hi - lo } else { 1.0 };
-    let q: Vec<u16> = values
-        .iter()
-        .map(|&v| (((v - lo) / span) * 65535.0).round() as u16)
-        .collect();
-    say(format_args!("quantised values {lo} … {hi} to 0 … 65535"))?;
-    save(&build(dims, Voxels::U16(q), norm_for(norm, 2))?, output)
+    let big = header.endianness == Endianness::Big;
+    let raw = volume.into_raw_data();
+    let source = Source {
+        dims: [dim[0] as usize, dim[1] as usize, dim[2] as usize],
+        bytes: &raw,
+        ty,
+        big,
+        slope,
+        inter,
+    };
+    convert(&source, window, output).map_err(|e| format!("{}: {e}", input.display()))
 }
 
 fn info(path: &Path) -> Res<()> {
@@ -341,11 +374,17 @@ fn main() -> ExitCode {
             input,
             output,
             dims,
+            ty,
             bytes,
             endian,
             skip,
-            norm,
-        } => raw(input, output, dims, *bytes, *endian, *skip, *norm),
+            window,
+        } => match (ty, bytes) {
+            (Some(t), _) => raw(input, output, dims, *t, *endian, *skip, window),
+            (None, None | Some(1)) => raw(input, output, dims, Type::U8, *endian, *skip, window),
+            (None, Some(2)) => raw(input, output, dims, Type::U16, *endian, *skip, window),
+            (None, Some(b)) => Err(format!("--bytes {b}: must be 1 or 2 (or use --type)")),
+        },
         Cmd::Image {
             input,
             output,
@@ -354,8 +393,8 @@ fn main() -> ExitCode {
         Cmd::Nifti {
             input,
             output,
-            norm,
-        } => nifti(input, output, *norm),
+            window,
+        } => nifti(input, output, window),
         Cmd::Info { file } => info(file),
     };
     match result {

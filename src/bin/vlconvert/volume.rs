@@ -1,0 +1,182 @@
+//! A volume read from a file as its values of one element type (raw bytes, the type, the byte
+//! order, the header's linear scaling), and how it becomes a `.vlb` dataset: which voxel width,
+//! which voxels, and which a and b, so that the dataset's normalised value at a node is
+//! clamp((value − A)/(B − A), 0, 1) for the window A … B (the data's full range unless given).
+//!
+//! - 8-bit sources (uint8, int8) keep their values exactly in 8-bit voxels, 16-bit ones (uint16,
+//!   int16) in 16-bit voxels (int8 and int16 offset by 128 and 32768), whatever their scaling:
+//!   the scaling is linear, so a and b absorb it.
+//! - Wider integers and floats are quantised to 16 bits over their range: the voxel is the
+//!   nearest of 0 … 65535 to (value − min)/(max − min)·65535, within half a quantum.
+//! - Values that are not finite (NaN, ±∞ in a float file) take the range's minimum.
+
+use clap::ValueEnum;
+
+/// The element types of a source volume.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Type {
+    U8,
+    I8,
+    U16,
+    I16,
+    U32,
+    I32,
+    U64,
+    I64,
+    F32,
+    F64,
+}
+
+impl Type {
+    /// Bytes per element.
+    pub fn bytes(self) -> usize {
+        match self {
+            Type::U8 | Type::I8 => 1,
+            Type::U16 | Type::I16 => 2,
+            Type::U32 | Type::I32 | Type::F32 => 4,
+            Type::U64 | Type::I64 | Type::F64 => 8,
+        }
+    }
+
+    /// The element at the start of `b` (at least [`Type::bytes`] long) as f64.
+    fn read(self, b: &[u8], big: bool) -> f64 {
+        macro_rules! num {
+            ($t:ty, $n:expr) => {{
+                let a: [u8; $n] = b[..$n].try_into().expect("element bytes");
+                (if big {
+                    <$t>::from_be_bytes(a)
+                } else {
+                    <$t>::from_le_bytes(a)
+                }) as f64
+            }};
+        }
+        match self {
+            Type::U8 => b[0] as f64,
+            Type::I8 => b[0] as i8 as f64,
+            Type::U16 => num!(u16, 2),
+            Type::I16 => num!(i16, 2),
+            Type::U32 => num!(u32, 4),
+            Type::I32 => num!(i32, 4),
+            Type::U64 => num!(u64, 8),
+            Type::I64 => num!(i64, 8),
+            Type::F32 => num!(f32, 4),
+            Type::F64 => num!(f64, 8),
+        }
+    }
+
+    /// Where the element's values fit a voxel exactly: the voxel width and the offset added.
+    fn exact(self) -> Option<(u32, f64)> {
+        match self {
+            Type::U8 => Some((1, 0.0)),
+            Type::I8 => Some((1, 128.0)),
+            Type::U16 => Some((2, 0.0)),
+            Type::I16 => Some((2, 32768.0)),
+            _ => None,
+        }
+    }
+}
+
+/// A volume's elements: `bytes` holds `dims` elements of `ty` (x fastest), `big` for
+/// big-endian; the value of an element e is `slope·e + inter`.
+pub struct Source<'a> {
+    pub dims: [usize; 3],
+    pub bytes: &'a [u8],
+    pub ty: Type,
+    pub big: bool,
+    pub slope: f64,
+    pub inter: f64,
+}
+
+/// What a conversion made: the dataset, and a line saying how values became voxels.
+pub struct Converted {
+    pub dataset: vlib::Dataset,
+    pub report: String,
+}
+
+impl Source<'_> {
+    /// The number of elements.
+    fn len(&self) -> usize {
+        self.dims.iter().product()
+    }
+
+    /// Element `i`'s raw value (before scaling).
+    fn element(&self, i: usize) -> f64 {
+        let n = self.ty.bytes();
+        self.ty.read(&self.bytes[i * n..], self.big)
+    }
+
+    /// The smallest and largest finite value (scaled); `None` if none is finite.
+    fn range(&self) -> Option<(f64, f64)> {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for i in 0..self.len() {
+            let v = self.slope * self.element(i) + self.inter;
+            if v.is_finite() {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+        (lo <= hi).then_some((lo, hi))
+    }
+
+    /// The dataset whose normalised values are clamp((value − A)/(B − A), 0, 1) for the window
+    /// (A, B) = `window`, each end the data's own where `None` (its smallest and largest
+    /// value; a constant volume v gets (v, v + 1), so it normalises to 0).
+    pub fn convert(&self, window: (Option<f64>, Option<f64>)) -> Result<Converted, String> {
+        let need = self.len() * self.ty.bytes();
+        if self.bytes.len() < need {
+            return Err(format!(
+                "{} bytes of voxels, {need} needed for {:?} of {:?}",
+                self.bytes.len(),
+                self.dims,
+                self.ty
+            ));
+        }
+        if !(self.slope.is_finite() && self.inter.is_finite() && self.slope != 0.0) {
+            return Err(format!(
+                "scaling slope {} and intercept {} must be finite, the slope not 0",
+                self.slope, self.inter
+            ));
+        }
+        let (lo, hi) = self
+            .range()
+            .ok_or("no finite value: nothing to normalise by")?;
+        let a = window.0.unwrap_or(lo);
+        let b = window.1.unwrap_or(if hi > a { hi } else { a + 1.0 });
+        if !(a.is_finite() && b.is_finite() && a != b) {
+            return Err(format!("window {a} … {b}: both ends finite and different"));
+        }
+        // A voxel v stands for the value c0 + c1·v.
+        let n = self.len();
+        let (raw, c0, c1, how) = if let Some((width, offset)) = self.ty.exact() {
+            let vox = |i: usize| (self.element(i) + offset) as u32;
+            let raw = if width == 1 {
+                vlib::Voxels::U8((0..n).map(|i| vox(i) as u8).collect())
+            } else {
+                vlib::Voxels::U16((0..n).map(|i| vox(i) as u16).collect())
+            };
+            let how = format!("{:?} values kept exactly in {width}-byte voxels", self.ty);
+            (raw, self.inter - self.slope * offset, self.slope, how)
+        } else {
+            let span = if hi > lo { hi - lo } else { 1.0 };
+            let q = |i: usize| {
+                let v = self.slope * self.element(i) + self.inter;
+                let v = if v.is_finite() { v } else { lo };
+                ((v - lo) / span * 65535.0).round().clamp(0.0, 65535.0) as u16
+            };
+            let how = format!("{:?} values {lo} … {hi} quantised to 0 … 65535", self.ty);
+            (
+                vlib::Voxels::U16((0..n).map(q).collect()),
+                lo,
+                span / 65535.0,
+                how,
+            )
+        };
+        let (va, vb) = ((a - c0) / c1, (b - c0) / c1);
+        let dataset =
+            vlib::Dataset::new(self.dims, raw, va as f32, vb as f32).map_err(|e| e.to_string())?;
+        Ok(Converted {
+            dataset,
+            report: format!("{how}; window {a} … {b} (a, b = {va} {vb} in voxel units)"),
+        })
+    }
+}
