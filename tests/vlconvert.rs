@@ -218,6 +218,53 @@ fn normalised(v: &Dataset) -> Vec<f64> {
     out
 }
 
+/// The writer's values of fixture `tests/fixtures/<stem>.txt`, in file order.
+fn writers_values(stem: &str) -> Vec<f64> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    std::fs::read_to_string(dir.join(format!("{stem}.txt")))
+        .unwrap()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect()
+}
+
+/// Converts fixture `tests/fixtures/<file>` with `vlconvert <sub>` and checks the dataset: 5 ×
+/// 4 × 3 nodes of `width` bytes, and each node's normalised value the writer's value placed in
+/// the data's range, (v − min)/(max − min): within 10⁻⁶ where the type is kept exactly (the
+/// slack is f32's in a and b), within half a quantum of 16 bits (plus that) where quantised.
+fn converts_like_the_writer(sub: &str, file: &str, width: u32, exact: bool) {
+    let input = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(file);
+    let stem = file.rsplit_once('.').unwrap().0;
+    let want = writers_values(stem);
+    let (lo, hi) = want
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
+    let d = tmp(&stem.replace('/', "-"));
+    let out = d.join("out.vlb");
+    let o = run(&[sub, s(&input), s(&out)]);
+    assert!(
+        o.status.success(),
+        "{file}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v = Dataset::load(&out).unwrap();
+    assert_eq!(v.dims(), [5, 4, 3], "{file}");
+    assert_eq!(v.raw().width(), width, "{file}");
+    let tol = if exact { 1e-6 } else { 0.5 / 65535.0 + 1e-6 };
+    for (n, (got, w)) in normalised(&v).iter().zip(&want).enumerate() {
+        let expect = (w - lo) / (hi - lo);
+        assert!(
+            (got - expect).abs() <= tol,
+            "{file} node {n}: {got} vs ({w} − {lo})/({hi} − {lo}) = {expect}"
+        );
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 /// Every NIfTI fixture converts, and each node's normalised value is the writer's value
 /// placed in the data's range, (v − min)/(max − min): within 10⁻⁶ where the type is kept
 /// exactly (8- and 16-bit integers, whatever their scaling; the slack is f32's in a and b),
@@ -242,42 +289,10 @@ fn nifti_of_every_type_converts_to_the_writers_values() {
         ("float64", 2, false),
     ];
     for (name, width, exact) in cases {
-        let want: Vec<f64> = std::fs::read_to_string(dir.join(format!("{name}.txt")))
-            .unwrap()
-            .lines()
-            .map(|l| l.parse().unwrap())
-            .collect();
-        let (lo, hi) = want
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
-                (l.min(v), h.max(v))
-            });
-        let out = d.join(format!("{name}.vlb"));
-        let nii = dir.join(format!("{name}.nii"));
-        let o = run(&["nifti", s(&nii), s(&out)]);
-        assert!(
-            o.status.success(),
-            "{name}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        let v = Dataset::load(&out).unwrap();
-        assert_eq!(v.dims(), [5, 4, 3], "{name}");
-        assert_eq!(v.raw().width(), width, "{name}");
-        let tol = if exact { 1e-6 } else { 0.5 / 65535.0 + 1e-6 };
-        for (n, (got, w)) in normalised(&v).iter().zip(&want).enumerate() {
-            let expect = (w - lo) / (hi - lo);
-            assert!(
-                (got - expect).abs() <= tol,
-                "{name} node {n}: {got} vs ({w} − {lo})/({hi} − {lo}) = {expect}"
-            );
-        }
+        converts_like_the_writer("nifti", &format!("nifti/{name}.nii"), width, exact);
     }
     // A CT window: Hounsfield units −1000 … 2000 to 0 … 1, clamped outside.
-    let want: Vec<f64> = std::fs::read_to_string(dir.join("int16_ct.txt"))
-        .unwrap()
-        .lines()
-        .map(|l| l.parse().unwrap())
-        .collect();
+    let want = writers_values("nifti/int16_ct");
     let out = d.join("window.vlb");
     let nii = dir.join("int16_ct.nii");
     let o = run(&["nifti", s(&nii), s(&out), "--window", "-1000", "2000"]);
@@ -406,5 +421,37 @@ fn raw_volumes_of_every_type_keep_their_values() {
         "i16",
     ]);
     assert_eq!(o.status.code(), Some(2));
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Every NRRD fixture (pynrrd: raw, gzip, big-endian, ascii, a detached header) converts to
+/// the writer's values; a truncated file and an unknown encoding are refused (exit 1).
+#[test]
+fn nrrd_of_every_encoding_converts_to_the_writers_values() {
+    for (file, width, exact) in [
+        ("nrrd/int16_raw.nrrd", 2, true),
+        ("nrrd/uint16_gzip.nrrd", 2, true),
+        ("nrrd/float32_big.nrrd", 2, false),
+        ("nrrd/float64_ascii.nrrd", 2, false),
+        ("nrrd/int8_raw.nrrd", 1, true),
+        ("nrrd/uint8_detached.nhdr", 1, true),
+    ] {
+        converts_like_the_writer("nrrd", file, width, exact);
+    }
+    let d = tmp("nrrd-bad");
+    let good = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/nrrd/int16_raw.nrrd");
+    let bytes = std::fs::read(&good).unwrap();
+    let short = d.join("short.nrrd");
+    std::fs::write(&short, &bytes[..bytes.len() - 10]).unwrap();
+    let o = run(&["nrrd", s(&short), s(&d.join("a.vlb"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("needed"));
+    let text = String::from_utf8_lossy(&bytes).replace("encoding: raw", "encoding: bzip2");
+    let bz = d.join("bz.nrrd");
+    std::fs::write(&bz, text.as_bytes()).unwrap();
+    let o = run(&["nrrd", s(&bz), s(&d.join("b.vlb"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("bzip2"));
+    assert!(!d.join("a.vlb").exists() && !d.join("b.vlb").exists());
     std::fs::remove_dir_all(&d).unwrap();
 }

@@ -64,6 +64,22 @@ impl Type {
         }
     }
 
+    /// Appends `v` as an element of this type, little-endian (integers saturate, as `as` does).
+    pub fn push_le(self, v: f64, out: &mut Vec<u8>) {
+        match self {
+            Type::U8 => out.push(v as u8),
+            Type::I8 => out.push(v as i8 as u8),
+            Type::U16 => out.extend((v as u16).to_le_bytes()),
+            Type::I16 => out.extend((v as i16).to_le_bytes()),
+            Type::U32 => out.extend((v as u32).to_le_bytes()),
+            Type::I32 => out.extend((v as i32).to_le_bytes()),
+            Type::U64 => out.extend((v as u64).to_le_bytes()),
+            Type::I64 => out.extend((v as i64).to_le_bytes()),
+            Type::F32 => out.extend((v as f32).to_le_bytes()),
+            Type::F64 => out.extend(v.to_le_bytes()),
+        }
+    }
+
     /// Where the element's values fit a voxel exactly: the voxel width and the offset added.
     fn exact(self) -> Option<(u32, f64)> {
         match self {

@@ -1,0 +1,235 @@
+//! NRRD (`.nrrd`, or a detached `.nhdr` header with its data file): the header's fields that
+//! decide the values — `type`, `dimension`, `sizes`, `endian`, `encoding` (`raw`, `gzip`,
+//! `ascii`), `data file`, `line skip`, `byte skip` — read as the format's specification
+//! (teem.sourceforge.net/nrrd/format.html) defines them, with the spellings of every type it
+//! allows. A 2D image converts as one slab. Geometry fields (`space directions`, `space
+//! origin`) are not read; other encodings (`bzip2`, `hex`), detached data lists (`LIST`,
+//! `%d` patterns) and more than one value per voxel are refused by name.
+
+use crate::volume::{Source, Type};
+use std::path::{Path, PathBuf};
+
+/// A NRRD file's volume: its dimensions, type, byte order and decoded bytes.
+pub struct Nrrd {
+    pub dims: [usize; 3],
+    pub ty: Type,
+    pub big: bool,
+    pub bytes: Vec<u8>,
+}
+
+impl Nrrd {
+    /// The volume as a conversion source.
+    pub fn source(&self) -> Source<'_> {
+        Source {
+            dims: self.dims,
+            bytes: &self.bytes,
+            ty: self.ty,
+            big: self.big,
+            slope: 1.0,
+            inter: 0.0,
+        }
+    }
+}
+
+/// Whether `bytes` (a file's start) is a NRRD header.
+pub fn is_nrrd(bytes: &[u8]) -> bool {
+    bytes.starts_with(b"NRRD000")
+}
+
+/// The element type a NRRD `type` field names (all the specification's spellings).
+fn type_of(name: &str) -> Option<Type> {
+    let t = match name {
+        "signed char" | "int8" | "int8_t" => Type::I8,
+        "uchar" | "unsigned char" | "uint8" | "uint8_t" => Type::U8,
+        "short" | "short int" | "signed short" | "signed short int" | "int16" | "int16_t" => {
+            Type::I16
+        }
+        "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => Type::U16,
+        "int" | "signed int" | "int32" | "int32_t" => Type::I32,
+        "uint" | "unsigned int" | "uint32" | "uint32_t" => Type::U32,
+        "longlong"
+        | "long long"
+        | "long long int"
+        | "signed long long"
+        | "signed long long int"
+        | "int64"
+        | "int64_t" => Type::I64,
+        "ulonglong" | "unsigned long long" | "unsigned long long int" | "uint64" | "uint64_t" => {
+            Type::U64
+        }
+        "float" => Type::F32,
+        "double" => Type::F64,
+        _ => return None,
+    };
+    Some(t)
+}
+
+/// Reads the NRRD file `path`.
+pub fn read(path: &Path) -> Result<Nrrd, String> {
+    let file = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    if !is_nrrd(&file) {
+        return Err(format!(
+            "{}: not a NRRD file (no NRRD000x magic)",
+            path.display()
+        ));
+    }
+    // The header: lines up to the first empty one (or the end, for a detached header).
+    let mut fields: Vec<(String, String)> = Vec::new();
+    let mut at = 0;
+    let mut first = true;
+    let header_end = loop {
+        let Some(nl) = file[at..].iter().position(|&b| b == b'\n') else {
+            break file.len();
+        };
+        let line = String::from_utf8_lossy(&file[at..at + nl]);
+        let line = line.trim_end_matches('\r');
+        at += nl + 1;
+        if first {
+            first = false;
+            continue; // the magic
+        }
+        if line.is_empty() {
+            break at;
+        }
+        if line.starts_with('#') || line.contains(":=") {
+            continue; // comments and key/value pairs
+        }
+        let (key, value) = line
+            .split_once(": ")
+            .ok_or_else(|| format!("{}: malformed header line {line:?}", path.display()))?;
+        fields.push((key.trim().to_ascii_lowercase(), value.trim().to_string()));
+    };
+    let field = |names: &[&str]| {
+        fields
+            .iter()
+            .find(|(k, _)| names.contains(&k.as_str()))
+            .map(|(_, v)| v.as_str())
+    };
+    let bad = |what: String| format!("{}: {what}", path.display());
+    let ty_name = field(&["type"]).ok_or_else(|| bad("no type field".into()))?;
+    let ty = type_of(ty_name).ok_or_else(|| bad(format!("type {ty_name:?} does not convert")))?;
+    let dimension: usize = field(&["dimension"])
+        .and_then(|v| v.parse().ok())
+        .ok_or_else(|| bad("no or a malformed dimension field".into()))?;
+    let sizes: Vec<usize> = field(&["sizes"])
+        .ok_or_else(|| bad("no sizes field".into()))?
+        .split_whitespace()
+        .map(|v| v.parse().map_err(|_| bad(format!("size {v:?}"))))
+        .collect::<Result<_, _>>()?;
+    if sizes.len() != dimension {
+        return Err(bad(format!(
+            "dimension {dimension} but {} sizes",
+            sizes.len()
+        )));
+    }
+    let dims = match sizes.as_slice() {
+        [x, y, z] => [*x, *y, *z],
+        [x, y] => [*x, *y, 1],
+        _ => {
+            return Err(bad(format!(
+                "a {dimension}-dimensional array {sizes:?}: only 2D and 3D volumes of one \\
+                 value per voxel convert"
+            )))
+        }
+    };
+    if dims.contains(&0) {
+        return Err(bad(format!("sizes {sizes:?}: every size must be positive")));
+    }
+    let big = match field(&["endian"]) {
+        Some("big") => true,
+        Some("little") | None => false,
+        Some(e) => return Err(bad(format!("endian {e:?}"))),
+    };
+    let encoding = field(&["encoding"]).ok_or_else(|| bad("no encoding field".into()))?;
+    let number = |names: &[&str]| -> Result<i64, String> {
+        field(names)
+            .map(|v| v.parse().map_err(|_| bad(format!("{} {v:?}", names[0]))))
+            .unwrap_or(Ok(0))
+    };
+    let line_skip = number(&["line skip", "lineskip"])?;
+    let byte_skip = number(&["byte skip", "byteskip"])?;
+    // The data: after the header, or in the detached data file (relative to the header).
+    let data: Vec<u8> = match field(&["data file", "datafile"]) {
+        Some(name) if name.starts_with("LIST") || name.contains('%') => {
+            return Err(bad(format!(
+                "data file {name:?}: lists of files do not convert"
+            )))
+        }
+        Some(name) => {
+            let p = Path::new(name);
+            let p: PathBuf = if p.is_relative() {
+                path.parent().unwrap_or(Path::new(".")).join(p)
+            } else {
+                p.to_path_buf()
+            };
+            std::fs::read(&p).map_err(|e| format!("{}: {e}", p.display()))?
+        }
+        None => file[header_end..].to_vec(),
+    };
+    // Line skip, then byte skip (−1: the data is the file's last bytes, raw only).
+    let mut data = data.as_slice();
+    for _ in 0..line_skip.max(0) {
+        match data.iter().position(|&b| b == b'\n') {
+            Some(nl) => data = &data[nl + 1..],
+            None => return Err(bad("line skip past the end of the data".into())),
+        }
+    }
+    let n: usize = dims.iter().product();
+    let need = n
+        .checked_mul(ty.bytes())
+        .ok_or_else(|| bad("sizes overflow".into()))?;
+    let raw = |data: &[u8]| -> Result<Vec<u8>, String> {
+        let data = if byte_skip == -1 {
+            data.get(data.len().saturating_sub(need)..).unwrap_or(data)
+        } else {
+            data.get(byte_skip.max(0) as usize..).unwrap_or(&[])
+        };
+        if data.len() < need {
+            return Err(bad(format!(
+                "{} bytes of data, {need} needed for {dims:?} of {ty_name}",
+                data.len()
+            )));
+        }
+        Ok(data[..need].to_vec())
+    };
+    let (bytes, big) = match encoding {
+        "raw" => (raw(data)?, big),
+        "gzip" | "gz" => {
+            use std::io::Read;
+            let mut out = Vec::new();
+            flate2::read::MultiGzDecoder::new(data)
+                .read_to_end(&mut out)
+                .map_err(|e| bad(format!("gzip data: {e}")))?;
+            // Byte skip counts bytes of the decompressed data.
+            (raw(&out)?, big)
+        }
+        "ascii" | "text" | "txt" => {
+            let text = String::from_utf8_lossy(data);
+            let mut out = Vec::with_capacity(need);
+            for word in text.split_whitespace().take(n) {
+                let v: f64 = word
+                    .parse()
+                    .map_err(|_| bad(format!("ascii value {word:?}")))?;
+                ty.push_le(v, &mut out);
+            }
+            if out.len() < need {
+                return Err(bad(format!(
+                    "{} ascii values, {n} needed",
+                    out.len() / ty.bytes()
+                )));
+            }
+            (out, false)
+        }
+        e => {
+            return Err(bad(format!(
+                "encoding {e:?} does not convert (raw, gzip, ascii do)"
+            )))
+        }
+    };
+    Ok(Nrrd {
+        dims,
+        ty,
+        big,
+        bytes,
+    })
+}
