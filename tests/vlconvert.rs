@@ -455,3 +455,57 @@ fn nrrd_of_every_encoding_converts_to_the_writers_values() {
     assert!(!d.join("a.vlb").exists() && !d.join("b.vlb").exists());
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// `vlconvert IN OUT.vlb` tells the format from the file's first bytes: each fixture (NIfTI,
+/// the same NIfTI gzipped, NRRD, a detached NRRD header, a PNG) converts to the same bytes as
+/// its own subcommand gives; a headerless file and a `.vlb` are refused with a message that
+/// says what to do (exit 1).
+#[test]
+fn the_format_is_told_from_the_file() {
+    use std::io::Write;
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    let d = tmp("auto");
+    let nii = fixtures.join("nifti/int16_ct.nii");
+    let gz = d.join("ct.nii.gz");
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    enc.write_all(&std::fs::read(&nii).unwrap()).unwrap();
+    std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+    let png = d.join("grey.png");
+    image::GrayImage::from_fn(6, 5, |x, y| image::Luma([(x * 40 + y) as u8]))
+        .save(&png)
+        .unwrap();
+    for (sub, input) in [
+        ("nifti", nii.clone()),
+        ("nifti", gz),
+        ("nrrd", fixtures.join("nrrd/uint16_gzip.nrrd")),
+        ("nrrd", fixtures.join("nrrd/uint8_detached.nhdr")),
+        ("image", png),
+    ] {
+        let (auto, explicit) = (d.join("auto.vlb"), d.join("explicit.vlb"));
+        let o = run(&[s(&input), s(&auto)]);
+        assert!(
+            o.status.success(),
+            "{}: {}",
+            input.display(),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let o = run(&[sub, s(&input), s(&explicit)]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert_eq!(
+            std::fs::read(&auto).unwrap(),
+            std::fs::read(&explicit).unwrap(),
+            "{}",
+            input.display()
+        );
+    }
+    let raw = d.join("volume.raw");
+    std::fs::write(&raw, [7u8; 64]).unwrap();
+    let o = run(&[s(&raw), s(&d.join("x.vlb"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("vlconvert raw"));
+    let o = run(&[s(&d.join("auto.vlb")), s(&d.join("y.vlb"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("already a .vlb"));
+    assert!(!d.join("x.vlb").exists() && !d.join("y.vlb").exists());
+    std::fs::remove_dir_all(&d).unwrap();
+}

@@ -2,6 +2,7 @@
 //! describes `.vlb` files.
 //!
 //! ```text
+//! vlconvert brain.nii.gz brain.vlb                    # the format from the file's first bytes
 //! vlconvert nifti brain.nii.gz brain.vlb
 //! vlconvert nifti ct.nii.gz ct.vlb --window -1000 2000   # Hounsfield units to 0 … 1
 //! vlconvert nrrd ct.nrrd ct.vlb                        # raw, gzip or ascii; .nhdr too
@@ -23,6 +24,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use vlib::{Dataset, Voxels};
 
+mod detect;
 mod nrrd;
 mod volume;
 
@@ -88,6 +90,14 @@ enum Endian {
 
 #[derive(Subcommand)]
 enum Cmd {
+    /// Any volume or image whose format its first bytes tell (NIfTI-1, NRRD, MetaImage, PNG,
+    /// PNM): `vlconvert IN OUT.vlb` is short for `vlconvert convert IN OUT.vlb`.
+    Convert {
+        input: PathBuf,
+        output: PathBuf,
+        #[command(flatten)]
+        window: Window,
+    },
     /// A headerless raw volume, x fastest, then y, then z.
     Raw {
         input: PathBuf,
@@ -369,8 +379,39 @@ fn info(path: &Path) -> Res<()> {
     say(format_args!("raw values:  {lo} … {hi}"))
 }
 
+/// The names of the subcommands (a first argument that is none of them, nor an option, is an
+/// input file: `vlconvert IN OUT.vlb`).
+const SUBCOMMANDS: [&str; 7] = ["convert", "raw", "image", "nifti", "nrrd", "info", "help"];
+
+/// Converts `input`, whose format its first bytes tell.
+fn auto(input: &Path, output: &Path, window: &Window) -> Res<()> {
+    match detect::format(input)? {
+        detect::Format::Nifti => nifti(input, output, window),
+        detect::Format::Nrrd => {
+            nrrd::read(input).and_then(|v| convert(&v.source(), window, output))
+        }
+        detect::Format::MetaImage => Err(format!(
+            "{}: a MetaImage file; this vlconvert does not read MetaImage",
+            input.display()
+        )),
+        detect::Format::Image => {
+            if window.ends() != (None, None) {
+                return Err("an image's voxels take --a/--b of the image subcommand".into());
+            }
+            image(input, output, Norm { a: None, b: None })
+        }
+    }
+}
+
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    let mut args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    if args.len() >= 3 {
+        let first = args[1].to_string_lossy();
+        if !first.starts_with('-') && !SUBCOMMANDS.contains(&first.as_ref()) {
+            args.insert(1, "convert".into());
+        }
+    }
+    let cli = match Cli::try_parse_from(args) {
         Ok(c) => c,
         Err(e) => {
             let code = if e.use_stderr() { 2 } else { 0 };
@@ -409,6 +450,11 @@ fn main() -> ExitCode {
             output,
             window,
         } => nrrd::read(input).and_then(|v| convert(&v.source(), window, output)),
+        Cmd::Convert {
+            input,
+            output,
+            window,
+        } => auto(input, output, window),
         Cmd::Info { file } => info(file),
     };
     match result {

@@ -1,0 +1,69 @@
+//! Which format a file is, from its first bytes (`vlconvert IN OUT.vlb`): NRRD by its magic,
+//! NIfTI-1 by `n+1` at byte 344 (inside gzip too), MetaImage by its `ObjectType`/`NDims` header
+//! keys, PNG and PNM images by theirs. A headerless raw volume cannot be recognised: it needs
+//! `vlconvert raw` with its dimensions and type.
+
+use std::io::Read;
+use std::path::Path;
+
+/// The formats `vlconvert` reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Nifti,
+    Nrrd,
+    MetaImage,
+    Image,
+}
+
+/// The format of the file at `path`.
+pub fn format(path: &Path) -> Result<Format, String> {
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(512).read_to_end(&mut head))
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    if head.starts_with(&[0x1f, 0x8b]) {
+        // gzip: look inside (a .nii.gz).
+        let mut inner = Vec::new();
+        let f = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let _ = flate2::read::MultiGzDecoder::new(f)
+            .take(512)
+            .read_to_end(&mut inner);
+        if is_nifti(&inner) {
+            return Ok(Format::Nifti);
+        }
+        return Err(format!(
+            "{}: gzip-compressed, but not a NIfTI-1 file inside",
+            path.display()
+        ));
+    }
+    if is_nifti(&head) {
+        return Ok(Format::Nifti);
+    }
+    if crate::nrrd::is_nrrd(&head) {
+        return Ok(Format::Nrrd);
+    }
+    if head.starts_with(b"\x89PNG")
+        || (head.len() > 2 && head[0] == b'P' && b"123456".contains(&head[1]))
+    {
+        return Ok(Format::Image);
+    }
+    let text = String::from_utf8_lossy(&head);
+    let first = text.trim_start().split(['=', ' ']).next().unwrap_or("");
+    if matches!(first, "ObjectType" | "NDims" | "Comment") && text.contains("=") {
+        return Ok(Format::MetaImage);
+    }
+    if head.starts_with(vlib::vlb::MAGIC) {
+        return Err(format!("{}: already a .vlb dataset", path.display()));
+    }
+    Err(format!(
+        "{}: not a format vlconvert recognises (NIfTI-1, NRRD, MetaImage, PNG, PNM); a \
+         headerless raw volume converts with `vlconvert raw` and its --dims and --type",
+        path.display()
+    ))
+}
+
+/// Whether `head` (a file's first bytes) is a NIfTI-1 single file or header: magic `n+1` or
+/// `ni1` and a NUL at byte 344.
+fn is_nifti(head: &[u8]) -> bool {
+    matches!(head.get(344..348), Some(b"n+1\0") | Some(b"ni1\0"))
+}
