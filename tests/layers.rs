@@ -21,7 +21,7 @@ const LAYERS: [&[&str]; 7] = [
 
 /// The names `src/lib.rs` re-exports at the crate root, with the layer each comes from, so that
 /// `crate::Library` counts as a path into `api`.
-const ROOT: [(&str, &str); 31] = [
+const ROOT: [(&str, &str); 32] = [
     ("Library", "api"),
     ("Closed", "api"),
     ("Sampler", "api"),
@@ -45,6 +45,7 @@ const ROOT: [(&str, &str); 31] = [
     ("Dataset", "data"),
     ("Filter", "data"),
     ("Voxels", "data"),
+    ("Geometry", "data"),
     ("vlb", "data"),
     ("Error", "error"),
     ("ErrorCode", "error"),

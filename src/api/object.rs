@@ -119,6 +119,39 @@ impl Library {
         self.transform(Command::Matrix, mat)
     }
 
+    /// Places the object where dataset `id`'s nodes lie in physical space (its
+    /// [`crate::Geometry`], from the sidecar `vlconvert` writes): the transform taking the unit
+    /// cube's corner (0, 0, 0) to node (0, 0, 0) and (1, 1, 1) to the last node, in
+    /// millimetres in RAS (+x right, +y anterior, +z superior), so a dataset assigned to the
+    /// object shows at its physical size and anatomical orientation. Composed after the
+    /// object's earlier transforms, like `vlMatrix` (whose scope it has). An axis of one node
+    /// gets one node's spacing. `BadId` for an unknown id, `BadValue` for a dataset without
+    /// geometry. Not a command of the C API (vlaux's `vluPlace` calls it).
+    pub fn place_dataset(&mut self, id: i32) -> Result<()> {
+        self.check(Command::Matrix)?;
+        let d = self.datasets.get(&id).cloned().ok_or_else(|| {
+            crate::error::Error::new(ErrorCode::BadId, format!("place_dataset: no dataset {id}"))
+        })?;
+        let g = d.geometry().ok_or_else(|| {
+            crate::error::Error::new(
+                ErrorCode::BadValue,
+                format!(
+                    "place_dataset: dataset {id} has no geometry (no sidecar beside its file: \
+                     convert it with vlconvert from a format that has one)"
+                ),
+            )
+        })?;
+        let dims = d.dims();
+        let a = g.affine;
+        // Column c of A, scaled by the node count along axis c less one (at least one).
+        let col = |c: usize| {
+            let n = dims[c].saturating_sub(1).max(1) as f64;
+            glam::DVec4::new(a[0][c] * n, a[1][c] * n, a[2][c] * n, 0.0)
+        };
+        let t = glam::DVec4::new(a[0][3], a[1][3], a[2][3], 1.0);
+        self.transform(Command::Matrix, DMat4::from_cols(col(0), col(1), col(2), t))
+    }
+
     /// `vlBoundary`: scales the boundary box about the cube centre (positive factors).
     pub fn boundary(&mut self, x: f32, y: f32, z: f32) -> Result<()> {
         self.check(Command::Boundary)?;

@@ -32,6 +32,7 @@
 mod bricks;
 mod cells;
 mod filter;
+mod geometry;
 mod lanes;
 #[cfg(test)]
 mod tests;
@@ -43,6 +44,7 @@ pub(crate) use cells::CellMask;
 use cells::CellMasks;
 pub(crate) use filter::bc_abs_sum;
 pub use filter::Filter;
+pub use geometry::Geometry;
 pub(crate) use lanes::Cells8;
 pub(crate) use trilinear::CellGradients;
 pub(crate) use vlb::header as vlb_header;
@@ -138,6 +140,8 @@ pub struct Dataset {
     /// splat as one load, or as the memory operand of its first use, instead of a scalar load
     /// and a shuffle.
     splats: ([[wide::f32x4; 3]; 4], [[wide::f32x8; 3]; 4]),
+    /// Where its nodes lie in physical space, when known ([`Geometry`]).
+    geometry: Option<Geometry>,
 }
 
 impl PartialEq for Dataset {
@@ -147,10 +151,23 @@ impl PartialEq for Dataset {
             && self.a.to_bits() == other.a.to_bits()
             && self.b.to_bits() == other.b.to_bits()
             && self.raw == other.raw
+            && self.geometry == other.geometry
     }
 }
 
 impl Dataset {
+    /// Where the dataset's nodes lie in physical space, when known: from the sidecar of the
+    /// file it was loaded from, or [`Dataset::with_geometry`].
+    pub fn geometry(&self) -> Option<&Geometry> {
+        self.geometry.as_ref()
+    }
+
+    /// The dataset placed in physical space by `geometry`.
+    pub fn with_geometry(mut self, geometry: Geometry) -> Dataset {
+        self.geometry = Some(geometry);
+        self
+    }
+
     /// A dataset from raw voxels (x fastest, then y, then z) and normalisation a, b.
     pub fn new(dims: [usize; 3], raw: Voxels, a: f32, b: f32) -> Result<Dataset> {
         if dims.contains(&0) {
@@ -191,6 +208,7 @@ impl Dataset {
             b,
             bricks: Default::default(),
             cell_masks: Default::default(),
+            geometry: None,
             last: dims.map(|n| (n - 1) as f64),
             half_last: dims.map(|n| 0.5 * (n - 1) as f64),
             lo_offset: 1 + dims[0] + dims[0] * dims[1],

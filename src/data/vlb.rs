@@ -133,7 +133,19 @@ impl Dataset {
             }
             Voxels::U16(v)
         };
-        Dataset::new(h.dims, raw, h.a, h.b)
+        let d = Dataset::new(h.dims, raw, h.a, h.b)?;
+        // The physical placement, where a sidecar gives it (`geometry`).
+        let sidecar = super::Geometry::sidecar(path);
+        match std::fs::read_to_string(&sidecar) {
+            Ok(text) => Ok(d.with_geometry(super::Geometry::parse(&text).map_err(|e| {
+                Error::new(e.code, format!("{}: {}", sidecar.display(), e.message))
+            })?)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(d),
+            Err(e) => Err(Error::new(
+                ErrorCode::IoError,
+                format!("{}: {e}", sidecar.display()),
+            )),
+        }
     }
 
     /// The `.vlb` encoding of the dataset; `NoMemory` where its bytes cannot be allocated

@@ -284,6 +284,23 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     f.commit()
 }
 
+/// Writes the geometry sidecar of the dataset file `path` (atomically), or, for a dataset
+/// without geometry, removes one an earlier file left, so that the sidecar always describes
+/// the file beside it.
+pub(crate) fn write_sidecar(path: &Path, geometry: Option<&crate::data::Geometry>) -> Result<()> {
+    let sidecar = crate::data::Geometry::sidecar(path);
+    match geometry {
+        Some(g) => write_atomic(&sidecar, g.to_text().as_bytes()),
+        None => match fs::remove_file(&sidecar) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::new(
+                ErrorCode::IoError,
+                format!("{}: {e}", sidecar.display()),
+            )),
+            _ => Ok(()),
+        },
+    }
+}
+
 /// Encodes 8-bit RGB pixels (row-major, top row first) in the format of `path` (by its
 /// extension) and writes them atomically, encoding straight into the file: PPM with no copy of
 /// the pixels, PNG with the compressed stream (at most about the pixels' size) held once.

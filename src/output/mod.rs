@@ -24,14 +24,17 @@ mod tests;
 
 impl crate::data::Dataset {
     /// Writes the dataset as a `.vlb` file, atomically (the format: [`Dataset::to_vlb_bytes`]),
-    /// piece by piece: no copy of the voxels is made.
+    /// piece by piece: no copy of the voxels is made. Its geometry, if it has one, goes to the
+    /// sidecar `path.geom` ([`crate::Geometry`]); a sidecar left there by an earlier file is
+    /// removed when it has none.
     ///
     /// [`Dataset::to_vlb_bytes`]: crate::data::Dataset::to_vlb_bytes
     pub fn save(&self, path: &std::path::Path) -> Result<()> {
         let mut file = files::AtomicFile::create(path)?;
         file.write(&self.vlb_header())?;
         self.vlb_body(|bytes| file.write(bytes))?;
-        file.commit()
+        file.commit()?;
+        files::write_sidecar(path, self.geometry())
     }
 }
 

@@ -152,8 +152,14 @@ pub fn write(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Resu
         done += n;
         progress.advance(n as u64)?;
     }
-    for (_, file) in files {
-        if let Err(e) = file.commit() {
+    for (field, file) in files {
+        // (A voxelization's nodes lie in the scene's world, not in millimetres: no geometry,
+        // and a sidecar an earlier file left is removed.)
+        let path = file_name(req, field);
+        if let Err(e) = file
+            .commit()
+            .and_then(|()| crate::output::files::write_sidecar(&path, None))
+        {
             first_error.get_or_insert(e);
         }
     }

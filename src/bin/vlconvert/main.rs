@@ -180,11 +180,83 @@ fn build(dims: [usize; 3], raw: Voxels, (a, b): (f32, f32)) -> Res<Dataset> {
     Dataset::new(dims, raw, a, b).map_err(|e| e.to_string())
 }
 
-/// Converts a volume's elements and writes the dataset.
-fn convert(source: &Source, window: &Window, output: &Path) -> Res<()> {
+/// Converts a volume's elements and writes the dataset, with its physical geometry (in the
+/// sidecar `OUTPUT.geom`) where the source has one.
+fn convert(
+    source: &Source,
+    window: &Window,
+    output: &Path,
+    geometry: Option<vlib::Geometry>,
+) -> Res<()> {
     let converted = source.convert(window.ends())?;
     say(format_args!("{}", converted.report))?;
-    save(&converted.dataset, output)
+    let d = match geometry {
+        Some(g) => {
+            let [sx, sy, sz] = g.spacing();
+            say(format_args!(
+                "spacing {sx} x {sy} x {sz} mm, node 0 at {:?} (RAS)",
+                g.origin()
+            ))?;
+            converted.dataset.with_geometry(g)
+        }
+        None => converted.dataset,
+    };
+    save(&d, output)
+}
+
+/// A NIfTI-1 header's placement of its voxels, in RAS millimetres: the sform where its code
+/// is set, else the qform (quaternion, pixdim, qfac), else the voxel sizes alone (NIfTI's
+/// "method 1"); units other than millimetres (xyzt_units) are converted.
+fn nifti_geometry(h: &nifti::NiftiHeader) -> Res<vlib::Geometry> {
+    let unit = match h.xyzt_units & 7 {
+        1 => 1000.0, // metres
+        3 => 0.001,  // micrometres
+        _ => 1.0,    // millimetres, or unknown
+    };
+    let p = |i: usize| h.pixdim[i] as f64;
+    let affine = if h.sform_code > 0 {
+        [h.srow_x, h.srow_y, h.srow_z].map(|r| r.map(|v| v as f64 * unit))
+    } else if h.qform_code > 0 {
+        let (b, c, d) = (h.quatern_b as f64, h.quatern_c as f64, h.quatern_d as f64);
+        let a = (1.0 - (b * b + c * c + d * d)).max(0.0).sqrt();
+        let r = [
+            [
+                a * a + b * b - c * c - d * d,
+                2.0 * (b * c - a * d),
+                2.0 * (b * d + a * c),
+            ],
+            [
+                2.0 * (b * c + a * d),
+                a * a + c * c - b * b - d * d,
+                2.0 * (c * d - a * b),
+            ],
+            [
+                2.0 * (b * d - a * c),
+                2.0 * (c * d + a * b),
+                a * a + d * d - c * c - b * b,
+            ],
+        ];
+        let qfac = if p(0) < 0.0 { -1.0 } else { 1.0 };
+        let s = [p(1), p(2), qfac * p(3)];
+        // (The crate names qoffset_x … z quatern_x … z.)
+        let off = [h.quatern_x as f64, h.quatern_y as f64, h.quatern_z as f64];
+        let row = |i: usize| {
+            [
+                r[i][0] * s[0] * unit,
+                r[i][1] * s[1] * unit,
+                r[i][2] * s[2] * unit,
+                off[i] * unit,
+            ]
+        };
+        [row(0), row(1), row(2)]
+    } else {
+        [
+            [p(1) * unit, 0.0, 0.0, 0.0],
+            [0.0, p(2) * unit, 0.0, 0.0],
+            [0.0, 0.0, p(3) * unit, 0.0],
+        ]
+    };
+    vlib::Geometry::new(affine).map_err(|e| e.message)
 }
 
 fn raw(
@@ -234,7 +306,7 @@ fn raw(
         slope: 1.0,
         inter: 0.0,
     };
-    convert(&source, window, output)
+    convert(&source, window, output, None)
 }
 
 /// Image rows run top to bottom; object y runs upwards, so row 0 becomes the top slab row.
@@ -343,6 +415,7 @@ fn nifti(input: &Path, output: &Path, window: &Window) -> Res<()> {
         (header.scl_slope as f64, header.scl_inter as f64)
     };
     let big = header.endianness == Endianness::Big;
+    let geometry = nifti_geometry(&header).map_err(|e| format!("{}: {e}", input.display()))?;
     let raw = volume.into_raw_data();
     let source = Source {
         dims: [dim[0] as usize, dim[1] as usize, dim[2] as usize],
@@ -352,7 +425,8 @@ fn nifti(input: &Path, output: &Path, window: &Window) -> Res<()> {
         slope,
         inter,
     };
-    convert(&source, window, output).map_err(|e| format!("{}: {e}", input.display()))
+    convert(&source, window, output, Some(geometry))
+        .map_err(|e| format!("{}: {e}", input.display()))
 }
 
 fn info(path: &Path) -> Res<()> {
@@ -376,7 +450,22 @@ fn info(path: &Path) -> Res<()> {
     ))?;
     say(format_args!("voxel width: {} byte(s)", d.raw().width()))?;
     say(format_args!("a, b:        {a} {b}"))?;
-    say(format_args!("raw values:  {lo} … {hi}"))
+    say(format_args!("raw values:  {lo} … {hi}"))?;
+    match d.geometry() {
+        Some(g) => {
+            let [sx, sy, sz] = g.spacing();
+            say(format_args!("spacing:     {sx} x {sy} x {sz} mm"))?;
+            say(format_args!("node 0 at:   {:?} (RAS, mm)", g.origin()))?;
+            for row in &g.affine {
+                say(format_args!("affine row:  {row:?}"))?;
+            }
+            Ok(())
+        }
+        None => say(format_args!(
+            "geometry:    none (no sidecar {})",
+            vlib::Geometry::sidecar(path).display()
+        )),
+    }
 }
 
 /// The names of the subcommands (a first argument that is none of them, nor an option, is an
@@ -388,7 +477,7 @@ fn auto(input: &Path, output: &Path, window: &Window) -> Res<()> {
     match detect::format(input)? {
         detect::Format::Nifti => nifti(input, output, window),
         detect::Format::Nrrd => {
-            nrrd::read(input).and_then(|v| convert(&v.source(), window, output))
+            nrrd::read(input).and_then(|v| convert(&v.source(), window, output, v.geometry))
         }
         detect::Format::MetaImage => Err(format!(
             "{}: a MetaImage file; this vlconvert does not read MetaImage",
@@ -449,7 +538,7 @@ fn main() -> ExitCode {
             input,
             output,
             window,
-        } => nrrd::read(input).and_then(|v| convert(&v.source(), window, output)),
+        } => nrrd::read(input).and_then(|v| convert(&v.source(), window, output, v.geometry)),
         Cmd::Convert {
             input,
             output,

@@ -2,9 +2,10 @@
 //! decide the values — `type`, `dimension`, `sizes`, `endian`, `encoding` (`raw`, `gzip`,
 //! `ascii`), `data file`, `line skip`, `byte skip` — read as the format's specification
 //! (teem.sourceforge.net/nrrd/format.html) defines them, with the spellings of every type it
-//! allows. A 2D image converts as one slab. Geometry fields (`space directions`, `space
-//! origin`) are not read; other encodings (`bzip2`, `hex`), detached data lists (`LIST`,
-//! `%d` patterns) and more than one value per voxel are refused by name.
+//! allows. A 2D image converts as one slab. The geometry comes from `space`, `space
+//! directions` and `space origin` (turned into RAS; LPS, LAS and RAS spaces), or from
+//! `spacings` alone. Other encodings (`bzip2`, `hex`), detached data lists (`LIST`, `%d`
+//! patterns) and more than one value per voxel are refused by name.
 
 use crate::volume::{Source, Type};
 use std::path::{Path, PathBuf};
@@ -15,6 +16,8 @@ pub struct Nrrd {
     pub ty: Type,
     pub big: bool,
     pub bytes: Vec<u8>,
+    /// Where its nodes lie, in RAS millimetres, when the header says.
+    pub geometry: Option<vlib::Geometry>,
 }
 
 impl Nrrd {
@@ -64,6 +67,57 @@ fn type_of(name: &str) -> Option<Type> {
     Some(t)
 }
 
+/// The numbers of a NRRD vector `(x,y,z)`; `None` for `none` or a malformed one.
+fn vector(v: &str) -> Option<Vec<f64>> {
+    let inner = v.trim().strip_prefix('(')?.strip_suffix(')')?;
+    inner.split(',').map(|n| n.trim().parse().ok()).collect()
+}
+
+/// The geometry a header's fields give (`field` looks one up), in RAS millimetres.
+fn geometry(field: &dyn Fn(&[&str]) -> Option<String>) -> Result<Option<vlib::Geometry>, String> {
+    // RAS from the space's own axes: flip the ones that point left or posterior.
+    let flip = match field(&["space"]).as_deref() {
+        Some("right-anterior-superior" | "RAS") => Some([1.0, 1.0, 1.0]),
+        Some("left-anterior-superior" | "LAS") => Some([-1.0, 1.0, 1.0]),
+        Some("left-posterior-superior" | "LPS") => Some([-1.0, -1.0, 1.0]),
+        Some(other) => return Err(format!("space {other:?}: only RAS, LAS and LPS convert")),
+        None => None,
+    };
+    if let (Some(flip), Some(dirs)) = (flip, field(&["space directions"])) {
+        let cols: Vec<Vec<f64>> = dirs
+            .split_whitespace()
+            .map(|d| vector(d).filter(|v| v.len() == 3))
+            .collect::<Option<_>>()
+            .ok_or_else(|| format!("space directions {dirs:?}"))?;
+        let origin = match field(&["space origin"]) {
+            Some(o) => vector(&o)
+                .filter(|v| v.len() == 3)
+                .ok_or_else(|| format!("space origin {o:?}"))?,
+            None => vec![0.0; 3],
+        };
+        if cols.len() != 3 && cols.len() != 2 {
+            return Err(format!("space directions {dirs:?}: 2 or 3 vectors"));
+        }
+        let col = |c: usize, r: usize| cols.get(c).map_or(if r == c { 1.0 } else { 0.0 }, |v| v[r]);
+        let row = |r: usize| [col(0, r), col(1, r), col(2, r), origin[r]].map(|v| v * flip[r]);
+        return vlib::Geometry::new([row(0), row(1), row(2)])
+            .map(Some)
+            .map_err(|e| e.message);
+    }
+    if let Some(sp) = field(&["spacings"]) {
+        let s: Vec<f64> = sp
+            .split_whitespace()
+            .map(|v| if v == "nan" { Ok(1.0) } else { v.parse() })
+            .collect::<Result<_, _>>()
+            .map_err(|_| format!("spacings {sp:?}"))?;
+        let s = [s.first(), s.get(1), s.get(2)].map(|v| v.copied().unwrap_or(1.0));
+        return vlib::Geometry::new(vlib::Geometry::axis_aligned(s, [0.0; 3]).affine)
+            .map(Some)
+            .map_err(|e| e.message);
+    }
+    Ok(None)
+}
+
 /// Reads the NRRD file `path`.
 pub fn read(path: &Path) -> Result<Nrrd, String> {
     let file = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -106,6 +160,7 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
             .map(|(_, v)| v.as_str())
     };
     let bad = |what: String| format!("{}: {what}", path.display());
+    let geometry = geometry(&|names: &[&str]| field(names).map(str::to_string)).map_err(&bad)?;
     let ty_name = field(&["type"]).ok_or_else(|| bad("no type field".into()))?;
     let ty = type_of(ty_name).ok_or_else(|| bad(format!("type {ty_name:?} does not convert")))?;
     let dimension: usize = field(&["dimension"])
@@ -231,5 +286,6 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
         ty,
         big,
         bytes,
+        geometry,
     })
 }

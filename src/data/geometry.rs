@@ -1,0 +1,134 @@
+//! Where a dataset's nodes lie in physical space, carried beside its `.vlb` file (whose header
+//! the paper fixes) in a sidecar: `NAME.vlb.geom`, a few lines of text written by `vlconvert`
+//! from the source's own geometry (NIfTI's sform or qform, NRRD's space directions and origin,
+//! MetaImage's spacing, matrix and offset), read by [`crate::Dataset::load`] when present.
+//!
+//! ```text
+//! vlib-geometry 1
+//! # node (i, j, k) lies at (x, y, z) = A · (i, j, k) + t, in millimetres, RAS
+//! row 0.5 0 0 -60
+//! row 0 0.5 0 -60
+//! row 0 0 2 -30
+//! ```
+//!
+//! Each `row` is a row of [A | t]: world x, y and z as functions of the node index. The world
+//! is RAS (+x the subject's right, +y anterior, +z superior), NIfTI's convention; LPS sources
+//! (NRRD's `left-posterior-superior`, DICOM, MetaImage) are turned into it. The module owns the
+//! format and its checks; placing an object by it is the API's (`Library::place_dataset`).
+
+use crate::error::{Error, ErrorCode, Result};
+use std::path::{Path, PathBuf};
+
+/// A dataset's physical placement: node (i, j, k) at `affine · (i, j, k, 1)`, millimetres, RAS.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Geometry {
+    /// The rows of [A | t].
+    pub affine: [[f64; 4]; 3],
+}
+
+/// The first line of a geometry sidecar.
+const MAGIC_LINE: &str = "vlib-geometry 1";
+
+impl Geometry {
+    /// Spacing `s` along each axis and origin `o`, axes along x, y, z.
+    pub fn axis_aligned(s: [f64; 3], o: [f64; 3]) -> Geometry {
+        Geometry {
+            affine: [
+                [s[0], 0.0, 0.0, o[0]],
+                [0.0, s[1], 0.0, o[1]],
+                [0.0, 0.0, s[2], o[2]],
+            ],
+        }
+    }
+
+    /// A geometry whose numbers are finite and whose A is invertible (|det A| > 0, relative to
+    /// its size), or `BadValue`.
+    pub fn new(affine: [[f64; 4]; 3]) -> Result<Geometry> {
+        let g = Geometry { affine };
+        let invalid =
+            |why: &str| Error::new(ErrorCode::BadValue, format!("dataset geometry: {why}"));
+        if !affine.iter().flatten().all(|v| v.is_finite()) {
+            return Err(invalid("a number is not finite"));
+        }
+        let a = |r: usize, c: usize| affine[r][c];
+        let det = a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1))
+            - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0))
+            + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0));
+        let scale: f64 = g.spacing().iter().product();
+        if !(det.abs() > 1e-12 * scale) {
+            return Err(invalid("its axes are degenerate (determinant 0)"));
+        }
+        Ok(g)
+    }
+
+    /// The distance between neighbouring nodes along each index axis (the columns' lengths).
+    pub fn spacing(&self) -> [f64; 3] {
+        let col = |c: usize| {
+            (0..3)
+                .map(|r| self.affine[r][c].powi(2))
+                .sum::<f64>()
+                .sqrt()
+        };
+        [col(0), col(1), col(2)]
+    }
+
+    /// Where node (0, 0, 0) lies.
+    pub fn origin(&self) -> [f64; 3] {
+        [self.affine[0][3], self.affine[1][3], self.affine[2][3]]
+    }
+
+    /// The sidecar file of the dataset file `path`: `path` with `.geom` appended.
+    pub fn sidecar(path: &Path) -> PathBuf {
+        let mut p = path.as_os_str().to_owned();
+        p.push(".geom");
+        PathBuf::from(p)
+    }
+
+    /// The sidecar's text.
+    pub fn to_text(&self) -> String {
+        let mut s = format!(
+            "{MAGIC_LINE}\n# node (i, j, k) lies at (x, y, z) = A · (i, j, k) + t, in millimetres, RAS\n"
+        );
+        for row in &self.affine {
+            s.push_str(&format!(
+                "row {} {} {} {}\n",
+                row[0], row[1], row[2], row[3]
+            ));
+        }
+        s
+    }
+
+    /// Parses a sidecar's text; `BadFile` with the reason for anything else.
+    pub fn parse(text: &str) -> Result<Geometry> {
+        let mut lines = text
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty() && !l.starts_with('#'));
+        if lines.next() != Some(MAGIC_LINE) {
+            return Err(bad(format!("its first line is not {MAGIC_LINE:?}")));
+        }
+        let mut affine = [[0.0; 4]; 3];
+        for row in &mut affine {
+            let line = lines
+                .next()
+                .ok_or_else(|| bad("fewer than 3 rows".into()))?;
+            let words: Vec<&str> = line.split_whitespace().collect();
+            if words.len() != 5 || words[0] != "row" {
+                return Err(bad(format!("{line:?} is not `row` and 4 numbers")));
+            }
+            for (v, w) in row.iter_mut().zip(&words[1..]) {
+                *v = w
+                    .parse()
+                    .map_err(|_| bad(format!("{w:?} is not a number")))?;
+            }
+        }
+        if let Some(extra) = lines.next() {
+            return Err(bad(format!("{extra:?} after the 3 rows")));
+        }
+        Geometry::new(affine).map_err(|e| Error::new(ErrorCode::BadFile, e.message))
+    }
+}
+
+fn bad(why: String) -> Error {
+    Error::new(ErrorCode::BadFile, format!("dataset geometry: {why}"))
+}
