@@ -4,6 +4,7 @@
 //! ```text
 //! vlconvert nifti brain.nii.gz brain.vlb
 //! vlconvert nifti ct.nii.gz ct.vlb --window -1000 2000   # Hounsfield units to 0 … 1
+//! vlconvert metaimage ct.mha ct.vlb        # MetaImage: .mha, or .mhd with its .raw/.zraw
 //! vlconvert raw ct.raw ct.vlb --dims 256 256 113 --type i16 --endian big
 //! vlconvert image word.png word.vlb        # grey: word.vlb; colour: word_r/_g/_b.vlb
 //! vlconvert info brain.vlb
@@ -22,6 +23,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use vlib::{Dataset, Voxels};
 
+mod metaimage;
 mod volume;
 
 use volume::{Source, Type};
@@ -118,6 +120,13 @@ enum Cmd {
     /// A NIfTI-1 volume (.nii or .nii.gz) of any integer or float type, its scl_slope and
     /// scl_inter applied.
     Nifti {
+        input: PathBuf,
+        output: PathBuf,
+        #[command(flatten)]
+        window: Window,
+    },
+    /// A MetaImage (.mha, or .mhd with its .raw or .zraw) of any integer or float type, 2D or 3D.
+    Metaimage {
         input: PathBuf,
         output: PathBuf,
         #[command(flatten)]
@@ -395,6 +404,11 @@ fn main() -> ExitCode {
             output,
             window,
         } => nifti(input, output, window),
+        Cmd::Metaimage {
+            input,
+            output,
+            window,
+        } => metaimage::convert(input, output, window),
         Cmd::Info { file } => info(file),
     };
     match result {
