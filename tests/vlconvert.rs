@@ -1,6 +1,7 @@
 //! `vlconvert` end to end: raw volumes (every element type, both byte orders), NIfTI files of
-//! every data type written by nibabel (`tests/fixtures/nifti`, with the writer's own values
-//! beside each), grey and colour images, `info`, and the exit codes for bad input, bad command
+//! every data type written by nibabel (`tests/fixtures/nifti`) and MetaImage files written by
+//! SimpleITK (`tests/fixtures/metaimage`), each with the writer's own values beside it, grey and
+//! colour images, `info`, and the exit codes for bad input, bad command
 //! lines and an output closed or full.
 
 use std::path::{Path, PathBuf};
@@ -218,10 +219,10 @@ fn normalised(v: &Dataset) -> Vec<f64> {
     out
 }
 
-/// The writer's values of fixture `tests/fixtures/<stem>.txt`, in file order.
-fn writers_values(stem: &str) -> Vec<f64> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
-    std::fs::read_to_string(dir.join(format!("{stem}.txt")))
+/// The values an independent writer put in a fixture, from `NAME.txt` beside it: one a line,
+/// in file order (x fastest).
+fn writers_values(txt: &Path) -> Vec<f64> {
+    std::fs::read_to_string(txt)
         .unwrap()
         .lines()
         .map(|l| l.parse().unwrap())
@@ -229,21 +230,15 @@ fn writers_values(stem: &str) -> Vec<f64> {
 }
 
 /// Converts fixture `tests/fixtures/<file>` with `vlconvert <sub>` and checks the dataset: 5 ×
-/// 4 × 3 nodes of `width` bytes, and each node's normalised value the writer's value placed in
-/// the data's range, (v − min)/(max − min): within 10⁻⁶ where the type is kept exactly (the
-/// slack is f32's in a and b), within half a quantum of 16 bits (plus that) where quantised.
+/// 4 × 3 nodes of `width` bytes whose normalised values are the writer's
+/// ([`assert_writers_values`]).
 fn converts_like_the_writer(sub: &str, file: &str, width: u32, exact: bool) {
-    let input = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(file);
-    let stem = file.rsplit_once('.').unwrap().0;
-    let want = writers_values(stem);
-    let (lo, hi) = want
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
-            (l.min(v), h.max(v))
-        });
-    let d = tmp(&stem.replace('/', "-"));
+    let input = fixture(file);
+    let want = writers_values(&fixture(&format!(
+        "{}.txt",
+        file.rsplit_once('.').unwrap().0
+    )));
+    let d = tmp(&file.replace(['/', '.'], "-"));
     let out = d.join("out.vlb");
     let o = run(&[sub, s(&input), s(&out)]);
     assert!(
@@ -254,15 +249,47 @@ fn converts_like_the_writer(sub: &str, file: &str, width: u32, exact: bool) {
     let v = Dataset::load(&out).unwrap();
     assert_eq!(v.dims(), [5, 4, 3], "{file}");
     assert_eq!(v.raw().width(), width, "{file}");
+    assert_writers_values(file, &v, &want, exact);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// The path of fixture `tests/fixtures/<name>`.
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
+}
+
+/// Each node's normalised value in `v` is the writer's value placed in the data's range,
+/// (w − min)/(max − min): within 10⁻⁶ where the type is kept `exact`ly (the slack is f32's in
+/// a and b), within half a quantum of 16 bits (plus that) where it is quantised.
+fn assert_writers_values(name: &str, v: &Dataset, want: &[f64], exact: bool) {
+    let (lo, hi) = want
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
+    let got = normalised(v);
+    assert_eq!(got.len(), want.len(), "{name}: nodes");
     let tol = if exact { 1e-6 } else { 0.5 / 65535.0 + 1e-6 };
-    for (n, (got, w)) in normalised(&v).iter().zip(&want).enumerate() {
+    for (n, (got, w)) in got.iter().zip(want).enumerate() {
         let expect = (w - lo) / (hi - lo);
         assert!(
             (got - expect).abs() <= tol,
-            "{file} node {n}: {got} vs ({w} − {lo})/({hi} − {lo}) = {expect}"
+            "{name} node {n}: {got} vs ({w} − {lo})/({hi} − {lo}) = {expect}"
         );
     }
-    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Each node's normalised value in `v` is the writer's value in the window `a` … `b`,
+/// clamp((w − a)/(b − a), 0, 1), within 10⁻⁶.
+fn assert_windowed(v: &Dataset, want: &[f64], a: f64, b: f64) {
+    let got = normalised(v);
+    assert_eq!(got.len(), want.len(), "nodes");
+    for (got, w) in got.iter().zip(want) {
+        let expect = ((w - a) / (b - a)).clamp(0.0, 1.0);
+        assert!((got - expect).abs() <= 1e-6, "{got} vs {expect} for {w}");
+    }
 }
 
 /// Every NIfTI fixture converts, and each node's normalised value is the writer's value
@@ -292,16 +319,12 @@ fn nifti_of_every_type_converts_to_the_writers_values() {
         converts_like_the_writer("nifti", &format!("nifti/{name}.nii"), width, exact);
     }
     // A CT window: Hounsfield units −1000 … 2000 to 0 … 1, clamped outside.
-    let want = writers_values("nifti/int16_ct");
+    let want = writers_values(&dir.join("int16_ct.txt"));
     let out = d.join("window.vlb");
     let nii = dir.join("int16_ct.nii");
     let o = run(&["nifti", s(&nii), s(&out), "--window", "-1000", "2000"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v = Dataset::load(&out).unwrap();
-    for (got, w) in normalised(&v).iter().zip(&want) {
-        let expect = ((w + 1000.0) / 3000.0).clamp(0.0, 1.0);
-        assert!((got - expect).abs() <= 1e-6, "{got} vs {expect} for {w}");
-    }
+    assert_windowed(&Dataset::load(&out).unwrap(), &want, -1000.0, 2000.0);
     std::fs::remove_dir_all(&d).unwrap();
 }
 
@@ -457,7 +480,7 @@ fn nrrd_of_every_encoding_converts_to_the_writers_values() {
 }
 
 /// `vlconvert IN OUT.vlb` tells the format from the file's first bytes: each fixture (NIfTI,
-/// the same NIfTI gzipped, NRRD, a detached NRRD header, a PNG) converts to the same bytes as
+/// the same NIfTI gzipped, NRRD, a detached NRRD header, MetaImage `.mha` and `.mhd`, a PNG) converts to the same bytes as
 /// its own subcommand gives; a headerless file and a `.vlb` are refused with a message that
 /// says what to do (exit 1).
 #[test]
@@ -479,6 +502,8 @@ fn the_format_is_told_from_the_file() {
         ("nifti", gz),
         ("nrrd", fixtures.join("nrrd/uint16_gzip.nrrd")),
         ("nrrd", fixtures.join("nrrd/uint8_detached.nhdr")),
+        ("metaimage", fixtures.join("metaimage/int16_ct.mha")),
+        ("metaimage", fixtures.join("metaimage/uint16.mhd")),
         ("image", png),
     ] {
         let (auto, explicit) = (d.join("auto.vlb"), d.join("explicit.vlb"));
@@ -507,5 +532,111 @@ fn the_format_is_told_from_the_file() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("already a .vlb"));
     assert!(!d.join("x.vlb").exists() && !d.join("y.vlb").exists());
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Every MetaImage fixture (`.mha`, `.mhd` with `.raw` or `.zraw`, zlib-compressed or not)
+/// converts, and each node's normalised value is SimpleITK's value placed in the data's range, as
+/// for NIfTI; a 2D image is one slab. A CT window (−1000 … 2000) clamps.
+#[test]
+fn metaimage_of_every_type_converts_to_the_writers_values() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/metaimage");
+    let d = tmp("metaimage");
+    let cases = [
+        ("int16_ct.mha", [5, 4, 3], 2, true),
+        ("uint16.mhd", [5, 4, 3], 2, true),
+        ("float32_zlib.mha", [5, 4, 3], 2, false),
+        ("int32_zlib.mhd", [5, 4, 3], 2, false),
+        ("int8.mha", [5, 4, 3], 1, true),
+        ("float64.mha", [5, 4, 3], 2, false),
+        ("uint8.mha", [5, 4, 3], 1, true),
+        ("uint8_2d.mha", [5, 4, 1], 1, true),
+    ];
+    for (file, dims, width, exact) in cases {
+        let name = file.split('.').next().unwrap();
+        let want = writers_values(&dir.join(format!("{name}.txt")));
+        let out = d.join(format!("{name}.vlb"));
+        let o = run(&["metaimage", s(&dir.join(file)), s(&out)]);
+        assert!(
+            o.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let v = Dataset::load(&out).unwrap();
+        assert_eq!(v.dims(), dims, "{file}");
+        assert_eq!(v.raw().width(), width, "{file}");
+        assert_writers_values(file, &v, &want, exact);
+    }
+    let want = writers_values(&dir.join("int16_ct.txt"));
+    let out = d.join("window.vlb");
+    let mha = dir.join("int16_ct.mha");
+    let o = run(&["metaimage", s(&mha), s(&out), "--window", "-1000", "2000"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_windowed(&Dataset::load(&out).unwrap(), &want, -1000.0, 2000.0);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Big-endian elements (`ElementByteOrderMSB = True`) at the end of their data file
+/// (`HeaderSize = -1`, after bytes that are not data) keep their values.
+#[test]
+fn metaimage_big_endian_data_at_the_end_of_its_file() {
+    let d = tmp("metaimage-msb");
+    let values: [i16; 4] = [-300, 0, 1200, 7];
+    let mut raw = vec![0xAAu8; 9];
+    raw.extend(values.iter().flat_map(|v| v.to_be_bytes()));
+    std::fs::write(d.join("v.raw"), &raw).unwrap();
+    let mhd = d.join("v.mhd");
+    std::fs::write(
+        &mhd,
+        "ObjectType = Image\nNDims = 3\nDimSize = 2 2 1\nElementByteOrderMSB = True\n\
+         HeaderSize = -1\nElementType = MET_SHORT\nElementDataFile = v.raw\n",
+    )
+    .unwrap();
+    let out = d.join("v.vlb");
+    let o = run(&["metaimage", s(&mhd), s(&out)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let want = values.map(f64::from);
+    assert_writers_values("v.mhd", &Dataset::load(&out).unwrap(), &want, true);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// A data file shorter than the dimensions need (`.mhd` + `.raw`, `.mha`, compressed `.mha`),
+/// several channels and a list of data files each exit 1 with a message and write nothing.
+#[test]
+fn metaimage_errors_exit_1_without_output() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/metaimage");
+    let d = tmp("metaimage-bad");
+    let header = |name: &str| std::fs::read_to_string(dir.join(name)).unwrap();
+    let bytes = |name: &str| std::fs::read(dir.join(name)).unwrap();
+    // uint16.mhd with 100 of its 120 bytes of data.
+    std::fs::write(d.join("uint16.mhd"), header("uint16.mhd")).unwrap();
+    std::fs::write(d.join("uint16.raw"), &bytes("uint16.raw")[..100]).unwrap();
+    // A .mha and a compressed .mha cut 20 bytes short.
+    for name in ["int16_ct.mha", "float32_zlib.mha"] {
+        let b = bytes(name);
+        std::fs::write(d.join(name), &b[..b.len() - 20]).unwrap();
+    }
+    // Three channels (an RGB image), and a list of slice files.
+    let mut rgb = bytes("uint8.mha");
+    let at = rgb.windows(11).position(|w| w == b"ElementType").unwrap();
+    rgb.splice(at..at, *b"ElementNumberOfChannels = 3\n");
+    std::fs::write(d.join("rgb.mha"), rgb).unwrap();
+    let list =
+        header("uint16.mhd").replace("ElementDataFile = uint16.raw", "ElementDataFile = LIST");
+    std::fs::write(d.join("list.mhd"), format!("{list}uint16.raw\n")).unwrap();
+    for (name, says) in [
+        ("uint16.mhd", "needed"),
+        ("int16_ct.mha", "needed"),
+        ("float32_zlib.mha", "compressed data"),
+        ("rgb.mha", "ElementNumberOfChannels = 3"),
+        ("list.mhd", "LIST"),
+    ] {
+        let out = d.join(format!("{name}.vlb"));
+        let o = run(&["metaimage", s(&d.join(name)), s(&out)]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+        assert!(err.contains(says), "{name}: {err}");
+        assert!(!out.exists(), "{name}");
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }

@@ -55,7 +55,7 @@ impl Geometry {
             - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0))
             + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0));
         let scale: f64 = g.spacing().iter().product();
-        if !(det.abs() > 1e-12 * scale) {
+        if det.is_nan() || det.abs() <= 1e-12 * scale {
             return Err(invalid("its axes are degenerate (determinant 0)"));
         }
         Ok(g)

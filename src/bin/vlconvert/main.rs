@@ -6,6 +6,7 @@
 //! vlconvert nifti brain.nii.gz brain.vlb
 //! vlconvert nifti ct.nii.gz ct.vlb --window -1000 2000   # Hounsfield units to 0 … 1
 //! vlconvert nrrd ct.nrrd ct.vlb                        # raw, gzip or ascii; .nhdr too
+//! vlconvert metaimage ct.mha ct.vlb        # MetaImage: .mha, or .mhd with its .raw/.zraw
 //! vlconvert raw ct.raw ct.vlb --dims 256 256 113 --type i16 --endian big
 //! vlconvert image word.png word.vlb        # grey: word.vlb; colour: word_r/_g/_b.vlb
 //! vlconvert info brain.vlb
@@ -25,6 +26,7 @@ use std::process::ExitCode;
 use vlib::{Dataset, Voxels};
 
 mod detect;
+mod metaimage;
 mod nrrd;
 mod volume;
 
@@ -130,6 +132,13 @@ enum Cmd {
     /// A NIfTI-1 volume (.nii or .nii.gz) of any integer or float type, its scl_slope and
     /// scl_inter applied.
     Nifti {
+        input: PathBuf,
+        output: PathBuf,
+        #[command(flatten)]
+        window: Window,
+    },
+    /// A MetaImage (.mha, or .mhd with its .raw or .zraw) of any integer or float type, 2D or 3D.
+    Metaimage {
         input: PathBuf,
         output: PathBuf,
         #[command(flatten)]
@@ -470,7 +479,16 @@ fn info(path: &Path) -> Res<()> {
 
 /// The names of the subcommands (a first argument that is none of them, nor an option, is an
 /// input file: `vlconvert IN OUT.vlb`).
-const SUBCOMMANDS: [&str; 7] = ["convert", "raw", "image", "nifti", "nrrd", "info", "help"];
+const SUBCOMMANDS: [&str; 8] = [
+    "convert",
+    "raw",
+    "image",
+    "nifti",
+    "nrrd",
+    "metaimage",
+    "info",
+    "help",
+];
 
 /// Converts `input`, whose format its first bytes tell.
 fn auto(input: &Path, output: &Path, window: &Window) -> Res<()> {
@@ -479,10 +497,7 @@ fn auto(input: &Path, output: &Path, window: &Window) -> Res<()> {
         detect::Format::Nrrd => {
             nrrd::read(input).and_then(|v| convert(&v.source(), window, output, v.geometry))
         }
-        detect::Format::MetaImage => Err(format!(
-            "{}: a MetaImage file; this vlconvert does not read MetaImage",
-            input.display()
-        )),
+        detect::Format::MetaImage => metaimage::convert(input, output, window),
         detect::Format::Image => {
             if window.ends() != (None, None) {
                 return Err("an image's voxels take --a/--b of the image subcommand".into());
@@ -544,6 +559,11 @@ fn main() -> ExitCode {
             output,
             window,
         } => auto(input, output, window),
+        Cmd::Metaimage {
+            input,
+            output,
+            window,
+        } => metaimage::convert(input, output, window),
         Cmd::Info { file } => info(file),
     };
     match result {
