@@ -28,6 +28,12 @@ extern "C" {
    of view (60 degrees). */
 void vluCamera(vlfloat ex, vlfloat ey, vlfloat ez, vlfloat lx, vlfloat ly, vlfloat lz);
 
+/* Places the current object where dataset `id`'s nodes lie in physical space (millimetres, RAS:
+   +x right, +y anterior, +z superior), from the geometry sidecar (NAME.vlb.geom) that vlconvert
+   writes beside a converted NIfTI, NRRD or MetaImage file: a transform composed like vlMatrix
+   (object scope). VL_BADID for an unknown id, VL_BADVALUE for a dataset without geometry. */
+void vluPlace(vlint id);
+
 /* Perlin's improved gradient noise in [-1, 1] at p * size; seed 0 is Perlin's permutation, other
    seeds shuffle it. p NULL: VL_NULLPOINTER, returns 0. */
 vlfloat vluNoise(const vlfloat *p, vlfloat size, vlint seed);

@@ -71,8 +71,8 @@ pub use extensions::{vlCancel, vlProgress};
 
 // vlaux (`vlaux.h`).
 pub use vlaux::{
-    vluCamera, vluNoise, vluSpline, vluTurbulence, VLU_BLEND, VLU_CYLINDER, VLU_DIFFERENCE,
-    VLU_INTERSECTION, VLU_SPHERE, VLU_SWEEP, VLU_UNION, VL_PARAB1,
+    vluCamera, vluNoise, vluPlace, vluSpline, vluTurbulence, VLU_BLEND, VLU_CYLINDER,
+    VLU_DIFFERENCE, VLU_INTERSECTION, VLU_SPHERE, VLU_SWEEP, VLU_UNION, VL_PARAB1,
 };
 
 // Rust-only helpers for the unit tests (not part of the C interface).

@@ -45,6 +45,13 @@ pub extern "C" fn vluCamera(
     })
 }
 
+/// Places the current object where dataset `id`'s nodes lie in physical space
+/// (`Library::place_dataset`: its scope, its checks, its errors).
+#[no_mangle]
+pub extern "C" fn vluPlace(id: vlint) {
+    ffi_boundary((), || library(Command::Matrix, |lib| lib.place_dataset(id)))
+}
+
 /// Perlin noise in [-1, 1] at `p * size`, with a seeded permutation (0 = Perlin's).
 ///
 /// # Safety

@@ -12,8 +12,9 @@ use std::collections::BTreeSet;
 use std::process::Command;
 
 /// The functions of vlaux.h.
-const VLAUX: [&str; 12] = [
+const VLAUX: [&str; 13] = [
     "vluCamera",
+    "vluPlace",
     "vluNoise",
     "vluTurbulence",
     "vluSpline",
