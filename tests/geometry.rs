@@ -16,8 +16,11 @@ fn fixture(name: &str) -> PathBuf {
 
 /// Converts fixture `name` into a scratch directory; returns the `.vlb`'s path.
 fn convert(name: &str) -> PathBuf {
+    // A directory of its own per call: the tests run at once and remove theirs.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let d = std::env::temp_dir().join(format!(
-        "vlib-geometry-{}-{}",
+        "vlib-geometry-{}-{}-{call}",
         name.replace(['/', '.'], "-"),
         std::process::id()
     ));
