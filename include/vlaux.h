@@ -30,8 +30,8 @@ void vluCamera(vlfloat ex, vlfloat ey, vlfloat ez, vlfloat lx, vlfloat ly, vlflo
 
 /* Places the current object where dataset `id`'s nodes lie in physical space (millimetres, RAS:
    +x right, +y anterior, +z superior), from the geometry sidecar (NAME.vlb.geom) that vlconvert
-   writes beside a converted NIfTI, NRRD or MetaImage file: a transform composed like vlMatrix
-   (object scope). VL_BADID for an unknown id, VL_BADVALUE for a dataset without geometry. */
+   writes beside a converted NIfTI or NRRD file: a transform composed like vlMatrix (object
+   scope; call it before other transforms, which then act in millimetres). VL_BADID for an unknown id, VL_BADVALUE for a dataset without geometry. */
 void vluPlace(vlint id);
 
 /* Perlin's improved gradient noise in [-1, 1] at p * size; seed 0 is Perlin's permutation, other

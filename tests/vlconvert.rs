@@ -476,6 +476,54 @@ fn nrrd_of_every_encoding_converts_to_the_writers_values() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("bzip2"));
     assert!(!d.join("a.vlb").exists() && !d.join("b.vlb").exists());
+    // Hostile headers exit 1 with a message, without a panic, an abort or a hang: sizes whose
+    // product overflows, an ascii volume far larger than its file, a negative byte skip, an
+    // axis of several values per voxel, a FIFO.
+    let header = "NRRD0004\ntype: int16\ndimension: 3\nencoding: raw\n";
+    for (name, fields, says) in [
+        ("overflow", "sizes: 9223372036854775809 2 1\n", "overflow"),
+        (
+            "ascii",
+            "sizes: 1000000 1000000 100000\nencoding: ascii\n",
+            "needed",
+        ),
+        ("skip", "sizes: 2 2 2\nbyte skip: -7\n", "byte skip"),
+        (
+            "kinds",
+            "sizes: 3 2 2\nkinds: RGB-color domain domain\n",
+            "kinds",
+        ),
+    ] {
+        let f = d.join(format!("{name}.nrrd"));
+        let text = format!("{header}{fields}\n")
+            .replace("encoding: raw\nsizes: 1000000", "sizes: 1000000");
+        std::fs::write(&f, text.as_bytes()).unwrap();
+        let o = run(&["nrrd", s(&f), s(&d.join("c.vlb"))]);
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains(says),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    let fifo = d.join("fifo");
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    let o = run(&[s(&fifo), s(&d.join("c.vlb"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not a regular file"));
+    // A placement that cannot be made is a note; the volume converts without one.
+    let f = d.join("space.nrrd");
+    let mut bytes = b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: raw\nspace: scanner-xyz\nspace directions: (1,0,0) (0,1,0) (0,0,1)\n\n".to_vec();
+    bytes.extend([1u8, 2, 3, 4, 5, 6, 7, 8]);
+    std::fs::write(&f, &bytes).unwrap();
+    let o = run(&["nrrd", s(&f), s(&d.join("e.vlb"))]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no placement"));
+    assert!(Dataset::load(&d.join("e.vlb")).unwrap().geometry().is_none());
     std::fs::remove_dir_all(&d).unwrap();
 }
 

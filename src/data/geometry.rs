@@ -1,7 +1,9 @@
 //! Where a dataset's nodes lie in physical space, carried beside its `.vlb` file (whose header
 //! the paper fixes) in a sidecar: `NAME.vlb.geom`, a few lines of text written by `vlconvert`
-//! from the source's own geometry (NIfTI's sform or qform, NRRD's space directions and origin,
-//! MetaImage's spacing, matrix and offset), read by [`crate::Dataset::load`] when present.
+//! from the source's own geometry (NIfTI's sform or qform, NRRD's space directions and origin),
+//! read by [`crate::Dataset::load`] when present: a sidecar that cannot be read or parsed
+//! makes the load fail with its reason (`VL_IOERROR`, `VL_BADFILE`), so keep it with its file
+//! or remove it.
 //!
 //! ```text
 //! vlib-geometry 1
@@ -12,8 +14,8 @@
 //! ```
 //!
 //! Each `row` is a row of [A | t]: world x, y and z as functions of the node index. The world
-//! is RAS (+x the subject's right, +y anterior, +z superior), NIfTI's convention; LPS sources
-//! (NRRD's `left-posterior-superior`, DICOM, MetaImage) are turned into it. The module owns the
+//! is RAS (+x the subject's right, +y anterior, +z superior), NIfTI's convention; LPS and LAS
+//! sources (NRRD's `left-posterior-superior`) are turned into it. The module owns the
 //! format and its checks; placing an object by it is the API's (`Library::place_dataset`).
 
 use crate::error::{Error, ErrorCode, Result};

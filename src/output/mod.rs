@@ -33,8 +33,14 @@ impl crate::data::Dataset {
         let mut file = files::AtomicFile::create(path)?;
         file.write(&self.vlb_header())?;
         self.vlb_body(|bytes| file.write(bytes))?;
+        // The old sidecar goes before the new file replaces the old one, and the new sidecar
+        // comes after: whatever fails between, no file is described by another's geometry.
+        files::write_sidecar(path, None)?;
         file.commit()?;
-        files::write_sidecar(path, self.geometry())
+        match self.geometry() {
+            Some(g) => files::write_sidecar(path, Some(g)),
+            None => Ok(()),
+        }
     }
 }
 

@@ -156,9 +156,8 @@ pub fn write(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Resu
         // (A voxelization's nodes lie in the scene's world, not in millimetres: no geometry,
         // and a sidecar an earlier file left is removed.)
         let path = file_name(req, field);
-        if let Err(e) = file
-            .commit()
-            .and_then(|()| crate::output::files::write_sidecar(&path, None))
+        if let Err(e) =
+            crate::output::files::write_sidecar(&path, None).and_then(|()| file.commit())
         {
             first_error.get_or_insert(e);
         }

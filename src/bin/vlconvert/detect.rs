@@ -17,10 +17,8 @@ pub enum Format {
 
 /// The format of the file at `path`.
 pub fn format(path: &Path) -> Result<Format, String> {
-    let mut head = Vec::new();
-    std::fs::File::open(path)
-        .and_then(|f| f.take(512).read_to_end(&mut head))
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+    // (A FIFO or a device is refused, not read: its bytes could not be read twice.)
+    let head = crate::volume::read_regular(path, Some(512))?;
     if head.starts_with(&[0x1f, 0x8b]) {
         // gzip: look inside (a .nii.gz).
         let mut inner = Vec::new();

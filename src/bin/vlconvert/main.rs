@@ -1,5 +1,6 @@
-//! `vlconvert`: converts raw volumes, 2D images and NIfTI files to vlib's `.vlb` datasets, and
-//! describes `.vlb` files.
+//! `vlconvert`: converts NIfTI, NRRD, MetaImage and raw volumes and 2D images to vlib's `.vlb`
+//! datasets (with a geometry sidecar where the source places its voxels), and describes `.vlb`
+//! files.
 //!
 //! ```text
 //! vlconvert brain.nii.gz brain.vlb                    # the format from the file's first bytes
@@ -12,7 +13,7 @@
 //! vlconvert info brain.vlb
 //! ```
 //!
-//! Volumes (raw, NIfTI) of any element type become datasets whose normalised value is
+//! Volumes (raw, NIfTI, NRRD, MetaImage) of any element type become datasets whose normalised value is
 //! clamp((value − A)/(B − A), 0, 1) for a window A … B of data values, by default the data's
 //! smallest and largest value (`volume`: 8-bit sources in 8-bit voxels, others in 16-bit ones).
 //!
@@ -110,7 +111,7 @@ enum Cmd {
         /// The element type (default u8; --bytes 2 alone means u16).
         #[arg(long = "type", value_enum, conflicts_with = "bytes")]
         ty: Option<Type>,
-        /// Bytes per voxel, 1 (u8) or 2 (u16): --type's older form.
+        /// Bytes per voxel, 1 (u8) or 2 (u16): the same as --type u8 or u16.
         #[arg(long)]
         bytes: Option<u32>,
         /// Byte order of elements wider than a byte.
@@ -299,7 +300,7 @@ fn raw(
             input.display()
         ));
     }
-    let data = std::fs::read(input).map_err(|e| format!("{}: {e}", input.display()))?;
+    let data = volume::read_regular(input, Some(need))?;
     if len > need {
         eprintln!(
             "vlconvert: note: {} has {} bytes after the volume (ignored)",
@@ -424,7 +425,15 @@ fn nifti(input: &Path, output: &Path, window: &Window) -> Res<()> {
         (header.scl_slope as f64, header.scl_inter as f64)
     };
     let big = header.endianness == Endianness::Big;
-    let geometry = nifti_geometry(&header).map_err(|e| format!("{}: {e}", input.display()))?;
+    // A placement that cannot be made (voxel sizes of 0, say) is said, and the volume
+    // converts without one.
+    let geometry = match nifti_geometry(&header) {
+        Ok(g) => Some(g),
+        Err(e) => {
+            eprintln!("vlconvert: note: {}: no placement: {e}", input.display());
+            None
+        }
+    };
     let raw = volume.into_raw_data();
     let source = Source {
         dims: [dim[0] as usize, dim[1] as usize, dim[2] as usize],
@@ -434,8 +443,7 @@ fn nifti(input: &Path, output: &Path, window: &Window) -> Res<()> {
         slope,
         inter,
     };
-    convert(&source, window, output, Some(geometry))
-        .map_err(|e| format!("{}: {e}", input.display()))
+    convert(&source, window, output, geometry).map_err(|e| format!("{}: {e}", input.display()))
 }
 
 fn info(path: &Path) -> Res<()> {
@@ -490,13 +498,17 @@ const SUBCOMMANDS: [&str; 8] = [
     "help",
 ];
 
+/// Converts the NRRD file `input`.
+fn nrrd_file(input: &Path, output: &Path, window: &Window) -> Res<()> {
+    let v = nrrd::read(input)?;
+    convert(&v.source(), window, output, v.geometry)
+}
+
 /// Converts `input`, whose format its first bytes tell.
 fn auto(input: &Path, output: &Path, window: &Window) -> Res<()> {
     match detect::format(input)? {
         detect::Format::Nifti => nifti(input, output, window),
-        detect::Format::Nrrd => {
-            nrrd::read(input).and_then(|v| convert(&v.source(), window, output, v.geometry))
-        }
+        detect::Format::Nrrd => nrrd_file(input, output, window),
         detect::Format::MetaImage => metaimage::convert(input, output, window),
         detect::Format::Image => {
             if window.ends() != (None, None) {
@@ -553,7 +565,7 @@ fn main() -> ExitCode {
             input,
             output,
             window,
-        } => nrrd::read(input).and_then(|v| convert(&v.source(), window, output, v.geometry)),
+        } => nrrd_file(input, output, window),
         Cmd::Convert {
             input,
             output,

@@ -256,7 +256,7 @@ fn elements(h: &Header, bytes: &[u8], from: usize, need: usize, name: &Path) -> 
 /// Converts the MetaImage `input` (`.mha`, or `.mhd` with its data file) to `output`.
 pub fn convert(input: &Path, output: &Path, window: &super::Window) -> Res<()> {
     let at = |e: String| format!("{}: {e}", input.display());
-    let text = std::fs::read(input).map_err(|e| at(e.to_string()))?;
+    let text = crate::volume::read_regular(input, None).map_err(at)?;
     let dir = input.parent().unwrap_or(Path::new(""));
     let h = parse(&text, dir).map_err(at)?;
     let need = h
@@ -268,7 +268,7 @@ pub fn convert(input: &Path, output: &Path, window: &super::Window) -> Res<()> {
     let data = match &h.file {
         DataFile::Local => elements(&h, &text, h.end, need, input)?,
         DataFile::Path(p) => {
-            let bytes = std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            let bytes = crate::volume::read_regular(p, None)?;
             elements(&h, &bytes, 0, need, p)?
         }
     };

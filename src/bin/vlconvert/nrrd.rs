@@ -7,7 +7,7 @@
 //! `spacings` alone. Other encodings (`bzip2`, `hex`), detached data lists (`LIST`, `%d`
 //! patterns) and more than one value per voxel are refused by name.
 
-use crate::volume::{Source, Type};
+use crate::volume::{read_regular, Source, Type};
 use std::path::{Path, PathBuf};
 
 /// A NRRD file's volume: its dimensions, type, byte order and decoded bytes.
@@ -98,7 +98,20 @@ fn geometry(field: &dyn Fn(&[&str]) -> Option<String>) -> Result<Option<vlib::Ge
         if cols.len() != 3 && cols.len() != 2 {
             return Err(format!("space directions {dirs:?}: 2 or 3 vectors"));
         }
-        let col = |c: usize, r: usize| cols.get(c).map_or(if r == c { 1.0 } else { 0.0 }, |v| v[r]);
+        // A 2D image's third axis: the unit normal of its plane.
+        let normal = if cols.len() == 2 {
+            let (a, b) = (&cols[0], &cols[1]);
+            let n = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
+            let len = n.iter().map(|v| v * v).sum::<f64>().sqrt();
+            n.map(|v| if len > 0.0 { v / len } else { 0.0 })
+        } else {
+            [0.0; 3]
+        };
+        let col = |c: usize, r: usize| cols.get(c).map_or(normal[r], |v| v[r]);
         let row = |r: usize| [col(0, r), col(1, r), col(2, r), origin[r]].map(|v| v * flip[r]);
         return vlib::Geometry::new([row(0), row(1), row(2)])
             .map(Some)
@@ -120,7 +133,7 @@ fn geometry(field: &dyn Fn(&[&str]) -> Option<String>) -> Result<Option<vlib::Ge
 
 /// Reads the NRRD file `path`.
 pub fn read(path: &Path) -> Result<Nrrd, String> {
-    let file = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let file = read_regular(path, None)?;
     if !is_nrrd(&file) {
         return Err(format!(
             "{}: not a NRRD file (no NRRD000x magic)",
@@ -160,7 +173,12 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
             .map(|(_, v)| v.as_str())
     };
     let bad = |what: String| format!("{}: {what}", path.display());
-    let geometry = geometry(&|names: &[&str]| field(names).map(str::to_string)).map_err(&bad)?;
+    // A placement that cannot be made is said, and the volume converts without one.
+    let geometry =
+        geometry(&|names: &[&str]| field(names).map(str::to_string)).unwrap_or_else(|e| {
+            eprintln!("vlconvert: note: {}: no placement: {e}", path.display());
+            None
+        });
     let ty_name = field(&["type"]).ok_or_else(|| bad("no type field".into()))?;
     let ty = type_of(ty_name).ok_or_else(|| bad(format!("type {ty_name:?} does not convert")))?;
     let dimension: usize = field(&["dimension"])
@@ -176,6 +194,16 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
             "dimension {dimension} but {} sizes",
             sizes.len()
         )));
+    }
+    // One value per voxel: every axis a domain (space or time) axis.
+    if let Some(kinds) = field(&["kinds"]) {
+        let ok = ["domain", "space", "time", "none", "???"];
+        if let Some(k) = kinds.split_whitespace().find(|k| !ok.contains(k)) {
+            return Err(bad(format!(
+                "kinds {kinds:?}: an axis of kind {k} (more than one value per voxel) does not \
+                 convert"
+            )));
+        }
     }
     let dims = match sizes.as_slice() {
         [x, y, z] => [*x, *y, *z],
@@ -217,7 +245,7 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
             } else {
                 p.to_path_buf()
             };
-            std::fs::read(&p).map_err(|e| format!("{}: {e}", p.display()))?
+            read_regular(&p, None)?
         }
         None => file[header_end..].to_vec(),
     };
@@ -229,10 +257,16 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
             None => return Err(bad("line skip past the end of the data".into())),
         }
     }
-    let n: usize = dims.iter().product();
+    let n = dims
+        .iter()
+        .try_fold(1usize, |a, &d| a.checked_mul(d))
+        .ok_or_else(|| bad(format!("sizes {sizes:?} overflow")))?;
     let need = n
         .checked_mul(ty.bytes())
         .ok_or_else(|| bad("sizes overflow".into()))?;
+    if byte_skip < -1 {
+        return Err(bad(format!("byte skip {byte_skip}: at least -1")));
+    }
     let raw = |data: &[u8]| -> Result<Vec<u8>, String> {
         let data = if byte_skip == -1 {
             data.get(data.len().saturating_sub(need)..).unwrap_or(data)
@@ -249,10 +283,18 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
     };
     let (bytes, big) = match encoding {
         "raw" => (raw(data)?, big),
+        "gzip" | "gz" if byte_skip == -1 => {
+            return Err(bad(
+                "byte skip -1 with gzip encoding: the specification forbids it".into(),
+            ))
+        }
         "gzip" | "gz" => {
             use std::io::Read;
             let mut out = Vec::new();
+            // No more than the volume needs after the skip (a bomb stops there).
+            let most = need as u64 + byte_skip.max(0) as u64 + 1;
             flate2::read::MultiGzDecoder::new(data)
+                .take(most)
                 .read_to_end(&mut out)
                 .map_err(|e| bad(format!("gzip data: {e}")))?;
             // Byte skip counts bytes of the decompressed data.
@@ -260,7 +302,7 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
         }
         "ascii" | "text" | "txt" => {
             let text = String::from_utf8_lossy(data);
-            let mut out = Vec::with_capacity(need);
+            let mut out = Vec::with_capacity(need.min(data.len()));
             for word in text.split_whitespace().take(n) {
                 let v: f64 = word
                     .parse()

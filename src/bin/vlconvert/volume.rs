@@ -110,9 +110,10 @@ pub struct Converted {
 }
 
 impl Source<'_> {
-    /// The number of elements.
+    /// The number of elements (saturating: a product that overflows is refused by
+    /// [`Source::convert`]'s length check).
     fn len(&self) -> usize {
-        self.dims.iter().product()
+        self.dims.iter().fold(1usize, |a, &d| a.saturating_mul(d))
     }
 
     /// Element `i`'s raw value (before scaling).
@@ -138,7 +139,7 @@ impl Source<'_> {
     /// (A, B) = `window`, each end the data's own where `None` (its smallest and largest
     /// value; a constant volume v gets (v, v + 1), so it normalises to 0).
     pub fn convert(&self, window: (Option<f64>, Option<f64>)) -> Result<Converted, String> {
-        let need = self.len() * self.ty.bytes();
+        let need = self.len().saturating_mul(self.ty.bytes());
         if self.bytes.len() < need {
             return Err(format!(
                 "{} bytes of voxels, {need} needed for {:?} of {:?}",
@@ -195,4 +196,21 @@ impl Source<'_> {
             report: format!("{how}; window {a} … {b} (a, b = {va} {vb} in voxel units)"),
         })
     }
+}
+
+/// The bytes of the regular file `path`, at most `limit` of them (`None`: all): a FIFO, a
+/// device or a directory is refused rather than read (it could block, or never end).
+pub fn read_regular(path: &std::path::Path, limit: Option<u64>) -> Result<Vec<u8>, String> {
+    use std::io::Read;
+    let at = |e: std::io::Error| format!("{}: {e}", path.display());
+    let meta = std::fs::metadata(path).map_err(at)?;
+    if !meta.is_file() {
+        return Err(format!("{}: not a regular file", path.display()));
+    }
+    let f = std::fs::File::open(path).map_err(at)?;
+    let mut out = Vec::new();
+    f.take(limit.unwrap_or(u64::MAX))
+        .read_to_end(&mut out)
+        .map_err(at)?;
+    Ok(out)
 }
