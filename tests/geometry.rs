@@ -52,6 +52,7 @@ fn the_sidecar_is_the_writers_affine() {
         ("nifti/int16_aniso.nii", "nifti/int16_aniso"),
         ("nifti/uint8_qform.nii", "nifti/uint8_qform"),
         ("nrrd/int16_lps.nrrd", "nrrd/int16_lps"),
+        ("nrrd/uint8_oblique.nrrd", "nrrd/uint8_oblique"),
     ] {
         let out = convert(file);
         let d = Dataset::load(&out).unwrap();
@@ -205,4 +206,82 @@ fn placing_needs_a_dataset_with_geometry() {
         vlib::ErrorCode::BadId
     );
     assert_eq!(vl.fingerprint(), before);
+}
+
+/// An oblique placement (the NRRD fixture turned 30° about z, spacing 1 × 2 × 3): the part of
+/// the object near node (4, 0, ·) shows where the writer's affine puts those nodes. Seen from
+/// far above (+z, up +y), the marker's centroid lies within two pixels of the projection of
+/// A·(3.5, 0.375, 1) + t (the centre of its region, object x 0.75 … 1, y 0 … 0.25), by the
+/// camera model: right = up × forward, up = forward × right. A transposed or mirrored A puts it
+/// elsewhere.
+#[test]
+fn an_oblique_placement_puts_each_node_where_the_writer_does() {
+    let out = convert("nrrd/uint8_oblique.nrrd");
+    let a = writers_affine("nrrd/uint8_oblique");
+    let world =
+        |p: [f64; 3]| [0, 1, 2].map(|r| a[r][0] * p[0] + a[r][1] * p[1] + a[r][2] * p[2] + a[r][3]);
+    // The box's centre, nodes (2, 1.5, 1).
+    let c = world([2.0, 1.5, 1.0]);
+    let cam = Camera {
+        eye: [c[0] as f32, c[1] as f32, c[2] as f32 + 2000.0],
+        at: [c[0] as f32, c[1] as f32, c[2] as f32],
+        up: [0.0, 1.0, 0.0],
+        fov: 0.4,
+    };
+    let mut vl = Library::new();
+    vl.load(1, &out).unwrap();
+    std::fs::remove_dir_all(out.parent().unwrap()).unwrap();
+    vl.scene().unwrap();
+    vl.camera(&cam).unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.step_size(0.05, 1.0).unwrap();
+    vl.object().unwrap();
+    vl.place_dataset(1).unwrap();
+    vl.dataset(Fields::F, 1).unwrap();
+    vl.function(Fields::O, |s| {
+        let p = s.position();
+        let _ = s.set(
+            Fields::O,
+            if p[0] > 0.75 && p[1] < 0.25 { 1.0 } else { 0.0 },
+        );
+    })
+    .unwrap();
+    vl.set(Fields::COLORS | Fields::KA, 1.0).unwrap();
+    vl.end().unwrap();
+    let (w, h) = (200u32, 200u32);
+    let img = vl.render_preview(w, h, 1.0).unwrap();
+    let (mut sx, mut sy, mut n) = (0.0, 0.0, 0.0);
+    for y in 0..h {
+        for x in 0..w {
+            if img.pixel(x, y)[0] > 0.5 {
+                sx += x as f64 + 0.5;
+                sy += y as f64 + 0.5;
+                n += 1.0;
+            }
+        }
+    }
+    assert!(n > 10.0, "the marker shows ({n} pixels)");
+    // The camera model: f the view direction, r = up × f, u = f × r; a point at v from the
+    // eye lands at ((1 + (v·r)/(v·f)/t)·w/2, (1 − (v·u)/(v·f)/t)·h/2), t = tan(fov / 2).
+    let (f, up) = ([0.0, 0.0, -1.0], [0.0, 1.0, 0.0]);
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let r = cross(up, f);
+    let u = cross(f, r);
+    let p = world([3.5, 0.375, 1.0]);
+    let v = [0, 1, 2].map(|i| p[i] - cam.eye[i] as f64);
+    let t = (0.2f64).to_radians().tan();
+    let ex = (1.0 + dot(v, r) / dot(v, f) / t) * w as f64 / 2.0;
+    let ey = (1.0 - dot(v, u) / dot(v, f) / t) * h as f64 / 2.0;
+    let (gx, gy) = (sx / n, sy / n);
+    assert!(
+        (gx - ex).abs() < 2.0 && (gy - ey).abs() < 2.0,
+        "marker at ({gx:.1}, {gy:.1}), the writer's nodes at ({ex:.1}, {ey:.1})"
+    );
 }

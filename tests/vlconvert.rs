@@ -306,6 +306,7 @@ fn nifti_of_every_type_converts_to_the_writers_values() {
         ("int8", 1, true),
         ("int16_ct", 2, true),
         ("int16_scaled", 2, true),
+        ("int16_negslope", 2, true),
         ("int16_big", 2, true),
         ("uint16", 2, true),
         ("int32", 2, false),
@@ -523,7 +524,10 @@ fn nrrd_of_every_encoding_converts_to_the_writers_values() {
     let o = run(&["nrrd", s(&f), s(&d.join("e.vlb"))]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stderr).contains("no placement"));
-    assert!(Dataset::load(&d.join("e.vlb")).unwrap().geometry().is_none());
+    assert!(Dataset::load(&d.join("e.vlb"))
+        .unwrap()
+        .geometry()
+        .is_none());
     std::fs::remove_dir_all(&d).unwrap();
 }
 
@@ -686,5 +690,72 @@ fn metaimage_errors_exit_1_without_output() {
         assert!(err.contains(says), "{name}: {err}");
         assert!(!out.exists(), "{name}");
     }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Values that are not finite (NaN, ±∞ in a float file) take the range of the finite ones'
+/// minimum: the field is 0 there; the finite values span 0 … 1.
+#[test]
+fn non_finite_values_take_the_minimum() {
+    let d = tmp("nonfinite");
+    let values = [
+        f32::NAN,
+        1.0,
+        3.0,
+        f32::INFINITY,
+        2.0,
+        f32::NEG_INFINITY,
+        1.5,
+        3.0,
+    ];
+    let raw = d.join("f.raw");
+    std::fs::write(
+        &raw,
+        values
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect::<Vec<u8>>(),
+    )
+    .unwrap();
+    let out = d.join("f.vlb");
+    let o = run(&[
+        "raw",
+        s(&raw),
+        s(&out),
+        "--dims",
+        "2",
+        "2",
+        "2",
+        "--type",
+        "f32",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let got = normalised(&Dataset::load(&out).unwrap());
+    let want = [0.0, 0.0, 1.0, 0.0, 0.5, 0.0, 0.25, 1.0];
+    for (g, w) in got.iter().zip(want) {
+        assert!((g - w).abs() <= 0.5 / 65535.0 + 1e-6, "{got:?} vs {want:?}");
+    }
+    // Nothing finite: nothing to normalise by (exit 1).
+    std::fs::write(
+        &raw,
+        [f32::NAN; 8]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect::<Vec<u8>>(),
+    )
+    .unwrap();
+    let o = run(&[
+        "raw",
+        s(&raw),
+        s(&d.join("g.vlb")),
+        "--dims",
+        "2",
+        "2",
+        "2",
+        "--type",
+        "f32",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no finite value"));
     std::fs::remove_dir_all(&d).unwrap();
 }
