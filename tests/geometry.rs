@@ -79,7 +79,14 @@ fn sidecars_round_trip_and_refuse_malformed_text() {
         [0.0, 0.0, 2.0, 1e-3],
     ])
     .unwrap();
-    assert_eq!(Geometry::parse(&g.to_text()).unwrap(), g);
+    assert_eq!(
+        Geometry::parse(&g.to_text([4, 3, 2]), [4, 3, 2]).unwrap(),
+        g
+    );
+    // Beside a file of another grid (a stale sidecar), refused.
+    let e = Geometry::parse(&g.to_text([4, 3, 2]), [4, 3, 3]).unwrap_err();
+    assert_eq!(e.code, vlib::ErrorCode::BadFile);
+    assert!(e.message.contains("dims 4 3 3"), "{}", e.message);
     let spacing = g.spacing();
     assert!((spacing[2] - (0.1f64 * 0.1 + 4.0).sqrt()).abs() < 1e-12);
     for bad in [
@@ -91,7 +98,8 @@ fn sidecars_round_trip_and_refuse_malformed_text() {
         "vlib-geometry 1\nrow 1 0 0 0\nrow 2 0 0 0\nrow 0 0 1 0\n",
         "vlib-geometry 1\nrow 1 0 0 0\nrow 0 1 0 0\nrow 0 0 NaN 0\n",
     ] {
-        let e = Geometry::parse(bad).unwrap_err();
+        let bad = bad.replacen("\nrow", "\ndims 2 2 2\nrow", 1);
+        let e = Geometry::parse(&bad, [2, 2, 2]).unwrap_err();
         assert_eq!(e.code, vlib::ErrorCode::BadFile, "{bad:?}");
     }
 }
@@ -284,4 +292,35 @@ fn an_oblique_placement_puts_each_node_where_the_writer_does() {
         (gx - ex).abs() < 2.0 && (gy - ey).abs() < 2.0,
         "marker at ({gx:.1}, {gy:.1}), the writer's nodes at ({ex:.1}, {ey:.1})"
     );
+}
+
+/// A sidecar beside a file of another grid (copied, or left by an earlier file of the name) is
+/// refused at load with `BadFile`, naming the grid; saving a dataset without geometry removes
+/// the sidecar an earlier file left, and one with geometry writes its own.
+#[test]
+fn a_sidecar_of_another_grid_is_refused_and_saving_keeps_them_paired() {
+    let out = convert("nifti/int16_aniso.nii");
+    let dir = out.parent().unwrap().to_path_buf();
+    let other = dir.join("other.vlb");
+    Dataset::new([2, 2, 2], vlib::Voxels::U8(vec![1; 8]), 0.0, 255.0)
+        .unwrap()
+        .save(&other)
+        .unwrap();
+    assert!(Dataset::load(&other).unwrap().geometry().is_none());
+    std::fs::copy(Geometry::sidecar(&out), Geometry::sidecar(&other)).unwrap();
+    let e = Dataset::load(&other).unwrap_err();
+    assert_eq!(e.code, vlib::ErrorCode::BadFile);
+    assert!(e.message.contains("dims 2 2 2"), "{}", e.message);
+    // Saved again without geometry: the stale sidecar goes.
+    Dataset::new([2, 2, 2], vlib::Voxels::U8(vec![1; 8]), 0.0, 255.0)
+        .unwrap()
+        .save(&other)
+        .unwrap();
+    assert!(!Geometry::sidecar(&other).exists());
+    // Saved with the converted dataset's geometry: loaded back the same.
+    let placed = Dataset::load(&out).unwrap();
+    let copy = dir.join("copy.vlb");
+    placed.save(&copy).unwrap();
+    assert_eq!(Dataset::load(&copy).unwrap(), placed);
+    std::fs::remove_dir_all(&dir).unwrap();
 }

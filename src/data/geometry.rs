@@ -8,12 +8,15 @@
 //! ```text
 //! vlib-geometry 1
 //! # node (i, j, k) lies at (x, y, z) = A · (i, j, k) + t, in millimetres, RAS
+//! dims 240 240 60
 //! row 0.5 0 0 -60
 //! row 0 0.5 0 -60
 //! row 0 0 2 -30
 //! ```
 //!
-//! Each `row` is a row of [A | t]: world x, y and z as functions of the node index. The world
+//! `dims` is the grid the sidecar describes: a sidecar beside a file of another grid (left
+//! there by an earlier file of the name) is refused at load. Each `row` is a row of [A | t]:
+//! world x, y and z as functions of the node index. The world
 //! is RAS (+x the subject's right, +y anterior, +z superior), NIfTI's convention; LPS and LAS
 //! sources (NRRD's `left-posterior-superior`) are turned into it. The module owns the
 //! format and its checks; placing an object by it is the API's (`Library::place_dataset`).
@@ -86,10 +89,12 @@ impl Geometry {
         PathBuf::from(p)
     }
 
-    /// The sidecar's text.
-    pub fn to_text(&self) -> String {
+    /// The sidecar's text, for a dataset of `dims` nodes.
+    pub fn to_text(&self, dims: [usize; 3]) -> String {
         let mut s = format!(
-            "{MAGIC_LINE}\n# node (i, j, k) lies at (x, y, z) = A · (i, j, k) + t, in millimetres, RAS\n"
+            "{MAGIC_LINE}\n# node (i, j, k) lies at (x, y, z) = A · (i, j, k) + t, in millimetres, RAS\n\
+             dims {} {} {}\n",
+            dims[0], dims[1], dims[2]
         );
         for row in &self.affine {
             s.push_str(&format!(
@@ -100,14 +105,24 @@ impl Geometry {
         s
     }
 
-    /// Parses a sidecar's text; `BadFile` with the reason for anything else.
-    pub fn parse(text: &str) -> Result<Geometry> {
+    /// Parses the sidecar of a dataset of `dims` nodes; `BadFile` with the reason for
+    /// anything else, a sidecar of another grid among them.
+    pub fn parse(text: &str, dims: [usize; 3]) -> Result<Geometry> {
         let mut lines = text
             .lines()
             .map(str::trim)
             .filter(|l| !l.is_empty() && !l.starts_with('#'));
         if lines.next() != Some(MAGIC_LINE) {
             return Err(bad(format!("its first line is not {MAGIC_LINE:?}")));
+        }
+        let grid = lines.next().unwrap_or("");
+        let said: Vec<&str> = grid.split_whitespace().collect();
+        let want: Vec<String> = dims.iter().map(|d| d.to_string()).collect();
+        if said.first() != Some(&"dims") || said[1..] != want {
+            return Err(bad(format!(
+                "{grid:?} is not `dims {} {} {}`, the grid of the dataset beside it",
+                dims[0], dims[1], dims[2]
+            )));
         }
         let mut affine = [[0.0; 4]; 3];
         for row in &mut affine {

@@ -137,9 +137,11 @@ impl Dataset {
         // The physical placement, where a sidecar gives it (`geometry`).
         let sidecar = super::Geometry::sidecar(path);
         match std::fs::read_to_string(&sidecar) {
-            Ok(text) => Ok(d.with_geometry(super::Geometry::parse(&text).map_err(|e| {
-                Error::new(e.code, format!("{}: {}", sidecar.display(), e.message))
-            })?)),
+            Ok(text) => Ok(
+                d.with_geometry(super::Geometry::parse(&text, h.dims).map_err(|e| {
+                    Error::new(e.code, format!("{}: {}", sidecar.display(), e.message))
+                })?),
+            ),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(d),
             Err(e) => Err(Error::new(
                 ErrorCode::IoError,

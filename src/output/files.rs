@@ -287,10 +287,13 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 /// Writes the geometry sidecar of the dataset file `path` (atomically), or, for a dataset
 /// without geometry, removes one an earlier file left, so that the sidecar always describes
 /// the file beside it.
-pub(crate) fn write_sidecar(path: &Path, geometry: Option<&crate::data::Geometry>) -> Result<()> {
+pub(crate) fn write_sidecar(
+    path: &Path,
+    geometry: Option<(&crate::data::Geometry, [usize; 3])>,
+) -> Result<()> {
     let sidecar = crate::data::Geometry::sidecar(path);
     match geometry {
-        Some(g) => write_atomic(&sidecar, g.to_text().as_bytes()),
+        Some((g, dims)) => write_atomic(&sidecar, g.to_text(dims).as_bytes()),
         None => match fs::remove_file(&sidecar) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::new(
                 ErrorCode::IoError,

@@ -38,7 +38,7 @@ impl crate::data::Dataset {
         files::write_sidecar(path, None)?;
         file.commit()?;
         match self.geometry() {
-            Some(g) => files::write_sidecar(path, Some(g)),
+            Some(g) => files::write_sidecar(path, Some((g, self.dims()))),
             None => Ok(()),
         }
     }

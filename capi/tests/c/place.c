@@ -74,7 +74,7 @@ int main(void)
     g = fopen("placed.vlb.geom", "w");
     check("write its sidecar", g != NULL);
     if (g) {
-        fputs("vlib-geometry 1\nrow 10 0 0 100\nrow 0 20 0 200\nrow 0 0 30 300\n", g);
+        fputs("vlib-geometry 1\ndims 4 3 2\nrow 10 0 0 100\nrow 0 20 0 200\nrow 0 0 30 300\n", g);
         fclose(g);
     }
     check("write bare.vlb (no sidecar)", write_vlb("bare.vlb"));
