@@ -316,7 +316,7 @@ impl Mapping {
 impl Mapping {
     /// The smallest and largest value of Φ(v, j) over all v in [lo, hi] (clamped to [0, 1]):
     /// exact, from the values at the ends and at every breakpoint inside, and for Φ_t the
-    /// output of every step the interval meets. Used to prove that a region is transparent.
+    /// output of every step the interval meets. It proves a region transparent.
     pub fn range(&self, lo: f32, hi: f32, j: usize) -> (f32, f32) {
         let clamp = |v: f32| if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
         let (lo, hi) = (clamp(lo), clamp(hi.max(lo)));

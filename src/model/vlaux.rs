@@ -1,4 +1,4 @@
-//! The auxiliary library ("vlaux"): procedural helpers used to build volume objects and
+//! The auxiliary library ("vlaux"): procedural helpers that build volume objects and
 //! textures. It owns Perlin's improved gradient noise and turbulence (with deterministic,
 //! seedable permutation tables), the Catmull-Rom `spline` of Ebert et al., and the analytic
 //! distance fields (`parab1`, `sphere`, `cylinder`) defined on the unit cube, and the rotational
