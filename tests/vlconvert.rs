@@ -229,10 +229,10 @@ fn writers_values(txt: &Path) -> Vec<f64> {
         .collect()
 }
 
-/// Converts fixture `tests/fixtures/<file>` with `vlconvert <sub>` and checks the dataset: 5 ×
-/// 4 × 3 nodes of `width` bytes whose normalised values are the writer's
+/// Converts fixture `tests/fixtures/<file>` with `vlconvert <sub>` and checks the dataset:
+/// `dims` nodes of `width` bytes whose normalised values are the writer's
 /// ([`assert_writers_values`]).
-fn converts_like_the_writer(sub: &str, file: &str, width: u32, exact: bool) {
+fn converts_like_the_writer(sub: &str, file: &str, dims: [usize; 3], width: u32, exact: bool) {
     let input = fixture(file);
     let want = writers_values(&fixture(&format!(
         "{}.txt",
@@ -247,9 +247,25 @@ fn converts_like_the_writer(sub: &str, file: &str, width: u32, exact: bool) {
         String::from_utf8_lossy(&o.stderr)
     );
     let v = Dataset::load(&out).unwrap();
-    assert_eq!(v.dims(), [5, 4, 3], "{file}");
+    assert_eq!(v.dims(), dims, "{file}");
     assert_eq!(v.raw().width(), width, "{file}");
     assert_writers_values(file, &v, &want, exact);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Converts the CT fixture `tests/fixtures/<file>` (whose values are in `<stem>.txt`) with
+/// `vlconvert <sub> --window -1000 2000`: Hounsfield units −1000 … 2000 to 0 … 1, clamped
+/// outside ([`assert_windowed`]).
+fn converts_in_a_ct_window(sub: &str, file: &str) {
+    let want = writers_values(&fixture(&format!(
+        "{}.txt",
+        file.rsplit_once('.').unwrap().0
+    )));
+    let d = tmp(&format!("window-{}", file.replace(['/', '.'], "-")));
+    let out = d.join("window.vlb");
+    let o = run(&[sub, s(&fixture(file)), s(&out), "--window", "-1000", "2000"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_windowed(&Dataset::load(&out).unwrap(), &want, -1000.0, 2000.0);
     std::fs::remove_dir_all(&d).unwrap();
 }
 
@@ -299,8 +315,6 @@ fn assert_windowed(v: &Dataset, want: &[f64], a: f64, b: f64) {
 /// 8-bit voxels, wider ones 16-bit. A window in data units (a CT's −1000 … 2000) clamps.
 #[test]
 fn nifti_of_every_type_converts_to_the_writers_values() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/nifti");
-    let d = tmp("nifti");
     let cases = [
         ("uint8", 1, true),
         ("int8", 1, true),
@@ -317,16 +331,10 @@ fn nifti_of_every_type_converts_to_the_writers_values() {
         ("float64", 2, false),
     ];
     for (name, width, exact) in cases {
-        converts_like_the_writer("nifti", &format!("nifti/{name}.nii"), width, exact);
+        let file = format!("nifti/{name}.nii");
+        converts_like_the_writer("nifti", &file, [5, 4, 3], width, exact);
     }
-    // A CT window: Hounsfield units −1000 … 2000 to 0 … 1, clamped outside.
-    let want = writers_values(&dir.join("int16_ct.txt"));
-    let out = d.join("window.vlb");
-    let nii = dir.join("int16_ct.nii");
-    let o = run(&["nifti", s(&nii), s(&out), "--window", "-1000", "2000"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_windowed(&Dataset::load(&out).unwrap(), &want, -1000.0, 2000.0);
-    std::fs::remove_dir_all(&d).unwrap();
+    converts_in_a_ct_window("nifti", "nifti/int16_ct.nii");
 }
 
 /// Raw volumes of signed and float types in either byte order: an int16 −1 is −1 (not 65535),
@@ -460,7 +468,7 @@ fn nrrd_of_every_encoding_converts_to_the_writers_values() {
         ("nrrd/int8_raw.nrrd", 1, true),
         ("nrrd/uint8_detached.nhdr", 1, true),
     ] {
-        converts_like_the_writer("nrrd", file, width, exact);
+        converts_like_the_writer("nrrd", file, [5, 4, 3], width, exact);
     }
     let d = tmp("nrrd-bad");
     let good = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/nrrd/int16_raw.nrrd");
@@ -592,8 +600,6 @@ fn the_format_is_told_from_the_file() {
 /// for NIfTI; a 2D image is one slab. A CT window (−1000 … 2000) clamps.
 #[test]
 fn metaimage_of_every_type_converts_to_the_writers_values() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/metaimage");
-    let d = tmp("metaimage");
     let cases = [
         ("int16_ct.mha", [5, 4, 3], 2, true),
         ("uint16.mhd", [5, 4, 3], 2, true),
@@ -605,27 +611,10 @@ fn metaimage_of_every_type_converts_to_the_writers_values() {
         ("uint8_2d.mha", [5, 4, 1], 1, true),
     ];
     for (file, dims, width, exact) in cases {
-        let name = file.split('.').next().unwrap();
-        let want = writers_values(&dir.join(format!("{name}.txt")));
-        let out = d.join(format!("{name}.vlb"));
-        let o = run(&["metaimage", s(&dir.join(file)), s(&out)]);
-        assert!(
-            o.status.success(),
-            "{file}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        let v = Dataset::load(&out).unwrap();
-        assert_eq!(v.dims(), dims, "{file}");
-        assert_eq!(v.raw().width(), width, "{file}");
-        assert_writers_values(file, &v, &want, exact);
+        let file = format!("metaimage/{file}");
+        converts_like_the_writer("metaimage", &file, dims, width, exact);
     }
-    let want = writers_values(&dir.join("int16_ct.txt"));
-    let out = d.join("window.vlb");
-    let mha = dir.join("int16_ct.mha");
-    let o = run(&["metaimage", s(&mha), s(&out), "--window", "-1000", "2000"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_windowed(&Dataset::load(&out).unwrap(), &want, -1000.0, 2000.0);
-    std::fs::remove_dir_all(&d).unwrap();
+    converts_in_a_ct_window("metaimage", "metaimage/int16_ct.mha");
 }
 
 /// Big-endian elements (`ElementByteOrderMSB = True`) at the end of their data file

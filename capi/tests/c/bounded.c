@@ -18,52 +18,8 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include "checks.h"
 #include <vlib.h>
-
-static int failures = 0;
-
-static void check(const char *what, int ok)
-{
-    printf("%-4s %s\n", ok ? "ok" : "FAIL", what);
-    if (!ok)
-        failures++;
-}
-
-static int exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
-/* Whether the current directory holds a temporary file of the library. */
-static int temporaries_left(void)
-{
-    DIR *d = opendir(".");
-    struct dirent *e;
-    int found = 0;
-    if (!d)
-        return 1;
-    while ((e = readdir(d)) != NULL)
-        if (strncmp(e->d_name, ".vl-", 4) == 0)
-            found = 1;
-    closedir(d);
-    return found;
-}
-
-/* The value (0 ... 255) of channel 0 of pixel (x, y) of a binary PPM of the given width;
-   -1 if unreadable. */
-static int ppm_red(const char *path, int width, int x, int y)
-{
-    FILE *f = fopen(path, "rb");
-    int w, h, max, c = -1;
-    if (!f)
-        return -1;
-    if (fscanf(f, "P6 %d %d %d", &w, &h, &max) == 3 && w == width && fgetc(f) != EOF &&
-        fseek(f, (long)(y * w + x) * 3, SEEK_CUR) == 0)
-        c = fgetc(f);
-    fclose(f);
-    return c;
-}
 
 /* ---- Facing mirrors ---- */
 

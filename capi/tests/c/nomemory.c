@@ -18,18 +18,9 @@
 #include <sys/stat.h>
 #include <sys/time.h>
 #include <unistd.h>
+#include "checks.h"
 #include <vlaux.h>
 #include <vlib.h>
-
-static int failures = 0;
-
-static void check(const char *what, int ok)
-{
-    printf("%-4s %s\n", ok ? "ok" : "FAIL", what);
-    fflush(stdout);
-    if (!ok)
-        failures++;
-}
 
 /* The codes vlError reports now, all of them; 1 if the queue held exactly `code` (or nothing,
  * for VL_NOERROR). */
@@ -43,14 +34,6 @@ static int only(vlint code)
         printf("     (vlError %d)\n", (int)e);
     }
     return code == VL_NOERROR ? n == 0 : n == 1 && first == code;
-}
-
-static void put_u32(unsigned char *p, unsigned long v)
-{
-    p[0] = (unsigned char)(v & 255);
-    p[1] = (unsigned char)((v >> 8) & 255);
-    p[2] = (unsigned char)((v >> 16) & 255);
-    p[3] = (unsigned char)((v >> 24) & 255);
 }
 
 /* A .vlb of nx·ny·nz one-byte voxels (a = 0, b = 255), the voxels a hole (ftruncate): the
@@ -87,49 +70,12 @@ static int poke_centre(const char *path, unsigned long n)
     return fd >= 0 && close(fd) == 0 && ok;
 }
 
-static double file_size(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0 ? (double)st.st_size : -1.0;
-}
-
 /* The peak resident memory so far, in KiB. */
 static long peak_kib(void)
 {
     struct rusage u;
     getrusage(RUSAGE_SELF, &u);
     return u.ru_maxrss;
-}
-
-/* The address space mapped now (VmSize of /proc/self/status), in bytes; 0 if unknown. */
-static double mapped_bytes(void)
-{
-    char line[256];
-    double kib = 0.0;
-    FILE *f = fopen("/proc/self/status", "r");
-    if (!f)
-        return 0.0;
-    while (fgets(line, sizeof line, f))
-        if (strncmp(line, "VmSize:", 7) == 0)
-            kib = atof(line + 7);
-    fclose(f);
-    return kib * 1024.0;
-}
-
-/* A scene of one object of constant fields voxelized at nx·ny·nz nodes over the unit box. */
-/* Whether the current directory holds a temporary file of the library. */
-static int temporaries_left(void)
-{
-    DIR *d = opendir(".");
-    struct dirent *e;
-    int found = 0;
-    if (!d)
-        return 1;
-    while ((e = readdir(d)) != NULL)
-        if (strncmp(e->d_name, ".vl-", 4) == 0)
-            found = 1;
-    closedir(d);
-    return found;
 }
 
 /* A scene of a small ball, rendered to `path` at side x side. */
@@ -145,6 +91,7 @@ static void image(const char *path, int side)
     vlEnd();
 }
 
+/* A scene of one object of constant fields voxelized at nx·ny·nz nodes over the unit box. */
 static void voxelize(const char *prefix, int nx, int ny, int nz)
 {
     vlScene();

@@ -9,25 +9,9 @@
  * capi/tests/memcheck.rs. */
 #include <stdio.h>
 #include <string.h>
+#include "checks.h"
 #include <vlaux.h>
 #include <vlib.h>
-
-static int failures = 0;
-
-static void check(const char *what, int ok)
-{
-    printf("%-4s %s\n", ok ? "ok" : "FAIL", what);
-    if (!ok)
-        failures++;
-}
-
-static void put_u32(unsigned char *p, unsigned long v)
-{
-    p[0] = (unsigned char)(v & 255);
-    p[1] = (unsigned char)((v >> 8) & 255);
-    p[2] = (unsigned char)((v >> 16) & 255);
-    p[3] = (unsigned char)((v >> 24) & 255);
-}
 
 /* A 4 x 3 x 2 .vlb of one-byte voxels, all 200 (a = 0, b = 255). */
 static int write_vlb(const char *path)
@@ -48,20 +32,6 @@ static int write_vlb(const char *path)
     memset(body, 200, sizeof body);
     ok = fwrite(h, 1, 28, f) == 28 && fwrite(body, 1, 24, f) == 24;
     return fclose(f) == 0 && ok;
-}
-
-/* The red channel of pixel (x, y) of a binary PPM `width` wide; -1 if unreadable. */
-static int ppm_red(const char *path, int width, int x, int y)
-{
-    FILE *f = fopen(path, "rb");
-    int w, h, max, c = -1;
-    if (!f)
-        return -1;
-    if (fscanf(f, "P6 %d %d %d", &w, &h, &max) == 3 && w == width && fgetc(f) != EOF &&
-        fseek(f, (long)(y * w + x) * 3, SEEK_CUR) == 0)
-        c = fgetc(f);
-    fclose(f);
-    return c;
 }
 
 int main(void)

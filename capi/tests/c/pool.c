@@ -11,38 +11,9 @@
 #include <string.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include "checks.h"
 #include <vlaux.h>
 #include <vlib.h>
-
-static int failures = 0;
-
-static void check(const char *what, int ok)
-{
-    printf("%-4s %s\n", ok ? "ok" : "FAIL", what);
-    if (!ok)
-        failures++;
-}
-
-static int exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
-/* The address space mapped now (VmSize of /proc/self/status), in bytes; 0 if unknown. */
-static double mapped_bytes(void)
-{
-    char line[256];
-    double kib = 0.0;
-    FILE *f = fopen("/proc/self/status", "r");
-    if (!f)
-        return 0.0;
-    while (fgets(line, sizeof line, f))
-        if (strncmp(line, "VmSize:", 7) == 0)
-            kib = atof(line + 7);
-    fclose(f);
-    return kib * 1024.0;
-}
 
 static void render(const char *path)
 {

@@ -1,0 +1,96 @@
+/* Helpers the test programs of capi/tests/c share: the ok/FAIL lines and their count, and
+ * small file queries. Each program includes it once ("checks.h", beside it) and uses what it
+ * needs; the functions are static and marked unused, so a program that needs some of them
+ * compiles clean with -Wall -Wextra -Werror. C89 with POSIX (dirent, stat). */
+#ifndef VLIB_TEST_CHECKS_H
+#define VLIB_TEST_CHECKS_H
+
+#include <dirent.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#define CHECKS_UNUSED __attribute__((unused))
+
+/* The number of checks that failed. */
+static int failures = 0;
+
+/* Prints one line, "ok" or "FAIL" and what was checked, and counts a failure. */
+static CHECKS_UNUSED void check(const char *what, int ok)
+{
+    printf("%-4s %s\n", ok ? "ok" : "FAIL", what);
+    fflush(stdout);
+    if (!ok)
+        failures++;
+}
+
+/* Whether `path` exists. */
+static CHECKS_UNUSED int exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+/* The size of the file at `path` in bytes; -1 if there is none. */
+static CHECKS_UNUSED double file_size(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 ? (double)st.st_size : -1.0;
+}
+
+/* Whether the current directory holds a temporary file of the library. */
+static CHECKS_UNUSED int temporaries_left(void)
+{
+    DIR *d = opendir(".");
+    struct dirent *e;
+    int found = 0;
+    if (!d)
+        return 1;
+    while ((e = readdir(d)) != NULL)
+        if (strncmp(e->d_name, ".vl-", 4) == 0)
+            found = 1;
+    closedir(d);
+    return found;
+}
+
+/* The value (0 ... 255) of channel 0 of pixel (x, y) of a binary PPM of the given width;
+   -1 if unreadable. */
+static CHECKS_UNUSED int ppm_red(const char *path, int width, int x, int y)
+{
+    FILE *f = fopen(path, "rb");
+    int w, h, max, c = -1;
+    if (!f)
+        return -1;
+    if (fscanf(f, "P6 %d %d %d", &w, &h, &max) == 3 && w == width && fgetc(f) != EOF &&
+        fseek(f, (long)(y * w + x) * 3, SEEK_CUR) == 0)
+        c = fgetc(f);
+    fclose(f);
+    return c;
+}
+
+/* Writes v as 4 little-endian bytes at p (a .vlb header's integers). */
+static CHECKS_UNUSED void put_u32(unsigned char *p, unsigned long v)
+{
+    p[0] = (unsigned char)(v & 255);
+    p[1] = (unsigned char)((v >> 8) & 255);
+    p[2] = (unsigned char)((v >> 16) & 255);
+    p[3] = (unsigned char)((v >> 24) & 255);
+}
+
+/* The address space mapped now (VmSize of /proc/self/status), in bytes; 0 if unknown. */
+static CHECKS_UNUSED double mapped_bytes(void)
+{
+    char line[256];
+    double kib = 0.0;
+    FILE *f = fopen("/proc/self/status", "r");
+    if (!f)
+        return 0.0;
+    while (fgets(line, sizeof line, f))
+        if (strncmp(line, "VmSize:", 7) == 0)
+            kib = atof(line + 7);
+    fclose(f);
+    return kib * 1024.0;
+}
+
+#endif
