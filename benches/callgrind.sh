@@ -10,7 +10,7 @@
 # valgrind does not run AVX-512, so this counts the eight-lane (AVX2) packet march.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release --quiet -p vlib --bin vlconvert --example mni
+cargo build --release --quiet -p vlconvert -p vlib-volume --bin vlconvert --example mni
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 mni=../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz

@@ -600,33 +600,7 @@ impl Brain {
 /// The MNI dataset: `$VLIB_MNI_VLB`, or `target/bench-data/mni.vlb`, converted from the NIfTI
 /// file in `../shared/data` with `vlconvert` (built first if needed) when missing.
 fn mni_dataset() -> Res<PathBuf> {
-    let path = mni_scene::dataset_path(|nii, vlb| {
-        let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-        let exe = root.join("target/release/vlconvert");
-        if !exe.exists() {
-            let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-            let st = std::process::Command::new(cargo)
-                .args(["build", "--release", "--bin", "vlconvert"])
-                .current_dir(&root)
-                .status()
-                .map_err(|e| format!("run cargo: {e}"))?;
-            if !st.success() {
-                return Err("cargo build --bin vlconvert failed".into());
-            }
-        }
-        let st = std::process::Command::new(&exe)
-            .arg("nifti")
-            .arg(nii)
-            .arg(vlb)
-            .status()
-            .map_err(|e| format!("run vlconvert: {e}"))?;
-        if st.success() {
-            Ok(())
-        } else {
-            Err(format!("vlconvert failed on {}", nii.display()))
-        }
-    })?;
-    Ok(path)
+    Ok(mni_scene::converted_dataset()?)
 }
 
 /// The hypertexture: a ball whose geometry field is a sphere's distance field displaced by

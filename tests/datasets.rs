@@ -8,6 +8,8 @@ use vlib::{Dataset, Filter, Voxels};
 
 #[path = "common/lcg.rs"]
 mod lcg;
+#[path = "../examples/common/mni_scene.rs"]
+mod mni_scene;
 use lcg::Lcg;
 
 /// A 40×36×32 volume of a few Gaussian blobs over an empty background, 8-bit.
@@ -327,28 +329,14 @@ fn mni_brain_renders_identically_with_and_without_skipping() {
         eprintln!("skipped: {nii} not found");
         return;
     }
-    let exe = std::env::current_exe().unwrap();
-    let bin = exe.parent().unwrap().parent().unwrap().join("vlconvert");
     let dir = std::env::temp_dir().join(format!("vlib-mni-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let vlb = dir.join("mni.vlb");
-    let st = std::process::Command::new(&bin)
-        .args(["nifti", nii])
-        .arg(&vlb)
-        .status()
-        .unwrap();
-    assert!(st.success());
-    let info = std::process::Command::new(&bin)
-        .arg("info")
-        .arg(&vlb)
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&info.stdout);
-    assert!(text.contains("197 x 233 x 189"), "{text}");
-    assert!(text.contains("voxel width: 1 byte"), "{text}");
+    mni_scene::vlconvert(&["nifti".as_ref(), nii.as_ref(), vlb.as_os_str()]).unwrap();
     let d = Dataset::load(&vlb).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
     let dims = d.dims();
+    assert_eq!(dims, [197, 233, 189]);
     let render = |skip: bool, lean_kernel: bool| {
         let mut vl = Library::new();
         vl.add_dataset(1, d.clone()).unwrap();

@@ -56,9 +56,8 @@ const ROOT: [(&str, &str); 32] = [
     ("RenderControl", "control"),
 ];
 
-/// The top-level modules that belong to no layer: the crate root, the binaries and the unit
-/// tests' helpers.
-const OUTSIDE: [&str; 3] = ["lib", "bin", "testing"];
+/// The top-level modules that belong to no layer: the crate root and the unit tests' helpers.
+const OUTSIDE: [&str; 2] = ["lib", "testing"];
 
 /// The rank of `name` (a top-level module of the crate or a name re-exported at its root), if
 /// it is in a layer.

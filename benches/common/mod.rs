@@ -17,19 +17,7 @@ use vlib::Optimise;
 /// use with `vlconvert` from `../shared/data/…nii.gz`. An error when neither the file nor the
 /// NIfTI source is there, or when the conversion fails.
 pub fn try_mni_dataset() -> Result<PathBuf, String> {
-    mni_scene::dataset_path(|nii, vlb| {
-        let st = std::process::Command::new(env!("CARGO_BIN_EXE_vlconvert"))
-            .arg("nifti")
-            .arg(nii)
-            .arg(vlb)
-            .status()
-            .map_err(|e| format!("run vlconvert: {e}"))?;
-        if st.success() {
-            Ok(())
-        } else {
-            Err(format!("vlconvert failed on {}", nii.display()))
-        }
-    })
+    mni_scene::converted_dataset()
 }
 
 /// [`try_mni_dataset`], panicking when it fails.

@@ -34,6 +34,45 @@ pub fn dataset_path(
     Ok(out)
 }
 
+/// Runs `vlconvert` (its own workspace package) with `args`, building it first with
+/// `cargo build --release -p vlconvert` (once per process; quick when it is up to date).
+pub fn vlconvert(args: &[&std::ffi::OsStr]) -> Result<(), String> {
+    use std::sync::OnceLock;
+    static BUILT: OnceLock<Result<PathBuf, String>> = OnceLock::new();
+    let exe = BUILT.get_or_init(|| {
+        let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+        let st = std::process::Command::new(cargo)
+            .args(["build", "--release", "--quiet", "-p", "vlconvert"])
+            .current_dir(&root)
+            .status()
+            .map_err(|e| format!("run cargo: {e}"))?;
+        if !st.success() {
+            return Err("cargo build -p vlconvert failed".into());
+        }
+        let target = std::env::var_os("CARGO_TARGET_DIR")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| root.join("target"));
+        Ok(target.join("release/vlconvert"))
+    });
+    let exe = exe.as_ref().map_err(Clone::clone)?;
+    let st = std::process::Command::new(exe)
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .map_err(|e| format!("run {}: {e}", exe.display()))?;
+    if st.success() {
+        Ok(())
+    } else {
+        Err(format!("vlconvert {args:?} failed"))
+    }
+}
+
+/// [`dataset_path`] with `vlconvert nifti` as the conversion.
+pub fn converted_dataset() -> Result<PathBuf, String> {
+    dataset_path(|nii, vlb| vlconvert(&["nifti".as_ref(), nii.as_os_str(), vlb.as_os_str()]))
+}
+
 /// Mapping ids used by the scene.
 const OPACITY: i32 = 1;
 const COLOUR: i32 = 2;

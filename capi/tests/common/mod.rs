@@ -62,16 +62,16 @@ pub fn ensure_libraries() -> &'static Path {
 }
 
 /// Makes sure the tools that prepare the C examples' datasets are fresh in `target/<profile>/`:
-/// `vlconvert` and the `word_png` and `profiles` examples (in `examples/`). `cargo test` builds
-/// them only when it tests the core package; this works for `cargo test -p vlib-capi` too.
+/// `vlconvert` (package `vlconvert`) and the `word_png` and `profiles` examples (in `examples/`).
+/// `cargo test` builds them only when it tests their packages; this works for
+/// `cargo test -p vlib-capi` too.
 pub fn ensure_tools() -> &'static Path {
     static BUILT: OnceLock<PathBuf> = OnceLock::new();
     BUILT.get_or_init(|| {
+        cargo_build(&["-p", "vlconvert"]);
         let dir = cargo_build(&[
             "-p",
-            "vlib",
-            "--bin",
-            "vlconvert",
+            "vlib-volume",
             "--example",
             "word_png",
             "--example",
@@ -328,7 +328,7 @@ pub fn prepare(source: &str, cwd: &Path) -> Vec<String> {
 /// Makes sure the Rust examples `names` are fresh in `target/<profile>/examples/`; returns
 /// `target/<profile>`.
 pub fn ensure_examples(names: &[&str]) -> PathBuf {
-    let mut args = vec!["-p", "vlib"];
+    let mut args = vec!["-p", "vlib-volume"];
     for n in names {
         args.extend(["--example", n]);
     }
