@@ -10,16 +10,16 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
 cargo build --release --workspace --lib --bins --examples
-mkdir -p out/bin
+mkdir -p out/bin out/inputs
 vlconvert=target/release/vlconvert
 # Inputs of the C examples, which run with cwd = out/: word.vlb (text.c) and the chess profiles
-# (chess.c).
+# (chess.c), drawn as PNGs in out/inputs/ and converted to datasets in out/.
 echo "== datasets"
-target/release/examples/word_png out/word.png
-"$vlconvert" image out/word.png out/word.vlb
-target/release/examples/profiles out
+target/release/examples/word_png out/inputs/word.png
+"$vlconvert" image out/inputs/word.png out/word.vlb
+target/release/examples/profiles out/inputs
 for piece in pawn rook knight knight_head bishop queen king; do
-  "$vlconvert" image "out/$piece.png" "out/$piece.vlb"
+  "$vlconvert" image "out/inputs/$piece.png" "out/$piece.vlb"
 done
 mni=../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz
 if [ -e "$mni" ]; then

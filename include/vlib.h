@@ -445,7 +445,9 @@ void vlDirectionalLight(vlfloat dx,
 void vlRenderType(vlint type);
 
 /*
- Sets the world-space sampling interval and the interval over which opacity is exact.
+ Sets the world-space sampling interval and the interval over which opacity is exact. Until it
+ is called, the reference is 1 and each object samples at min(1, d / 256), d the diagonal of
+ its world box (docs/compat.md, "The default step").
  */
 void vlStepSize(vlfloat step, vlfloat reference);
 

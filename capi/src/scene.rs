@@ -167,7 +167,9 @@ pub extern "C" fn vlRenderType(r#type: vlint) {
     })
 }
 
-/// Sets the world-space sampling interval and the interval over which opacity is exact.
+/// Sets the world-space sampling interval and the interval over which opacity is exact. Until it
+/// is called, the reference is 1 and each object samples at min(1, d / 256), d the diagonal of
+/// its world box (docs/compat.md, "The default step").
 #[no_mangle]
 pub extern "C" fn vlStepSize(step: vlfloat, reference: vlfloat) {
     ffi_boundary((), || {

@@ -134,6 +134,30 @@ fn gallery_images_are_byte_identical() {
     assert!(wrong.is_empty(), "images changed:\n{}", wrong.join("\n"));
 }
 
+/// The Rust `figure2` example and the paper's C Figure 2 are one scene: the same bytes.
+#[test]
+fn figure2_in_rust_and_in_c_write_the_same_image() {
+    let got = render_gallery_figure2();
+    assert_eq!(got.0, got.1, "Rust's stone.ppm differs from C's");
+}
+
+/// Renders Figure 2 in C and in Rust; returns both `stone.ppm` files' bytes.
+fn render_gallery_figure2() -> (Vec<u8>, Vec<u8>) {
+    let bin = TempDir::new("figure2-bin");
+    let exe = common::compile_c("examples/c/figure2.c", bin.path(), &[]);
+    let c = TempDir::new("figure2-c");
+    common::run(&exe, c.path(), &[]);
+    let rust = TempDir::new("figure2-rust");
+    let examples = common::ensure_examples(&["figure2"]).join("examples");
+    common::run(
+        &examples.join("figure2"),
+        rust.path(),
+        &["stone.ppm".into()],
+    );
+    let read = |d: &TempDir| std::fs::read(d.path().join("stone.ppm")).expect("stone.ppm");
+    (read(&c), read(&rust))
+}
+
 /// Whether `name` is one of the images that need the MNI template.
 fn is_brain(name: &str) -> bool {
     ["mni/", "twisted_brain/", "mip_brain/"]

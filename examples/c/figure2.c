@@ -73,8 +73,12 @@ vlEnd();
     /* ---- end of Figure 2; ours: report the errors and exit with 0 ---- */
     {
         vlint e;
-        while ((e = vlError()) != VL_NOERROR)
-            printf("vlError: %d (%s)\n", (int)e, vlErrorString(e));
+        while ((e = vlError()) != VL_NOERROR) {
+            printf("vlError: %d (%s)", (int)e, vlErrorString(e));
+            if (e == VL_BADINDEX)
+                printf(": expected, the paper's line 20 asks for output 2 of a one-output table");
+            printf("\n");
+        }
     }
     return 0;
 }

@@ -430,12 +430,17 @@ impl Library {
     }
 
     /// `vlStepSize`: world-space sampling interval and the interval over which opacity is exact;
-    /// both finite and positive.
+    /// both finite and positive, captured by later objects.
+    ///
+    /// Until it is called, the reference is 1 world unit and each object samples at
+    /// min(1, d / 256) for its world box's diagonal d: 256 samples along the diagonal of a small
+    /// object, and the step of 1 for objects over 256 units across, as in the paper's scenes
+    /// (`docs/compat.md`, "The default step").
     pub fn step_size(&mut self, step: f32, reference: f32) -> Result<()> {
         self.check(Command::StepSize)?;
         positive("vlStepSize", &[step, reference])?;
         let r = &mut self.settings_mut().render;
-        r.step = step;
+        r.step = Some(step);
         r.reference = reference;
         Ok(())
     }

@@ -115,16 +115,21 @@ pub enum Light {
     },
 }
 
-/// Default sampling interval and opacity reference, in world units.
+/// Default opacity reference, and the largest default sampling interval, in world units.
 pub const DEFAULT_STEP: f32 = 1.0;
+
+/// An object whose step was never set samples its world box's diagonal this many times, at a
+/// step of at most [`DEFAULT_STEP`] (see [`RenderState::step_for`]).
+pub const DEFAULT_SAMPLES_PER_DIAGONAL: f64 = 256.0;
 
 /// The rendering state an object captures at its `vlObject`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderState {
     /// Rendering algorithm.
     pub render_type: RenderType,
-    /// World-space sampling interval.
-    pub step: f32,
+    /// World-space sampling interval; `None` until `vlStepSize` sets it: then
+    /// [`RenderState::step_for`] derives it from the object's size.
+    pub step: Option<f32>,
     /// World-space interval over which opacity is exact.
     pub reference: f32,
     /// Iso-surfaces: (field index, threshold).
@@ -148,7 +153,7 @@ impl Default for RenderState {
         toggles[Feature::Visible as usize] = true;
         RenderState {
             render_type: RenderType::Dvr,
-            step: DEFAULT_STEP,
+            step: None,
             reference: DEFAULT_STEP,
             surfaces: Vec::new(),
             toggles,
@@ -161,6 +166,21 @@ impl Default for RenderState {
 }
 
 impl RenderState {
+    /// The sampling interval of an object whose world box has diagonal `diagonal`: the step
+    /// `vlStepSize` set, or else min([`DEFAULT_STEP`], diagonal / [`DEFAULT_SAMPLES_PER_DIAGONAL`]),
+    /// so that a unit-scale object is not undersampled while a scene of hundreds of units (the
+    /// paper's) keeps the step of 1. A degenerate box (diagonal 0 or not finite) takes
+    /// [`DEFAULT_STEP`].
+    pub fn step_for(&self, diagonal: f64) -> f64 {
+        match self.step {
+            Some(s) => s as f64,
+            None if diagonal.is_finite() && diagonal > 0.0 => {
+                (diagonal / DEFAULT_SAMPLES_PER_DIAGONAL).min(DEFAULT_STEP as f64)
+            }
+            None => DEFAULT_STEP as f64,
+        }
+    }
+
     /// The state of one toggle.
     pub fn toggle(&self, f: Feature) -> bool {
         self.toggles[f as usize]
@@ -377,3 +397,6 @@ pub struct SceneDesc {
     /// The library's datasets when the scene closed (for `vlSample` in field functions).
     pub datasets: std::sync::Arc<crate::model::program::Datasets>,
 }
+
+#[cfg(test)]
+mod tests;

@@ -107,7 +107,11 @@ impl CObj {
         let b = crate::model::scene::v3(o.boundary);
         let box_min = DVec3::splat(0.5) - b * 0.5;
         let box_max = DVec3::splat(0.5) + b * 0.5;
-        let step = o.state.step as f64;
+        let diagonal = (0..3)
+            .map(|i| (to_world.col(i).truncate().length() * b[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let step = o.state.step_for(diagonal);
         let delta = match o.state.neighborhood {
             Some(d) => crate::model::scene::v3(d),
             None => {
