@@ -13,6 +13,7 @@ use std::fmt;
 /// The error codes. The discriminant is the number `vlError` returns in C.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(i32)]
+#[non_exhaustive]
 pub enum ErrorCode {
     /// No error (`VL_NOERROR`).
     NoError = 0,

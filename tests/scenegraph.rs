@@ -98,6 +98,7 @@ fn cvg_operators_voxelize_to_their_definitions_node_by_node() {
                         Operator::Intersection => o[0].min(o[1]),
                         Operator::Difference => o[0].min(1.0 - o[1]),
                         Operator::Blend => 1.0 - (1.0 - o[0]) * (1.0 - o[1]),
+                        other => panic!("no closed form for {other:?}"),
                     };
                     let got = d.node(i, j, k) as f64;
                     // 16-bit quantisation (7.6e-6) plus f32 evaluation.

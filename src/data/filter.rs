@@ -19,6 +19,7 @@ use crate::types::Interpolation;
 
 /// An interpolation filter with its parameters.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[non_exhaustive]
 pub enum Filter {
     /// The nearest node.
     Nearest,

@@ -57,6 +57,7 @@ pub const MAX_VOXELS: u64 = 1 << 32;
 
 /// The raw voxels of a dataset, as stored in the file.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum Voxels {
     /// One byte per voxel.
     U8(Vec<u8>),

@@ -23,6 +23,7 @@ use crate::Result;
 
 /// The operators.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Operator {
     /// max opacity.
     Union,

@@ -111,6 +111,7 @@ pub(crate) fn sample_dataset(
 
 /// What a sample's callback may do (the sample scope of the state machine).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum SampleRole {
     /// A field function: may write the fields of its mask.
     Field,
