@@ -26,6 +26,7 @@ mod common;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use std::time::Duration;
+use vlib::MappingId;
 use vlib::{vlaux, Attenuation, Camera, Feature, Fields, Library, MappingType, RenderType};
 
 /// Image size of the scene benchmarks.
@@ -61,8 +62,14 @@ fn figure2() -> Library {
     })
     .unwrap();
     vl.background(1.0, 1.0, 1.0).unwrap();
-    vl.mapping(1, MappingType::Lookup, 2, 1, &[0.001, 1.0, 1.0, 0.3])
-        .unwrap();
+    vl.mapping(
+        MappingId(1),
+        MappingType::Lookup,
+        2,
+        1,
+        &[0.001, 1.0, 1.0, 0.3],
+    )
+    .unwrap();
     vl.point_light([-200.0, 380.0, -200.0], Attenuation::None, white, 1.0)
         .unwrap();
     vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
@@ -72,7 +79,7 @@ fn figure2() -> Library {
         let _ = s.set(Fields::F, vlaux::parab1(s.position()));
     })
     .unwrap();
-    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
     // (The paper's `vlMap(VL_KS, VL_F, 1, 2)` is refused and changes nothing: left out.)
     vl.function(Fields::COLORS, stone).unwrap();
     vl.set(Fields::KA, 0.3).unwrap();
@@ -155,7 +162,8 @@ fn dsr() -> Library {
         0.545, 0.3, 0.5, 0.75, 1.0,
         1.0, 1.0, 0.9, 0.2, 0.12,
     ];
-    vl.mapping(1, MappingType::Lookup, 3, 4, &table).unwrap();
+    vl.mapping(MappingId(1), MappingType::Lookup, 3, 4, &table)
+        .unwrap();
     vl.scene().unwrap();
     vl.camera(&Camera {
         eye: [-60.0, 90.0, -330.0],
@@ -190,10 +198,10 @@ fn dsr() -> Library {
         let _ = s.set(Fields::F, f);
     })
     .unwrap();
-    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
-    vl.map(Fields::R, Fields::F, 1, 2).unwrap();
-    vl.map(Fields::G, Fields::F, 1, 3).unwrap();
-    vl.map(Fields::B, Fields::F, 1, 4).unwrap();
+    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
+    vl.map(Fields::R, Fields::F, MappingId(1), 2).unwrap();
+    vl.map(Fields::G, Fields::F, MappingId(1), 3).unwrap();
+    vl.map(Fields::B, Fields::F, MappingId(1), 4).unwrap();
     vl.set(Fields::KA, 0.6).unwrap();
     vl.set(Fields::KD, 0.7).unwrap();
     vl.set(Fields::KS, 0.5).unwrap();

@@ -29,6 +29,7 @@ use vlib::Dataset;
 use vlib::{
     vlaux, Attenuation, Camera, Fields, Image, Interpolation, Library, MappingType, RenderType,
 };
+use vlib::{DatasetId, MappingId};
 
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
 
@@ -394,7 +395,7 @@ fn slab_scene(vl: &mut Library, step: f32, linear: bool) -> vlib::Result<()> {
     if linear {
         let (a, b) = (RAMP_C0, RAMP_C1);
         vl.mapping(
-            1,
+            MappingId(1),
             MappingType::Ramp,
             2,
             3,
@@ -421,9 +422,9 @@ fn slab_scene(vl: &mut Library, step: f32, linear: bool) -> vlib::Result<()> {
             let z = s.position()[2];
             let _ = s.set(Fields::F, 0.25 + 0.5 * z);
         })?;
-        vl.map(Fields::R, Fields::F, 1, 1)?;
-        vl.map(Fields::G, Fields::F, 1, 2)?;
-        vl.map(Fields::B, Fields::F, 1, 3)?;
+        vl.map(Fields::R, Fields::F, MappingId(1), 1)?;
+        vl.map(Fields::G, Fields::F, MappingId(1), 2)?;
+        vl.map(Fields::B, Fields::F, MappingId(1), 3)?;
     } else {
         vl.set(Fields::O, CONST_O)?;
         vl.set(Fields::R, CONST_C[0])?;
@@ -638,7 +639,13 @@ fn hyper_fields(s: &mut vlib::Sample) {
 
 /// Camera, lights and opacity mapping of the hypertexture; opens the scene.
 fn hyper_setup(vl: &mut Library, cfg: Cfg) -> vlib::Result<()> {
-    vl.mapping(1, MappingType::Ramp, 2, 1, &[0.45, 0.0, 0.55, 0.9])?;
+    vl.mapping(
+        MappingId(1),
+        MappingType::Ramp,
+        2,
+        1,
+        &[0.45, 0.0, 0.55, 0.9],
+    )?;
     vl.scene()?;
     vl.camera(&Camera {
         eye: [50.0, 80.0, -120.0],
@@ -666,7 +673,7 @@ fn hyper_direct(cfg: Cfg) -> Res<Library> {
     vl.object()?;
     vl.scale(HYPER, HYPER, HYPER)?;
     vl.function(Fields::F | Fields::COLORS, hyper_fields)?;
-    vl.map(Fields::O, Fields::F, 1, 1)?;
+    vl.map(Fields::O, Fields::F, MappingId(1), 1)?;
     hyper_constants(&mut vl)?;
     vl.end()?;
     Ok(vl)
@@ -709,16 +716,16 @@ fn hyper_voxelize(n: i32, dir: &Path) -> Res<([Arc<Dataset>; 4], f64)> {
 fn hyper_voxel(data: &[Arc<Dataset>; 4], cfg: Cfg) -> Res<Library> {
     let mut vl = Library::new();
     for (i, d) in data.iter().enumerate() {
-        vl.add_dataset(10 + i as i32, d.clone())?;
+        vl.add_dataset(DatasetId(10 + i as i32), d.clone())?;
     }
     hyper_setup(&mut vl, cfg)?;
     vl.object()?;
     vl.scale(HYPER, HYPER, HYPER)?;
-    vl.dataset(Fields::F, 10)?;
-    vl.map(Fields::O, Fields::F, 1, 1)?;
-    vl.dataset(Fields::R, 11)?;
-    vl.dataset(Fields::G, 12)?;
-    vl.dataset(Fields::B, 13)?;
+    vl.dataset(Fields::F, DatasetId(10))?;
+    vl.map(Fields::O, Fields::F, MappingId(1), 1)?;
+    vl.dataset(Fields::R, DatasetId(11))?;
+    vl.dataset(Fields::G, DatasetId(12))?;
+    vl.dataset(Fields::B, DatasetId(13))?;
     hyper_constants(&mut vl)?;
     vl.end()?;
     Ok(vl)

@@ -8,6 +8,7 @@
 
 #[path = "common/say.rs"]
 mod say;
+use vlib::MappingId;
 use vlib::{vlaux, Attenuation, Camera, Fields, Library, MappingType};
 
 /// Granite, as `stone` in `examples/c/figure2.c` computes it, operation for operation in f32,
@@ -56,7 +57,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     })?;
     vl.image(&out, 1.0, 100, 100)?;
     vl.background(1.0, 1.0, 1.0)?;
-    vl.mapping(1, MappingType::Lookup, 2, 1, &[0.001, 1.0, 1.0, 0.3])?;
+    vl.mapping(
+        MappingId(1),
+        MappingType::Lookup,
+        2,
+        1,
+        &[0.001, 1.0, 1.0, 0.3],
+    )?;
     vl.point_light([-200.0, 380.0, -200.0], Attenuation::None, white, 1.0)?;
     vl.ambient(1.0, 1.0, 1.0, 1.0)?;
     vl.object()?;
@@ -64,11 +71,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     vl.function(Fields::F, |s| {
         let _ = s.set(Fields::F, vlaux::parab1(s.position()));
     })?;
-    vl.map(Fields::O, Fields::F, 1, 1)?;
+    vl.map(Fields::O, Fields::F, MappingId(1), 1)?;
     // The paper's line 20 asks for output 2 of this one-output table: an error that changes
     // nothing (`examples/c/figure2.c` reports it through vlError). It is kept so that both
     // programs run the same commands; the error is expected and not reported here.
-    let refused = vl.map(Fields::KS, Fields::F, 1, 2);
+    let refused = vl.map(Fields::KS, Fields::F, MappingId(1), 2);
     debug_assert!(refused.is_err());
     vl.function(Fields::COLORS, stone)?;
     vl.set(Fields::KA, 0.3)?;

@@ -38,10 +38,11 @@ mod mni_scene;
 #[path = "common/say.rs"]
 mod say;
 use std::time::Instant;
+use vlib::MappingId;
 use vlib::{Camera, Fields, Library, MappingType, RenderType};
 
 /// Mapping id of the opacity ramp.
-const OPACITY: i32 = 10;
+const OPACITY: MappingId = MappingId(10);
 
 /// The opacity ramp on the normalised scale (value / 255): `(value, opacity)` points; Φ_r
 /// adds the segments from (0, 0) to the first point and from the last to (1, 1).

@@ -10,6 +10,7 @@
 mod say;
 use std::time::Instant;
 use vlib::{Attenuation, Camera, Fields, Image, Library, MappingType};
+use vlib::{DatasetId, MappingId};
 
 const SIZE: u32 = 256;
 const WORLD: f32 = 100.0;
@@ -19,7 +20,7 @@ fn define(vl: &mut Library) -> Result<(), vlib::Error> {
     vl.function(Fields::F, |s| {
         let _ = s.set(Fields::F, vlib::vlaux::parab1(s.position()));
     })?;
-    vl.map(Fields::O, Fields::F, 1, 1)?;
+    vl.map(Fields::O, Fields::F, MappingId(1), 1)?;
     vl.function(Fields::COLORS, |s| {
         let p = s.position();
         let band = 0.5 + 0.5 * (10.0 * (p[0] + 0.6 * p[1]) + 4.0 * p[2]).sin();
@@ -31,7 +32,13 @@ fn define(vl: &mut Library) -> Result<(), vlib::Error> {
 }
 
 fn setup(vl: &mut Library) -> Result<(), vlib::Error> {
-    vl.mapping(1, MappingType::Ramp, 2, 1, &[0.05, 0.0, 0.15, 0.8])?;
+    vl.mapping(
+        MappingId(1),
+        MappingType::Ramp,
+        2,
+        1,
+        &[0.05, 0.0, 0.15, 0.8],
+    )?;
     vl.scene()?;
     vl.camera(&Camera {
         eye: [50.0, 80.0, -120.0],
@@ -84,16 +91,16 @@ fn voxelized(n: i32, dir: &std::path::Path) -> Result<(Image, f64, f64), vlib::E
     for (id, name) in [(1, "o"), (2, "r"), (3, "g"), (4, "b"), (5, "f")] {
         let mut file = prefix.as_os_str().to_owned();
         file.push(format!("_{name}.vlb"));
-        vl.load(id, std::path::PathBuf::from(file))?;
+        vl.load(DatasetId(id), std::path::PathBuf::from(file))?;
     }
     setup(&mut vl)?;
     vl.object()?;
     vl.scale(WORLD, WORLD, WORLD)?;
-    vl.dataset(Fields::F, 5)?;
-    vl.dataset(Fields::O, 1)?;
-    vl.dataset(Fields::R, 2)?;
-    vl.dataset(Fields::G, 3)?;
-    vl.dataset(Fields::B, 4)?;
+    vl.dataset(Fields::F, DatasetId(5))?;
+    vl.dataset(Fields::O, DatasetId(1))?;
+    vl.dataset(Fields::R, DatasetId(2))?;
+    vl.dataset(Fields::G, DatasetId(3))?;
+    vl.dataset(Fields::B, DatasetId(4))?;
     constants(&mut vl)?;
     vl.end()?;
     let t = Instant::now();

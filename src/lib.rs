@@ -61,7 +61,10 @@ pub use model::scene::{Camera, Optimise, DEFAULT_FOV};
 pub use model::{cvg, vlaux};
 pub use output::{write_atomic, write_image};
 pub use render::{Image, Plan};
-pub use types::{Attenuation, Feature, Fields, Interpolation, MappingType, RenderType, T_MIN};
+pub use types::{
+    Attenuation, DatasetId, Feature, Fields, Interpolation, MappingId, MappingType, RenderType,
+    T_MIN,
+};
 
 /// The library's limits on what a call may ask for (`docs/commands.md`,
 /// `docs/dev/robustness.md`): larger requests are refused (with `VL_BADVALUE`, or

@@ -159,6 +159,27 @@ pub fn refraction_to_field(eta: f32) -> f32 {
     (eta - 1.0) / (MAX_REFRACTION - 1.0)
 }
 
+/// A dataset's id: the integer `vlLoad`, `vlDataset`, `vlUnload` and `vlSample` take in C.
+/// Any `i32`; ids name datasets, they do not count them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct DatasetId(pub i32);
+
+/// A transfer function's id: the integer `vlMapping` declares and `vlMap` names in C. Any `i32`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct MappingId(pub i32);
+
+impl fmt::Display for DatasetId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl fmt::Display for MappingId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
 macro_rules! int_enum {
     ($(#[$doc:meta])* $name:ident, $what:literal { $($(#[$vdoc:meta])* $variant:ident = $value:literal),+ $(,)? }) => {
         $(#[$doc])*

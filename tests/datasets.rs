@@ -5,6 +5,7 @@ use std::sync::{Arc, Mutex};
 use vlib::Optimise;
 use vlib::{Camera, Fields, Interpolation, Library, MappingType};
 use vlib::{Dataset, Filter, Voxels};
+use vlib::{DatasetId, MappingId};
 
 #[path = "common/lcg.rs"]
 mod lcg;
@@ -86,9 +87,15 @@ fn blob_scene_in(
     super_sample: i32,
 ) -> Vec<u8> {
     let mut vl = Library::new();
-    vl.add_dataset(7, data).unwrap();
-    vl.mapping(1, MappingType::Ramp, 3, 1, &[0.3, 0.0, 0.6, 0.5, 0.9, 0.9])
-        .unwrap();
+    vl.add_dataset(DatasetId(7), data).unwrap();
+    vl.mapping(
+        MappingId(1),
+        MappingType::Ramp,
+        3,
+        1,
+        &[0.3, 0.0, 0.6, 0.5, 0.9, 0.9],
+    )
+    .unwrap();
     vl.scene().unwrap();
     vl.set_optimise(optimise).unwrap();
     vl.super_sample(super_sample).unwrap();
@@ -112,8 +119,8 @@ fn blob_scene_in(
     vl.rotate(view.rotate[0], view.rotate[1], view.rotate[2])
         .unwrap();
     vl.boundary(boundary, boundary, boundary).unwrap();
-    vl.dataset(Fields::F, 7).unwrap();
-    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+    vl.dataset(Fields::F, DatasetId(7)).unwrap();
+    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
     vl.set(Fields::COLORS | Fields::KA | Fields::KD, 0.8)
         .unwrap();
     vl.end().unwrap();
@@ -237,7 +244,7 @@ fn termination_thresholds_outside_zero_to_one_are_refused() {
 fn vl_sample_matches_direct_evaluation() {
     let d = blobs();
     let mut vl = Library::new();
-    vl.add_dataset(3, d.clone()).unwrap();
+    vl.add_dataset(DatasetId(3), d.clone()).unwrap();
     let mut rng = Lcg(11);
     for (interp, filter) in [
         (Interpolation::Nearest, Filter::Nearest),
@@ -247,15 +254,20 @@ fn vl_sample_matches_direct_evaluation() {
         vl.interpolation(interp).unwrap();
         for _ in 0..500 {
             let p = [rng.next() as f32, rng.next() as f32, rng.next() as f32];
-            assert_eq!(vl.sample(3, p[0], p[1], p[2]).unwrap(), d.sample(p, filter));
+            assert_eq!(
+                vl.sample(DatasetId(3), p[0], p[1], p[2]).unwrap(),
+                d.sample(p, filter)
+            );
         }
     }
     assert_eq!(
-        vl.sample(4, 0.5, 0.5, 0.5).unwrap_err().code,
+        vl.sample(DatasetId(4), 0.5, 0.5, 0.5).unwrap_err().code,
         vlib::ErrorCode::BadId
     );
     assert_eq!(
-        vl.sample(3, f32::NAN, 0.5, 0.5).unwrap_err().code,
+        vl.sample(DatasetId(3), f32::NAN, 0.5, 0.5)
+            .unwrap_err()
+            .code,
         vlib::ErrorCode::BadValue
     );
 }
@@ -266,7 +278,7 @@ fn vl_sample_inside_a_field_function_uses_the_objects_interpolation() {
     type Log = Arc<Mutex<Vec<([f32; 3], f32)>>>;
     let seen: Log = Arc::default();
     let mut vl = Library::new();
-    vl.add_dataset(3, d.clone()).unwrap();
+    vl.add_dataset(DatasetId(3), d.clone()).unwrap();
     vl.scene().unwrap();
     vl.interpolation(Interpolation::Nearest).unwrap();
     vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
@@ -274,7 +286,7 @@ fn vl_sample_inside_a_field_function_uses_the_objects_interpolation() {
     let log = seen.clone();
     vl.function(Fields::O, move |s| {
         let p = s.position();
-        let v = s.dataset(3, p).unwrap();
+        let v = s.dataset(DatasetId(3), p).unwrap();
         let mut l = log.lock().unwrap();
         if l.len() < 200 {
             l.push((p, v));
@@ -295,26 +307,32 @@ fn vl_sample_inside_a_field_function_uses_the_objects_interpolation() {
 fn dataset_commands_validate() {
     use vlib::ErrorCode;
     let mut vl = Library::new();
-    assert_eq!(vl.unload(1).unwrap_err().code, ErrorCode::BadId);
+    assert_eq!(vl.unload(DatasetId(1)).unwrap_err().code, ErrorCode::BadId);
     assert_eq!(
-        vl.load(1, "/no/such/file.vlb").unwrap_err().code,
+        vl.load(DatasetId(1), "/no/such/file.vlb").unwrap_err().code,
         ErrorCode::IoError
     );
-    vl.add_dataset(1, blobs()).unwrap();
+    vl.add_dataset(DatasetId(1), blobs()).unwrap();
     vl.scene().unwrap();
     vl.object().unwrap();
-    assert_eq!(vl.dataset(Fields::O, 2).unwrap_err().code, ErrorCode::BadId);
     assert_eq!(
-        vl.dataset(Fields::NONE, 1).unwrap_err().code,
+        vl.dataset(Fields::O, DatasetId(2)).unwrap_err().code,
+        ErrorCode::BadId
+    );
+    assert_eq!(
+        vl.dataset(Fields::NONE, DatasetId(1)).unwrap_err().code,
         ErrorCode::BadField
     );
     let before = vl.fingerprint();
-    assert_eq!(vl.load(2, "x.vlb").unwrap_err().code, ErrorCode::BadScope);
+    assert_eq!(
+        vl.load(DatasetId(2), "x.vlb").unwrap_err().code,
+        ErrorCode::BadScope
+    );
     assert_eq!(vl.fingerprint(), before);
-    vl.dataset(Fields::O, 1).unwrap();
+    vl.dataset(Fields::O, DatasetId(1)).unwrap();
     vl.end().unwrap();
     // Unloading keeps objects that already cast the dataset working.
-    vl.unload(1).unwrap();
+    vl.unload(DatasetId(1)).unwrap();
     assert!(vl.render_preview(4, 4, 1.0).is_ok());
 }
 
@@ -339,7 +357,7 @@ fn mni_brain_renders_identically_with_and_without_skipping() {
     assert_eq!(dims, [197, 233, 189]);
     let render = |skip: bool, lean_kernel: bool| {
         let mut vl = Library::new();
-        vl.add_dataset(1, d.clone()).unwrap();
+        vl.add_dataset(DatasetId(1), d.clone()).unwrap();
         let op: Vec<f32> = [
             (40.0, 0.0),
             (80.0, 0.1),
@@ -350,7 +368,8 @@ fn mni_brain_renders_identically_with_and_without_skipping() {
         .iter()
         .flat_map(|&(s, a): &(f32, f32)| [s / 255.0, a])
         .collect();
-        vl.mapping(1, MappingType::Ramp, 5, 1, &op).unwrap();
+        vl.mapping(MappingId(1), MappingType::Ramp, 5, 1, &op)
+            .unwrap();
         vl.scene().unwrap();
         vl.set_optimise(Optimise {
             skip_empty: skip,
@@ -380,8 +399,8 @@ fn mni_brain_renders_identically_with_and_without_skipping() {
             (dims[2] - 1) as f32,
         )
         .unwrap();
-        vl.dataset(Fields::F, 1).unwrap();
-        vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+        vl.dataset(Fields::F, DatasetId(1)).unwrap();
+        vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
         vl.set(Fields::COLORS, 0.9).unwrap();
         vl.set(Fields::KA, 0.2).unwrap();
         vl.set(Fields::KD, 0.7).unwrap();
@@ -403,8 +422,8 @@ fn mni_brain_renders_identically_with_and_without_skipping() {
 fn mip_with_skipping_is_identical_to_mip_without() {
     let render = |skip_empty: bool| {
         let mut vl = Library::new();
-        vl.add_dataset(7, blobs()).unwrap();
-        vl.mapping(1, MappingType::Ramp, 2, 1, &[0.3, 0.0, 0.9, 0.9])
+        vl.add_dataset(DatasetId(7), blobs()).unwrap();
+        vl.mapping(MappingId(1), MappingType::Ramp, 2, 1, &[0.3, 0.0, 0.9, 0.9])
             .unwrap();
         vl.scene().unwrap();
         vl.set_optimise(Optimise {
@@ -425,8 +444,8 @@ fn mip_with_skipping_is_identical_to_mip_without() {
         vl.object().unwrap();
         vl.translate(-0.5, -0.5, -0.5).unwrap();
         vl.scale(39.0, 35.0, 31.0).unwrap();
-        vl.dataset(Fields::F, 7).unwrap();
-        vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+        vl.dataset(Fields::F, DatasetId(7)).unwrap();
+        vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
         vl.set(Fields::COLORS, 1.0).unwrap();
         vl.end().unwrap();
         vl.render_preview(48, 36, 48.0 / 36.0).unwrap().to_rgb8()
@@ -455,7 +474,9 @@ fn sizes_whose_product_overflows_are_refused_before_allocating() {
     // The same for a voxelization request, and a directory is not a dataset.
     let mut vl = Library::new();
     assert_eq!(
-        vl.load(1, std::env::temp_dir()).unwrap_err().code,
+        vl.load(DatasetId(1), std::env::temp_dir())
+            .unwrap_err()
+            .code,
         ErrorCode::IoError
     );
     vl.scene().unwrap();
@@ -497,11 +518,11 @@ fn sizes_whose_product_overflows_are_refused_before_allocating() {
 fn lean_kernel_changes_no_pixel() {
     let render = |lean_kernel: bool, two: bool, mip: bool| {
         let mut vl = Library::new();
-        vl.add_dataset(7, blobs()).unwrap();
-        vl.mapping(1, MappingType::Ramp, 2, 1, &[0.3, 0.0, 0.9, 0.9])
+        vl.add_dataset(DatasetId(7), blobs()).unwrap();
+        vl.mapping(MappingId(1), MappingType::Ramp, 2, 1, &[0.3, 0.0, 0.9, 0.9])
             .unwrap();
         vl.mapping(
-            2,
+            MappingId(2),
             MappingType::Ramp,
             3,
             3,
@@ -543,11 +564,11 @@ fn lean_kernel_changes_no_pixel() {
             vl.object().unwrap();
             vl.translate(-0.5 + 0.3 * i as f32, -0.5, -0.5).unwrap();
             vl.scale(39.0, 35.0, 31.0).unwrap();
-            vl.dataset(Fields::F, 7).unwrap();
-            vl.map(Fields::O, Fields::F, 1, 1).unwrap();
-            vl.map(Fields::R, Fields::F, 2, 1).unwrap();
-            vl.map(Fields::G, Fields::F, 2, 2).unwrap();
-            vl.map(Fields::B, Fields::F, 2, 3).unwrap();
+            vl.dataset(Fields::F, DatasetId(7)).unwrap();
+            vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
+            vl.map(Fields::R, Fields::F, MappingId(2), 1).unwrap();
+            vl.map(Fields::G, Fields::F, MappingId(2), 2).unwrap();
+            vl.map(Fields::B, Fields::F, MappingId(2), 3).unwrap();
             vl.set(Fields::KA, 0.3).unwrap();
             vl.set(Fields::KD, 0.6).unwrap();
             vl.set(Fields::KS, 0.4).unwrap();

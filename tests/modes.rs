@@ -1,6 +1,7 @@
 //! DSR, MIP and shadows against closed forms: the silhouette of an iso-sphere, semi-transparent
 //! surfaces compositing, the maximum-intensity sample, and a shadow through a constant slab.
 
+use vlib::MappingId;
 use vlib::{Attenuation, Camera, Feature, Fields, Library, RenderType};
 
 fn radial(s: &mut vlib::Sample) {
@@ -260,7 +261,7 @@ fn surfaces_are_shaded_inside_where_a_table_steps_at_their_threshold() {
         0.5, 1.0, 1.0, 1.0, 0.0,
         1.0, 1.0, 1.0, 0.0, 0.0,
     ];
-    vl.mapping(1, vlib::MappingType::Lookup, 4, 4, &table)
+    vl.mapping(MappingId(1), vlib::MappingType::Lookup, 4, 4, &table)
         .unwrap();
     vl.scene().unwrap();
     vl.camera(&Camera {
@@ -279,10 +280,10 @@ fn surfaces_are_shaded_inside_where_a_table_steps_at_their_threshold() {
     vl.translate(-0.5, -0.5, -0.5).unwrap();
     vl.scale(100.0, 100.0, 100.0).unwrap();
     vl.function(Fields::F, radial).unwrap();
-    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
-    vl.map(Fields::R, Fields::F, 1, 2).unwrap();
-    vl.map(Fields::G, Fields::F, 1, 3).unwrap();
-    vl.map(Fields::B, Fields::F, 1, 4).unwrap();
+    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
+    vl.map(Fields::R, Fields::F, MappingId(1), 2).unwrap();
+    vl.map(Fields::G, Fields::F, MappingId(1), 3).unwrap();
+    vl.map(Fields::B, Fields::F, MappingId(1), 4).unwrap();
     vl.set(Fields::KA, 1.0).unwrap();
     vl.end().unwrap();
     let img = vl.render_preview(size, size, 1.0).unwrap();

@@ -22,6 +22,7 @@
 use vlib::Optimise;
 use vlib::{Camera, Feature, Fields, Library, MappingType};
 use vlib::{Dataset, Voxels};
+use vlib::{DatasetId, MappingId};
 
 #[path = "common/lcg.rs"]
 mod lcg;
@@ -117,11 +118,11 @@ struct Case {
 /// opacity, table 2's three columns into r, g and b; lit with coefficients `[ka, kd, ks]`, or
 /// unlit (ka 1 alone).
 fn colour_program(vl: &mut Library, lit: Option<[f32; 3]>) {
-    vl.dataset(Fields::F, 1).unwrap();
-    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
-    vl.map(Fields::R, Fields::F, 2, 1).unwrap();
-    vl.map(Fields::G, Fields::F, 2, 2).unwrap();
-    vl.map(Fields::B, Fields::F, 2, 3).unwrap();
+    vl.dataset(Fields::F, DatasetId(1)).unwrap();
+    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
+    vl.map(Fields::R, Fields::F, MappingId(2), 1).unwrap();
+    vl.map(Fields::G, Fields::F, MappingId(2), 2).unwrap();
+    vl.map(Fields::B, Fields::F, MappingId(2), 3).unwrap();
     match lit {
         Some([ka, kd, ks]) => {
             vl.set(Fields::KA, ka).unwrap();
@@ -159,7 +160,7 @@ fn render_made(case: &Case, packets: bool, threads: usize) -> (Vec<[f32; 3]>, bo
         volume(&mut rng, case.dims)
     };
     let mut vl = Library::new();
-    vl.add_dataset(1, data).unwrap();
+    vl.add_dataset(DatasetId(1), data).unwrap();
     // An opacity ramp that is 0 up to 0.3 (the zero test), a colour ramp.
     let opacity: &[f32] = if case.many_rows {
         &[
@@ -169,10 +170,16 @@ fn render_made(case: &Case, packets: bool, threads: usize) -> (Vec<[f32; 3]>, bo
     } else {
         &[0.3, 0.0, 0.5, 0.2, 0.7, 0.6, 0.95, 0.9]
     };
-    vl.mapping(1, MappingType::Ramp, opacity.len() as i32 / 2, 1, opacity)
-        .unwrap();
     vl.mapping(
-        2,
+        MappingId(1),
+        MappingType::Ramp,
+        opacity.len() as i32 / 2,
+        1,
+        opacity,
+    )
+    .unwrap();
+    vl.mapping(
+        MappingId(2),
         MappingType::Ramp,
         3,
         3,
@@ -219,7 +226,7 @@ fn render_made(case: &Case, packets: bool, threads: usize) -> (Vec<[f32; 3]>, bo
         .flat_map(|y| (0..W).map(move |x| (x, y)))
         .map(|(x, y)| image.pixel(x, y))
         .collect();
-    (pixels, vl.dataset_of(1).unwrap().values_made())
+    (pixels, vl.dataset_of(DatasetId(1)).unwrap().values_made())
 }
 
 fn cases() -> Vec<Case> {
@@ -484,15 +491,21 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                 let size = scale.iter().fold(0.0f32, |m, v| m.max(*v));
                 let render = |packets: bool, threads: usize, wide_lanes: bool, trust: bool| {
                     let mut vl = Library::new();
-                    vl.add_dataset(1, data.clone()).unwrap();
+                    vl.add_dataset(DatasetId(1), data.clone()).unwrap();
                     let (a1, an) = (
                         if ends.0 { 0.0 } else { 0.1 },
                         if ends.1 { 1.0 } else { 0.9 },
                     );
-                    vl.mapping(1, MappingType::Ramp, 3, 1, &[a1, 0.0, 0.5, 0.4, an, 0.95])
-                        .unwrap();
                     vl.mapping(
-                        2,
+                        MappingId(1),
+                        MappingType::Ramp,
+                        3,
+                        1,
+                        &[a1, 0.0, 0.5, 0.4, an, 0.95],
+                    )
+                    .unwrap();
+                    vl.mapping(
+                        MappingId(2),
                         MappingType::Ramp,
                         2,
                         3,

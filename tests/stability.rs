@@ -7,6 +7,7 @@
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
+use vlib::MappingId;
 use vlib::{Attenuation, Camera, Feature, Fields, Library, MappingType, RenderType};
 
 /// Values a field function may return, hostile ones included.
@@ -103,7 +104,7 @@ fn build(c: &Case) -> Library {
         if c.mapping_ends.0 { 0.0 } else { 0.1 },
         if c.mapping_ends.1 { 1.0 } else { 0.9 },
     );
-    vl.mapping(1, MappingType::Ramp, 2, 1, &[a1, 0.3, an, 0.9])
+    vl.mapping(MappingId(1), MappingType::Ramp, 2, 1, &[a1, 0.3, an, 0.9])
         .unwrap();
     vl.scene().unwrap();
     let size = c.scale.iter().fold(0.0f32, |m, v| m.max(*v));
@@ -165,7 +166,7 @@ fn build(c: &Case) -> Library {
         let _ = s.set(Fields::F, v);
     })
     .unwrap();
-    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
+    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
     vl.function(
         Fields::O | Fields::COLORS | Fields::KS | Fields::RF,
         move |s| {

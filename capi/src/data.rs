@@ -7,6 +7,7 @@ use crate::types::{vlfloat, vlint};
 use std::os::raw::c_char;
 use vlib_core::limits::{MAX_OUTPUTS, MAX_POINTS};
 use vlib_core::{Command, Error, ErrorCode, MappingType, Result};
+use vlib_core::{DatasetId, MappingId};
 
 /// Loads a `.vlb` dataset under the id `id`.
 ///
@@ -18,7 +19,7 @@ pub unsafe extern "C" fn vlLoad(id: vlint, file: *const c_char) {
         library(Command::Load, |lib| {
             // SAFETY: `file` is NULL or NUL-terminated by the caller's contract.
             let path = unsafe { c_path(Command::Load.name(), "file", file) }?;
-            lib.load(id, path)
+            lib.load(DatasetId(id), path)
         })
     })
 }
@@ -26,7 +27,9 @@ pub unsafe extern "C" fn vlLoad(id: vlint, file: *const c_char) {
 /// Frees the dataset `id`.
 #[no_mangle]
 pub extern "C" fn vlUnload(id: vlint) {
-    ffi_boundary((), || library(Command::Unload, |lib| lib.unload(id)))
+    ffi_boundary((), || {
+        library(Command::Unload, |lib| lib.unload(DatasetId(id)))
+    })
 }
 
 /// The normalised value of dataset `id` at dataset coordinates (x, y, z) in [0, 1]^3; 0 on
@@ -42,13 +45,13 @@ pub(crate) fn sample(id: vlint, x: vlfloat, y: vlfloat, z: vlfloat) -> Result<vl
     // the rendering scene's datasets without waiting for the state the render holds.
     if !crate::sample::active() {
         if let Some(s) = render_sampler() {
-            return s.sample(id, x, y, z);
+            return s.sample(DatasetId(id), x, y, z);
         }
     }
     either(
         Command::Sample,
-        |s| s.dataset(id, [x, y, z]),
-        |lib| lib.sample(id, x, y, z),
+        |s| s.dataset(DatasetId(id), [x, y, z]),
+        |lib| lib.sample(DatasetId(id), x, y, z),
     )
 }
 
@@ -87,7 +90,7 @@ pub unsafe extern "C" fn vlMapping(
             let len = points as usize * (outputs as usize + 1);
             // SAFETY: non-NULL, and `len` floats long by the caller's contract.
             let table = unsafe { std::slice::from_raw_parts(table, len) };
-            lib.mapping(id, kind, points, outputs, table)
+            lib.mapping(MappingId(id), kind, points, outputs, table)
         })
     })
 }

@@ -8,7 +8,7 @@ use crate::callbacks::{CField, CNormal, CSpatial};
 use crate::ffi::{either, ffi_boundary, library, null, read_floats};
 use crate::types::{vlfloat, vlint};
 use std::os::raw::c_void;
-use vlib_core::{Command, Fields, Result};
+use vlib_core::{Command, DatasetId, Fields, MappingId, Result};
 
 /// Opens an object; it captures the rendering parameters in force.
 #[no_mangle]
@@ -123,7 +123,7 @@ pub unsafe extern "C" fn vlFunction(
 pub extern "C" fn vlDataset(fields: vlint, id: vlint) {
     ffi_boundary((), || {
         library(Command::Dataset, |lib| {
-            lib.dataset(Fields::from_raw(fields)?, id)
+            lib.dataset(Fields::from_raw(fields)?, DatasetId(id))
         })
     })
 }
@@ -136,7 +136,7 @@ pub extern "C" fn vlMap(targets: vlint, source: vlint, mapping: vlint, output: v
             lib.map(
                 Fields::from_raw(targets)?,
                 Fields::from_raw(source)?,
-                mapping,
+                MappingId(mapping),
                 output,
             )
         })

@@ -17,6 +17,7 @@ use crate::sample;
 use crate::types::{vlfloat, vlint, VL_ALLFIELDS};
 use std::os::raw::c_void;
 use vlib_core::cvg::Operator;
+use vlib_core::DatasetId;
 use vlib_core::{Camera, Command, Error, ErrorCode, Fields, Result, SampleRole};
 
 /// The most knots `vluSpline` accepts.
@@ -49,7 +50,9 @@ pub extern "C" fn vluCamera(
 /// (`Library::place_dataset`: its scope, its checks, its errors).
 #[no_mangle]
 pub extern "C" fn vluPlace(id: vlint) {
-    ffi_boundary((), || library(Command::Matrix, |lib| lib.place_dataset(id)))
+    ffi_boundary((), || {
+        library(Command::Matrix, |lib| lib.place_dataset(DatasetId(id)))
+    })
 }
 
 /// Perlin noise in [-1, 1] at `p * size`, with a seeded permutation (0 = Perlin's).
@@ -182,7 +185,7 @@ pub unsafe extern "C" fn VLU_SWEEP(p: *mut vlfloat, misc: *mut c_void) {
         // object's interpolation and writes the sample; the value is written even when the id is
         // unknown (0, as vlSample returns).
         let swept = sample::with_current(|s| {
-            let v = vlib_core::vlaux::sweep(s, id);
+            let v = vlib_core::vlaux::sweep(s, DatasetId(id));
             s.set(Fields::ALL, *v.as_ref().unwrap_or(&0.0))?;
             v.map(|_| ())
         });

@@ -10,6 +10,7 @@
 
 use std::path::{Path, PathBuf};
 use vlib::{Attenuation, Camera, Fields, Library, MappingType};
+use vlib::{DatasetId, MappingId};
 
 /// The converted MNI template: `$VLIB_MNI_VLB`, or `target/bench-data/mni.vlb`, made on first
 /// use from `../shared/data/…nii.gz` by `convert(nii, vlb)` (which runs `vlconvert nifti`).
@@ -74,11 +75,11 @@ pub fn converted_dataset() -> Result<PathBuf, String> {
 }
 
 /// Mapping ids used by the scene.
-const OPACITY: i32 = 1;
-const COLOUR: i32 = 2;
+const OPACITY: MappingId = MappingId(1);
+const COLOUR: MappingId = MappingId(2);
 
 /// Dataset id of the brain.
-pub const BRAIN: i32 = 1;
+pub const BRAIN: DatasetId = DatasetId(1);
 
 /// The early-termination threshold of VTK's CPU ray caster (`Optimise::termination` terms): it
 /// stops a ray once its fixed-point remaining opacity falls below 0xff of 0x7fff.

@@ -32,7 +32,7 @@ use vlib::{
     Attenuation, Camera, Closed, Command, ErrorCode, Feature, Fields, Interpolation, Library,
     MappingType, RenderType, Sample, Scope,
 };
-use vlib::{Dataset, Voxels};
+use vlib::{Dataset, DatasetId, MappingId, Voxels};
 
 /// How the interpreter behaves.
 #[derive(Clone, Copy, Debug)]
@@ -462,7 +462,7 @@ fn field_fn(kind: u8, c: f32, id: i32, allow_panic: bool) -> vlib::FieldFn {
         }),
         4 => Arc::new(move |s: &mut Sample| {
             let p = s.position();
-            match s.dataset(id, p) {
+            match s.dataset(DatasetId(id), p) {
                 Ok(v) => {
                     assert!((0.0..=1.0).contains(&v), "dataset value {v}");
                     s.set(Fields::ALL, v).expect("set");
@@ -472,7 +472,7 @@ fn field_fn(kind: u8, c: f32, id: i32, allow_panic: bool) -> vlib::FieldFn {
                     "{e}"
                 ),
             }
-            let _ = s.dataset(id, [f32::NAN, c, 0.5]);
+            let _ = s.dataset(DatasetId(id), [f32::NAN, c, 0.5]);
         }),
         5 => Arc::new(move |s: &mut Sample| {
             let n = s.child_count() as i32;
@@ -1039,23 +1039,25 @@ impl<'d> Driver<'d> {
                         p
                     }
                 };
-                self.call(Command::Load, |lib, _| match lib.load(id, &path) {
-                    Ok(()) => Ok(()),
-                    Err(e) => {
-                        assert!(
-                            matches!(
-                                e.code,
-                                ErrorCode::BadScope
-                                    | ErrorCode::IoError
-                                    | ErrorCode::BadMagic
-                                    | ErrorCode::BadDimensions
-                                    | ErrorCode::BadVoxelWidth
-                                    | ErrorCode::BadRange
-                                    | ErrorCode::BadSize
-                            ),
-                            "vlLoad: {e}"
-                        );
-                        Err(e)
+                self.call(Command::Load, |lib, _| {
+                    match lib.load(DatasetId(id), &path) {
+                        Ok(()) => Ok(()),
+                        Err(e) => {
+                            assert!(
+                                matches!(
+                                    e.code,
+                                    ErrorCode::BadScope
+                                        | ErrorCode::IoError
+                                        | ErrorCode::BadMagic
+                                        | ErrorCode::BadDimensions
+                                        | ErrorCode::BadVoxelWidth
+                                        | ErrorCode::BadRange
+                                        | ErrorCode::BadSize
+                                ),
+                                "vlLoad: {e}"
+                            );
+                            Err(e)
+                        }
                     }
                 });
             }
@@ -1074,18 +1076,18 @@ impl<'d> Driver<'d> {
                 };
                 let (a, b) = (input.f(), input.f());
                 if let Ok(d) = Dataset::new(dims, raw, a, b) {
-                    self.call(Command::Load, |lib, _| lib.add_dataset(id, d));
+                    self.call(Command::Load, |lib, _| lib.add_dataset(DatasetId(id), d));
                 }
             }
             22 => {
                 let id = input.id();
-                self.call(Command::Unload, |lib, _| lib.unload(id));
+                self.call(Command::Unload, |lib, _| lib.unload(DatasetId(id)));
             }
             23 => {
                 let id = input.id();
                 let p = [input.f(), input.f(), input.f()];
                 self.call(Command::Sample, |lib, _| {
-                    let v = lib.sample(id, p[0], p[1], p[2])?;
+                    let v = lib.sample(DatasetId(id), p[0], p[1], p[2])?;
                     assert!((0.0..=1.0).contains(&v), "vlSample gave {v}");
                     Ok(())
                 });
@@ -1098,7 +1100,7 @@ impl<'d> Driver<'d> {
                 let t = table(input, points, outputs);
                 self.call(Command::Mapping, |lib, _| {
                     let kind = c_arg(lib, Command::Mapping, MappingType::from_raw(kind))?;
-                    lib.mapping(id, kind, points, outputs, &t)
+                    lib.mapping(MappingId(id), kind, points, outputs, &t)
                 });
             }
             25 | 26 => self.call(Command::Object, |lib, _| lib.object()),
@@ -1185,7 +1187,7 @@ impl<'d> Driver<'d> {
             36 => {
                 let (f, id) = (input.fields(), input.id());
                 self.call(Command::Dataset, |lib, _| {
-                    lib.dataset(Fields::from_bits_unchecked(f as u32), id)
+                    lib.dataset(Fields::from_bits_unchecked(f as u32), DatasetId(id))
                 });
             }
             37 => {
@@ -1194,7 +1196,7 @@ impl<'d> Driver<'d> {
                     lib.map(
                         Fields::from_bits_unchecked(t as u32),
                         Fields::from_bits_unchecked(s as u32),
-                        m,
+                        MappingId(m),
                         o,
                     )
                 });

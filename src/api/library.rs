@@ -16,7 +16,9 @@ use crate::data::{Dataset, Filter};
 use crate::error::{err, ErrorCode, Result};
 use crate::model::mapping::Mapping;
 use crate::model::scene::{Camera, ImageRequest, Light, ObjectDesc, SceneDesc, Settings};
-use crate::types::{Attenuation, Feature, Fields, Interpolation, MappingType, RenderType};
+use crate::types::{
+    Attenuation, DatasetId, Feature, Fields, Interpolation, MappingId, MappingType, RenderType,
+};
 use glam::DMat4;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -51,7 +53,7 @@ pub struct Sampler {
 impl Sampler {
     /// `vlSample`: dataset `id`'s normalised value at dataset coordinates (x, y, z), as
     /// [`Library::sample`] gives it (the same errors, without the scope check).
-    pub fn sample(&self, id: i32, x: f32, y: f32, z: f32) -> Result<f32> {
+    pub fn sample(&self, id: DatasetId, x: f32, y: f32, z: f32) -> Result<f32> {
         crate::model::program::sample_dataset(&self.datasets, id, [x, y, z], self.filter)
     }
 }
@@ -85,7 +87,7 @@ pub(super) struct OpenScene {
 pub struct Library {
     /// Defaults that each new scene starts from (set at library scope).
     pub(super) defaults: Settings,
-    pub(super) mappings: BTreeMap<i32, Arc<Mapping>>,
+    pub(super) mappings: BTreeMap<MappingId, Arc<Mapping>>,
     /// The loaded datasets, shared with the scenes and samplers made from them (changed by
     /// copy on write, so a scene being rendered keeps the map it was given).
     pub(super) datasets: Arc<crate::model::program::Datasets>,
@@ -514,7 +516,7 @@ impl Library {
     /// `vlLoad`: reads a `.vlb` dataset and files it under `id`, replacing any dataset of that
     /// id (objects that already cast the old one keep it). A file that cannot be read or is
     /// malformed changes nothing.
-    pub fn load(&mut self, id: i32, path: impl AsRef<Path>) -> Result<()> {
+    pub fn load(&mut self, id: DatasetId, path: impl AsRef<Path>) -> Result<()> {
         self.check(Command::Load)?;
         let d = Dataset::load(path.as_ref())?;
         Arc::make_mut(&mut self.datasets).insert(id, Arc::new(d));
@@ -524,20 +526,20 @@ impl Library {
     /// Files an in-memory dataset under `id` (the Rust counterpart of `vlLoad`). An
     /// `Arc<Dataset>` is shared, not copied: several libraries (or ids) can hold one dataset,
     /// and its caches (brick ranges) are computed once for all of them.
-    pub fn add_dataset(&mut self, id: i32, dataset: impl Into<Arc<Dataset>>) -> Result<()> {
+    pub fn add_dataset(&mut self, id: DatasetId, dataset: impl Into<Arc<Dataset>>) -> Result<()> {
         self.check(Command::Load)?;
         Arc::make_mut(&mut self.datasets).insert(id, dataset.into());
         Ok(())
     }
 
     /// The dataset filed under `id`.
-    pub fn dataset_of(&self, id: i32) -> Option<&Arc<Dataset>> {
+    pub fn dataset_of(&self, id: DatasetId) -> Option<&Arc<Dataset>> {
         self.datasets.get(&id)
     }
 
     /// `vlUnload`: forgets dataset `id`; objects that cast it keep their reference, so the
     /// memory is freed when the last of them is gone.
-    pub fn unload(&mut self, id: i32) -> Result<()> {
+    pub fn unload(&mut self, id: DatasetId) -> Result<()> {
         self.check(Command::Unload)?;
         match Arc::make_mut(&mut self.datasets).remove(&id) {
             Some(_) => Ok(()),
@@ -559,7 +561,7 @@ impl Library {
 
     /// `vlSample` outside sample scope: dataset `id`'s normalised value at dataset coordinates
     /// (x, y, z), under the interpolation in force.
-    pub fn sample(&self, id: i32, x: f32, y: f32, z: f32) -> Result<f32> {
+    pub fn sample(&self, id: DatasetId, x: f32, y: f32, z: f32) -> Result<f32> {
         self.check(Command::Sample)?;
         crate::model::program::sample_dataset(&self.datasets, id, [x, y, z], self.filter())
     }
@@ -578,7 +580,7 @@ impl Library {
     /// through the old definition keep it.
     pub fn mapping(
         &mut self,
-        id: i32,
+        id: MappingId,
         kind: MappingType,
         points: i32,
         outputs: i32,

@@ -10,7 +10,7 @@ use crate::api::scope::Command;
 use crate::error::{err, Error, ErrorCode, Result};
 use crate::model::program::{clamp_field, Instr, NormalFn, Sample};
 use crate::model::scene::ObjectDesc;
-use crate::types::{axes, Fields};
+use crate::types::{axes, DatasetId, Fields, MappingId};
 use glam::{DMat4, DVec4};
 use std::sync::Arc;
 
@@ -127,7 +127,7 @@ impl Library {
     /// object's earlier transforms, like `vlMatrix` (whose scope it has). An axis of one node
     /// gets one node's spacing. `BadId` for an unknown id, `BadValue` for a dataset without
     /// geometry. Not a command of the C API (vlaux's `vluPlace` calls it).
-    pub fn place_dataset(&mut self, id: i32) -> Result<()> {
+    pub fn place_dataset(&mut self, id: DatasetId) -> Result<()> {
         self.check(Command::Matrix)?;
         let d = self.datasets.get(&id).cloned().ok_or_else(|| {
             crate::error::Error::new(ErrorCode::BadId, format!("place_dataset: no dataset {id}"))
@@ -211,7 +211,7 @@ impl Library {
 
     /// `vlDataset`: an instruction writing dataset `id`, interpolated with the filter in force
     /// now, to `fields`.
-    pub fn dataset(&mut self, fields: Fields, id: i32) -> Result<()> {
+    pub fn dataset(&mut self, fields: Fields, id: DatasetId) -> Result<()> {
         self.check(Command::Dataset)?;
         fields.validate()?;
         let data =
@@ -232,7 +232,7 @@ impl Library {
         &mut self,
         targets: Fields,
         source: Fields,
-        mapping: i32,
+        mapping: MappingId,
         output: i32,
     ) -> Result<()> {
         self.check(Command::Map)?;

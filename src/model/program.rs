@@ -15,7 +15,7 @@ use crate::error::{err, Error, ErrorCode, Result};
 use crate::model::mapping::Mapping;
 pub(crate) use crate::num::clamp_field;
 pub(crate) use crate::num::clamp_fields;
-use crate::types::{Fields, FIELD_COUNT};
+use crate::types::{DatasetId, Fields, FIELD_COUNT};
 use std::collections::BTreeMap;
 use std::fmt;
 use std::sync::Arc;
@@ -28,7 +28,7 @@ pub type FieldFn = Arc<dyn Fn(&mut Sample<'_>) + Send + Sync>;
 pub type NormalFn = Arc<dyn Fn(&mut [f32; 3], &mut Sample<'_>) + Send + Sync>;
 
 /// The datasets of a library, by id, shared without copies.
-pub type Datasets = BTreeMap<i32, Arc<Dataset>>;
+pub type Datasets = BTreeMap<DatasetId, Arc<Dataset>>;
 
 /// What a sample can reach besides its own point: the library's datasets (for `vlSample`), the
 /// interpolation filter of the object being evaluated, and its children (for `vlChild*`).
@@ -93,7 +93,7 @@ impl Child {
 /// `vlSample`: dataset `id` at dataset coordinates `p` with `filter`.
 pub(crate) fn sample_dataset(
     datasets: &Datasets,
-    id: i32,
+    id: DatasetId,
     p: [f32; 3],
     filter: Filter,
 ) -> Result<f32> {
@@ -254,7 +254,7 @@ impl<'a> Sample<'a> {
 
     /// `vlSample` inside a field function: dataset `id` at dataset coordinates `p`, with the
     /// interpolation the object captured.
-    pub fn dataset(&self, id: i32, p: [f32; 3]) -> Result<f32> {
+    pub fn dataset(&self, id: DatasetId, p: [f32; 3]) -> Result<f32> {
         match self.env {
             Some(env) => sample_dataset(&env.datasets, id, p, env.filter),
             None => err(ErrorCode::BadId, format!("vlSample: no dataset {id}")),

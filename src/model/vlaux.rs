@@ -11,6 +11,7 @@
 
 use crate::error::Result;
 use crate::model::program::Sample;
+use crate::types::DatasetId;
 
 /// Ken Perlin's reference permutation of 0..=255 (from the "Improved Noise" reference code, 2002).
 pub const PERLIN_PERMUTATION: [u8; 256] = [
@@ -290,7 +291,7 @@ pub fn sweep_coords(p: [f32; 3]) -> Option<[f32; 3]> {
 /// the inscribed cylinder (where the dataset is not read, so an unknown `id` goes unnoticed
 /// there). Errors are those of `vlSample` (`VL_BADID` for an unknown dataset). The caller
 /// writes the value (the C `VLU_SWEEP` writes it to every field its `vlFunction` call named).
-pub fn sweep(s: &mut Sample<'_>, id: i32) -> Result<f32> {
+pub fn sweep(s: &mut Sample<'_>, id: DatasetId) -> Result<f32> {
     match sweep_coords(s.position()) {
         Some(q) => s.dataset(id, q),
         None => Ok(0.0),

@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::testing::Xorshift;
+use crate::types::{DatasetId, MappingId};
 
 /// The packet march's tiles are 32×32 where the image has at least 16 of them a thread,
 /// else 16×16; and `tiles` with either side covers the image once, row-major.
@@ -526,9 +527,9 @@ fn lanes_march_is_the_march() {
     let mut terminated = 0;
     for (ks, exponent) in [(0.3, 10.0), (0.0, 10.0), (0.6, 3.0), (0.3, 20.5)] {
         let mut vl = crate::Library::new();
-        vl.add_dataset(1, data.clone()).unwrap();
+        vl.add_dataset(DatasetId(1), data.clone()).unwrap();
         vl.mapping(
-            2,
+            MappingId(2),
             MappingType::Ramp,
             3,
             1,
@@ -536,7 +537,8 @@ fn lanes_march_is_the_march() {
         )
         .unwrap();
         let colour = [0.2, 0.55, 0.35, 0.3, 0.6, 0.9, 0.7, 0.5, 1.0, 1.0, 1.0, 1.0];
-        vl.mapping(3, MappingType::Ramp, 3, 3, &colour).unwrap();
+        vl.mapping(MappingId(3), MappingType::Ramp, 3, 3, &colour)
+            .unwrap();
         vl.scene().unwrap();
         vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
         vl.directional_light([0.3, -1.0, 0.2], [1.0, 0.9, 0.8], 1.0)
@@ -544,11 +546,11 @@ fn lanes_march_is_the_march() {
         vl.step_size(0.5, 1.0).unwrap();
         vl.object().unwrap();
         vl.scale(23.0, 23.0, 23.0).unwrap();
-        vl.dataset(Fields::F, 1).unwrap();
-        vl.map(Fields::O, Fields::F, 2, 1).unwrap();
-        vl.map(Fields::R, Fields::F, 3, 1).unwrap();
-        vl.map(Fields::G, Fields::F, 3, 2).unwrap();
-        vl.map(Fields::B, Fields::F, 3, 3).unwrap();
+        vl.dataset(Fields::F, DatasetId(1)).unwrap();
+        vl.map(Fields::O, Fields::F, MappingId(2), 1).unwrap();
+        vl.map(Fields::R, Fields::F, MappingId(3), 1).unwrap();
+        vl.map(Fields::G, Fields::F, MappingId(3), 2).unwrap();
+        vl.map(Fields::B, Fields::F, MappingId(3), 3).unwrap();
         vl.set(Fields::KA, 0.2).unwrap();
         vl.set(Fields::KD, 0.7).unwrap();
         vl.set(Fields::KS, ks).unwrap();
@@ -637,9 +639,15 @@ fn sphere_library_with(lit: bool) -> crate::Library {
         .collect();
     let data = Dataset::new([n; 3], crate::data::Voxels::U8(voxels), 0.0, 1.0).unwrap();
     let mut vl = crate::Library::new();
-    vl.add_dataset(1, data).unwrap();
-    vl.mapping(2, MappingType::Ramp, 3, 1, &[0.3, 0.0, 0.5, 0.6, 1.0, 0.95])
-        .unwrap();
+    vl.add_dataset(DatasetId(1), data).unwrap();
+    vl.mapping(
+        MappingId(2),
+        MappingType::Ramp,
+        3,
+        1,
+        &[0.3, 0.0, 0.5, 0.6, 1.0, 0.95],
+    )
+    .unwrap();
     vl.scene().unwrap();
     vl.step_size(0.5, 1.0).unwrap();
     if lit {
@@ -654,8 +662,8 @@ fn sphere_library_with(lit: bool) -> crate::Library {
     }
     vl.object().unwrap();
     vl.scale(19.0, 19.0, 19.0).unwrap();
-    vl.dataset(Fields::F, 1).unwrap();
-    vl.map(Fields::O, Fields::F, 2, 1).unwrap();
+    vl.dataset(Fields::F, DatasetId(1)).unwrap();
+    vl.map(Fields::O, Fields::F, MappingId(2), 1).unwrap();
     vl.set(Fields::R, 1.0).unwrap();
     if lit {
         vl.set(Fields::KA, 1.0).unwrap();

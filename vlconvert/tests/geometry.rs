@@ -6,6 +6,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use vlib::DatasetId;
 use vlib::{Camera, Dataset, Fields, Geometry, Library};
 
 fn fixture(name: &str) -> PathBuf {
@@ -110,7 +111,7 @@ fn sidecars_round_trip_and_refuse_malformed_text() {
 fn anterior_view(opaque: fn([f32; 3]) -> bool) -> vlib::Image {
     let out = convert("nifti/int16_aniso.nii");
     let mut vl = Library::new();
-    vl.load(1, &out).unwrap();
+    vl.load(DatasetId(1), &out).unwrap();
     std::fs::remove_dir_all(out.parent().unwrap()).unwrap();
     vl.scene().unwrap();
     // The box spans x 28 … 30, y −20 … −18.5, z −10 … −6 (nodes 0 … n − 1, spacing
@@ -125,8 +126,8 @@ fn anterior_view(opaque: fn([f32; 3]) -> bool) -> vlib::Image {
     vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
     vl.step_size(0.05, 1.0).unwrap();
     vl.object().unwrap();
-    vl.place_dataset(1).unwrap();
-    vl.dataset(Fields::F, 1).unwrap();
+    vl.place_dataset(DatasetId(1)).unwrap();
+    vl.dataset(Fields::F, DatasetId(1)).unwrap();
     vl.function(Fields::O, move |s| {
         let _ = s.set(Fields::O, if opaque(s.position()) { 1.0 } else { 0.0 });
     })
@@ -198,7 +199,7 @@ fn a_placed_volume_keeps_its_right_on_the_right() {
 fn placing_needs_a_dataset_with_geometry() {
     let mut vl = Library::new();
     vl.add_dataset(
-        2,
+        DatasetId(2),
         Dataset::new([2, 2, 2], vlib::Voxels::U8(vec![0; 8]), 0.0, 255.0).unwrap(),
     )
     .unwrap();
@@ -206,11 +207,11 @@ fn placing_needs_a_dataset_with_geometry() {
     vl.object().unwrap();
     let before = vl.fingerprint();
     assert_eq!(
-        vl.place_dataset(2).unwrap_err().code,
+        vl.place_dataset(DatasetId(2)).unwrap_err().code,
         vlib::ErrorCode::BadValue
     );
     assert_eq!(
-        vl.place_dataset(9).unwrap_err().code,
+        vl.place_dataset(DatasetId(9)).unwrap_err().code,
         vlib::ErrorCode::BadId
     );
     assert_eq!(vl.fingerprint(), before);
@@ -237,15 +238,15 @@ fn an_oblique_placement_puts_each_node_where_the_writer_does() {
         fov: 0.4,
     };
     let mut vl = Library::new();
-    vl.load(1, &out).unwrap();
+    vl.load(DatasetId(1), &out).unwrap();
     std::fs::remove_dir_all(out.parent().unwrap()).unwrap();
     vl.scene().unwrap();
     vl.camera(&cam).unwrap();
     vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
     vl.step_size(0.05, 1.0).unwrap();
     vl.object().unwrap();
-    vl.place_dataset(1).unwrap();
-    vl.dataset(Fields::F, 1).unwrap();
+    vl.place_dataset(DatasetId(1)).unwrap();
+    vl.dataset(Fields::F, DatasetId(1)).unwrap();
     vl.function(Fields::O, |s| {
         let p = s.position();
         let _ = s.set(

@@ -1,6 +1,7 @@
 //! Unit tests of `vlaux`.
 
 use super::*;
+use crate::types::DatasetId;
 
 /// Permutation table for `seed`: seed 0 is Perlin's table; other seeds apply a Fisher-Yates
 /// shuffle driven by xorshift64, whose state is a splitmix64 hash of the seed.
@@ -296,11 +297,11 @@ fn sweep_samples_the_profile() {
     )
     .unwrap();
     let mut sets = Datasets::new();
-    sets.insert(7, Arc::new(d));
+    sets.insert(DatasetId(7), Arc::new(d));
     let env = SampleEnv::new(Arc::new(sets), Filter::Trilinear);
     let at = |p: [f32; 3], id: i32| {
         let mut s = Sample::with_env(p, [0.0; 3], &env);
-        sweep(&mut s, id)
+        sweep(&mut s, DatasetId(id))
     };
     assert_eq!(
         at([0.5, 0.0, 0.5], 7).unwrap(),
@@ -326,5 +327,8 @@ fn sweep_samples_the_profile() {
     assert_eq!(at([0.5, 0.5, 0.5], 8).unwrap_err().code, ErrorCode::BadId);
     // Without datasets in reach (a bare sample) the id is unknown too.
     let mut bare = Sample::new([0.5; 3], [0.0; 3]);
-    assert_eq!(sweep(&mut bare, 7).unwrap_err().code, ErrorCode::BadId);
+    assert_eq!(
+        sweep(&mut bare, DatasetId(7)).unwrap_err().code,
+        ErrorCode::BadId
+    );
 }

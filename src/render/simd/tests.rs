@@ -4,6 +4,7 @@
 //! against the scalar march in `tests/packets.rs`.
 
 use super::*;
+use crate::types::{DatasetId, MappingId};
 
 /// The test scene of slabs: slabs along x of 5 voxels (with some texture) between empty
 /// ones of 3 (whole runs inside the slabs, cut runs at their faces), faint or, if
@@ -30,15 +31,16 @@ fn slabs_scene(
         .collect();
     let data = Dataset::new(dims, Voxels::U8(voxels), 0.0, 255.0).unwrap();
     let mut vl = Library::new();
-    vl.add_dataset(1, data).unwrap();
+    vl.add_dataset(DatasetId(1), data).unwrap();
     let density = if opaque {
         [0.3, 0.0, 0.6, 0.6, 1.0, 0.95]
     } else {
         [0.3, 0.0, 0.6, 0.05, 1.0, 0.08]
     };
-    vl.mapping(1, MappingType::Ramp, 3, 1, &density).unwrap();
+    vl.mapping(MappingId(1), MappingType::Ramp, 3, 1, &density)
+        .unwrap();
     vl.mapping(
-        2,
+        MappingId(2),
         MappingType::Ramp,
         2,
         3,
@@ -61,11 +63,11 @@ fn slabs_scene(
     vl.step_size(step, 1.0).unwrap();
     vl.object().unwrap();
     vl.scale(39.0, 35.0, 29.0).unwrap();
-    vl.dataset(Fields::F, 1).unwrap();
-    vl.map(Fields::O, Fields::F, 1, 1).unwrap();
-    vl.map(Fields::R, Fields::F, 2, 1).unwrap();
-    vl.map(Fields::G, Fields::F, 2, 2).unwrap();
-    vl.map(Fields::B, Fields::F, 2, 3).unwrap();
+    vl.dataset(Fields::F, DatasetId(1)).unwrap();
+    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
+    vl.map(Fields::R, Fields::F, MappingId(2), 1).unwrap();
+    vl.map(Fields::G, Fields::F, MappingId(2), 2).unwrap();
+    vl.map(Fields::B, Fields::F, MappingId(2), 3).unwrap();
     if shaded {
         vl.set(Fields::KA, 0.2).unwrap();
         vl.set(Fields::KD, 0.7).unwrap();
