@@ -661,6 +661,33 @@ void vlCancel(void);
 /* Field value encoding a refraction index eta >= 1. */
 #define VLREFRACTION(eta) (((vlfloat)(eta) - 1.0f) / (VL_MAXREFRACTION - 1.0f))
 
+/* Legacy callbacks (docs/compat.md, "Legacy C code"). The paper's field functions have an
+   implicit int result (`sphere(vlvector p, void *misc) { ... }`), so their type is
+   int (vlfloat *, void *), or int () for K&R definitions, not the void (...) of the parameter:
+   clang 16 and GCC 14 and later reject passing them. In GNU C (GCC, clang) vlSpatial,
+   vlFunction and vlNormal are also macros that convert an argument of exactly such a type (a
+   function returning int, or a pointer to one, with the command's parameter types or
+   unprototyped) to the parameter's type, and pass any other argument unchanged: every other
+   mismatch (other parameter types, a normal function given to vlFunction, an integer) is
+   diagnosed as without them. The int result is ignored. Each argument is evaluated once.
+   Defining VL_NO_LEGACY_CASTS before including vlib.h removes the macros; a call spelled
+   (vlFunction)(...) bypasses one. C++ sees the prototypes only. */
+#if defined(__GNUC__) && !defined(__cplusplus) && !defined(VL_NO_LEGACY_CASTS)
+#define VL_LEGACY_TYPE_(f, P) \
+    (__builtin_types_compatible_p(__typeof__(f), int P) \
+     || __builtin_types_compatible_p(__typeof__(f), int (*) P))
+#define VL_LEGACY_CALLBACK_(f, P) \
+    __builtin_choose_expr(VL_LEGACY_TYPE_(f, P), \
+        (void (*) P)(void (*)(void))__builtin_choose_expr(VL_LEGACY_TYPE_(f, P), (f), \
+                                                          (void (*)(void))0), \
+        (f))
+#define vlSpatial(f, misc) vlSpatial(VL_LEGACY_CALLBACK_(f, (vlfloat *, void *)), (misc))
+#define vlFunction(fields, f, misc) \
+    vlFunction((fields), VL_LEGACY_CALLBACK_(f, (vlfloat *, void *)), (misc))
+#define vlNormal(f, misc) \
+    vlNormal(VL_LEGACY_CALLBACK_(f, (vlfloat *, vlfloat *, void *)), (misc))
+#endif
+
 #ifdef __cplusplus
 }
 #endif

@@ -237,9 +237,10 @@ static void object(Shape *shape, vlfloat sx, vlfloat sy, vlfloat sz, const vlflo
 int main(int argc, char **argv)
 {
     static vlfloat opacity[] = {0.35f, 0.0f, 0.5f, 1.0f}; /* VL_RAMP: F -> O, solid above 0.5 */
-    static Shape white_ball = {SPHERE}, wood_cube = {BOX}, pink_ball = {SPHERE},
-                 column = {CYLINDER}, green_cube = {BOX}, log_shape = {CYLINDER},
-                 floor_shape = {BOX};
+    static Shape white_ball = {SPHERE, {0}}, wood_cube = {BOX, {0}},
+                 pink_ball = {SPHERE, {0}}, column = {CYLINDER, {0}},
+                 green_cube = {BOX, {0}}, log_shape = {CYLINDER, {0}},
+                 floor_shape = {BOX, {0}};
     static const vlfloat none[3] = {0.0f, 0.0f, 0.0f}, upright[3] = {90.0f, 0.0f, 0.0f},
                          cube_turn[3] = {0.0f, 28.0f, 0.0f}, green_turn[3] = {0.0f, -22.0f, 0.0f},
                          log_turn[3] = {0.0f, 55.0f, 0.0f};

@@ -220,29 +220,39 @@ pub fn c_files(dir: &str) -> Vec<String> {
 /// `cc -std=gnu89 <flags> source -Iinclude -Ltarget/<profile> -lvlib -lm`, and returns the
 /// executable; fails the test with cc's messages if it does not compile.
 pub fn compile_c(source: &str, out_dir: &Path, flags: &[&str]) -> PathBuf {
-    ensure_libraries();
+    let mut all = vec!["-std=gnu89"];
+    all.extend_from_slice(flags);
     let name = Path::new(source)
         .file_stem()
         .expect("file name")
         .to_string_lossy()
         .into_owned();
     let exe = out_dir.join(name);
-    let out = Command::new("cc")
-        .arg("-std=gnu89")
+    if let Err(messages) = compile_with("cc", source, &exe, &all) {
+        panic!("cc {source} failed:\n{messages}");
+    }
+    exe
+}
+
+/// Compiles and links `source` (relative to the workspace root) into `exe` with compiler `cc`:
+/// `cc <flags> source -Iinclude -Ltarget/<profile> -lvlib -lm -o exe`, run from the workspace
+/// root. Returns the compiler's messages as the error when it fails.
+pub fn compile_with(cc: &str, source: &str, exe: &Path, flags: &[&str]) -> Result<(), String> {
+    ensure_libraries();
+    let out = Command::new(cc)
         .args(flags)
         .args([source, "-Iinclude"])
         .arg(format!("-L{}", profile_dir_arg().display()))
         .args(["-lvlib", "-lm", "-o"])
-        .arg(&exe)
+        .arg(exe)
         .current_dir(workspace_root())
         .output()
-        .expect("run cc");
-    assert!(
-        out.status.success(),
-        "cc {source} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    exe
+        .unwrap_or_else(|e| panic!("run {cc}: {e}"));
+    if out.status.success() {
+        Ok(())
+    } else {
+        Err(String::from_utf8_lossy(&out.stderr).into_owned())
+    }
 }
 
 /// Runs a tool from `target/<profile>/` (`vlconvert`, `examples/word_png`, …) in `cwd`; fails
