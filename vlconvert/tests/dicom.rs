@@ -107,7 +107,8 @@ fn range(v: &[f64]) -> (f64, f64) {
 /// Every series converts to pydicom's modality values, node by node, in the data's range:
 /// negative Hounsfield units (int16, intercept −1024), a slope and intercept per slice (float
 /// values, quantised), 12 bits of 16 sign-extended in big endian, 8-bit implicit VR (8-bit
-/// voxels), RLE, and slices ordered by InstanceNumber. The slices are found in the order of
+/// voxels), 32-bit values (quantised), RLE, a gantry tilt, and slices ordered by
+/// InstanceNumber. The slices are found in the order of
 /// their positions, whatever their file names and instance numbers say.
 #[test]
 fn every_series_converts_to_the_writers_values() {
@@ -116,6 +117,7 @@ fn every_series_converts_to_the_writers_values() {
         ("mr_slopes", 2, false),
         ("be_signed12", 2, true),
         ("us8_implicit", 1, true),
+        ("u32_scaled", 2, false),
         ("ct_rle", 2, true),
         ("ct_tilt", 2, true),
         ("by_instance", 2, true),
@@ -159,6 +161,7 @@ fn the_sidecar_is_the_writers_placement() {
         "mr_slopes",
         "be_signed12",
         "us8_implicit",
+        "u32_scaled",
         "ct_rle",
         "ct_tilt",
     ] {
