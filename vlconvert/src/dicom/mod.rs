@@ -6,17 +6,17 @@
 //! (a README), and DICOM files without an image (a DICOMDIR), are skipped and counted. The
 //! images must be of one series (SeriesInstanceUID), or the series is chosen with `--series`
 //! or by naming one of its files; they are checked ([`slice::Slice::check`]), ordered and
-//! placed ([`stack`]), and read again one at a time for their pixels, so that the memory
-//! needed is the volume's and one file's.
+//! placed ([`stack`]), and read again one at a time for their pixels (not every file held
+//! at once).
 //!
 //! Values: each slice's stored values (masked to BitsStored, sign-extended where
 //! PixelRepresentation is 1) times its RescaleSlope plus its RescaleIntercept are the
 //! modality values (Hounsfield units for CT). Where every slice has one slope and intercept,
 //! the stored values are kept exactly in the narrowest element type that holds what
 //! BitsStored allows (8-bit types, so 8-bit voxels, for BitsStored ≤ 8; 16-bit ones to 16
-//! bits), and the scaling goes into the window, as for NIfTI's `scl_slope`; where they
-//! differ, the modality values are computed per slice and quantised to 16 bits over their
-//! range (`volume`).
+//! bits; 32-bit ones are quantised), and the scaling goes into the window, as for NIfTI's
+//! `scl_slope`; where they differ, the modality values are computed per slice and quantised
+//! to 16 bits over their range (`volume`).
 
 mod scan;
 mod slice;
