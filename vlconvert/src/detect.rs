@@ -1,7 +1,8 @@
 //! Which format a file is, from its first bytes (`vlconvert IN OUT.vlb`): NRRD by its magic,
 //! NIfTI-1 by `n+1` at byte 344 (inside gzip too), MetaImage by its `ObjectType`/`NDims` header
-//! keys, PNG and PNM images by theirs. A headerless raw volume cannot be recognised: it needs
-//! `vlconvert raw` with its dimensions and type.
+//! keys, DICOM by `DICM` at byte 128, PNG and PNM images by theirs; a folder is a DICOM series.
+//! A headerless raw volume cannot be recognised: it needs `vlconvert raw` with its dimensions
+//! and type.
 
 use std::io::Read;
 use std::path::Path;
@@ -13,10 +14,14 @@ pub enum Format {
     Nrrd,
     MetaImage,
     Image,
+    Dicom,
 }
 
 /// The format of the file at `path`.
 pub fn format(path: &Path) -> Result<Format, String> {
+    if std::fs::metadata(path).is_ok_and(|m| m.is_dir()) {
+        return Ok(Format::Dicom);
+    }
     // (A FIFO or a device is refused, not read: its bytes could not be read twice.)
     let head = crate::volume::read_regular(path, Some(512))?;
     if head.starts_with(&[0x1f, 0x8b]) {
@@ -37,6 +42,9 @@ pub fn format(path: &Path) -> Result<Format, String> {
     if is_nifti(&head) {
         return Ok(Format::Nifti);
     }
+    if crate::dicom::is_dicom(&head) {
+        return Ok(Format::Dicom);
+    }
     if crate::nrrd::is_nrrd(&head) {
         return Ok(Format::Nrrd);
     }
@@ -54,7 +62,7 @@ pub fn format(path: &Path) -> Result<Format, String> {
         return Err(format!("{}: already a .vlb dataset", path.display()));
     }
     Err(format!(
-        "{}: not a format vlconvert recognises (NIfTI-1, NRRD, MetaImage, PNG, PNM); a \
+        "{}: not a format vlconvert recognises (NIfTI-1, NRRD, MetaImage, DICOM, PNG, PNM); a \
          headerless raw volume converts with `vlconvert raw` and its --dims and --type",
         path.display()
     ))

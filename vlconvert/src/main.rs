@@ -1,6 +1,6 @@
-//! `vlconvert`: converts NIfTI, NRRD, MetaImage and raw volumes and 2D images to vlib's `.vlb`
-//! datasets (with a geometry sidecar where the source places its voxels), and describes `.vlb`
-//! files.
+//! `vlconvert`: converts NIfTI, NRRD, MetaImage, DICOM series and raw volumes and 2D images to
+//! vlib's `.vlb` datasets (with a geometry sidecar where the source places its voxels), and
+//! describes `.vlb` files.
 //!
 //! ```text
 //! vlconvert brain.nii.gz brain.vlb                    # the format from the file's first bytes
@@ -8,14 +8,19 @@
 //! vlconvert nifti ct.nii.gz ct.vlb --window -1000 2000   # Hounsfield units to 0 … 1
 //! vlconvert nrrd ct.nrrd ct.vlb                        # raw, gzip or ascii; .nhdr too
 //! vlconvert metaimage ct.mha ct.vlb        # MetaImage: .mha, or .mhd with its .raw/.zraw
+//! vlconvert dicom ct/ ct.vlb               # a folder of DICOM slices (or one of its files)
+//! vlconvert ct/ ct.vlb --series 1.2.840.…  # one series of a folder that holds several
 //! vlconvert raw ct.raw ct.vlb --dims 256 256 113 --type i16 --endian big
 //! vlconvert image word.png word.vlb        # grey: word.vlb; colour: word_r/_g/_b.vlb
 //! vlconvert info brain.vlb
 //! ```
 //!
-//! Volumes (raw, NIfTI, NRRD, MetaImage) of any element type become datasets whose normalised value is
-//! clamp((value − A)/(B − A), 0, 1) for a window A … B of data values, by default the data's
-//! smallest and largest value (`volume`: 8-bit sources in 8-bit voxels, others in 16-bit ones).
+//! Volumes (raw, NIfTI, NRRD, MetaImage, DICOM) of any element type become datasets whose
+//! normalised value is clamp((value − A)/(B − A), 0, 1) for a window A … B of data values, by
+//! default the data's smallest and largest value (`volume`: 8-bit sources in 8-bit voxels,
+//! others in 16-bit ones). A DICOM series' values are its modality values (Hounsfield units
+//! for CT: RescaleSlope and RescaleIntercept applied per slice); its slices are ordered along
+//! their normal and placed by their position, orientation and pixel spacing (`dicom`).
 //!
 //! Exit codes: 0 success, 1 the conversion failed (unreadable or malformed input, unwritable
 //! output, a report that cannot be written), 2 bad command line. A report whose reader has
@@ -27,6 +32,7 @@ use std::process::ExitCode;
 use vlib::{Dataset, Voxels};
 
 mod detect;
+mod dicom;
 mod metaimage;
 mod nrrd;
 mod volume;
@@ -93,13 +99,28 @@ enum Endian {
 
 #[derive(Subcommand)]
 enum Cmd {
-    /// Any volume or image whose format its first bytes tell (NIfTI-1, NRRD, MetaImage, PNG,
-    /// PNM): `vlconvert IN OUT.vlb` is short for `vlconvert convert IN OUT.vlb`.
+    /// Any volume or image whose format its first bytes tell (NIfTI-1, NRRD, MetaImage, DICOM,
+    /// PNG, PNM), or a folder of DICOM slices: `vlconvert IN OUT.vlb` is short for `vlconvert
+    /// convert IN OUT.vlb`.
     Convert {
         input: PathBuf,
         output: PathBuf,
         #[command(flatten)]
         window: Window,
+        /// The DICOM series to convert (its SeriesInstanceUID), where the folder holds several.
+        #[arg(long, value_name = "UID")]
+        series: Option<String>,
+    },
+    /// A DICOM series: a folder of single-frame slices, or one of its files (which chooses its
+    /// series); RescaleSlope and RescaleIntercept applied per slice.
+    Dicom {
+        input: PathBuf,
+        output: PathBuf,
+        #[command(flatten)]
+        window: Window,
+        /// The series to convert (its SeriesInstanceUID), where the folder holds several.
+        #[arg(long, value_name = "UID")]
+        series: Option<String>,
     },
     /// A headerless raw volume, x fastest, then y, then z.
     Raw {
@@ -487,8 +508,9 @@ fn info(path: &Path) -> Res<()> {
 
 /// The names of the subcommands (a first argument that is none of them, nor an option, is an
 /// input file: `vlconvert IN OUT.vlb`).
-const SUBCOMMANDS: [&str; 8] = [
+const SUBCOMMANDS: [&str; 9] = [
     "convert",
+    "dicom",
     "raw",
     "image",
     "nifti",
@@ -504,9 +526,17 @@ fn nrrd_file(input: &Path, output: &Path, window: &Window) -> Res<()> {
     convert(&v.source(), window, output, v.geometry)
 }
 
-/// Converts `input`, whose format its first bytes tell.
-fn auto(input: &Path, output: &Path, window: &Window) -> Res<()> {
-    match detect::format(input)? {
+/// Converts `input`, whose format its first bytes tell (a folder: a DICOM series).
+fn auto(input: &Path, output: &Path, window: &Window, series: Option<&str>) -> Res<()> {
+    let format = detect::format(input)?;
+    if series.is_some() && format != detect::Format::Dicom {
+        return Err(format!(
+            "{}: --series chooses a DICOM series, and this is {format:?}",
+            input.display()
+        ));
+    }
+    match format {
+        detect::Format::Dicom => dicom::convert(input, output, window, series),
         detect::Format::Nifti => nifti(input, output, window),
         detect::Format::Nrrd => nrrd_file(input, output, window),
         detect::Format::MetaImage => metaimage::convert(input, output, window),
@@ -570,7 +600,14 @@ fn main() -> ExitCode {
             input,
             output,
             window,
-        } => auto(input, output, window),
+            series,
+        } => auto(input, output, window, series.as_deref()),
+        Cmd::Dicom {
+            input,
+            output,
+            window,
+            series,
+        } => dicom::convert(input, output, window, series.as_deref()),
         Cmd::Metaimage {
             input,
             output,
