@@ -49,25 +49,6 @@ static void slab(void)
     vlEnd();
 }
 
-/* The whole file at `path` (its size in *n); NULL if unreadable. */
-static unsigned char *slurp(const char *path, long *n)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *b;
-    if (!f)
-        return NULL;
-    fseek(f, 0, SEEK_END);
-    *n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    b = malloc((size_t)*n + 1);
-    if (b && fread(b, 1, (size_t)*n, f) != (size_t)*n) {
-        free(b);
-        b = NULL;
-    }
-    fclose(f);
-    return b;
-}
-
 /* The body of a file after its header `header`; NULL unless the file starts with it and has
    `bytes` bytes after it. */
 static unsigned char *body(unsigned char *file, long n, const char *header, long bytes)
@@ -76,16 +57,6 @@ static unsigned char *body(unsigned char *file, long n, const char *header, long
     if (!file || n != h + bytes || memcmp(file, header, (size_t)h) != 0)
         return NULL;
     return file + h;
-}
-
-/* Whether every byte of b[0 .. n) is v. */
-static int all(const unsigned char *b, unsigned long n, unsigned char v)
-{
-    unsigned long i;
-    for (i = 0; i < n; i++)
-        if (b[i] != v)
-            return 0;
-    return 1;
 }
 
 static int progress_calls = 0, progress_cancels = 0;
@@ -136,7 +107,7 @@ int main(void)
     memset(rgb8, 0xA5, px * 3 + 16);
     ok = vlRenderBuffer(rgb8, px * 3, W, H, aspect, VL_RGB8);
     check("at library scope: VL_FALSE, VL_BADSCOPE, nothing written",
-          ok == VL_FALSE && vlError() == VL_BADSCOPE && all(rgb8, px * 3 + 16, 0xA5));
+          ok == VL_FALSE && vlError() == VL_BADSCOPE && all_bytes(rgb8, px * 3 + 16, 0xA5));
 
     slab();
     vlImage("b.ppm", aspect, W, H);
@@ -148,7 +119,7 @@ int main(void)
     check("a NULL buffer: VL_FALSE, VL_NULLPOINTER", ok == VL_FALSE && vlError() == VL_NULLPOINTER);
     ok = vlRenderBuffer(rgb8, px * 3 - 1, W, H, aspect, VL_RGB8);
     check("a buffer one byte short: VL_BADVALUE, nothing written",
-          ok == VL_FALSE && vlError() == VL_BADVALUE && all(rgb8, px * 3 + 16, 0xA5));
+          ok == VL_FALSE && vlError() == VL_BADVALUE && all_bytes(rgb8, px * 3 + 16, 0xA5));
     ok = vlRenderBuffer(rgb8, px * 3, W, H, aspect, 0);
     c = vlError();
     ok |= vlRenderBuffer(rgb8, px * 3, W, H, aspect, VL_RGBA32F + 1);
@@ -160,15 +131,15 @@ int main(void)
     c = c == VL_BADVALUE && vlError() == VL_BADVALUE;
     ok |= vlRenderBuffer(rgb8, px * 3, W, H, 0.0f, VL_RGB8);
     check("width 0, height -3, aspect 0: VL_BADVALUE, nothing written",
-          ok == VL_FALSE && c && vlError() == VL_BADVALUE && all(rgb8, px * 3 + 16, 0xA5));
+          ok == VL_FALSE && c && vlError() == VL_BADVALUE && all_bytes(rgb8, px * 3 + 16, 0xA5));
 
     /* The renders, with progress. */
     vlProgress(progress, NULL);
     ok = vlRenderBuffer(rgb8, px * 3 + 16, W, H, aspect, VL_RGB8);
-    sprintf(line, "VL_RGB8 renders (%d), progress %d call(s) ending at %g, bytes past it kept",
+    sprintf(line, "VL_RGB8 renders (%d), progress %d call_bytes(s) ending at %g, bytes past it kept",
             (int)ok, progress_calls, (double)progress_last);
     check(line, ok == VL_TRUE && vlError() == VL_NOERROR && progress_calls >= 1 &&
-                    progress_last == 1.0f && all(rgb8 + px * 3, 16, 0xA5));
+                    progress_last == 1.0f && all_bytes(rgb8 + px * 3, 16, 0xA5));
     ok = vlRenderBuffer(rgba8, px * 4, W, H, aspect, VL_RGBA8);
     ok &= vlRenderBuffer(rgb16, px * 6, W, H, aspect, VL_RGB16);
     ok &= vlRenderBuffer(rgba16, px * 8, W, H, aspect, VL_RGBA16);
@@ -196,13 +167,13 @@ int main(void)
     check("the scene's files are written", vlError() == VL_NOERROR);
 
     /* The buffers against the files. */
-    file = slurp("b.ppm", &n);
+    file = read_file("b.ppm", &n);
     sprintf(line, "P6\n%d %d\n255\n", W, H);
     b = body(file, n, line, (long)px * 3);
     check("VL_RGB8 is the .ppm byte for byte", b && memcmp(b, rgb8, px * 3) == 0);
     free(file);
 
-    file = slurp("b.rgb16.ppm", &n);
+    file = read_file("b.rgb16.ppm", &n);
     sprintf(line, "P6\n%d %d\n65535\n", W, H);
     b = body(file, n, line, (long)px * 6);
     for (bad = 0, i = 0; b && i < px * 3; i++)
@@ -210,7 +181,7 @@ int main(void)
     check("VL_RGB16 is the .rgb16.ppm (big-endian) value for value", b && bad == 0);
     free(file);
 
-    file = slurp("b.pfm", &n);
+    file = read_file("b.pfm", &n);
     sprintf(line, "PF\n%d %d\n-1.0\n", W, H);
     b = body(file, n, line, (long)px * 12);
     for (bad = 0, y = 0; b && y < H; y++)
@@ -240,7 +211,7 @@ int main(void)
     }
     check(line, ok);
     check("a corner the slab misses is transparent black",
-          all(rgba8, 4, 0) && rgba16[0] == 0 && rgba16[3] == 0 && rgba32[0] == 0.0f &&
+          all_bytes(rgba8, 4, 0) && rgba16[0] == 0 && rgba16[3] == 0 && rgba32[0] == 0.0f &&
               rgba32[3] == 0.0f);
     for (bad = 0, i = 0; i < px * 4; i++)
         bad += rgba8[i] != (rgba16[i] * 255UL + 32767UL) / 65535UL;
