@@ -430,19 +430,58 @@ fn scanned(background: [f32; 3], packets: bool) -> Library {
     vl
 }
 
+/// A glass ball (surfaces that refract, opacity 0.3) over nothing: its pixels' rays bend and
+/// leave the scene, so their transmittance is followed through the refractions.
+fn glass(background: [f32; 3]) -> Library {
+    let mut vl = Library::new();
+    vl.scene().unwrap();
+    vl.camera(&Camera {
+        eye: [50.0, 60.0, -150.0],
+        at: [50.0, 50.0, 50.0],
+        up: [0.0, 1.0, 0.0],
+        fov: 40.0,
+    })
+    .unwrap();
+    let [r, g, b] = background;
+    vl.background(r, g, b).unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.render_type(vlib::RenderType::Dsr).unwrap();
+    vl.surface(Fields::F, 0.5).unwrap();
+    vl.toggle(vlib::Feature::Refract, true).unwrap();
+    vl.step_size(0.5, 1.0).unwrap();
+    vl.object().unwrap();
+    vl.scale(100.0, 100.0, 100.0).unwrap();
+    vl.function(Fields::F, |s| {
+        let v = vlib::vlaux::sphere(s.position());
+        s.set(Fields::F, v).unwrap();
+    })
+    .unwrap();
+    vl.set(Fields::O, 0.3).unwrap();
+    vl.set(Fields::R, 0.8).unwrap();
+    vl.set(Fields::G, 0.6).unwrap();
+    vl.set(Fields::B, 0.2).unwrap();
+    vl.set(Fields::KA, 1.0).unwrap();
+    vl.set(Fields::RF, vlib::types::refraction_to_field(1.5))
+        .unwrap();
+    vl.end().unwrap();
+    vl
+}
+
 /// Compositing works: the 16-bit RGBA file of a scene, decoded and laid over a background B
 /// (`straight·α + (1 − α)·B`), is the scene rendered over B within 1.5 steps of 16 bits
 /// (the colour's and alpha's rounding), for two backgrounds, for the field-function bands,
-/// the lit ball and the scanned volume with and without the packet march; and the float RGBA
+/// the lit ball, the glass ball (transmittance through refractions) and the scanned volume
+/// with and without the packet march; and the float RGBA
 /// render (premultiplied: `C + (1 − α)·B`) is it within 10⁻⁵. (Without super-sampling: its
 /// refinement depends on what the pixels are compared in, `docs/images.md`.)
 #[test]
 fn rgba_composited_over_a_background_is_the_render_over_it() {
     let dir = scratch("over");
     type Scene<'a> = &'a dyn Fn([f32; 3]) -> Library;
-    let scenes: [(&str, Scene); 4] = [
+    let scenes: [(&str, Scene); 5] = [
         ("bands", &bands),
         ("ball", &|_| ball(1)),
+        ("glass", &glass),
         ("scanned", &|b| scanned(b, false)),
         ("packets", &|b| scanned(b, true)),
     ];
