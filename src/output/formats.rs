@@ -63,12 +63,12 @@ impl ImageFormat {
         let mut parts = name.rsplit('.');
         let ext = parts.next().filter(|_| name.contains('.'));
         let modifier = parts.next().and_then(|m| {
-            // A name that is only ".rgba.png" has no stem: its modifier is its stem.
+            // In `rgba.png` or `.rgba.png` the word is the stem, not a modifier.
             let has_stem = name.len() > m.len() + ext.map_or(0, str::len) + 2;
             MODIFIERS
                 .iter()
                 .find(|(word, _)| *word == m && has_stem)
-                .map(|&(word, pixels)| (word, pixels))
+                .copied()
         });
         let bad = |why: String| -> Result<ImageFormat> {
             err(ErrorCode::BadFile, format!("{}: {why}", path.display()))
