@@ -461,11 +461,7 @@ fn slab_exact(size: u32, linear: bool) -> Image {
             pixels.push(px);
         }
     }
-    Image {
-        width: size,
-        height: size,
-        pixels,
-    }
+    Image::from_rgb(size, size, pixels)
 }
 
 /// The iso-sphere: F = `vlaux::sphere` on a 100-unit cube, its 0.5 iso-surface a sphere of
@@ -526,11 +522,7 @@ fn sphere_exact(size: u32) -> Image {
             });
         }
     }
-    Image {
-        width: size,
-        height: size,
-        pixels,
-    }
+    Image::from_rgb(size, size, pixels)
 }
 
 /// Silhouette and depth errors of a rendered iso-sphere against the closed form: pixels the

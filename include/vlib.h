@@ -326,6 +326,36 @@ typedef vlfloat vlvector[3];
 #define VL_Z 4
 
 /*
+ Extension: 8-bit RGB, 3 bytes a pixel, the scene over its background.
+ */
+#define VL_RGB8 1
+
+/*
+ Extension: 8-bit RGBA, 4 bytes a pixel, transparent backdrop, straight colour and alpha.
+ */
+#define VL_RGBA8 2
+
+/*
+ Extension: 16-bit RGB, 3 native-endian unsigned shorts a pixel.
+ */
+#define VL_RGB16 3
+
+/*
+ Extension: 16-bit RGBA, 4 native-endian unsigned shorts a pixel, straight colour.
+ */
+#define VL_RGBA16 4
+
+/*
+ Extension: float RGB, 3 native-endian floats a pixel, in [0, 1].
+ */
+#define VL_RGB32F 5
+
+/*
+ Extension: float RGBA, 4 native-endian floats a pixel, premultiplied colour and alpha.
+ */
+#define VL_RGBA32F 6
+
+/*
  The specular exponent that the field value 1 stands for.
  */
 #define VL_MAXSPECULAR 128.0
@@ -655,6 +685,37 @@ void vlProgress(vlint (*f)(vlfloat done, void *misc), void *misc);
  render in progress it does nothing.
  */
 void vlCancel(void);
+
+/*
+ Extension. Renders the open scene (at scene scope, outside objects) into `buf`, as `vlImage`
+ would render it but without closing the scene or writing a file: `width` x `height` pixels
+ whose view plane has the width / height `aspect`, in the pixel format `format` (`VL_RGB8`,
+ `VL_RGBA8`, `VL_RGB16`, `VL_RGBA16`, `VL_RGB32F`, `VL_RGBA32F`): row-major, top row first,
+ channels interleaved, 16-bit and float values in the machine's byte order, any alignment.
+ RGB formats show the scene over its background; RGBA formats render it against a
+ transparent backdrop, alpha 1 - T (T the transmittance of the pixel's primary ray), with
+ straight colour in the integer formats (as a PNG holds it) and premultiplied colour in
+ `VL_RGBA32F` (docs/images.md). The image takes width * height * (bytes of a pixel) bytes at
+ the start of `buf` (`bytes` is an `unsigned long`, as the header includes no other header
+ for `size_t`); the rest of its `bytes` is left as it is. Returns `VL_TRUE` when the
+ image was rendered, `VL_FALSE` on error (recorded for `vlError`): `VL_BADSCOPE` outside
+ scene scope or while a scene renders, `VL_BADENUM` for an unknown format,
+ `VL_NULLPOINTER` for a NULL `buf`, `VL_BADVALUE` for a size or aspect `vlImage` refuses or
+ a `bytes` too small for the image; such a call writes nothing. The render follows
+ `vlProgress` and stops at `vlCancel` like a scene's (then `VL_CANCELLED`); rows are
+ written as they are finished, so a render that fails after it started leaves the rows
+ finished before it written and the others as they were.
+
+ # Safety
+ `buf` must be NULL or point to `bytes` writable bytes, not accessed by another thread
+ during the call.
+ */
+vlint vlRenderBuffer(void *buf,
+                     unsigned long bytes,
+                     vlint width,
+                     vlint height,
+                     vlfloat aspect,
+                     vlint format);
 
 /* Field value encoding a specular exponent e. */
 #define VLSPECULAR(e) ((vlfloat)(e) / VL_MAXSPECULAR)

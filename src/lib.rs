@@ -10,8 +10,10 @@
 //! as `libvlib.a` / `libvlib.so`) is a thin layer over [`Library`].
 //!
 //! The public API is what this page lists: [`Library`] and the types its methods take and
-//! return, the auxiliary library [`vlaux`], the CVG operators [`cvg`], the command table
-//! [`scope`], the base [`types`], and two file helpers ([`write_image`], [`write_atomic`]).
+//! return (among them the rendered [`Image`], its [`Backdrop`] and the [`PixelFormat`]s of
+//! [`Library::render_into`]), the auxiliary library [`vlaux`], the CVG operators [`cvg`], the
+//! command table [`scope`], the base [`types`], and two file helpers ([`write_image`],
+//! [`write_atomic`]).
 //! Everything else is internal, in layers that import downward only (`docs/dev/architecture.md`):
 //! `api` (the state machine) → `output` (the one place that writes files) → `render` (scene →
 //! immutable plan → pixels) → `accel` (empty-space skipping) → `model` (plain scene data and the
@@ -60,7 +62,7 @@ pub use model::program::{FieldFn, NormalFn, Sample, SampleRole};
 pub use model::scene::{Camera, Optimise, DEFAULT_FOV};
 pub use model::{cvg, vlaux};
 pub use output::{write_atomic, write_image};
-pub use render::{Image, Plan};
+pub use render::{Backdrop, Image, PixelFormat, Plan};
 pub use types::{
     Attenuation, DatasetId, Feature, Fields, Interpolation, MappingId, MappingType, RenderType,
     T_MIN,

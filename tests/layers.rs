@@ -21,7 +21,7 @@ const LAYERS: [&[&str]; 7] = [
 
 /// The names `src/lib.rs` re-exports at the crate root, with the layer each comes from, so that
 /// `crate::Library` counts as a path into `api`.
-const ROOT: [(&str, &str); 32] = [
+const ROOT: [(&str, &str); 34] = [
     ("Library", "api"),
     ("Closed", "api"),
     ("Sampler", "api"),
@@ -32,6 +32,8 @@ const ROOT: [(&str, &str); 32] = [
     ("write_atomic", "output"),
     ("write_image", "output"),
     ("Image", "render"),
+    ("Backdrop", "render"),
+    ("PixelFormat", "render"),
     ("Plan", "render"),
     ("Sample", "model"),
     ("SampleRole", "model"),

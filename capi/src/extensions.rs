@@ -4,16 +4,18 @@
 //!
 //! - `vlProgress` registers a progress function for the renders of the library's scenes.
 //! - `vlCancel` stops the render in progress, from any thread.
+//! - `vlRenderBuffer` renders the open scene into the caller's memory.
 //!
-//! The core's [`vlib_core::RenderControl`] does the work; this module holds the C forms: the
-//! process's cancel flag and the wrapper of the C progress function.
+//! The core's [`vlib_core::RenderControl`] and [`Library::render_into`] do the work; this
+//! module holds the C forms: the process's cancel flag, the wrapper of the C progress
+//! function, and the checks of the buffer's pointer, size and format.
 
-use crate::ffi::{ffi_boundary, lock_state, rendering};
+use crate::ffi::{ffi_boundary, lock_state, null, rendering, Rendering};
 use crate::sample;
-use crate::types::{vlfloat, vlint};
-use std::os::raw::c_void;
+use crate::types::{vlfloat, vlint, VL_FALSE, VL_TRUE};
+use std::os::raw::{c_ulong, c_void};
 use std::sync::{Arc, OnceLock};
-use vlib_core::{CancelFlag, Error, ErrorCode, Library, RenderControl, Result};
+use vlib_core::{CancelFlag, Error, ErrorCode, Library, PixelFormat, RenderControl, Result};
 
 /// The process's cancel flag: set by `vlCancel` while a scene renders, cleared when a render
 /// starts and when it ends.
@@ -114,5 +116,81 @@ pub extern "C" fn vlCancel() {
             cancel_flag().cancel();
         }
         Ok(())
+    })
+}
+
+/// Extension. Renders the open scene (at scene scope, outside objects) into `buf`, as `vlImage`
+/// would render it but without closing the scene or writing a file: `width` x `height` pixels
+/// whose view plane has the width / height `aspect`, in the pixel format `format` (`VL_RGB8`,
+/// `VL_RGBA8`, `VL_RGB16`, `VL_RGBA16`, `VL_RGB32F`, `VL_RGBA32F`): row-major, top row first,
+/// channels interleaved, 16-bit and float values in the machine's byte order, any alignment.
+/// RGB formats show the scene over its background; RGBA formats render it against a
+/// transparent backdrop, alpha 1 - T (T the transmittance of the pixel's primary ray), with
+/// straight colour in the integer formats (as a PNG holds it) and premultiplied colour in
+/// `VL_RGBA32F` (docs/images.md). The image takes width * height * (bytes of a pixel) bytes at
+/// the start of `buf` (`bytes` is an `unsigned long`, as the header includes no other header
+/// for `size_t`); the rest of its `bytes` is left as it is. Returns `VL_TRUE` when the
+/// image was rendered, `VL_FALSE` on error (recorded for `vlError`): `VL_BADSCOPE` outside
+/// scene scope or while a scene renders, `VL_BADENUM` for an unknown format,
+/// `VL_NULLPOINTER` for a NULL `buf`, `VL_BADVALUE` for a size or aspect `vlImage` refuses or
+/// a `bytes` too small for the image; such a call writes nothing. The render follows
+/// `vlProgress` and stops at `vlCancel` like a scene's (then `VL_CANCELLED`); rows are
+/// written as they are finished, so a render that fails after it started leaves the rows
+/// finished before it written and the others as they were.
+///
+/// # Safety
+/// `buf` must be NULL or point to `bytes` writable bytes, not accessed by another thread
+/// during the call.
+#[no_mangle]
+pub unsafe extern "C" fn vlRenderBuffer(
+    buf: *mut c_void,
+    bytes: c_ulong,
+    width: vlint,
+    height: vlint,
+    aspect: vlfloat,
+    format: vlint,
+) -> vlint {
+    ffi_boundary(VL_FALSE, || {
+        const NAME: &str = "vlRenderBuffer";
+        if sample::active() || rendering() {
+            return Err(Error::new(
+                ErrorCode::BadScope,
+                format!("{NAME}: not while a scene renders"),
+            ));
+        }
+        let state = lock_state();
+        let lib: &Library = match state.as_ref() {
+            Some(lib) if lib.scope() == vlib_core::Scope::Scene => lib,
+            _ => {
+                return Err(Error::new(
+                    ErrorCode::BadScope,
+                    format!("{NAME}: at scene scope (outside objects) only"),
+                ))
+            }
+        };
+        let format = PixelFormat::from_raw(format)?;
+        if buf.is_null() {
+            return Err(null(NAME, "buf"));
+        }
+        let side = |v: vlint| u32::try_from(v).ok().filter(|&v| v >= 1);
+        let (Some(w), Some(h)) = (side(width), side(height)) else {
+            return Err(Error::new(
+                ErrorCode::BadValue,
+                format!("{NAME}: size {width}x{height}"),
+            ));
+        };
+        // Only the image's bytes are handed on (a `bytes` too small is the core's error).
+        let bytes = usize::try_from(bytes).unwrap_or(usize::MAX);
+        let len = format
+            .image_bytes(w, h)
+            .map_or(bytes, |n| n.min(bytes))
+            .min(isize::MAX as usize);
+        // SAFETY: `buf` is not NULL and, by the caller's contract, `bytes` ≥ `len` writable
+        // bytes that no one else accesses during the call; `len` ≤ isize::MAX. The slice is
+        // only written, never read, so its bytes need not have been initialised.
+        let buffer = unsafe { std::slice::from_raw_parts_mut(buf.cast::<u8>(), len) };
+        let _rendering = Rendering::start(lib.sampler());
+        lib.render_into(w, h, aspect, format, buffer)?;
+        Ok(VL_TRUE)
     })
 }

@@ -177,6 +177,22 @@ pub const VL_Y: vlint = 2;
 pub const VL_Z: vlint = 4;
 
 // ---------------------------------------------------------------------------------------------
+// Pixel formats (extension: `vlRenderBuffer`; docs/images.md)
+
+/// Extension: 8-bit RGB, 3 bytes a pixel, the scene over its background.
+pub const VL_RGB8: vlint = 1;
+/// Extension: 8-bit RGBA, 4 bytes a pixel, transparent backdrop, straight colour and alpha.
+pub const VL_RGBA8: vlint = 2;
+/// Extension: 16-bit RGB, 3 native-endian unsigned shorts a pixel.
+pub const VL_RGB16: vlint = 3;
+/// Extension: 16-bit RGBA, 4 native-endian unsigned shorts a pixel, straight colour.
+pub const VL_RGBA16: vlint = 4;
+/// Extension: float RGB, 3 native-endian floats a pixel, in [0, 1].
+pub const VL_RGB32F: vlint = 5;
+/// Extension: float RGBA, 4 native-endian floats a pixel, premultiplied colour and alpha.
+pub const VL_RGBA32F: vlint = 6;
+
+// ---------------------------------------------------------------------------------------------
 // Normalisation of the specular exponent and the refraction index
 
 /// The specular exponent that the field value 1 stands for.
@@ -190,7 +206,9 @@ pub const VL_MAXREFRACTION: vlfloat = 3.0;
 mod checks {
     use super::*;
     use vlib_core::types::{axes, FIELD_COUNT, FIELD_NAMES, MAX_REFRACTION, MAX_SPECULAR};
-    use vlib_core::{Attenuation, ErrorCode, Feature, Interpolation, MappingType, RenderType};
+    use vlib_core::{
+        Attenuation, ErrorCode, Feature, Interpolation, MappingType, PixelFormat, RenderType,
+    };
 
     macro_rules! same {
         ($($c:expr => $core:expr),+ $(,)?) => { $(const _: () = assert!($c as i64 == $core as i64);)+ };
@@ -282,7 +300,15 @@ mod checks {
         VL_X => axes::X,
         VL_Y => axes::Y,
         VL_Z => axes::Z,
+        VL_RGB8 => PixelFormat::Rgb8,
+        VL_RGBA8 => PixelFormat::Rgba8,
+        VL_RGB16 => PixelFormat::Rgb16,
+        VL_RGBA16 => PixelFormat::Rgba16,
+        VL_RGB32F => PixelFormat::Rgb32F,
+        VL_RGBA32F => PixelFormat::Rgba32F,
     }
+    // Every pixel format of the core has a constant above.
+    const _: () = assert!(PixelFormat::ALL.len() == 6);
     // Every code of the core has a constant above: a new core code fails the build here.
     const _: () = assert!(ErrorCode::ALL.len() == 19);
     const _: () = assert!(VL_MAXSPECULAR == MAX_SPECULAR);

@@ -244,8 +244,9 @@ impl Library {
         Ok(())
     }
 
-    /// `vlImage`: requests an image of the scene. The extension (`.ppm`, `.png`, any case) selects
-    /// the format; `aspect` is the view plane's width / height.
+    /// `vlImage`: requests an image of the scene. The end of the file's name (any case) selects
+    /// the format: `.ppm`, `.png`, `.rgb16.png`, `.rgb16.ppm`, `.rgba.png`, `.rgba16.png`,
+    /// `.pfm` (`docs/images.md`); `aspect` is the view plane's width / height.
     pub fn image(
         &mut self,
         path: impl AsRef<Path>,

@@ -1,5 +1,6 @@
 //! What the Rust API adds to the commands, at library or scene scope: rendering the open scene
-//! to memory ([`Library::render_preview`]), its render plan ([`Library::render_plan`]), the
+//! to memory ([`Library::render`], [`Library::render_into`] a caller's buffer, which the C
+//! extension `vlRenderBuffer` uses), its render plan ([`Library::render_plan`]), the
 //! pixel-preserving speed-ups ([`Library::set_optimise`]), progress and cancellation
 //! ([`Library::set_render_control`]) and a snapshot of the state for tests
 //! ([`Library::fingerprint`]). None of these is a command of the C API; only `set_optimise`
@@ -10,27 +11,76 @@ use super::library::{positive, Library, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE};
 use crate::api::scope::Scope;
 use crate::error::{err, ErrorCode, Result};
 use crate::model::scene::SceneDesc;
+use crate::render::{Backdrop, Image, PixelFormat};
 
 impl Library {
-    /// Renders the open scene (at scene scope) to an image in memory without closing it or
-    /// writing its outputs: a preview for Rust users and tests. Not a command of the C API.
-    pub fn render_preview(&self, width: u32, height: u32, aspect: f32) -> Result<crate::Image> {
-        let desc = self.open_scene("render_preview")?;
-        positive("render_preview", &[aspect])?;
-        let side = 1..=MAX_IMAGE_SIDE as u32;
-        if !side.contains(&width)
-            || !side.contains(&height)
-            || width as u64 * height as u64 > MAX_IMAGE_PIXELS
-        {
-            return err(
-                ErrorCode::BadValue,
-                format!("render_preview: size {width}x{height}"),
-            );
-        }
+    /// Renders the open scene (at scene scope) to an image in memory, without closing it or
+    /// writing its outputs: `width × height` pixels (each side 1 … [`MAX_IMAGE_SIDE`], at most
+    /// [`MAX_IMAGE_PIXELS`] in all, else `BadValue`) whose view plane has the width / height
+    /// `aspect` (positive, else `BadValue`), as `vlImage` would render it; against `backdrop`
+    /// ([`Backdrop::Background`] for what an RGB file shows, [`Backdrop::Transparent`] for
+    /// colour over black and alpha `1 − T`, what an RGBA file holds: `docs/images.md`). It
+    /// follows [`Library::set_render_control`] like a scene's `end`. Not a command of the C
+    /// API (its extension `vlRenderBuffer` renders into a buffer: [`Library::render_into`]).
+    pub fn render(
+        &self,
+        width: u32,
+        height: u32,
+        aspect: f32,
+        backdrop: Backdrop,
+    ) -> Result<Image> {
+        let desc = self.open_scene("render")?;
+        check_size("render", width, height, aspect)?;
         crate::pool::install(|| {
             let progress =
                 crate::control::Progress::new(&self.control, width as u64 * height as u64);
-            crate::render::render_image(&self.compile(&desc)?, width, height, aspect, &progress)
+            let scene = self.compile(&desc)?;
+            crate::render::render_image(&scene, (width, height, aspect), backdrop, &progress)
+        })
+    }
+
+    /// [`Library::render`] against the background: the image an RGB file of the scene shows.
+    pub fn render_preview(&self, width: u32, height: u32, aspect: f32) -> Result<Image> {
+        self.render(width, height, aspect, Backdrop::Background)
+    }
+
+    /// Renders the open scene (at scene scope) as [`Library::render`] does, against the
+    /// backdrop of `format` ([`PixelFormat::backdrop`]), into `buffer`: its first
+    /// [`PixelFormat::image_bytes`] bytes get the pixels in `format` (row-major, top row first,
+    /// the machine's byte order: [`Image::to_bytes`], byte for byte), the rest is left as it
+    /// is. A buffer shorter than that is refused with `BadValue`, and so are the sizes
+    /// `render` refuses; a refused call writes nothing. Rows are written a strip at a time
+    /// as they are finished: where the render fails after it started (`Cancelled`,
+    /// `NoMemory`, `Internal`), the rows finished before it are written and the others left
+    /// as they were. No memory beyond a strip of the render is taken (about 2²⁰ pixels).
+    pub fn render_into(
+        &self,
+        width: u32,
+        height: u32,
+        aspect: f32,
+        format: PixelFormat,
+        buffer: &mut [u8],
+    ) -> Result<()> {
+        let desc = self.open_scene("render_into")?;
+        check_size("render_into", width, height, aspect)?;
+        let needed = format.image_bytes(width, height);
+        let Some(bytes) = needed.filter(|&n| n <= buffer.len()) else {
+            return err(
+                ErrorCode::BadValue,
+                format!(
+                    "render_into: a {width}x{height} image of {format:?} takes {} bytes, the \
+                     buffer has {}",
+                    needed.map_or("more than usize::MAX".into(), |n| n.to_string()),
+                    buffer.len()
+                ),
+            );
+        };
+        let buffer = &mut buffer[..bytes];
+        crate::pool::install(|| {
+            let progress =
+                crate::control::Progress::new(&self.control, width as u64 * height as u64);
+            let scene = self.compile(&desc)?;
+            crate::render::render_into(&scene, (width, height, aspect), format, &progress, buffer)
         })
     }
 
@@ -99,7 +149,7 @@ impl Library {
     /// stops a render from any thread, and a progress function called with the fraction done
     /// on one of the library's rendering threads (returning `false` cancels; see
     /// [`crate::ProgressFn`]). They apply to the scene's outputs at
-    /// its `end` and to [`Library::render_preview`]; a cancelled render fails with
+    /// its `end` and to [`Library::render`] and [`Library::render_into`]; a cancelled render fails with
     /// [`ErrorCode::Cancelled`] and writes no file of the output it was making (outputs
     /// finished before it are written). Not a command of the C API (its extensions
     /// `vlProgress` and `vlCancel` use it).
@@ -113,4 +163,25 @@ impl Library {
     pub fn fingerprint(&self) -> String {
         format!("{self:?}")
     }
+}
+
+/// Accepts the size and aspect of an image rendered to memory: each side 1 …
+/// [`MAX_IMAGE_SIDE`], at most [`MAX_IMAGE_PIXELS`] pixels, a positive finite aspect; else
+/// `BadValue`.
+fn check_size(what: &str, width: u32, height: u32, aspect: f32) -> Result<()> {
+    positive(what, &[aspect])?;
+    let side = 1..=MAX_IMAGE_SIDE as u32;
+    if !side.contains(&width)
+        || !side.contains(&height)
+        || width as u64 * height as u64 > MAX_IMAGE_PIXELS
+    {
+        return err(
+            ErrorCode::BadValue,
+            format!(
+                "{what}: size {width}x{height} (each side 1 … {MAX_IMAGE_SIDE}, at most \
+                 {MAX_IMAGE_PIXELS} pixels)"
+            ),
+        );
+    }
+    Ok(())
 }

@@ -1,54 +1,18 @@
-//! Image files: binary PPM (P6) and PNG encoding, and the atomic write of any file.
+//! The atomic write of any file.
 //!
 //! Every file is written to a temporary file in the destination directory, created exclusively
 //! under an unpredictable name, and renamed over the destination only when complete, so a failed
 //! write leaves no partial file and an existing file is replaced only by a complete new one
 //! ([`write_atomic`] lists the rules).
 //!
-//! It owns the encodings and the writing; which files a scene asks for, and their pixels, are
-//! decided above it (`render_outputs`) and below it (the renderer).
+//! It owns the writing; which files a scene asks for, their encodings and their pixels are
+//! decided beside it (`render_outputs`, `formats`) and below it (the renderer).
 
 use crate::error::{err, Error, ErrorCode, Result};
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
-
-/// The image formats `vlImage` accepts, chosen by the file extension (any case).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ImageFormat {
-    /// Binary PPM, `P6`, 8 bits per channel.
-    Ppm,
-    /// PNG, 8-bit RGB.
-    Png,
-}
-
-impl ImageFormat {
-    /// The format for a path, from its extension.
-    pub fn from_path(path: &Path) -> Result<ImageFormat> {
-        if path.file_name().is_none() {
-            return err(
-                ErrorCode::BadFile,
-                format!("{}: not a file name", path.display()),
-            );
-        }
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase());
-        match ext.as_deref() {
-            Some("ppm") => Ok(ImageFormat::Ppm),
-            Some("png") => Ok(ImageFormat::Png),
-            _ => err(
-                ErrorCode::BadFile,
-                format!(
-                    "{}: unsupported image format (use .ppm or .png)",
-                    path.display()
-                ),
-            ),
-        }
-    }
-}
 
 /// How many links [`destination`] follows before it gives up (as the kernel's `ELOOP`).
 const MAX_LINKS: usize = 40;
@@ -216,6 +180,11 @@ impl AtomicFile {
         })
     }
 
+    /// The path the caller named.
+    pub(crate) fn path(&self) -> &Path {
+        &self.path
+    }
+
     /// The error of a failed write, with the caller's path.
     fn io(&self, e: std::io::Error) -> Error {
         Error::new(ErrorCode::IoError, format!("{}: {e}", self.path.display()))
@@ -302,44 +271,4 @@ pub(crate) fn write_sidecar(
             _ => Ok(()),
         },
     }
-}
-
-/// Encodes 8-bit RGB pixels (row-major, top row first) in the format of `path` (by its
-/// extension) and writes them atomically, encoding straight into the file: PPM with no copy of
-/// the pixels, PNG with the compressed stream (at most about the pixels' size) held once.
-pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
-    let format = ImageFormat::from_path(path)?;
-    encode_into(AtomicFile::create(path)?, format, width, height, rgb)
-}
-
-/// [`write_image`] into a file already started (so that a destination that cannot be written
-/// is known before the pixels are rendered).
-pub(crate) fn encode_into(
-    mut f: AtomicFile,
-    format: ImageFormat,
-    width: u32,
-    height: u32,
-    rgb: &[u8],
-) -> Result<()> {
-    assert_eq!(rgb.len(), width as usize * height as usize * 3);
-    let path = f.path.clone();
-    let path = path.as_path();
-    match format {
-        ImageFormat::Ppm => {
-            f.write(format!("P6\n{width} {height}\n255\n").as_bytes())?;
-            f.write(rgb)?;
-        }
-        ImageFormat::Png => {
-            use image::ImageEncoder;
-            image::codecs::png::PngEncoder::new(f.writer())
-                .write_image(rgb, width, height, image::ExtendedColorType::Rgb8)
-                .map_err(|e| match e {
-                    image::ImageError::IoError(e) => {
-                        Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()))
-                    }
-                    e => Error::new(ErrorCode::Internal, format!("PNG encoding failed: {e}")),
-                })?;
-        }
-    }
-    f.commit()
 }

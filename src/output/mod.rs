@@ -2,22 +2,24 @@
 //!
 //! [`render_outputs`] compiles a finished scene once, renders each requested image with the
 //! renderer ([`crate::render`], which computes pixels and writes nothing) and voxelizes each
-//! requested volume ([`voxel`]), then writes the files: images through [`write_image`] (PPM or
-//! PNG by extension, `files`), datasets through [`crate::data::Dataset::save`] (defined here,
-//! so that no layer below this one writes a file); every file atomically ([`write_atomic`]). It
-//! does not trace rays or evaluate fields itself.
+//! requested volume ([`voxel`]), then writes the files: images in the format their names ask
+//! for (`formats`: PPM, PNG and PFM, RGB or RGBA, 8, 16 or 32 bits; also [`write_image`] and
+//! [`crate::Image::save`]), datasets through [`crate::data::Dataset::save`] (defined here, so
+//! that no layer below this one writes a file); every file atomically ([`write_atomic`],
+//! `files`). It does not trace rays or evaluate fields itself.
 
 use crate::control::{Progress, RenderControl};
 use crate::error::{Error, ErrorCode, Result};
 use crate::model::scene::{ImageRequest, SceneDesc};
-use crate::num::try_with_capacity;
-use crate::render::{render_strips, Compiled, Grids};
+use crate::render::{render_into, Compiled, Grids};
 
 mod files;
+mod formats;
 mod voxel;
 
-pub(crate) use files::ImageFormat;
-pub use files::{write_atomic, write_image};
+pub use files::write_atomic;
+pub use formats::write_image;
+pub(crate) use formats::ImageFormat;
 
 #[cfg(test)]
 mod tests;
@@ -103,19 +105,24 @@ pub fn render_outputs(desc: &SceneDesc, grids: &Grids, control: &RenderControl) 
     }
 }
 
-/// Renders one requested image and writes it. The memory it takes is the file's 8-bit pixels
-/// (the output's own bytes, held whole for the encoder), a strip of the render, and for PNG
-/// the compressed stream.
+/// Renders one requested image, against the backdrop its pixels call for (transparent for
+/// RGBA), and writes it. The memory it takes is the file's pixels (the output's own bytes,
+/// 3 to 12 a pixel, held whole for the encoder), a strip of the render, and for PNG the
+/// compressed stream (and for 16-bit PNG the encoder's big-endian copy of the pixels).
 fn image(compiled: &Compiled, req: &ImageRequest, progress: &Progress) -> Result<()> {
     let (w, h) = (req.width, req.height);
     // A name the file cannot have, or a destination that cannot be written, is refused
     // before rendering.
-    let format = files::ImageFormat::from_path(&req.path)?;
+    let format = formats::ImageFormat::from_path(&req.path)?;
     let file = files::AtomicFile::create(&req.path)?;
-    let mut rgb: Vec<u8> = try_with_capacity(w as usize * h as usize * 3, "the image's pixels")?;
-    render_strips(compiled, w, h, req.aspect, progress, |_, rows| {
-        rgb.extend(rows.iter().flat_map(|p| p.map(crate::render::to_u8)));
-        Ok(())
-    })?;
-    files::encode_into(file, format, w, h, &rgb)
+    let bytes = format.pixels.image_bytes(w, h);
+    let mut pixels = crate::num::try_vec(bytes.unwrap_or(usize::MAX), 0u8, "the image's pixels")?;
+    render_into(
+        compiled,
+        (w, h, req.aspect),
+        format.pixels,
+        progress,
+        &mut pixels,
+    )?;
+    formats::encode_into(file, format, w, h, &pixels)
 }

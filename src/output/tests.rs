@@ -1,28 +1,57 @@
 //! Unit tests of the output layer: image encoding and atomic writes.
 
 use super::files::*;
+use super::formats::*;
 use crate::error::ErrorCode;
+use crate::render::PixelFormat;
 use std::fs;
 use std::os::unix::fs::FileTypeExt;
 use std::path::Path;
 
+/// Every name of `docs/images.md`'s table gives its format, in any case; a word before the
+/// extension that is not a modifier, or a modifier that is the whole stem, is part of the
+/// name; unknown extensions and modifiers a file type cannot hold are `BadFile`.
 #[test]
-fn formats_by_extension() {
-    assert_eq!(
-        ImageFormat::from_path(Path::new("a.PPM")).unwrap(),
-        ImageFormat::Ppm
-    );
-    assert_eq!(
-        ImageFormat::from_path(Path::new("x/a.png")).unwrap(),
-        ImageFormat::Png
-    );
-    for bad in ["a.jpg", "a", "", "/"] {
-        assert_eq!(
-            ImageFormat::from_path(Path::new(bad)).unwrap_err().code,
-            ErrorCode::BadFile,
-            "{bad}"
-        );
+fn formats_by_name() {
+    use Container::*;
+    use PixelFormat::*;
+    for (name, container, pixels) in [
+        ("a.PPM", Ppm, Rgb8),
+        ("x/a.png", Png, Rgb8),
+        ("a.rgb.png", Png, Rgb8),
+        ("a.RGB8.ppm", Ppm, Rgb8),
+        ("a.rgb16.png", Png, Rgb16),
+        ("a.Rgb16.PPM", Ppm, Rgb16),
+        ("a.rgba.png", Png, Rgba8),
+        ("a.rgba8.png", Png, Rgba8),
+        ("a.rgba16.png", Png, Rgba16),
+        ("a.pfm", Pfm, Rgb32F),
+        ("frame.16.png", Png, Rgb8),
+        ("scan.v2.png", Png, Rgb8),
+        ("rgba.png", Png, Rgb8),
+        (".rgba.png", Png, Rgb8),
+        ("dir.rgba16/a.png", Png, Rgb8),
+    ] {
+        let f = ImageFormat::from_path(Path::new(name)).unwrap();
+        assert_eq!((f.container, f.pixels), (container, pixels), "{name}");
     }
+    for bad in [
+        "a.jpg",
+        "a",
+        "",
+        "/",
+        "a.png.",
+        "a.rgba.ppm",
+        "a.rgba16.ppm",
+        "a.rgb16.pfm",
+        "a.rgba.pfm",
+        "a.rgb.pfm",
+    ] {
+        let e = ImageFormat::from_path(Path::new(bad)).unwrap_err();
+        assert_eq!(e.code, ErrorCode::BadFile, "{bad}");
+    }
+    let e = ImageFormat::from_path(Path::new("a.rgba.ppm")).unwrap_err();
+    assert!(e.message.contains("no alpha"), "{}", e.message);
 }
 
 #[test]

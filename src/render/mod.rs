@@ -7,8 +7,11 @@
 //! can show, see `docs/dev/render-plan.md`), then traces rays over image tiles in parallel
 //! (rayon, `tiles`); every pixel is computed independently in a fixed order, so the bytes of
 //! an image do not depend on the number of threads. [`render_image`] is the entry point and
-//! returns an [`Image`]. It does not write files (the output layer above it does), nor does it
-//! build the scene description (`model`) or the empty-space structures (`accel`); it uses them.
+//! returns an [`Image`]; each pixel carries its colour and the transmittance of its primary
+//! ray, and a render against a transparent [`Backdrop`] shows nothing where rays leave the
+//! scene (RGBA images; their quantisation and layouts are `image`'s). It does not write files
+//! (the output layer above it does), nor does it build the scene description (`model`) or the
+//! empty-space structures (`accel`); it uses them.
 //! It owns the evaluation of programs during a render: the general interpreter is `model`'s
 //! (`program::run`), the lean kernel for programs of constants, datasets and transfer functions
 //! is the renderer's own (`kernel`).
@@ -44,6 +47,7 @@ use std::sync::Arc;
 
 mod compile;
 mod cursor;
+mod image;
 mod integrate;
 mod kernel;
 mod lanes;
@@ -52,6 +56,8 @@ mod tiles;
 
 pub(crate) use compile::Grids;
 pub use compile::{Compiled, Plan};
+pub(crate) use image::render_into;
+pub use image::{Backdrop, Image, PixelFormat};
 pub(crate) use shade::{reflect, refract};
 
 // The renderer's own items, reachable as `super::NAME` from its submodules (the packet march
@@ -70,37 +76,9 @@ pub const SUPER_SAMPLE_CONTRAST: f32 = 4.0 / 255.0;
 #[cfg(target_arch = "x86_64")]
 mod simd;
 
-/// A rendered image: linear RGB in [0, 1], row-major, top row first.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Image {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Pixels, `width * height` of them.
-    pub pixels: Vec<[f32; 3]>,
-}
-
-impl Image {
-    /// The pixel at column `x`, row `y` (row 0 at the top).
-    pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
-        self.pixels[(y * self.width + x) as usize]
-    }
-
-    /// 8-bit RGB, rounded; anything non-finite becomes 0.
-    pub fn to_rgb8(&self) -> Vec<u8> {
-        self.pixels.iter().flat_map(|p| p.map(to_u8)).collect()
-    }
-}
-
-/// A channel in 8 bits, rounded; anything non-finite becomes 0.
-pub(crate) fn to_u8(v: f32) -> u8 {
-    if v.is_finite() {
-        (v.clamp(0.0, 1.0) * 255.0).round() as u8
-    } else {
-        0
-    }
-}
+/// A pixel as the renderer computes it: linear RGB in [0, 1], then the transmittance `T` of
+/// its primary ray in [0, 1] (the weight of the backdrop in the colour).
+pub(crate) type Pixel = [f32; 4];
 
 /// Pixels a strip of an image holds at most (more where one row of tiles is more): an image
 /// is rendered a strip of rows at a time, so the memory a render needs beyond its output is
@@ -121,63 +99,74 @@ fn strip_rows(width: u32, height: u32) -> u32 {
 pub const MAX_SAMPLES_PER_RAY: f64 = (1u64 << 32) as f64;
 
 /// Renders the compiled scene to an image of `width × height` pixels whose view plane has the
-/// given width / height `aspect` ([`render_strips`]), into memory.
+/// given width / height `aspect`, against `backdrop` ([`render_strips`]), into memory.
 pub fn render_image(
     scene: &Compiled,
-    width: u32,
-    height: u32,
-    aspect: f32,
+    (width, height, aspect): (u32, u32, f32),
+    backdrop: Backdrop,
     progress: &Progress,
 ) -> Result<Image> {
-    let mut pixels = crate::num::try_with_capacity(width as usize * height as usize, "the image")?;
-    render_strips(scene, width, height, aspect, progress, |_, rows| {
-        pixels.extend_from_slice(rows);
-        Ok(())
-    })?;
+    let n = width as usize * height as usize;
+    let mut pixels = crate::num::try_with_capacity(n, "the image")?;
+    let mut transmittance = crate::num::try_with_capacity(n, "the image's transmittance")?;
+    render_strips(
+        scene,
+        (width, height, aspect),
+        backdrop,
+        progress,
+        |_, rows| {
+            pixels.extend(rows.iter().map(|p| [p[0], p[1], p[2]]));
+            transmittance.extend(rows.iter().map(|p| p[3]));
+            Ok(())
+        },
+    )?;
     Ok(Image {
         width,
         height,
         pixels,
+        transmittance,
+        backdrop,
     })
 }
 
 /// Renders the compiled scene to an image of `width × height` pixels whose view plane has the
-/// given width / height `aspect`, a strip of rows at a time: `sink(y, rows)` takes each strip,
-/// top first (`y` its first row), and `progress` counts its pixels. Adaptive super-sampling:
-/// one ray through each pixel centre, then pixels that differ from a neighbour by more than
-/// [`SUPER_SAMPLE_CONTRAST`] are replaced by the mean of an n×n grid of rays. Every pixel is
-/// computed on its own, so strips change no pixel.
+/// given width / height `aspect`, against `backdrop`, a strip of rows at a time: `sink(y,
+/// rows)` takes each strip, top first (`y` its first row), and `progress` counts its pixels.
+/// Adaptive super-sampling: one ray through each pixel centre, then pixels that differ from a
+/// neighbour by more than [`SUPER_SAMPLE_CONTRAST`] in a colour channel (or, against a
+/// transparent backdrop, in transmittance) are replaced by the mean of an n×n grid of rays
+/// (colour and transmittance). Every pixel is computed on its own, so strips change no pixel.
 ///
 /// Errors: the scene's work bound ([`Compiled::check_work`]), `VL_NOMEMORY`, `VL_CANCELLED`
 /// (within a tile of work of the flag), the sink's, and a panic (`VL_INTERNAL`).
 pub(crate) fn render_strips(
     scene: &Compiled,
-    width: u32,
-    height: u32,
-    aspect: f32,
+    size: (u32, u32, f32),
+    backdrop: Backdrop,
     progress: &Progress,
-    sink: impl FnMut(u32, &[[f32; 3]]) -> Result<()>,
+    sink: impl FnMut(u32, &[Pixel]) -> Result<()>,
 ) -> Result<()> {
-    let step = strip_rows(width, height);
-    render_in_strips(scene, (width, height, aspect), step, progress, sink)
+    let step = strip_rows(size.0, size.1);
+    render_in_strips(scene, size, backdrop, step, progress, sink)
 }
 
 /// [`render_strips`] in strips of `step` rows.
 fn render_in_strips(
     scene: &Compiled,
     (width, height, aspect): (u32, u32, f32),
+    backdrop: Backdrop,
     step: u32,
     progress: &Progress,
-    mut sink: impl FnMut(u32, &[[f32; 3]]) -> Result<()>,
+    mut sink: impl FnMut(u32, &[Pixel]) -> Result<()>,
 ) -> Result<()> {
     scene.check_work()?;
     progress.check()?;
     let run = || -> Result<()> {
         let view = view(&scene.settings, width, height, aspect);
         let marks = scene.entry_marks(&view);
+        let image = scene.image_rays(view.eye, backdrop);
         // What a pixel whose bound is +∞ shows, where that is known without its ray.
-        let unbounded = scene.unbounded_colour().map(to_f32);
-        let image = scene.image_rays(view.eye);
+        let unbounded = scene.unbounded_colour(&image).map(|c| pixel(c, 1.0));
         // Rays in packets of SIMD lanes, where that applies (one ray per pixel).
         #[cfg(target_arch = "x86_64")]
         let packets = simd::Packets::new(scene);
@@ -199,12 +188,13 @@ fn render_in_strips(
                     return c;
                 }
                 let dir = view.ray(x as f64 + 0.5, y as f64 + 0.5);
-                to_f32(scene.trace(view.eye, &image, dir, bound))
+                let (c, t) = scene.trace(view.eye, &image, dir, bound);
+                pixel(c, t)
             })
         };
         // The first pass of rows [lo, hi): a strip's rows and, with super-sampling, the row on
         // either side (the next strip keeps those it has).
-        let mut first: Vec<[f32; 3]> = Vec::new();
+        let mut first: Vec<Pixel> = Vec::new();
         let (mut lo, mut hi) = (0u32, 0u32);
         let row = width as usize;
         for y0 in (0..height).step_by(step as usize) {
@@ -238,7 +228,7 @@ fn render_in_strips(
                 sink(y0, &fresh)?;
             } else {
                 first.try_reserve(fresh.len()).map_err(|_| {
-                    crate::num::no_memory("a strip of the image", Some(fresh.len() * 12))
+                    crate::num::no_memory("a strip of the image", Some(fresh.len() * 16))
                 })?;
                 first.extend_from_slice(&fresh);
                 drop(fresh);
@@ -246,6 +236,12 @@ fn render_in_strips(
                 let at = |x: u32, y: u32| first[(y - lo) as usize * row + x as usize];
                 let from =
                     |x: u32, y: u32| entry.as_ref().map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
+                // The channels compared: colour, and against a transparent backdrop the
+                // transmittance (alpha) too.
+                let channels = match backdrop {
+                    Backdrop::Background => 3,
+                    Backdrop::Transparent => 4,
+                };
                 let differs = |x: u32, y: u32| {
                     let p = at(x, y);
                     let neighbours = [
@@ -257,7 +253,7 @@ fn render_in_strips(
                     neighbours.iter().any(|&(nx, ny)| {
                         nx < width && ny < height && {
                             let q = at(nx, ny);
-                            (0..3).any(|c| (p[c] - q[c]).abs() > SUPER_SAMPLE_CONTRAST)
+                            (0..channels).any(|c| (p[c] - q[c]).abs() > SUPER_SAMPLE_CONTRAST)
                         }
                     })
                 };
@@ -265,16 +261,20 @@ fn render_in_strips(
                     if !differs(x, y) {
                         return at(x, y);
                     }
-                    let mut sum = DVec3::ZERO;
+                    let (mut sum, mut t_sum) = (DVec3::ZERO, 0.0);
                     for j in 0..n {
                         for i in 0..n {
                             let sx = x as f64 + (i as f64 + 0.5) / n as f64;
                             let sy = y as f64 + (j as f64 + 0.5) / n as f64;
-                            let c = scene.trace(view.eye, &image, view.ray(sx, sy), from(x, y));
-                            sum += crate::model::scene::v3(to_f32(c));
+                            let (c, t) =
+                                scene.trace(view.eye, &image, view.ray(sx, sy), from(x, y));
+                            let p = pixel(c, t);
+                            sum += crate::model::scene::v3([p[0], p[1], p[2]]);
+                            t_sum += p[3] as f64;
                         }
                     }
-                    to_f32(sum / (n * n) as f64)
+                    let samples = (n * n) as f64;
+                    pixel(sum / samples, t_sum / samples)
                 })?;
                 sink(y0, &refined)?;
             }

@@ -932,14 +932,15 @@ fn unbounded_rays_show_the_background() {
                         None => bg,
                         Some(_) => DVec3::ZERO + 1.0 * bg,
                     };
-                    let got = scene.trace_ray(origin, None, dir, Ray::PRIMARY, f64::INFINITY);
+                    let (got, t) = scene.trace_ray(origin, None, dir, Ray::PRIMARY, f64::INFINITY);
                     let bits = |v: DVec3| v.to_array().map(f64::to_bits);
                     assert_eq!(bits(got), bits(want), "{origin} {dir} {background:?}");
-                    let image = scene.image_rays(origin);
-                    let per_image = scene.trace(origin, &image, dir, f64::INFINITY);
+                    assert_eq!(t, 1.0, "{origin} {dir}: the background shows whole");
+                    let image = scene.image_rays(origin, Backdrop::Background);
+                    let (per_image, _) = scene.trace(origin, &image, dir, f64::INFINITY);
                     assert_eq!(bits(per_image), bits(want), "{origin} {dir} {background:?}");
                     // The per-pixel loop's answer without the ray, where it has one.
-                    if let Some(c) = scene.unbounded_colour() {
+                    if let Some(c) = scene.unbounded_colour(&image) {
                         assert_eq!(bits(c), bits(got), "{origin} {dir} {background:?}");
                         known += 1;
                     }
@@ -978,12 +979,13 @@ fn cursor_started_in_place_is_the_new_cursor() {
             let mut c = Cursor::new(&scene, obj, 0, (o, d), (t0, t1), bound);
             let (col, t) = scene.march_one(&mut c, origin, dir);
             let want = col + t * bg;
-            let got = scene.trace_ray(origin, None, dir, Ray::PRIMARY, bound);
+            let (got, got_t) = scene.trace_ray(origin, None, dir, Ray::PRIMARY, bound);
             let bits = |v: DVec3| v.to_array().map(f64::to_bits);
             assert_eq!(bits(got), bits(want), "{origin} {dir} {bound}");
+            assert_eq!(got_t.to_bits(), t.to_bits(), "{origin} {dir} {bound}");
             // And with the origin and background made once per image (`Compiled::trace`).
-            let image = scene.image_rays(origin);
-            let per_image = scene.trace_ray(origin, Some(&image), dir, Ray::PRIMARY, bound);
+            let image = scene.image_rays(origin, Backdrop::Background);
+            let (per_image, _) = scene.trace_ray(origin, Some(&image), dir, Ray::PRIMARY, bound);
             assert_eq!(bits(per_image), bits(want), "{origin} {dir} {bound}");
             hits += (t < 1.0) as usize;
             checked += 1;
@@ -1708,15 +1710,12 @@ fn skip_grids_are_built_once_per_scene() {
 
 /// The image of `scene` at `size`, rendered in strips of `step` rows; with the strips' first
 /// rows as the sink saw them.
-pub(super) fn in_strips(
-    scene: &Compiled,
-    (w, h): (u32, u32),
-    step: u32,
-) -> (Vec<[f32; 3]>, Vec<u32>) {
+pub(super) fn in_strips(scene: &Compiled, (w, h): (u32, u32), step: u32) -> (Vec<Pixel>, Vec<u32>) {
     let mut pixels = Vec::new();
     let mut starts = Vec::new();
     let progress = crate::control::Progress::none();
-    render_in_strips(scene, (w, h, 1.1), step, &progress, |y, rows| {
+    let backdrop = Backdrop::Background;
+    render_in_strips(scene, (w, h, 1.1), backdrop, step, &progress, |y, rows| {
         assert_eq!(y as usize * w as usize, pixels.len(), "strips in order");
         starts.push(y);
         pixels.extend_from_slice(rows);
@@ -1733,7 +1732,7 @@ pub(super) fn in_strips(
 /// strips: `simd::tests`.)
 #[test]
 fn strips_change_no_pixel() {
-    let bits = |p: &[[f32; 3]]| p.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+    let bits = |p: &[Pixel]| p.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
     let size = (45, 101);
     let mut images = Vec::new();
     for (packets, super_sample) in [(false, 1), (false, 3)] {
@@ -1807,10 +1806,17 @@ fn progress_reaches_one_and_cancels() {
     };
     let progress = Progress::new(&control, (w * h) as u64);
     let mut strips = 0;
-    render_in_strips(&scene, (w, h, 1.0), 32, &progress, |_, _| {
-        strips += 1;
-        Ok(())
-    })
+    render_in_strips(
+        &scene,
+        (w, h, 1.0),
+        Backdrop::Background,
+        32,
+        &progress,
+        |_, _| {
+            strips += 1;
+            Ok(())
+        },
+    )
     .unwrap();
     let want: Vec<f32> = [32u32, 64, 96, 100]
         .iter()
@@ -1831,10 +1837,17 @@ fn progress_reaches_one_and_cancels() {
     };
     let progress = Progress::new(&control, (w * h) as u64);
     let mut strips = 0;
-    let e = render_in_strips(&scene, (w, h, 1.0), 32, &progress, |_, _| {
-        strips += 1;
-        Ok(())
-    })
+    let e = render_in_strips(
+        &scene,
+        (w, h, 1.0),
+        Backdrop::Background,
+        32,
+        &progress,
+        |_, _| {
+            strips += 1;
+            Ok(())
+        },
+    )
     .unwrap_err();
     assert_eq!(e.code, ErrorCode::Cancelled);
     assert_eq!((strips, *calls.lock().unwrap()), (2, 2));
@@ -1846,9 +1859,14 @@ fn progress_reaches_one_and_cancels() {
         progress: None,
     };
     let progress = Progress::new(&control, 1);
-    let e = render_in_strips(&scene, (w, h, 1.0), 32, &progress, |_, _| {
-        panic!("no strip after a cancel")
-    })
+    let e = render_in_strips(
+        &scene,
+        (w, h, 1.0),
+        Backdrop::Background,
+        32,
+        &progress,
+        |_, _| panic!("no strip after a cancel"),
+    )
     .unwrap_err();
     assert_eq!(e.code, ErrorCode::Cancelled);
     // A flag set by a field function, in the middle of the first strip: the render stops
@@ -1868,9 +1886,14 @@ fn progress_reaches_one_and_cancels() {
     vl.end().unwrap();
     let scene = vl.compiled().unwrap();
     let progress = Progress::new(&control, 1);
-    let e = render_in_strips(&scene, (64, 64, 1.0), 64, &progress, |_, _| {
-        panic!("no strip after a cancel")
-    })
+    let e = render_in_strips(
+        &scene,
+        (64, 64, 1.0),
+        Backdrop::Background,
+        64,
+        &progress,
+        |_, _| panic!("no strip after a cancel"),
+    )
     .unwrap_err();
     assert_eq!(e.code, ErrorCode::Cancelled);
     // Each thread finishes the pixel it is on (its ray: at most √3 / step + 2 samples, each

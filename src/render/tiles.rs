@@ -66,9 +66,9 @@ pub(super) fn per_pixel<F>(
     rows: std::ops::Range<u32>,
     progress: &Progress,
     f: F,
-) -> Result<Vec<[f32; 3]>>
+) -> Result<Vec<Pixel>>
 where
-    F: Fn(u32, u32) -> [f32; 3] + Sync,
+    F: Fn(u32, u32) -> Pixel + Sync,
 {
     per_tile(width, rows, TILE, progress, |(tx, ty, tw, th)| {
         let mut out = Vec::with_capacity((tw * th) as usize);
@@ -76,7 +76,7 @@ where
             for x in tx..tx + tw {
                 // A cancelled render stops within a pixel's work (the rest is discarded).
                 out.push(if progress.cancelled() {
-                    [0.0; 3]
+                    [0.0; 4]
                 } else {
                     f(x, y)
                 });
@@ -96,11 +96,11 @@ pub(super) fn per_tile<F>(
     side: u32,
     progress: &Progress,
     f: F,
-) -> Result<Vec<[f32; 3]>>
+) -> Result<Vec<Pixel>>
 where
-    F: Fn((u32, u32, u32, u32)) -> Vec<[f32; 3]> + Sync,
+    F: Fn((u32, u32, u32, u32)) -> Vec<Pixel> + Sync,
 {
-    type Tile = ((u32, u32), Vec<[f32; 3]>);
+    type Tile = ((u32, u32), Vec<Pixel>);
     let (top, bottom) = (rows.start, rows.end);
     let results: Vec<Tile> = tiles(width, rows, side)
         .into_par_iter()
@@ -117,7 +117,7 @@ where
     // into place in parallel, a tile row at a time.
     let per_row = width.div_ceil(side) as usize;
     let len = width as usize * (bottom - top) as usize;
-    let mut pixels = crate::num::try_vec(len, [0.0f32; 3], "a strip of the image")?;
+    let mut pixels = crate::num::try_vec(len, [0.0f32; 4], "a strip of the image")?;
     pixels
         .par_chunks_mut(width as usize * side as usize)
         .zip(results.par_chunks(per_row))
@@ -133,6 +133,18 @@ where
     Ok(pixels)
 }
 
+/// The pixel of colour `c` and transmittance `t`: each in [0, 1], anything non-finite 0.
+pub(super) fn pixel(c: DVec3, t: f64) -> Pixel {
+    let [r, g, b] = to_f32(c);
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0) as f32
+    } else {
+        0.0
+    };
+    [r, g, b, t]
+}
+
+/// A colour as single-precision channels in [0, 1]; anything non-finite becomes 0.
 pub(super) fn to_f32(c: DVec3) -> [f32; 3] {
     let f = |v: f64| {
         if v.is_finite() {

@@ -1,7 +1,8 @@
 /* Helpers the test programs of capi/tests/c share: the ok/FAIL lines and their count, and
- * small file queries. Each program includes it once ("checks.h", beside it) and uses what it
- * needs; the functions are static and marked unused, so a program that needs some of them
- * compiles clean with -Wall -Wextra -Werror. C89 with POSIX (dirent, stat). */
+ * small file and buffer queries (a whole file, a run of equal bytes). Each program includes
+ * it once ("checks.h", beside it) and uses what it needs; the functions are static and marked
+ * unused, so a program that needs some of them compiles clean with -Wall -Wextra -Werror. C89
+ * with POSIX (dirent, stat). */
 #ifndef VLIB_TEST_CHECKS_H
 #define VLIB_TEST_CHECKS_H
 
@@ -91,6 +92,35 @@ static CHECKS_UNUSED double mapped_bytes(void)
             kib = atof(line + 7);
     fclose(f);
     return kib * 1024.0;
+}
+
+/* The whole file at `path`, to be freed (its size in *n); NULL if unreadable. */
+static CHECKS_UNUSED unsigned char *read_file(const char *path, long *n)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *b;
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    *n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    b = malloc((size_t)*n + 1);
+    if (b && fread(b, 1, (size_t)*n, f) != (size_t)*n) {
+        free(b);
+        b = NULL;
+    }
+    fclose(f);
+    return b;
+}
+
+/* Whether every byte of b[0 .. n) is v. */
+static CHECKS_UNUSED int all_bytes(const unsigned char *b, unsigned long n, unsigned char v)
+{
+    unsigned long i;
+    for (i = 0; i < n; i++)
+        if (b[i] != v)
+            return 0;
+    return 1;
 }
 
 #endif

@@ -16,14 +16,17 @@ mod surface;
 pub(in crate::render) use dvr::*;
 
 /// What kind of ray is being traced: how many bounces it has made, whether it is a mirror ray
-/// (it then sees only objects that cast reflections), what it shows where it escapes, and what
-/// its colour weighs in the pixel (1 for a primary ray; the products of transmittances,
-/// opacities and KS along the ray tree for a secondary one).
+/// (it then sees only objects that cast reflections), what it shows where it escapes
+/// (`background`: the background colour, unless the image's backdrop is `transparent`, where
+/// no ray of it shows that colour), and what its colour weighs in the pixel (1 for a primary
+/// ray; the products of transmittances, opacities and KS along the ray tree for a secondary
+/// one).
 #[derive(Clone, Copy, Debug)]
 pub(in crate::render) struct Ray {
     pub(in crate::render) depth: i32,
     pub(in crate::render) mirror: bool,
     pub(in crate::render) background: bool,
+    pub(in crate::render) transparent: bool,
     pub(in crate::render) weight: f64,
 }
 
@@ -32,6 +35,7 @@ impl Ray {
         depth: 0,
         mirror: false,
         background: true,
+        transparent: false,
         weight: 1.0,
     };
 }
@@ -59,14 +63,18 @@ pub(in crate::render) struct Layer {
     pub(in crate::render) mirror: Option<Mirror>,
 }
 
-/// What [`Compiled::trace_ray`] makes of the scene and the origin of an image's primary rays
-/// (the eye) on each of them ([`Compiled::image_rays`]), made once per image: the same numbers.
+/// What [`Compiled::trace_ray`] makes of the scene, the origin of an image's primary rays
+/// (the eye) and its backdrop on each of them ([`Compiled::image_rays`]), made once per
+/// image: the same numbers.
 pub(in crate::render) struct ImageRays {
     /// The origin in the coordinates of the scene's object where it has one only
     /// ([`CObj::object_ray`]; zero, not read, otherwise).
     pub(in crate::render) origin_o: DVec3,
-    /// The background colour.
+    /// What the primary rays show where they escape: the background colour, or zero for a
+    /// transparent backdrop.
     pub(in crate::render) background: DVec3,
+    /// Whether the backdrop is transparent (no ray of the image shows the background colour).
+    pub(in crate::render) transparent: bool,
 }
 
 impl Compiled {
@@ -98,17 +106,14 @@ impl Compiled {
             .or_else(|| EntryMarks::build(grid, obj.to_world, camera))
     }
 
-    /// The colour [`Compiled::trace`] gives every primary ray whose bound is +∞, whatever its
-    /// origin and direction, where [`Compiled::trace_ray`]'s one-volume path answers it
-    /// without looking at the ray (`None` where it does look): the per-pixel loop then
-    /// neither makes the ray nor calls the trace for such a pixel.
-    pub(in crate::render) fn unbounded_colour(&self) -> Option<DVec3> {
+    /// The colour [`Compiled::trace`] gives every primary ray of `image` whose bound is +∞
+    /// (its transmittance is 1), whatever its origin and direction, where
+    /// [`Compiled::trace_ray`]'s one-volume path answers it without looking at the ray
+    /// (`None` where it does look): the per-pixel loop then neither makes the ray nor calls
+    /// the trace for such a pixel.
+    pub(in crate::render) fn unbounded_colour(&self, image: &ImageRays) -> Option<DVec3> {
         let ray = Ray::PRIMARY;
-        let background = if ray.background {
-            crate::model::scene::v3(self.settings.background)
-        } else {
-            DVec3::ZERO
-        };
+        let background = image.background;
         let [obj] = self.objects.as_slice() else {
             return None;
         };
@@ -122,7 +127,7 @@ impl Compiled {
     }
 
     /// Traces one primary ray whose pixel has the [`EntryMap`] bound `bound` (−∞ without a
-    /// map); returns the pixel colour.
+    /// map); returns the pixel colour and the ray's transmittance ([`Compiled::trace_ray`]).
     ///
     /// `image`: [`Compiled::image_rays`] of `origin` (the same for every ray of an image).
     pub(in crate::render) fn trace(
@@ -131,19 +136,29 @@ impl Compiled {
         image: &ImageRays,
         dir: DVec3,
         bound: f64,
-    ) -> DVec3 {
-        self.trace_ray(origin, Some(image), dir, Ray::PRIMARY, bound)
+    ) -> (DVec3, f64) {
+        let ray = Ray {
+            transparent: image.transparent,
+            ..Ray::PRIMARY
+        };
+        self.trace_ray(origin, Some(image), dir, ray, bound)
     }
 
-    /// What [`Compiled::trace_ray`] makes of the scene and the ray origin `origin` on every
-    /// primary ray from it, made once per image.
-    pub(in crate::render) fn image_rays(&self, origin: DVec3) -> ImageRays {
+    /// What [`Compiled::trace_ray`] makes of the scene, the ray origin `origin` and the
+    /// backdrop on every primary ray from it, made once per image.
+    pub(in crate::render) fn image_rays(&self, origin: DVec3, backdrop: Backdrop) -> ImageRays {
+        let transparent = backdrop == Backdrop::Transparent;
         ImageRays {
             origin_o: match self.objects.as_slice() {
                 [obj] => obj.object_ray(origin, DVec3::ZERO).0,
                 _ => DVec3::ZERO,
             },
-            background: crate::model::scene::v3(self.settings.background),
+            background: if transparent {
+                DVec3::ZERO
+            } else {
+                crate::model::scene::v3(self.settings.background)
+            },
+            transparent,
         }
     }
 
@@ -168,6 +183,11 @@ impl Compiled {
     ///
     /// `image`: what is made of `origin` and the scene once per image where known
     /// ([`Compiled::image_rays`]; `None`: made here).
+    ///
+    /// Returns the colour the ray shows and its transmittance `T`: the weight of what it
+    /// shows where it escapes (the background) in that colour, which is `col + T·background`
+    /// for the light `col` it gathers; 0 where it ends early or a branch behind a refracting
+    /// surface weighs too little to be traced. Mirror rays add colour, not transmittance.
     pub(in crate::render) fn trace_ray(
         &self,
         origin: DVec3,
@@ -175,8 +195,8 @@ impl Compiled {
         dir: DVec3,
         ray: Ray,
         bound: f64,
-    ) -> DVec3 {
-        let background = if ray.background {
+    ) -> (DVec3, f64) {
+        let background = if ray.background && !ray.transparent {
             match image {
                 Some(i) => i.background,
                 None => crate::model::scene::v3(self.settings.background),
@@ -198,7 +218,7 @@ impl Compiled {
                     let bits = |v: DVec3| v.to_array().map(f64::to_bits);
                     let shown = unsampled();
                     if bits(shown) == bits(background) {
-                        return shown;
+                        return (shown, 1.0);
                     }
                 }
                 let (o, d) = match image {
@@ -206,16 +226,16 @@ impl Compiled {
                     None => obj.object_ray(origin, dir),
                 };
                 let Some((t0, t1)) = obj.clip(o, d) else {
-                    return background;
+                    return (background, 1.0);
                 };
                 if bound >= t1 {
-                    return unsampled();
+                    return (unsampled(), 1.0);
                 }
                 // In place (see `Cursor::unstarted`).
                 let mut c = Cursor::unstarted(obj, 0, (o, d), (t0, t1));
                 c.start(self, obj, bound);
                 let (col, t) = self.march_one(&mut c, origin, dir);
-                return col + t * background;
+                return (col + t * background, t);
             }
         }
         let mut cursors: Vec<Cursor> = Vec::new();
@@ -240,7 +260,7 @@ impl Compiled {
             // One volume along the ray and nothing else: its own tight loop.
             let mut c = cursors.pop().expect("one cursor");
             let (col, t) = self.march_one(&mut c, origin, dir);
-            return col + t * background;
+            return (col + t * background, t);
         }
         layers.sort_by(|a, b| a.t.total_cmp(&b.t));
         let mut layers = layers.into_iter().peekable();
@@ -271,10 +291,13 @@ impl Compiled {
                             depth: ray.depth + 1,
                             mirror: true,
                             background: m.background,
+                            transparent: ray.transparent,
                             weight,
                         };
-                        colour +=
-                            m.ks * self.trace_ray(m.from, None, m.dir, mirror, f64::NEG_INFINITY);
+                        colour += m.ks
+                            * self
+                                .trace_ray(m.from, None, m.dir, mirror, f64::NEG_INFINITY)
+                                .0;
                     }
                 }
                 if acc.add(layer.alpha, colour) {
@@ -284,9 +307,9 @@ impl Compiled {
                     // Everything behind a refracting surface is seen along the bent ray.
                     let (col, t) = acc.result();
                     let Some(weight) = self.branch(ray.weight * t) else {
-                        return col;
+                        return (col, 0.0);
                     };
-                    let behind = self.trace_ray(
+                    let (behind, t_behind) = self.trace_ray(
                         from,
                         None,
                         to,
@@ -297,7 +320,7 @@ impl Compiled {
                         },
                         f64::NEG_INFINITY,
                     );
-                    return col + t * behind;
+                    return (col + t * behind, t * t_behind);
                 }
             }
             let Some((ci, mid)) = best else { break };
@@ -316,6 +339,6 @@ impl Compiled {
             }
         }
         let (col, t) = acc.result();
-        col + t * background
+        (col + t * background, t)
     }
 }

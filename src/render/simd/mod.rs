@@ -381,9 +381,9 @@ impl<'a> Packets<'a> {
         view: &Pinhole,
         entry: Option<&EntryMap>,
         image: &ImageRays,
-        unbounded: Option<[f32; 3]>,
+        unbounded: Option<Pixel>,
         (tx, ty, tw, th): (u32, u32, u32, u32),
-    ) -> Vec<[f32; 3]> {
+    ) -> Vec<Pixel> {
         let tile = TileRays {
             view,
             entry,
@@ -421,7 +421,7 @@ impl<'a> Packets<'a> {
 
     /// [`Packets::tile`] in [`PACKETS8`] packets of eight lanes.
     #[target_feature(enable = "avx2,fma")]
-    fn tile_avx2(&self, tile: &TileRays<'_>) -> Vec<[f32; 3]> {
+    fn tile_avx2(&self, tile: &TileRays<'_>) -> Vec<Pixel> {
         let segments = |keeps: &mut _, runs: &_, st: &mut _| next_segments(keeps, runs, st);
         let step = |st: &mut _, active, cache: &mut _| self.step8(st, active, cache);
         let taken = |c: &mut _, run: &mut _, trusted: &mut _| self.next_taken8(c, run, trusted);
@@ -438,7 +438,7 @@ impl<'a> Packets<'a> {
     /// [`Packets::tile`] in [`P`] packets of sixteen lanes: lane `i` is lane `i % 16` of
     /// packet `i / 16`, and a step steps every packet.
     #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
-    fn tile_avx512(&self, tile: &TileRays<'_>) -> Vec<[f32; 3]> {
+    fn tile_avx512(&self, tile: &TileRays<'_>) -> Vec<Pixel> {
         let segments = |keeps: &mut _, runs: &_, st: &mut _| next_segments16(keeps, runs, st);
         let step = |st: &mut _, active, cache: &mut _| self.step16(st, active, cache);
         let taken = |c: &mut _, run: &mut _, trusted: &mut _| self.next_taken16(c, run, trusted);
@@ -477,7 +477,7 @@ impl<'a> Packets<'a> {
         next_segments: impl Fn(&mut [u32; N], &[Run16; N], &mut LaneState<N>) -> u32,
         mut step: impl FnMut(&mut LaneState<N>, u32, &mut CellGradients) -> u32,
         next_taken: impl Fn(&mut Cursor, &mut Run16, &mut u32) -> u32,
-    ) -> Vec<[f32; 3]> {
+    ) -> Vec<Pixel> {
         const { assert!(N == 8 || N == 16) };
         const { assert!(P >= 1 && L == P * N && L <= 64) };
         let all = u64::MAX >> (64 - L);
@@ -486,7 +486,7 @@ impl<'a> Packets<'a> {
         let lanes_of = u64::MAX >> (64 - N);
         let background = tile.image.background;
         let (tw, th) = tile.size;
-        let mut out = vec![[0f32; 3]; (tw * th) as usize];
+        let mut out = vec![[0f32; 4]; (tw * th) as usize];
         let mut starts = Starts::default();
         let mut lanes: [Option<LaneRay>; L] = std::array::from_fn(|_| None);
         // Per lane: its run's segments, and those still to take by bit (`to_take`; 0 for a
@@ -571,7 +571,7 @@ impl<'a> Packets<'a> {
         q: &mut Starts,
         slot: &'s mut Option<LaneRay>,
         tile: &TileRays<'_>,
-        out: &mut [[f32; 3]],
+        out: &mut [Pixel],
     ) -> Option<(&'s Cursor, [f32; 3])> {
         while q.at == q.len {
             if q.next >= tile.size.0 * tile.size.1 {
@@ -606,15 +606,11 @@ impl<'a> Packets<'a> {
 }
 
 /// Lane `i`'s pixel (of lanes with colours `col` by channel and transmittances `t`, in eight
-/// or sixteen lanes): its colour plus its transmittance times the background.
-fn finish<const N: usize>(
-    col: &[[f32; N]; 3],
-    t: &[f32; N],
-    i: usize,
-    background: DVec3,
-) -> [f32; 3] {
+/// or sixteen lanes): its colour plus its transmittance times the background, and its
+/// transmittance.
+fn finish<const N: usize>(col: &[[f32; N]; 3], t: &[f32; N], i: usize, background: DVec3) -> Pixel {
     let c = DVec3::new(col[0][i] as f64, col[1][i] as f64, col[2][i] as f64);
-    to_f32(c + t[i] as f64 * background)
+    pixel(c + t[i] as f64 * background, t[i] as f64)
 }
 
 /// A lane's ray: its cursor, its pixel (in the tile), and how many of its next runs are taken

@@ -17,7 +17,7 @@ impl Packets<'_> {
     /// neighbours show it final; the cursor's own search elsewhere)
     /// (`ray_start_lanes_are_the_scalar_starts`).
     #[target_feature(enable = "avx2,fma")]
-    pub(super) fn make_starts(&self, q: &mut Starts, tile: &TileRays<'_>, out: &mut [[f32; 3]]) {
+    pub(super) fn make_starts(&self, q: &mut Starts, tile: &TileRays<'_>, out: &mut [Pixel]) {
         let obj = self.obj;
         let (tw, _) = tile.size;
         let (row, col) = (q.next / tw, q.next % tw);
@@ -56,16 +56,16 @@ impl Packets<'_> {
                     continue;
                 }
                 if bits(unsampled) == bits(background) {
-                    out[px] = to_f32(unsampled);
+                    out[px] = pixel(unsampled, 1.0);
                     continue;
                 }
             }
             if ok >> l & 1 == 0 {
-                out[px] = to_f32(background);
+                out[px] = pixel(background, 1.0);
                 continue;
             }
             if bound >= t1[l] {
-                out[px] = to_f32(unsampled);
+                out[px] = pixel(unsampled, 1.0);
                 continue;
             }
             let n = if n[l] != 0 {
@@ -98,7 +98,7 @@ pub(super) struct TileRays<'a> {
     pub(super) view: &'a Pinhole,
     pub(super) entry: Option<&'a EntryMap>,
     pub(super) image: &'a ImageRays,
-    pub(super) unbounded: Option<[f32; 3]>,
+    pub(super) unbounded: Option<Pixel>,
     pub(super) origin: (u32, u32),
     pub(super) size: (u32, u32),
 }

@@ -80,7 +80,7 @@ fn slabs_scene(
 }
 
 /// The bits of the pixels of `image`.
-fn bits(image: &[[f32; 3]]) -> Vec<u32> {
+fn bits<const C: usize>(image: &[[f32; C]]) -> Vec<u32> {
     image.iter().flatten().map(|v| v.to_bits()).collect()
 }
 
@@ -94,8 +94,8 @@ fn march(vl: &crate::Library, (width, height): (u32, u32), packets: usize) -> (V
     let entry = scene
         .entry_marks(&view)
         .map(|m| m.rows(0..height as usize).unwrap());
-    let unbounded = scene.unbounded_colour().map(to_f32);
-    let image = scene.image_rays(view.eye);
+    let image = scene.image_rays(view.eye, Backdrop::Background);
+    let unbounded = scene.unbounded_colour(&image).map(|c| pixel(c, 1.0));
     let mut p = Packets::new(&scene).expect("the packet march applies");
     p.packets = packets;
     let progress = crate::control::Progress::none();
@@ -106,6 +106,13 @@ fn march(vl: &crate::Library, (width, height): (u32, u32), packets: usize) -> (V
     .unwrap();
     let untested = p.untested.load(std::sync::atomic::Ordering::Relaxed);
     (bits(&pixels), untested)
+}
+
+/// The pixels of `image` with their transmittance, as the renderer gives them.
+fn with_transmittance(image: &crate::Image) -> Vec<Pixel> {
+    let t = &image.transmittance;
+    let p = image.pixels.iter().zip(t);
+    p.map(|(&[r, g, b], &t)| [r, g, b, t]).collect()
 }
 
 /// Runs taken on trust ([`TRUSTED_RUNS`]) are taken, and change no pixel: the slabs
@@ -162,7 +169,8 @@ fn packets_carry_rays_without_changing_them() {
                         let vl = slabs_scene(step, shaded, opaque, optimise);
                         let by = |packets: usize| march(&vl, size, packets).0;
                         let (one, two, four) = (by(1), by(2), by(4));
-                        let default = bits(&vl.render_preview(size.0, size.1, 1.2).unwrap().pixels);
+                        let image = vl.render_preview(size.0, size.1, 1.2).unwrap();
+                        let default = bits(&with_transmittance(&image));
                         let what = format!(
                             "{size:?}, opaque {opaque}, step {step}, shaded {shaded}, \
                              wide {wide_lanes}"
@@ -171,7 +179,7 @@ fn packets_carry_rays_without_changing_them() {
                         assert_eq!(four, two, "{what}: four packets and two differ");
                         assert_eq!(default, two, "{what}: the default and two packets differ");
                         let background = [0.1f32, 0.2, 0.3].map(f32::to_bits);
-                        let shown = default.chunks(3).filter(|p| *p != background).count();
+                        let shown = default.chunks(4).filter(|p| p[..3] != background).count();
                         let least = (size.0 * size.1 / 6) as usize;
                         assert!(shown > least, "{what}: {shown} pixels show the slabs");
                     }

@@ -1,0 +1,213 @@
+//! Image file formats: which one a file name asks for ([`ImageFormat::from_path`]) and the
+//! encodings (binary PPM, PNG, PFM) of pixels laid out as a [`PixelFormat`].
+//!
+//! The name's extension picks the file type and a modifier just before it picks the pixels
+//! (`docs/images.md`): `x.png` and `x.ppm` are 8-bit RGB, `x.rgb16.png` and `x.rgb16.ppm`
+//! 16-bit RGB, `x.rgba.png` and `x.rgba16.png` RGBA against a transparent backdrop, `x.pfm`
+//! 32-bit float RGB. It owns the names and the byte layouts of the files; the pixels are the
+//! renderer's ([`PixelFormat::put`]), the atomic writing is `files`'.
+
+use super::files::AtomicFile;
+use crate::error::{err, Error, ErrorCode, Result};
+use crate::render::PixelFormat;
+use std::path::Path;
+
+/// The kind of file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Container {
+    /// Binary PPM, `P6`: 8 or 16 bits a channel (16-bit values big-endian).
+    Ppm,
+    /// PNG: RGB or RGBA, 8 or 16 bits a channel.
+    Png,
+    /// Portable float map, `PF`: RGB, 32-bit floats, little-endian, rows bottom to top.
+    Pfm,
+}
+
+/// The format of an image file: its kind and its pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImageFormat {
+    /// The kind of file.
+    pub container: Container,
+    /// The pixels it holds (and so the backdrop it is rendered against).
+    pub pixels: PixelFormat,
+}
+
+/// The modifiers a file name may carry before its extension, and the pixels each asks for.
+const MODIFIERS: [(&str, PixelFormat); 6] = [
+    ("rgb", PixelFormat::Rgb8),
+    ("rgb8", PixelFormat::Rgb8),
+    ("rgb16", PixelFormat::Rgb16),
+    ("rgba", PixelFormat::Rgba8),
+    ("rgba8", PixelFormat::Rgba8),
+    ("rgba16", PixelFormat::Rgba16),
+];
+
+/// What an unsupported name is told.
+const SUPPORTED: &str = "use .ppm, .png or .pfm, with .rgb16 before .ppm or .png for 16 bits \
+                         and .rgba or .rgba16 before .png for alpha";
+
+impl ImageFormat {
+    /// The format a path asks for, from the end of its file name (any case): the extension
+    /// `ppm`, `png` or `pfm`, and before it one of the modifiers `rgb`, `rgb8`, `rgb16`,
+    /// `rgba`, `rgba8`, `rgba16` (another word there is part of the name). A name without a
+    /// file name, an unknown extension, and a modifier its file type cannot hold (alpha in a
+    /// PPM, any modifier on a PFM) are `BadFile`.
+    pub fn from_path(path: &Path) -> Result<ImageFormat> {
+        let Some(name) = path.file_name() else {
+            return err(
+                ErrorCode::BadFile,
+                format!("{}: not a file name", path.display()),
+            );
+        };
+        let name = name.to_string_lossy().to_ascii_lowercase();
+        let mut parts = name.rsplit('.');
+        let ext = parts.next().filter(|_| name.contains('.'));
+        let modifier = parts.next().and_then(|m| {
+            // In `rgba.png` or `.rgba.png` the word is the stem, not a modifier.
+            let has_stem = name.len() > m.len() + ext.map_or(0, str::len) + 2;
+            MODIFIERS
+                .iter()
+                .find(|(word, _)| *word == m && has_stem)
+                .copied()
+        });
+        let bad = |why: String| -> Result<ImageFormat> {
+            err(ErrorCode::BadFile, format!("{}: {why}", path.display()))
+        };
+        let container = match ext {
+            Some("ppm") => Container::Ppm,
+            Some("png") => Container::Png,
+            Some("pfm") => Container::Pfm,
+            _ => return bad(format!("unsupported image format ({SUPPORTED})")),
+        };
+        let pixels = match (container, modifier) {
+            (Container::Pfm, None) => PixelFormat::Rgb32F,
+            (Container::Pfm, Some((word, _))) => {
+                return bad(format!(
+                    "a PFM holds 32-bit float RGB only: .{word}.pfm is not a format \
+                     ({SUPPORTED})"
+                ))
+            }
+            (Container::Ppm, Some((word, pixels))) if pixels.has_alpha() => {
+                return bad(format!(
+                    "a PPM has no alpha channel: .{word}.ppm is not a format (use .{word}.png)"
+                ))
+            }
+            (_, Some((_, pixels))) => pixels,
+            (_, None) => PixelFormat::Rgb8,
+        };
+        Ok(ImageFormat { container, pixels })
+    }
+}
+
+/// Encodes `pixels` (a `width × height` image laid out as `format.pixels`, in the machine's
+/// byte order) into the file `f` and commits it. Where the file wants another byte order or
+/// row order, a row at a time is reordered: no copy of the image is made (the PNG encoder
+/// holds its compressed stream, and for 16 bits its own big-endian copy of the pixels).
+pub(crate) fn encode_into(
+    mut f: AtomicFile,
+    format: ImageFormat,
+    width: u32,
+    height: u32,
+    pixels: &[u8],
+) -> Result<()> {
+    let row = width as usize * format.pixels.pixel_bytes();
+    assert_eq!(Some(pixels.len()), format.pixels.image_bytes(width, height));
+    let rows = pixels.chunks_exact(row.max(1));
+    match format.container {
+        Container::Ppm if format.pixels.channel_bytes() == 1 => {
+            f.write(format!("P6\n{width} {height}\n255\n").as_bytes())?;
+            f.write(pixels)?;
+        }
+        Container::Ppm => {
+            // 16-bit values are big-endian.
+            f.write(format!("P6\n{width} {height}\n65535\n").as_bytes())?;
+            let mut line = Vec::with_capacity(row);
+            for r in rows {
+                line.clear();
+                line.extend(
+                    r.chunks_exact(2)
+                        .flat_map(|v| u16::from_ne_bytes([v[0], v[1]]).to_be_bytes()),
+                );
+                f.write(&line)?;
+            }
+        }
+        Container::Png => {
+            use image::{ExtendedColorType as C, ImageEncoder};
+            let colour = match format.pixels {
+                PixelFormat::Rgb8 => C::Rgb8,
+                PixelFormat::Rgba8 => C::Rgba8,
+                PixelFormat::Rgb16 => C::Rgb16,
+                PixelFormat::Rgba16 => C::Rgba16,
+                other => unreachable!("no PNG of {other:?}"),
+            };
+            let path = f.path().to_path_buf();
+            image::codecs::png::PngEncoder::new(f.writer())
+                .write_image(pixels, width, height, colour)
+                .map_err(|e| match e {
+                    image::ImageError::IoError(e) => {
+                        Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()))
+                    }
+                    e => Error::new(ErrorCode::Internal, format!("PNG encoding failed: {e}")),
+                })?;
+        }
+        Container::Pfm => {
+            // A negative scale: little-endian floats. Rows bottom to top.
+            f.write(format!("PF\n{width} {height}\n-1.0\n").as_bytes())?;
+            let mut line = Vec::with_capacity(row);
+            for r in rows.rev() {
+                line.clear();
+                line.extend(
+                    r.chunks_exact(4)
+                        .flat_map(|v| f32::from_ne_bytes([v[0], v[1], v[2], v[3]]).to_le_bytes()),
+                );
+                f.write(&line)?;
+            }
+        }
+    }
+    f.commit()
+}
+
+/// Encodes 8-bit RGB pixels (row-major, top row first) in the format of `path` (by its name:
+/// `.ppm`, `.png`, `.rgb.png` ...; a name that asks for other pixels is `BadFile`: those are
+/// written by [`crate::Image::save`]) and writes them atomically, straight into the file: no
+/// copy of the pixels is made (PNG holds its compressed stream, at most about their size).
+/// A slice that is not `3 · width · height` bytes long is `BadValue`.
+pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
+    let format = ImageFormat::from_path(path)?;
+    if format.pixels != PixelFormat::Rgb8 {
+        return err(
+            ErrorCode::BadFile,
+            format!(
+                "{}: write_image writes 8-bit RGB (.ppm, .png); {:?} pixels are written by \
+                 Image::save",
+                path.display(),
+                format.pixels
+            ),
+        );
+    }
+    if Some(rgb.len()) != PixelFormat::Rgb8.image_bytes(width, height) {
+        return err(
+            ErrorCode::BadValue,
+            format!(
+                "{}: {} bytes for a {width}x{height} RGB image",
+                path.display(),
+                rgb.len()
+            ),
+        );
+    }
+    encode_into(AtomicFile::create(path)?, format, width, height, rgb)
+}
+
+impl crate::render::Image {
+    /// Writes the image atomically in the format its file name asks for (`docs/images.md`):
+    /// RGB formats hold its colour (for an image rendered against a transparent backdrop,
+    /// its light over black); RGBA formats its colour straight and alpha (1 for an image
+    /// rendered against the background: opaque).
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
+        let path = path.as_ref();
+        let format = ImageFormat::from_path(path)?;
+        let f = AtomicFile::create(path)?;
+        let bytes = self.to_bytes(format.pixels);
+        encode_into(f, format, self.width, self.height, &bytes)
+    }
+}

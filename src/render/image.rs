@@ -1,0 +1,339 @@
+//! A rendered image in memory ([`Image`]: linear colour and the transmittance of each pixel's
+//! primary ray), what the rays show where they leave the scene ([`Backdrop`]), and the
+//! quantisation of pixels into the integer and float layouts of [`PixelFormat`]: the one
+//! definition of 8-bit, 16-bit and alpha values that the in-memory helpers, the caller's
+//! buffers and the image files all use (`docs/images.md`). It computes no pixel (the renderer
+//! does) and writes no file (the output layer does).
+
+use super::{render_strips, Compiled, Progress};
+use crate::error::Result;
+
+/// Renders the compiled scene ([`render_strips`]) against the backdrop of `format` into
+/// `buffer`, exactly the image's bytes long, a strip of rows at a time as they are finished.
+pub(crate) fn render_into(
+    scene: &Compiled,
+    size: (u32, u32, f32),
+    format: PixelFormat,
+    progress: &Progress,
+    buffer: &mut [u8],
+) -> Result<()> {
+    let backdrop = format.backdrop();
+    let n = format.pixel_bytes();
+    assert_eq!(Some(buffer.len()), format.image_bytes(size.0, size.1));
+    let row = size.0 as usize * n;
+    render_strips(scene, size, backdrop, progress, |y, rows| {
+        let at = y as usize * row;
+        let out = &mut buffer[at..at + rows.len() * n];
+        for (p, dst) in rows.iter().zip(out.chunks_exact_mut(n)) {
+            format.put([p[0], p[1], p[2]], p[3], backdrop, dst);
+        }
+        Ok(())
+    })
+}
+
+/// What a render shows where its rays leave the scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Backdrop {
+    /// The scene's background colour (`vlBackground`), as in RGB images: every pixel is
+    /// opaque.
+    #[default]
+    Background,
+    /// Nothing: the background is transparent. Each pixel's colour is its light over black
+    /// (premultiplied by its coverage), and its alpha is `1 − T`, `T` the transmittance of its
+    /// primary ray; mirror rays that escape show black too. Compositing such an image over
+    /// an image `B` (`colour + T·B`) gives the scene rendered in front of `B`.
+    Transparent,
+}
+
+/// A layout of pixels in memory: row-major, top row first, channels interleaved, values in
+/// the machine's byte order. RGB layouts show the scene over its background; RGBA layouts
+/// are rendered with a transparent backdrop ([`Backdrop::Transparent`]) and carry alpha
+/// `1 − T`. Integer RGBA colour is straight (not premultiplied), as PNG stores it; float
+/// RGBA colour is premultiplied, as OpenEXR and compositing arithmetic take it. The values
+/// are those of the C constants (`VL_RGB8` ... of `vlRenderBuffer`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PixelFormat {
+    /// 3 bytes a pixel (`VL_RGB8`).
+    Rgb8 = 1,
+    /// 4 bytes a pixel, straight colour (`VL_RGBA8`).
+    Rgba8 = 2,
+    /// 3 `u16` a pixel, 6 bytes (`VL_RGB16`).
+    Rgb16 = 3,
+    /// 4 `u16` a pixel, 8 bytes, straight colour (`VL_RGBA16`).
+    Rgba16 = 4,
+    /// 3 `f32` a pixel, 12 bytes, in [0, 1] (`VL_RGB32F`).
+    Rgb32F = 5,
+    /// 4 `f32` a pixel, 16 bytes, premultiplied colour, in [0, 1] (`VL_RGBA32F`).
+    Rgba32F = 6,
+}
+
+impl PixelFormat {
+    /// Every format, in numeric order.
+    pub const ALL: [PixelFormat; 6] = [
+        PixelFormat::Rgb8,
+        PixelFormat::Rgba8,
+        PixelFormat::Rgb16,
+        PixelFormat::Rgba16,
+        PixelFormat::Rgb32F,
+        PixelFormat::Rgba32F,
+    ];
+
+    /// Validates a raw integer from the C interface (`BadEnum` for another).
+    pub fn from_raw(raw: i32) -> crate::error::Result<PixelFormat> {
+        match PixelFormat::ALL.iter().find(|f| f.raw() == raw) {
+            Some(&f) => Ok(f),
+            None => crate::error::err(
+                crate::error::ErrorCode::BadEnum,
+                format!("{raw} is not a valid pixel format"),
+            ),
+        }
+    }
+
+    /// The raw integer of the C interface.
+    pub fn raw(self) -> i32 {
+        self as i32
+    }
+
+    /// The channels of a pixel: 3 or 4.
+    pub fn channels(self) -> usize {
+        if self.has_alpha() {
+            4
+        } else {
+            3
+        }
+    }
+
+    /// The bytes of one channel: 1, 2 or 4.
+    pub fn channel_bytes(self) -> usize {
+        match self {
+            PixelFormat::Rgb8 | PixelFormat::Rgba8 => 1,
+            PixelFormat::Rgb16 | PixelFormat::Rgba16 => 2,
+            PixelFormat::Rgb32F | PixelFormat::Rgba32F => 4,
+        }
+    }
+
+    /// The bytes of one pixel.
+    pub fn pixel_bytes(self) -> usize {
+        self.channels() * self.channel_bytes()
+    }
+
+    /// Whether it has an alpha channel.
+    pub fn has_alpha(self) -> bool {
+        matches!(
+            self,
+            PixelFormat::Rgba8 | PixelFormat::Rgba16 | PixelFormat::Rgba32F
+        )
+    }
+
+    /// What a render in this format shows where rays leave the scene.
+    pub fn backdrop(self) -> Backdrop {
+        if self.has_alpha() {
+            Backdrop::Transparent
+        } else {
+            Backdrop::Background
+        }
+    }
+
+    /// The bytes of a `width × height` image, if that fits in `usize`.
+    pub fn image_bytes(self, width: u32, height: u32) -> Option<usize> {
+        (width as usize)
+            .checked_mul(height as usize)?
+            .checked_mul(self.pixel_bytes())
+    }
+
+    /// Writes the pixel of colour `rgb` and transmittance `t`, of an image rendered against
+    /// `backdrop`, into `out` (exactly [`PixelFormat::pixel_bytes`] long) in the machine's
+    /// byte order.
+    pub(crate) fn put(self, rgb: [f32; 3], t: f32, backdrop: Backdrop, out: &mut [u8]) {
+        let alpha = alpha(t, backdrop);
+        match self {
+            PixelFormat::Rgb8 => out.copy_from_slice(&rgb.map(to_u8)),
+            PixelFormat::Rgba8 => {
+                let [r, g, b] = rgb.map(|c| to_u8(straight(c, alpha)));
+                out.copy_from_slice(&[r, g, b, to_u8(alpha)]);
+            }
+            PixelFormat::Rgb16 => put_all(out, rgb.map(|c| to_u16(c).to_ne_bytes())),
+            PixelFormat::Rgba16 => {
+                let [r, g, b] = rgb.map(|c| to_u16(straight(c, alpha)));
+                put_all(out, [r, g, b, to_u16(alpha)].map(u16::to_ne_bytes));
+            }
+            PixelFormat::Rgb32F => put_all(out, rgb.map(|c| clean(c).to_ne_bytes())),
+            PixelFormat::Rgba32F => {
+                let [r, g, b] = rgb.map(clean);
+                put_all(out, [r, g, b, alpha].map(f32::to_ne_bytes));
+            }
+        }
+    }
+}
+
+/// Writes the channels' bytes one after the other into `out`.
+fn put_all<const C: usize, const B: usize>(out: &mut [u8], channels: [[u8; B]; C]) {
+    for (dst, src) in out.chunks_exact_mut(B).zip(channels) {
+        dst.copy_from_slice(&src);
+    }
+}
+
+/// A rendered image: linear RGB in [0, 1] and the transmittance of each pixel's primary
+/// ray, row-major, top row first (`docs/images.md`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Colour, `width * height` pixels: with [`Backdrop::Background`] what the pixel shows,
+    /// the background included; with [`Backdrop::Transparent`] the light of the scene over
+    /// black (colour premultiplied by alpha).
+    pub pixels: Vec<[f32; 3]>,
+    /// The transmittance `T` of each pixel's primary ray, in [0, 1]: the weight of what lies
+    /// behind the scene (the background) in the pixel, 0 where the ray ends in opaque matter
+    /// or early termination; with super-sampling the mean over the pixel's rays.
+    pub transmittance: Vec<f32>,
+    /// What the rays show where they leave the scene.
+    pub backdrop: Backdrop,
+}
+
+impl Image {
+    /// An image of the colours `pixels` (`width * height` of them, row-major, top row first;
+    /// panics on another count), opaque: against the background, transmittance 0 (for images
+    /// made by other means than a render, such as a closed form to compare a render with).
+    pub fn from_rgb(width: u32, height: u32, pixels: Vec<[f32; 3]>) -> Image {
+        assert_eq!(pixels.len(), width as usize * height as usize);
+        Image {
+            width,
+            height,
+            transmittance: vec![0.0; pixels.len()],
+            pixels,
+            backdrop: Backdrop::Background,
+        }
+    }
+
+    /// The colour at column `x`, row `y` (row 0 at the top).
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
+        self.pixels[self.index(x, y)]
+    }
+
+    /// The index of the pixel at column `x`, row `y`.
+    fn index(&self, x: u32, y: u32) -> usize {
+        y as usize * self.width as usize + x as usize
+    }
+
+    /// The alpha at column `x`, row `y`: `1 − T` for a transparent backdrop, 1 (opaque) for
+    /// the background.
+    pub fn alpha(&self, x: u32, y: u32) -> f32 {
+        alpha(self.transmittance[self.index(x, y)], self.backdrop)
+    }
+
+    /// The pixels in `format` ([`PixelFormat`]: what a render into a buffer of that format
+    /// gives, and what the image files hold), in the machine's byte order.
+    pub fn to_bytes(&self, format: PixelFormat) -> Vec<u8> {
+        let n = format.pixel_bytes();
+        let mut out = vec![0u8; self.pixels.len() * n];
+        for ((p, &t), dst) in self
+            .pixels
+            .iter()
+            .zip(&self.transmittance)
+            .zip(out.chunks_exact_mut(n))
+        {
+            format.put(*p, t, self.backdrop, dst);
+        }
+        out
+    }
+
+    /// 8-bit RGB, each channel `round(255·v)`.
+    pub fn to_rgb8(&self) -> Vec<u8> {
+        self.pixels.iter().flat_map(|p| p.map(to_u8)).collect()
+    }
+
+    /// 16-bit RGB: `round(65535·v)`, the 16-bit value whose rounding to 8 bits
+    /// (`round(v16 / 257)`) is the 8-bit value (`docs/images.md`).
+    pub fn to_rgb16(&self) -> Vec<u16> {
+        self.pixels.iter().flat_map(|p| p.map(to_u16)).collect()
+    }
+
+    /// 8-bit RGBA, straight colour (colour / alpha) and alpha, as a PNG holds it.
+    pub fn to_rgba8(&self) -> Vec<u8> {
+        self.to_bytes(PixelFormat::Rgba8)
+    }
+
+    /// 16-bit RGBA, straight colour (colour / alpha) and alpha, as a PNG holds it.
+    pub fn to_rgba16(&self) -> Vec<u16> {
+        self.rgba(to_u16, |c, a| to_u16(straight(c, a)))
+    }
+
+    /// Float RGBA: premultiplied colour and alpha.
+    pub fn to_rgba_f32(&self) -> Vec<f32> {
+        self.rgba(clean, |c, _| clean(c))
+    }
+
+    /// Every pixel as four channels: `colour(c, alpha)` of each colour channel, then
+    /// `alpha_of(alpha)`.
+    fn rgba<T>(&self, alpha_of: impl Fn(f32) -> T, colour: impl Fn(f32, f32) -> T) -> Vec<T> {
+        self.pixels
+            .iter()
+            .zip(&self.transmittance)
+            .flat_map(|(p, &t)| {
+                let a = alpha(t, self.backdrop);
+                let [r, g, b] = p.map(|c| colour(c, a));
+                [r, g, b, alpha_of(a)]
+            })
+            .collect()
+    }
+}
+
+/// The alpha of a pixel whose primary ray has transmittance `t`: `1 − t` against a
+/// transparent backdrop, 1 against the background; in [0, 1], never NaN.
+pub(crate) fn alpha(t: f32, backdrop: Backdrop) -> f32 {
+    match backdrop {
+        Backdrop::Background => 1.0,
+        Backdrop::Transparent => 1.0 - clean(t),
+    }
+}
+
+/// `v` in [0, 1]; anything non-finite becomes 0.
+pub(crate) fn clean(v: f32) -> f32 {
+    if v.is_finite() {
+        v.clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
+/// The straight colour of the premultiplied channel `c` at alpha `a`: `c / a`, at most 1
+/// (light a mirror adds beyond the coverage cannot be stored straight); 0 where `a` is 0 (a
+/// pixel nothing covers has no colour).
+pub(crate) fn straight(c: f32, a: f32) -> f32 {
+    if a > 0.0 {
+        (clean(c) / a).min(1.0)
+    } else {
+        0.0
+    }
+}
+
+/// A channel in 8 bits: `round(255·v)` of `v` in [0, 1]; anything non-finite becomes 0.
+pub(crate) fn to_u8(v: f32) -> u8 {
+    if v.is_finite() {
+        (v.clamp(0.0, 1.0) * 255.0).round() as u8
+    } else {
+        0
+    }
+}
+
+/// A channel in 16 bits: `round(65535·v)` of `v` in [0, 1] (computed exactly, in double
+/// precision); anything non-finite becomes 0. Rounded to 8 bits (`round(v16 / 257)`), it is
+/// [`to_u8`]`(v)`: in exact arithmetic `65535·v = 257·(255·v)` and 257 is odd, so the half
+/// steps of 8 bits fall on half steps of 16 bits and both roundings agree. [`to_u8`] rounds
+/// `255·v` in single precision, which can move a product within 2⁻¹⁷ of a half step across
+/// it; the 16-bit value is then kept within the 8-bit value's interval (one unit of 16 bits),
+/// so that the relation always holds.
+pub(crate) fn to_u16(v: f32) -> u16 {
+    if !v.is_finite() {
+        return 0;
+    }
+    let q8 = to_u8(v) as i32;
+    let q = (v.clamp(0.0, 1.0) as f64 * 65535.0).round() as i32;
+    q.clamp(257 * q8 - 128, 257 * q8 + 128).clamp(0, 65535) as u16
+}
+
+#[cfg(test)]
+mod tests;
