@@ -13,9 +13,14 @@
 //! vlconvert info brain.vlb
 //! ```
 //!
-//! Volumes (raw, NIfTI, NRRD, MetaImage) of any element type become datasets whose normalised value is
-//! clamp((value − A)/(B − A), 0, 1) for a window A … B of data values, by default the data's
-//! smallest and largest value (`volume`: 8-bit sources in 8-bit voxels, others in 16-bit ones).
+//! Volumes (raw, NIfTI, NRRD, MetaImage) of any element type become datasets whose normalised
+//! value is clamp((value − A)/(B − A), 0, 1) for a window A … B of data values, by default the
+//! data's smallest and largest value (`volume`: 8-bit sources in 8-bit voxels, others in 16-bit
+//! ones).
+//!
+//! Long steps (reading, decompressing, converting voxels) draw a progress line on standard
+//! error when it is a terminal, blanked out when the step ends; `--quiet` draws none, and
+//! nothing is drawn into a pipe or a file (`progress`).
 //!
 //! Exit codes: 0 success, 1 the conversion failed (unreadable or malformed input, unwritable
 //! output, a report that cannot be written), 2 bad command line. A report whose reader has
@@ -29,6 +34,7 @@ use vlib::{Dataset, Voxels};
 mod detect;
 mod metaimage;
 mod nrrd;
+mod progress;
 mod volume;
 
 use volume::{Source, Type};
@@ -42,6 +48,9 @@ use volume::{Source, Type};
 struct Cli {
     #[command(subcommand)]
     command: Cmd,
+    /// Draw no progress bar (it is drawn on standard error only when that is a terminal).
+    #[arg(long, short, global = true)]
+    quiet: bool,
 }
 
 /// Normalisation written to the output: voxel v maps to clamp((v − a)/(b − a), 0, 1).
@@ -385,11 +394,35 @@ fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
     path.with_file_name(format!("{stem}{suffix}{ext}"))
 }
 
+/// Reads the NIfTI-1 file `input`, its progress shown: a single file (`n+1`, gzipped or not)
+/// through a reader that counts the file's bytes; a header whose volume is in an `.img` beside
+/// it, through the crate's own file pairing.
+fn read_nifti(input: &Path) -> Result<nifti::InMemNiftiObject, nifti::NiftiError> {
+    use std::io::{BufReader, Read};
+    let mut magic = [0u8; 2];
+    let gz = std::fs::File::open(input)?.read(&mut magic)? == 2 && magic == [0x1f, 0x8b];
+    let file = std::fs::File::open(input)?;
+    let name = input.file_name().unwrap_or_default().to_string_lossy();
+    let bar = progress::Progress::new(
+        format!("reading {name}"),
+        file.metadata()?.len(),
+        progress::Unit::Bytes,
+    );
+    let counted = BufReader::new(progress::Reading::new(file, bar));
+    let read = if gz {
+        nifti::InMemNiftiObject::from_reader(flate2::read::MultiGzDecoder::new(counted))
+    } else {
+        nifti::InMemNiftiObject::from_reader(counted)
+    };
+    match read {
+        Err(nifti::NiftiError::NoVolumeData) => nifti::ReaderOptions::new().read_file(input),
+        other => other,
+    }
+}
+
 fn nifti(input: &Path, output: &Path, window: &Window) -> Res<()> {
-    use nifti::{Endianness, NiftiObject, NiftiType, NiftiVolume, ReaderOptions};
-    let obj = ReaderOptions::new()
-        .read_file(input)
-        .map_err(|e| format!("{}: {e}", input.display()))?;
+    use nifti::{Endianness, NiftiObject, NiftiType, NiftiVolume};
+    let obj = read_nifti(input).map_err(|e| format!("{}: {e}", input.display()))?;
     let header = obj.header().clone();
     let volume = obj.into_volume();
     let dim = volume.dim().to_vec();
@@ -521,10 +554,16 @@ fn auto(input: &Path, output: &Path, window: &Window) -> Res<()> {
 
 fn main() -> ExitCode {
     let mut args: Vec<std::ffi::OsString> = std::env::args_os().collect();
-    if args.len() >= 3 {
-        let first = args[1].to_string_lossy();
+    // The first argument after a leading --quiet.
+    let at = args
+        .iter()
+        .skip(1)
+        .position(|a| a != "--quiet" && a != "-q")
+        .map_or(args.len(), |i| i + 1);
+    if args.len() >= at + 2 {
+        let first = args[at].to_string_lossy();
         if !first.starts_with('-') && !SUBCOMMANDS.contains(&first.as_ref()) {
-            args.insert(1, "convert".into());
+            args.insert(at, "convert".into());
         }
     }
     let cli = match Cli::try_parse_from(args) {
@@ -535,6 +574,7 @@ fn main() -> ExitCode {
             return ExitCode::from(code);
         }
     };
+    progress::set_quiet(cli.quiet);
     let result = match &cli.command {
         Cmd::Raw {
             input,
