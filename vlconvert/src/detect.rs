@@ -1,6 +1,7 @@
 //! Which format a file is, from its first bytes (`vlconvert IN OUT.vlb`): NRRD by its magic,
 //! NIfTI-1 by `n+1` at byte 344 (inside gzip too), MetaImage by its `ObjectType`/`NDims` header
-//! keys, PNG and PNM images by theirs. A headerless raw volume cannot be recognised: it needs
+//! keys, TIFF (and BigTIFF) by `II*\0`/`MM\0*` (`II+\0`/`MM\0+`), a folder of TIFF files
+//! as a stack, PNG and PNM images by theirs. A headerless raw volume cannot be recognised: it needs
 //! `vlconvert raw` with its dimensions and type.
 
 use std::io::Read;
@@ -13,10 +14,21 @@ pub enum Format {
     Nrrd,
     MetaImage,
     Image,
+    /// A TIFF file, or a folder of them.
+    Tiff,
 }
 
 /// The format of the file at `path`.
 pub fn format(path: &Path) -> Result<Format, String> {
+    if path.is_dir() {
+        return match crate::tiffstack::folder_files(path)?.is_empty() {
+            false => Ok(Format::Tiff),
+            true => Err(format!(
+                "{}: a folder without TIFF files (.tif, .tiff): not a stack vlconvert reads",
+                path.display()
+            )),
+        };
+    }
     // (A FIFO or a device is refused, not read: its bytes could not be read twice.)
     let head = crate::volume::read_regular(path, Some(512))?;
     if head.starts_with(&[0x1f, 0x8b]) {
@@ -40,6 +52,9 @@ pub fn format(path: &Path) -> Result<Format, String> {
     if crate::nrrd::is_nrrd(&head) {
         return Ok(Format::Nrrd);
     }
+    if crate::tiffstack::is_tiff(&head) {
+        return Ok(Format::Tiff);
+    }
     if head.starts_with(b"\x89PNG")
         || (head.len() > 2 && head[0] == b'P' && b"123456".contains(&head[1]))
     {
@@ -54,7 +69,7 @@ pub fn format(path: &Path) -> Result<Format, String> {
         return Err(format!("{}: already a .vlb dataset", path.display()));
     }
     Err(format!(
-        "{}: not a format vlconvert recognises (NIfTI-1, NRRD, MetaImage, PNG, PNM); a \
+        "{}: not a format vlconvert recognises (NIfTI-1, NRRD, MetaImage, TIFF, PNG, PNM); a \
          headerless raw volume converts with `vlconvert raw` and its --dims and --type",
         path.display()
     ))

@@ -1,6 +1,6 @@
-//! `vlconvert`: converts NIfTI, NRRD, MetaImage and raw volumes and 2D images to vlib's `.vlb`
-//! datasets (with a geometry sidecar where the source places its voxels), and describes `.vlb`
-//! files.
+//! `vlconvert`: converts NIfTI, NRRD, MetaImage, TIFF stacks and raw volumes and 2D images to
+//! vlib's `.vlb` datasets (with a geometry sidecar where the source places its voxels), and
+//! describes `.vlb` files.
 //!
 //! ```text
 //! vlconvert brain.nii.gz brain.vlb                    # the format from the file's first bytes
@@ -8,19 +8,21 @@
 //! vlconvert nifti ct.nii.gz ct.vlb --window -1000 2000   # Hounsfield units to 0 … 1
 //! vlconvert nrrd ct.nrrd ct.vlb                        # raw, gzip or ascii; .nhdr too
 //! vlconvert metaimage ct.mha ct.vlb        # MetaImage: .mha, or .mhd with its .raw/.zraw
+//! vlconvert tiff stack.tif stack.vlb       # a multi-page TIFF, one z slice a page
+//! vlconvert slices/ stack.vlb              # a folder of single-page TIFFs, natural order
 //! vlconvert raw ct.raw ct.vlb --dims 256 256 113 --type i16 --endian big
 //! vlconvert image word.png word.vlb        # grey: word.vlb; colour: word_r/_g/_b.vlb
 //! vlconvert info brain.vlb
 //! ```
 //!
-//! Volumes (raw, NIfTI, NRRD, MetaImage) of any element type become datasets whose normalised
-//! value is clamp((value − A)/(B − A), 0, 1) for a window A … B of data values, by default the
-//! data's smallest and largest value (`volume`: 8-bit sources in 8-bit voxels, others in 16-bit
-//! ones).
+//! Volumes (raw, NIfTI, NRRD, MetaImage, TIFF) of any element type become datasets whose
+//! normalised value is clamp((value − A)/(B − A), 0, 1) for a window A … B of data values, by
+//! default the data's smallest and largest value (`volume`: 8-bit sources in 8-bit voxels,
+//! others in 16-bit ones). TIFF stacks: `tiffstack`.
 //!
-//! Long steps (reading, decompressing, converting voxels) draw a progress line on standard
-//! error when it is a terminal, blanked out when the step ends; `--quiet` draws none, and
-//! nothing is drawn into a pipe or a file (`progress`).
+//! Long steps (reading, decompressing, decoding slices, converting voxels) draw a progress
+//! line on standard error when it is a terminal, blanked out when the step ends; `--quiet`
+//! draws none, and nothing is drawn into a pipe or a file (`progress`).
 //!
 //! Exit codes: 0 success, 1 the conversion failed (unreadable or malformed input, unwritable
 //! output, a report that cannot be written), 2 bad command line. A report whose reader has
@@ -35,6 +37,7 @@ mod detect;
 mod metaimage;
 mod nrrd;
 mod progress;
+mod tiffstack;
 mod volume;
 
 use volume::{Source, Type};
@@ -102,8 +105,9 @@ enum Endian {
 
 #[derive(Subcommand)]
 enum Cmd {
-    /// Any volume or image whose format its first bytes tell (NIfTI-1, NRRD, MetaImage, PNG,
-    /// PNM): `vlconvert IN OUT.vlb` is short for `vlconvert convert IN OUT.vlb`.
+    /// Any volume or image whose format its first bytes tell (NIfTI-1, NRRD, MetaImage, TIFF,
+    /// PNG, PNM), or a folder of TIFFs: `vlconvert IN OUT.vlb` is short for `vlconvert convert
+    /// IN OUT.vlb`.
     Convert {
         input: PathBuf,
         output: PathBuf,
@@ -161,6 +165,9 @@ enum Cmd {
         #[command(flatten)]
         window: Window,
     },
+    /// A TIFF stack: a multi-page TIFF (ImageJ or plain; one z slice a page) or a folder of
+    /// single-page TIFFs (in the natural order of their names), grey, of any sample type.
+    Tiff(tiffstack::Args),
     /// Print a .vlb file's dimensions, voxel width, normalisation and value range.
     Info { file: PathBuf },
 }
@@ -520,13 +527,14 @@ fn info(path: &Path) -> Res<()> {
 
 /// The names of the subcommands (a first argument that is none of them, nor an option, is an
 /// input file: `vlconvert IN OUT.vlb`).
-const SUBCOMMANDS: [&str; 8] = [
+const SUBCOMMANDS: [&str; 9] = [
     "convert",
     "raw",
     "image",
     "nifti",
     "nrrd",
     "metaimage",
+    "tiff",
     "info",
     "help",
 ];
@@ -543,6 +551,7 @@ fn auto(input: &Path, output: &Path, window: &Window) -> Res<()> {
         detect::Format::Nifti => nifti(input, output, window),
         detect::Format::Nrrd => nrrd_file(input, output, window),
         detect::Format::MetaImage => metaimage::convert(input, output, window),
+        detect::Format::Tiff => tiffstack::convert_auto(input, output, window),
         detect::Format::Image => {
             if window.ends() != (None, None) {
                 return Err("an image's voxels take --a/--b of the image subcommand".into());
@@ -616,6 +625,7 @@ fn main() -> ExitCode {
             output,
             window,
         } => metaimage::convert(input, output, window),
+        Cmd::Tiff(args) => tiffstack::convert(args),
         Cmd::Info { file } => info(file),
     };
     match result {

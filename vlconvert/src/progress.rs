@@ -1,5 +1,6 @@
-//! Progress of a long step (reading a file, decompressing it, converting voxels) as one line
-//! on standard error: the step's name, a bar, the fraction done, the amount (bytes or voxels), the time so far and the rate, redrawn at most ten times a second.
+//! Progress of a long step (reading a file, decompressing it, decoding slices, converting
+//! voxels) as one line on standard error: the step's name, a bar, the fraction done, the amount
+//! (bytes, slices or voxels), the time so far and the rate, redrawn at most ten times a second.
 //!
 //! The line is drawn only when standard error is a terminal (`std::io::IsTerminal`) and
 //! `--quiet` is not given: piped or redirected, vlconvert writes no progress at all. The line
@@ -33,6 +34,7 @@ pub fn set_quiet(quiet: bool) {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Unit {
     Bytes,
+    Slices,
     Voxels,
 }
 
@@ -144,6 +146,7 @@ fn amount(n: f64, unit: Unit) -> String {
     let (base, names): (f64, [&str; 4]) = match unit {
         Unit::Bytes => (1024.0, ["B", "KiB", "MiB", "GiB"]),
         Unit::Voxels => (1000.0, ["", "k", "M", "G"]),
+        Unit::Slices => return format!("{n:.0}"),
     };
     let mut v = n;
     let mut i = 0;
@@ -178,6 +181,7 @@ pub fn line(
     };
     let noun = match unit {
         Unit::Bytes => "",
+        Unit::Slices => " slices",
         Unit::Voxels => " voxels",
     };
     let secs = elapsed.as_secs_f64();
@@ -185,6 +189,7 @@ pub fn line(
         let per = done.min(total) as f64 / secs;
         match unit {
             Unit::Bytes => format!("  {}/s", amount(per, unit)),
+            Unit::Slices => format!("  {per:.1} slices/s"),
             Unit::Voxels => format!("  {} voxels/s", amount(per, unit)),
         }
     } else {

@@ -34,7 +34,7 @@ fn big_raw(d: &Path) -> PathBuf {
     p
 }
 
-/// Piped, every reader (raw, NIfTI, NRRD gzip, MetaImage zlib) writes
+/// Piped, every reader (raw, NIfTI, NRRD gzip, MetaImage zlib, TIFF file and folder) writes
 /// no progress: standard error holds only whole `vlconvert: note:` lines, no carriage return.
 #[test]
 fn no_progress_when_standard_error_is_not_a_terminal() {
@@ -60,6 +60,11 @@ fn no_progress_when_standard_error_is_not_a_terminal() {
             s(&fixture("metaimage/float32_zlib.mha")).into(),
             s(&out).into(),
         ],
+        vec![
+            s(&fixture("tiff/float32_deflate.tif")).into(),
+            s(&out).into(),
+        ],
+        vec![s(&fixture("tiff/uint8_slices")).into(), s(&out).into()],
     ];
     for args in cases {
         let o = Command::new(BIN).args(&args).output().unwrap();
@@ -139,7 +144,7 @@ fn blanked_before(screen: &str, marker: &str) {
 
 /// Under a terminal the bar is drawn (the file's name, a bar, the percentage, bytes), each
 /// step's line is blanked out ("\r", spaces, "\r") before anything else is written, and the
-/// report follows on a clean line; `--quiet` draws none.
+/// report follows on a clean line (an error message too); `--quiet` draws none.
 #[test]
 fn a_bar_on_a_terminal_blanked_out_before_the_report() {
     if under_a_terminal("true").is_none_or(|o| !o.status.success()) {
@@ -171,5 +176,19 @@ fn a_bar_on_a_terminal_blanked_out_before_the_report() {
     let screen = String::from_utf8_lossy(&o.stdout);
     assert!(!screen.contains(" ["), "{screen:?}");
     assert!(screen.starts_with("U8 values kept exactly"), "{screen:?}");
+    // An error after slices were read: the line is blanked out before the message.
+    let folder = d.join("stack");
+    std::fs::create_dir(&folder).unwrap();
+    for entry in std::fs::read_dir(fixture("tiff/uint8_slices")).unwrap() {
+        let p = entry.unwrap().path();
+        std::fs::copy(&p, folder.join(p.file_name().unwrap())).unwrap();
+    }
+    std::fs::write(folder.join("slice_12.tif"), b"II*\0 cut short").unwrap();
+    let cmd = format!("'{BIN}' tiff '{}' '{}'", s(&folder), s(&out));
+    let o = under_a_terminal(&cmd).unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let screen = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(screen.contains("stack ["), "{screen:?}");
+    blanked_before(&screen, "vlconvert: ");
     std::fs::remove_dir_all(&d).unwrap();
 }

@@ -31,7 +31,18 @@ fn half_way_through_a_file() {
 }
 
 #[test]
-fn voxels_count_in_thousands() {
+fn slices_and_voxels_count_in_their_units() {
+    let t = line("stack", 3, 12, Unit::Slices, Duration::from_secs(2), 80);
+    assert!(
+        t.ends_with("]  25%  3/12 slices  2.0 s  1.5 slices/s"),
+        "{t}"
+    );
+    let (full, empty) = cells(&t);
+    assert_eq!(
+        full,
+        (full + empty) / 4,
+        "a quarter filled (rounded down): {t}"
+    );
     let t = line(
         "converting",
         2_500_000,
@@ -62,10 +73,10 @@ fn edge_states_divide_by_nothing() {
 #[test]
 fn the_line_fits_the_terminal() {
     let long = "a-very-long-file-name-from-a-scanner-export-0001.tif";
-    let t = line(long, 1, 2, Unit::Bytes, Duration::from_secs(1), 80);
+    let t = line(long, 1, 2, Unit::Slices, Duration::from_secs(1), 80);
     assert!(t.chars().count() <= 79, "{t}");
     assert!(t.contains('…') && t.starts_with("a-very-long"), "{t}");
-    assert!(t.ends_with("50%  1 B/2 B  1.0 s  1 B/s"), "{t}");
-    let t = line(long, 1, 2, Unit::Bytes, Duration::from_secs(1), 20);
+    assert!(t.ends_with("50%  1/2 slices  1.0 s  1.0 slices/s"), "{t}");
+    let t = line(long, 1, 2, Unit::Slices, Duration::from_secs(1), 20);
     assert_eq!(t.chars().count(), 19, "{t}");
 }
