@@ -1,8 +1,8 @@
 //! Which format a file is, from its first bytes (`vlconvert IN OUT.vlb`): NRRD by its magic,
 //! NIfTI-1 by `n+1` at byte 344 (inside gzip too), MetaImage by its `ObjectType`/`NDims` header
-//! keys, TIFF (and BigTIFF) by `II*\0`/`MM\0*` (`II+\0`/`MM\0+`), a folder of TIFF files
-//! as a stack, PNG and PNM images by theirs. A headerless raw volume cannot be recognised: it needs
-//! `vlconvert raw` with its dimensions and type.
+//! keys, TIFF (and BigTIFF) by `II*\0`/`MM\0*` (`II+\0`/`MM\0+`), PNG and PNM images by
+//! theirs; a folder holding TIFF files is a stack. A headerless raw volume cannot be
+//! recognised: it needs `vlconvert raw` with its dimensions and type.
 
 use std::io::Read;
 use std::path::Path;
