@@ -10,7 +10,7 @@
 //!
 //! A reader drives it with [`Progress::new`], [`Progress::advance`] and [`Progress::finish`],
 //! or wraps its input in [`Reading`], which advances by the bytes read. What a line says for a
-//! given state is [`line`], a pure function.
+//! given state is [`line()`], a pure function.
 
 use std::io::{IsTerminal, Read, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
