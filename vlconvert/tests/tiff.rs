@@ -101,6 +101,9 @@ fn every_type_converts_to_the_writers_values() {
         ("int32_tiled", [5, 4, 3], 2, false),
         ("float64_2d", [5, 4, 1], 2, false),
         ("uint8_miniswhite", [5, 4, 3], 1, true),
+        ("uint64", [5, 4, 3], 2, false),
+        ("int64", [5, 4, 3], 2, false),
+        ("float16", [5, 4, 3], 2, false),
     ];
     for (name, dims, width, exact) in cases {
         let out = d.join(format!("{name}.vlb"));
