@@ -1,8 +1,9 @@
 //! Which format a file is, from its first bytes (`vlconvert IN OUT.vlb`): NRRD by its magic,
 //! NIfTI-1 by `n+1` at byte 344 (inside gzip too), MetaImage by its `ObjectType`/`NDims` header
-//! keys, DICOM by `DICM` at byte 128, PNG and PNM images by theirs; a folder is a DICOM series.
-//! A headerless raw volume cannot be recognised: it needs `vlconvert raw` with its dimensions
-//! and type.
+//! keys, DICOM by `DICM` at byte 128, TIFF (and BigTIFF) by `II*\0`/`MM\0*` (`II+\0`/`MM\0+`),
+//! PNG and PNM images by theirs; a folder holding TIFF files is a stack, any other folder a
+//! DICOM series. A headerless raw volume cannot be recognised: it needs `vlconvert raw` with
+//! its dimensions and type.
 
 use std::io::Read;
 use std::path::Path;
@@ -15,12 +16,25 @@ pub enum Format {
     MetaImage,
     Image,
     Dicom,
+    /// A TIFF file, or a folder of them.
+    Tiff,
 }
 
 /// The format of the file at `path`.
 pub fn format(path: &Path) -> Result<Format, String> {
     if std::fs::metadata(path).is_ok_and(|m| m.is_dir()) {
-        return Ok(Format::Dicom);
+        // A folder of TIFFs is a stack; one holding a DICOM file a series.
+        if !crate::tiffstack::folder_files(path)?.is_empty() {
+            return Ok(Format::Tiff);
+        }
+        if holds_dicom(path) {
+            return Ok(Format::Dicom);
+        }
+        return Err(format!(
+            "{}: a folder without TIFF files (.tif, .tiff) or DICOM files (DICM at byte 128): \
+             neither a stack nor a series vlconvert reads",
+            path.display()
+        ));
     }
     // (A FIFO or a device is refused, not read: its bytes could not be read twice.)
     let head = crate::volume::read_regular(path, Some(512))?;
@@ -48,6 +62,9 @@ pub fn format(path: &Path) -> Result<Format, String> {
     if crate::nrrd::is_nrrd(&head) {
         return Ok(Format::Nrrd);
     }
+    if crate::tiffstack::is_tiff(&head) {
+        return Ok(Format::Tiff);
+    }
     if head.starts_with(b"\x89PNG")
         || (head.len() > 2 && head[0] == b'P' && b"123456".contains(&head[1]))
     {
@@ -62,7 +79,7 @@ pub fn format(path: &Path) -> Result<Format, String> {
         return Err(format!("{}: already a .vlb dataset", path.display()));
     }
     Err(format!(
-        "{}: not a format vlconvert recognises (NIfTI-1, NRRD, MetaImage, DICOM, PNG, PNM); a \
+        "{}: not a format vlconvert recognises (NIfTI-1, NRRD, MetaImage, DICOM, TIFF, PNG, PNM); a \
          headerless raw volume converts with `vlconvert raw` and its --dims and --type",
         path.display()
     ))
@@ -72,4 +89,18 @@ pub fn format(path: &Path) -> Result<Format, String> {
 /// `ni1` and a NUL at byte 344.
 fn is_nifti(head: &[u8]) -> bool {
     matches!(head.get(344..348), Some(b"n+1\0") | Some(b"ni1\0"))
+}
+
+/// Whether the folder `dir` holds a regular file with `DICM` at byte 128 (its first 132 bytes
+/// read; unreadable entries skipped: the DICOM reader names them).
+fn holds_dicom(dir: &Path) -> bool {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return false;
+    };
+    entries.filter_map(|e| e.ok()).any(|e| {
+        let p = e.path();
+        e.file_type().is_ok_and(|t| t.is_file())
+            && crate::volume::read_regular(&p, Some(132))
+                .is_ok_and(|head| crate::dicom::scan::is_dicom(&head))
+    })
 }

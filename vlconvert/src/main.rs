@@ -1,4 +1,5 @@
-//! `vlconvert`: converts NIfTI, NRRD, MetaImage, DICOM series and raw volumes and 2D images to
+//! `vlconvert`: converts NIfTI, NRRD, MetaImage, DICOM series, TIFF stacks and raw volumes and
+//! 2D images to
 //! vlib's `.vlb` datasets (with a geometry sidecar where the source places its voxels), and
 //! describes `.vlb` files.
 //!
@@ -10,17 +11,24 @@
 //! vlconvert metaimage ct.mha ct.vlb        # MetaImage: .mha, or .mhd with its .raw/.zraw
 //! vlconvert dicom ct/ ct.vlb               # a folder of DICOM slices (or one of its files)
 //! vlconvert ct/ ct.vlb --series 1.2.840.…  # one series of a folder that holds several
+//! vlconvert tiff stack.tif stack.vlb       # a multi-page TIFF, one z slice a page
+//! vlconvert slices/ stack.vlb              # a folder of single-page TIFFs, natural order
 //! vlconvert raw ct.raw ct.vlb --dims 256 256 113 --type i16 --endian big
 //! vlconvert image word.png word.vlb        # grey: word.vlb; colour: word_r/_g/_b.vlb
 //! vlconvert info brain.vlb
 //! ```
 //!
-//! Volumes (raw, NIfTI, NRRD, MetaImage, DICOM) of any element type become datasets whose
+//! Volumes (raw, NIfTI, NRRD, MetaImage, DICOM, TIFF) of any element type become datasets whose
 //! normalised value is clamp((value − A)/(B − A), 0, 1) for a window A … B of data values, by
 //! default the data's smallest and largest value (`volume`: 8-bit sources in 8-bit voxels,
 //! others in 16-bit ones). A DICOM series' values are its modality values (Hounsfield units
 //! for CT: RescaleSlope and RescaleIntercept applied per slice); its slices are ordered along
-//! their normal and placed by their position, orientation and pixel spacing (`dicom`).
+//! their normal and placed by their position, orientation and pixel spacing (`dicom`). TIFF
+//! stacks: `tiffstack`.
+//!
+//! Long steps (reading, decompressing, decoding slices, converting voxels) draw a progress
+//! line on standard error when it is a terminal, blanked out when the step ends; `--quiet`
+//! draws none, and nothing is drawn into a pipe or a file (`progress`).
 //!
 //! Exit codes: 0 success, 1 the conversion failed (unreadable or malformed input, unwritable
 //! output, a report that cannot be written), 2 bad command line. A report whose reader has
@@ -35,6 +43,8 @@ mod detect;
 mod dicom;
 mod metaimage;
 mod nrrd;
+mod progress;
+mod tiffstack;
 mod volume;
 
 use volume::{Source, Type};
@@ -48,6 +58,9 @@ use volume::{Source, Type};
 struct Cli {
     #[command(subcommand)]
     command: Cmd,
+    /// Draw no progress bar (it is drawn on standard error only when that is a terminal).
+    #[arg(long, short, global = true)]
+    quiet: bool,
 }
 
 /// Normalisation written to the output: voxel v maps to clamp((v − a)/(b − a), 0, 1).
@@ -100,8 +113,8 @@ enum Endian {
 #[derive(Subcommand)]
 enum Cmd {
     /// Any volume or image whose format its first bytes tell (NIfTI-1, NRRD, MetaImage, DICOM,
-    /// PNG, PNM), or a folder of DICOM slices: `vlconvert IN OUT.vlb` is short for `vlconvert
-    /// convert IN OUT.vlb`.
+    /// TIFF, PNG, PNM), or a folder (of TIFFs: a stack; otherwise DICOM slices): `vlconvert IN
+    /// OUT.vlb` is short for `vlconvert convert IN OUT.vlb`.
     Convert {
         input: PathBuf,
         output: PathBuf,
@@ -173,6 +186,9 @@ enum Cmd {
         #[command(flatten)]
         window: Window,
     },
+    /// A TIFF stack: a multi-page TIFF (ImageJ or plain; one z slice a page) or a folder of
+    /// single-page TIFFs (in the natural order of their names), grey, of any sample type.
+    Tiff(tiffstack::Args),
     /// Print a .vlb file's dimensions, voxel width, normalisation and value range.
     Info { file: PathBuf },
 }
@@ -406,11 +422,35 @@ fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
     path.with_file_name(format!("{stem}{suffix}{ext}"))
 }
 
+/// Reads the NIfTI-1 file `input`, its progress shown: a single file (`n+1`, gzipped or not)
+/// through a reader that counts the file's bytes; a header whose volume is in an `.img` beside
+/// it, through the crate's own file pairing.
+fn read_nifti(input: &Path) -> Result<nifti::InMemNiftiObject, nifti::NiftiError> {
+    use std::io::{BufReader, Read};
+    let mut magic = [0u8; 2];
+    let gz = std::fs::File::open(input)?.read(&mut magic)? == 2 && magic == [0x1f, 0x8b];
+    let file = std::fs::File::open(input)?;
+    let name = input.file_name().unwrap_or_default().to_string_lossy();
+    let bar = progress::Progress::new(
+        format!("reading {name}"),
+        file.metadata()?.len(),
+        progress::Unit::Bytes,
+    );
+    let counted = BufReader::new(progress::Reading::new(file, bar));
+    let read = if gz {
+        nifti::InMemNiftiObject::from_reader(flate2::read::MultiGzDecoder::new(counted))
+    } else {
+        nifti::InMemNiftiObject::from_reader(counted)
+    };
+    match read {
+        Err(nifti::NiftiError::NoVolumeData) => nifti::ReaderOptions::new().read_file(input),
+        other => other,
+    }
+}
+
 fn nifti(input: &Path, output: &Path, window: &Window) -> Res<()> {
-    use nifti::{Endianness, NiftiObject, NiftiType, NiftiVolume, ReaderOptions};
-    let obj = ReaderOptions::new()
-        .read_file(input)
-        .map_err(|e| format!("{}: {e}", input.display()))?;
+    use nifti::{Endianness, NiftiObject, NiftiType, NiftiVolume};
+    let obj = read_nifti(input).map_err(|e| format!("{}: {e}", input.display()))?;
     let header = obj.header().clone();
     let volume = obj.into_volume();
     let dim = volume.dim().to_vec();
@@ -508,7 +548,7 @@ fn info(path: &Path) -> Res<()> {
 
 /// The names of the subcommands (a first argument that is none of them, nor an option, is an
 /// input file: `vlconvert IN OUT.vlb`).
-const SUBCOMMANDS: [&str; 9] = [
+const SUBCOMMANDS: [&str; 10] = [
     "convert",
     "dicom",
     "raw",
@@ -516,6 +556,7 @@ const SUBCOMMANDS: [&str; 9] = [
     "nifti",
     "nrrd",
     "metaimage",
+    "tiff",
     "info",
     "help",
 ];
@@ -540,6 +581,7 @@ fn auto(input: &Path, output: &Path, window: &Window, series: Option<&str>) -> R
         detect::Format::Nifti => nifti(input, output, window),
         detect::Format::Nrrd => nrrd_file(input, output, window),
         detect::Format::MetaImage => metaimage::convert(input, output, window),
+        detect::Format::Tiff => tiffstack::convert_auto(input, output, window),
         detect::Format::Image => {
             if window.ends() != (None, None) {
                 return Err("an image's voxels take --a/--b of the image subcommand".into());
@@ -551,10 +593,16 @@ fn auto(input: &Path, output: &Path, window: &Window, series: Option<&str>) -> R
 
 fn main() -> ExitCode {
     let mut args: Vec<std::ffi::OsString> = std::env::args_os().collect();
-    if args.len() >= 3 {
-        let first = args[1].to_string_lossy();
+    // The first argument after a leading --quiet.
+    let at = args
+        .iter()
+        .skip(1)
+        .position(|a| a != "--quiet" && a != "-q")
+        .map_or(args.len(), |i| i + 1);
+    if args.len() >= at + 2 {
+        let first = args[at].to_string_lossy();
         if !first.starts_with('-') && !SUBCOMMANDS.contains(&first.as_ref()) {
-            args.insert(1, "convert".into());
+            args.insert(at, "convert".into());
         }
     }
     let cli = match Cli::try_parse_from(args) {
@@ -565,6 +613,7 @@ fn main() -> ExitCode {
             return ExitCode::from(code);
         }
     };
+    progress::set_quiet(cli.quiet);
     let result = match &cli.command {
         Cmd::Raw {
             input,
@@ -613,6 +662,7 @@ fn main() -> ExitCode {
             output,
             window,
         } => metaimage::convert(input, output, window),
+        Cmd::Tiff(args) => tiffstack::convert(args),
         Cmd::Info { file } => info(file),
     };
     match result {

@@ -11,6 +11,7 @@
 //! `TransformMatrix`, `AnatomicalOrientation`) and other keys do not change values: ignored,
 //! as are `ElementMin` / `ElementMax` and the intensity functions, which ITK does not apply.
 
+use crate::progress::{Progress, Reading, Unit};
 use crate::volume::{Source, Type};
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -199,6 +200,10 @@ fn parse(text: &[u8], dir: &Path) -> Res<Header> {
 /// they start at `from` unless `HeaderSize` says otherwise.
 fn elements(h: &Header, bytes: &[u8], from: usize, need: usize, name: &Path) -> Res<Vec<u8>> {
     let len = bytes.len();
+    let label = format!(
+        "decompressing {}",
+        name.file_name().unwrap_or_default().to_string_lossy()
+    );
     let name = name.display();
     let from = match h.skip {
         Some(-1) if h.compressed => {
@@ -220,10 +225,13 @@ fn elements(h: &Header, bytes: &[u8], from: usize, need: usize, name: &Path) -> 
     let what = format!("{:?} x {:?}", h.dims, h.ty);
     let out = if h.compressed {
         let mut out = Vec::new();
-        flate2::read::ZlibDecoder::new(data)
-            .take(need as u64 + 1)
-            .read_to_end(&mut out)
-            .map_err(|e| format!("{name}: compressed data from byte {from}: {e}"))?;
+        let bar = Progress::new(label, need as u64, Unit::Bytes);
+        Reading::new(
+            flate2::read::ZlibDecoder::new(data).take(need as u64 + 1),
+            bar,
+        )
+        .read_to_end(&mut out)
+        .map_err(|e| format!("{name}: compressed data from byte {from}: {e}"))?;
         if out.len() < need {
             return Err(format!(
                 "{name}: the data decompresses to {} bytes, but {need} are needed for {what}",

@@ -7,6 +7,7 @@
 //! `spacings` alone. Other encodings (`bzip2`, `hex`), detached data lists (`LIST`, `%d`
 //! patterns) and more than one value per voxel are refused by name.
 
+use crate::progress::{Progress, Reading, Unit};
 use crate::volume::{read_regular, Source, Type};
 use std::path::{Path, PathBuf};
 
@@ -32,6 +33,14 @@ impl Nrrd {
             inter: 0.0,
         }
     }
+}
+
+/// The file name of `path`, for a progress line.
+fn name(path: &Path) -> String {
+    path.file_name()
+        .unwrap_or_default()
+        .to_string_lossy()
+        .into_owned()
 }
 
 /// Whether `bytes` (a file's start) is a NRRD header.
@@ -293,8 +302,8 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
             let mut out = Vec::new();
             // No more than the volume needs after the skip (a bomb stops there).
             let most = need as u64 + byte_skip.max(0) as u64 + 1;
-            flate2::read::MultiGzDecoder::new(data)
-                .take(most)
+            let bar = Progress::new(format!("decompressing {}", name(path)), most, Unit::Bytes);
+            Reading::new(flate2::read::MultiGzDecoder::new(data).take(most), bar)
                 .read_to_end(&mut out)
                 .map_err(|e| bad(format!("gzip data: {e}")))?;
             // Byte skip counts bytes of the decompressed data.

@@ -9,8 +9,26 @@
 //! - Wider integers and floats are quantised to 16 bits over their range: the voxel is the
 //!   nearest of 0 … 65535 to (value − min)/(max − min)·65535, within half a quantum.
 //! - Values that are not finite (NaN, ±∞ in a float file) take the range's minimum.
+//!
+//! Reading a whole file ([`read_regular`]) and converting its voxels (two passes: the range,
+//! then the voxels) show their progress on a terminal (`progress`).
 
+use crate::progress::{Progress, Reading, Unit};
 use clap::ValueEnum;
+
+/// Elements converted between two looks at the progress line.
+const BLOCK: usize = 1 << 20;
+
+/// `f(0) … f(n − 1)`, advancing `bar` by each block of [`BLOCK`] elements.
+fn collect<T>(n: usize, bar: &mut Progress, f: impl Fn(usize) -> T) -> Vec<T> {
+    let mut out = Vec::with_capacity(n);
+    for start in (0..n).step_by(BLOCK) {
+        let end = (start + BLOCK).min(n);
+        out.extend((start..end).map(&f));
+        bar.advance((end - start) as u64);
+    }
+    out
+}
 
 /// The element types of a source volume.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -123,14 +141,19 @@ impl Source<'_> {
     }
 
     /// The smallest and largest finite value (scaled); `None` if none is finite.
-    fn range(&self) -> Option<(f64, f64)> {
+    fn range(&self, bar: &mut Progress) -> Option<(f64, f64)> {
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for i in 0..self.len() {
-            let v = self.slope * self.element(i) + self.inter;
-            if v.is_finite() {
-                lo = lo.min(v);
-                hi = hi.max(v);
+        let n = self.len();
+        for start in (0..n).step_by(BLOCK) {
+            let end = (start + BLOCK).min(n);
+            for i in start..end {
+                let v = self.slope * self.element(i) + self.inter;
+                if v.is_finite() {
+                    lo = lo.min(v);
+                    hi = hi.max(v);
+                }
             }
+            bar.advance((end - start) as u64);
         }
         (lo <= hi).then_some((lo, hi))
     }
@@ -154,22 +177,25 @@ impl Source<'_> {
                 self.slope, self.inter
             ));
         }
-        let (lo, hi) = self
-            .range()
-            .ok_or("no finite value: nothing to normalise by")?;
+        // Two passes over the elements: the range, then the voxels.
+        let n = self.len();
+        let mut bar = Progress::new("finding the range", n as u64, Unit::Voxels);
+        let range = self.range(&mut bar);
+        bar.finish();
+        let (lo, hi) = range.ok_or("no finite value: nothing to normalise by")?;
         let a = window.0.unwrap_or(lo);
         let b = window.1.unwrap_or(if hi > a { hi } else { a + 1.0 });
         if !(a.is_finite() && b.is_finite() && a != b) {
             return Err(format!("window {a} … {b}: both ends finite and different"));
         }
         // A voxel v stands for the value c0 + c1·v.
-        let n = self.len();
+        let mut bar = Progress::new("converting", n as u64, Unit::Voxels);
         let (raw, c0, c1, how) = if let Some((width, offset)) = self.ty.exact() {
             let vox = |i: usize| (self.element(i) + offset) as u32;
             let raw = if width == 1 {
-                vlib::Voxels::U8((0..n).map(|i| vox(i) as u8).collect())
+                vlib::Voxels::U8(collect(n, &mut bar, |i| vox(i) as u8))
             } else {
-                vlib::Voxels::U16((0..n).map(|i| vox(i) as u16).collect())
+                vlib::Voxels::U16(collect(n, &mut bar, |i| vox(i) as u16))
             };
             let how = format!("{:?} values kept exactly in {width}-byte voxels", self.ty);
             (raw, self.inter - self.slope * offset, self.slope, how)
@@ -182,12 +208,13 @@ impl Source<'_> {
             };
             let how = format!("{:?} values {lo} … {hi} quantised to 0 … 65535", self.ty);
             (
-                vlib::Voxels::U16((0..n).map(q).collect()),
+                vlib::Voxels::U16(collect(n, &mut bar, q)),
                 lo,
                 span / 65535.0,
                 how,
             )
         };
+        bar.finish();
         let (va, vb) = ((a - c0) / c1, (b - c0) / c1);
         let dataset =
             vlib::Dataset::new(self.dims, raw, va as f32, vb as f32).map_err(|e| e.to_string())?;
@@ -199,7 +226,8 @@ impl Source<'_> {
 }
 
 /// The bytes of the regular file `path`, at most `limit` of them (`None`: all): a FIFO, a
-/// device or a directory is refused rather than read (it could block, or never end).
+/// device or a directory is refused rather than read (it could block, or never end). Reads of
+/// more than 64 KiB (not a format's first bytes) show their progress.
 pub fn read_regular(path: &std::path::Path, limit: Option<u64>) -> Result<Vec<u8>, String> {
     use std::io::Read;
     let at = |e: std::io::Error| format!("{}: {e}", path.display());
@@ -208,9 +236,15 @@ pub fn read_regular(path: &std::path::Path, limit: Option<u64>) -> Result<Vec<u8
         return Err(format!("{}: not a regular file", path.display()));
     }
     let f = std::fs::File::open(path).map_err(at)?;
+    let total = limit.map_or(meta.len(), |l| l.min(meta.len()));
     let mut out = Vec::new();
-    f.take(limit.unwrap_or(u64::MAX))
-        .read_to_end(&mut out)
-        .map_err(at)?;
+    let mut f = f.take(limit.unwrap_or(u64::MAX));
+    if total > 64 * 1024 {
+        let name = path.file_name().unwrap_or_default().to_string_lossy();
+        let bar = Progress::new(format!("reading {name}"), total, Unit::Bytes);
+        Reading::new(f, bar).read_to_end(&mut out).map_err(at)?;
+    } else {
+        f.read_to_end(&mut out).map_err(at)?;
+    }
     Ok(out)
 }

@@ -241,10 +241,18 @@ fn a_folder_and_a_single_file_are_told_apart() {
     let empty = d.join("empty");
     std::fs::create_dir(&empty).unwrap();
     std::fs::copy(dir.join("README"), empty.join("README")).unwrap();
-    let o = run(&[s(&empty), s(&d.join("y.vlb"))]);
+    let o = run(&["dicom", s(&empty), s(&d.join("y.vlb"))]);
     assert_eq!(o.status.code(), Some(1));
     assert!(
         text(&o.stderr).contains("no DICOM image"),
+        "{}",
+        text(&o.stderr)
+    );
+    // Detected, it is neither a TIFF stack nor a DICOM series.
+    let o = run(&[s(&empty), s(&d.join("y.vlb"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text(&o.stderr).contains("neither a stack nor a series"),
         "{}",
         text(&o.stderr)
     );

@@ -18,7 +18,7 @@
 //! `scl_slope`; where they differ, the modality values are computed per slice and quantised
 //! to 16 bits over their range (`volume`).
 
-mod scan;
+pub(crate) mod scan;
 mod slice;
 mod stack;
 
