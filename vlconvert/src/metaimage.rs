@@ -7,9 +7,13 @@
 //! `ElementType` (`MET_UCHAR` … `MET_DOUBLE`; `MET_LONG` and `MET_ULONG` are 4 bytes, as in
 //! MetaIO's type table), `ElementByteOrderMSB` / `BinaryDataByteOrderMSB`, `CompressedData`
 //! (zlib), `HeaderSize` (bytes to skip from the start of the data's file; −1: the data ends the
-//! file) and `ElementNumberOfChannels` (only 1 converts). Geometry (`ElementSpacing`, `Offset`,
-//! `TransformMatrix`, `AnatomicalOrientation`) and other keys do not change values: ignored,
-//! as are `ElementMin` / `ElementMax` and the intensity functions, which ITK does not apply.
+//! file) and `ElementNumberOfChannels` (only 1 converts). The placement, as ITK reads it:
+//! `ElementSpacing` (mm), `Offset` (or `Origin`, `Position`: node 0's position) and
+//! `TransformMatrix` (or `Rotation`, `Orientation`: the direction of each axis in turn, three
+//! numbers each) in ITK's LPS space, turned into RAS for the sidecar; missing keys are ITK's
+//! defaults (spacing 1, offset 0, identity). `AnatomicalOrientation` is ignored, as ITK ignores
+//! it. `ElementMin` / `ElementMax` and the intensity functions are ignored too: ITK does not
+//! apply them.
 
 use crate::progress::{Progress, Reading, Unit};
 use crate::volume::{Source, Type};
@@ -29,6 +33,8 @@ enum DataFile {
 /// What the header says of the elements.
 struct Header {
     dims: [usize; 3],
+    /// `NDims` (2 or more; dimensions beyond the third are of size 1).
+    ndims: usize,
     ty: Type,
     big: bool,
     compressed: bool,
@@ -39,6 +45,10 @@ struct Header {
     file: DataFile,
     /// The byte after the header's last line, in the header's file.
     end: usize,
+    /// The placement keys' values: `ElementSpacing`, `Offset`, `TransformMatrix`.
+    spacing: Option<String>,
+    offset: Option<String>,
+    matrix: Option<String>,
 }
 
 fn boolean(key: &str, v: &str) -> Res<bool> {
@@ -76,6 +86,7 @@ fn element_type(v: &str) -> Res<Type> {
 fn parse(text: &[u8], dir: &Path) -> Res<Header> {
     let (mut ndims, mut dimsize, mut ty, mut file) = (None, None, None, None);
     let (mut big, mut compressed, mut skip) = (false, false, None);
+    let (mut spacing, mut offset, mut matrix) = (None, None, None);
     let mut start = 0;
     let mut number = 0;
     while file.is_none() {
@@ -141,6 +152,9 @@ fn parse(text: &[u8], dir: &Path) -> Res<Header> {
                 big = boolean(key, value).map_err(at)?
             }
             "CompressedData" => compressed = boolean(key, value).map_err(at)?,
+            "ElementSpacing" => spacing = Some(value.to_string()),
+            "Offset" | "Origin" | "Position" => offset = Some(value.to_string()),
+            "TransformMatrix" | "Rotation" | "Orientation" => matrix = Some(value.to_string()),
             "HeaderSize" => {
                 skip = Some(
                     value
@@ -187,13 +201,83 @@ fn parse(text: &[u8], dir: &Path) -> Res<Header> {
     let dims = [dimsize[0], dimsize[1], *dimsize.get(2).unwrap_or(&1)];
     Ok(Header {
         dims,
+        ndims,
         ty: ty.ok_or("no ElementType")?,
         big,
         compressed,
         skip,
         file: file.expect("the loop ends at ElementDataFile"),
         end: start,
+        spacing,
+        offset,
+        matrix,
     })
+}
+
+/// `n` numbers from the value of `key`, or `default` when the key is missing.
+fn numbers(key: &str, value: Option<&str>, n: usize, default: &[f64]) -> Res<Vec<f64>> {
+    let Some(v) = value else {
+        return Ok(default.to_vec());
+    };
+    let got: Option<Vec<f64>> = v
+        .split_whitespace()
+        .map(|w| w.parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect();
+    match got {
+        Some(g) if g.len() >= n => Ok(g[..n].to_vec()),
+        _ => Err(format!("{key} = {v}: {n} finite numbers expected")),
+    }
+}
+
+/// The RAS placement of the header's image: node (i, j, k) at offset + Σ spacing·index·direction
+/// in LPS (ITK's reading), with x and y negated for RAS. A 2D image's third axis is its plane's
+/// normal, 1 mm long.
+fn geometry(h: &Header) -> Res<vlib::Geometry> {
+    let n = h.ndims;
+    if n > 3 {
+        return Err(format!(
+            "the placement of a {n}-dimensional header is not read"
+        ));
+    }
+    let spacing = numbers("ElementSpacing", h.spacing.as_deref(), n, &[1.0; 3][..n])?;
+    let offset = numbers("Offset", h.offset.as_deref(), n, &[0.0; 3][..n])?;
+    let identity: Vec<f64> = (0..n * n)
+        .map(|i| if i / n == i % n { 1.0 } else { 0.0 })
+        .collect();
+    let m = numbers("TransformMatrix", h.matrix.as_deref(), n * n, &identity)?;
+    // axis a's direction: m[a·n .. a·n + n] (ITK's MetaImageIO), padded to 3D.
+    let mut dir = [[0.0f64; 3]; 3];
+    for (a, d) in dir.iter_mut().enumerate().take(n) {
+        d[..n].copy_from_slice(&m[a * n..a * n + n]);
+    }
+    let mut origin = [0.0f64; 3];
+    origin[..n].copy_from_slice(&offset);
+    let mut step = [1.0f64; 3];
+    step[..n].copy_from_slice(&spacing);
+    if n == 2 {
+        let (a, b) = (dir[0], dir[1]);
+        let c = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        let len = c.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if len <= 0.0 {
+            return Err("TransformMatrix: the image's two axes are parallel".into());
+        }
+        dir[2] = c.map(|v| v / len);
+    }
+    let ras = [-1.0, -1.0, 1.0];
+    let row = |r: usize| {
+        [
+            dir[0][r] * step[0] * ras[r],
+            dir[1][r] * step[1] * ras[r],
+            dir[2][r] * step[2] * ras[r],
+            origin[r] * ras[r],
+        ]
+        .map(|v| v + 0.0) // no "-0" in the sidecar
+    };
+    vlib::Geometry::new([row(0), row(1), row(2)]).map_err(|e| e.message)
 }
 
 /// The header's elements, `need` bytes of them, from `bytes` (the data's file, `name`), where
@@ -288,6 +372,12 @@ pub fn convert(input: &Path, output: &Path, window: &super::Window) -> Res<()> {
         slope: 1.0,
         inter: 0.0,
     };
-    // (Its spacing, offset and orientation are not read: the dataset gets no geometry.)
-    super::convert(&source, window, output, None).map_err(at)
+    let placement = match geometry(&h) {
+        Ok(g) => Some(g),
+        Err(e) => {
+            eprintln!("vlconvert: note: {}: no placement: {e}", input.display());
+            None
+        }
+    };
+    super::convert(&source, window, output, placement).map_err(at)
 }

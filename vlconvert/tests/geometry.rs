@@ -1,6 +1,7 @@
 //! A dataset's physical placement (`vlib::Geometry`, the sidecar `vlconvert` writes): the
 //! sidecar carries the writer's own affine (nibabel's for NIfTI, sform and qform; pynrrd's LPS
-//! space directions turned into RAS), and `Library::place_dataset` shows a converted volume at
+//! space directions turned into RAS; SimpleITK's spacing, origin and direction for MetaImage,
+//! LPS turned into RAS), and `Library::place_dataset` shows a converted volume at
 //! its physical size and orientation: the anisotropic NIfTI fixture (spacing 0.5 × 0.5 × 2 mm,
 //! x flipped) keeps its aspect and its subject's right on the +x side.
 
@@ -54,6 +55,8 @@ fn the_sidecar_is_the_writers_affine() {
         ("nifti/uint8_qform.nii", "nifti/uint8_qform"),
         ("nrrd/int16_lps.nrrd", "nrrd/int16_lps"),
         ("nrrd/uint8_oblique.nrrd", "nrrd/uint8_oblique"),
+        ("metaimage/int16_oblique.mha", "metaimage/int16_oblique"),
+        ("metaimage/uint8_spacing.mhd", "metaimage/uint8_spacing"),
     ] {
         let out = convert(file);
         let d = Dataset::load(&out).unwrap();

@@ -609,6 +609,8 @@ fn metaimage_of_every_type_converts_to_the_writers_values() {
         ("float64.mha", [5, 4, 3], 2, false),
         ("uint8.mha", [5, 4, 3], 1, true),
         ("uint8_2d.mha", [5, 4, 1], 1, true),
+        ("int16_oblique.mha", [5, 4, 3], 2, true),
+        ("uint8_spacing.mhd", [5, 4, 3], 1, true),
     ];
     for (file, dims, width, exact) in cases {
         let file = format!("metaimage/{file}");
@@ -638,6 +640,55 @@ fn metaimage_big_endian_data_at_the_end_of_its_file() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let want = values.map(f64::from);
     assert_writers_values("v.mhd", &Dataset::load(&out).unwrap(), &want, true);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// A placement that cannot be made (a malformed `ElementSpacing`, parallel axes in
+/// `TransformMatrix`) is a note: the volume converts without a sidecar. Without placement keys
+/// the sidecar is ITK's default: 1 mm spacing, node 0 at the origin, LPS axes turned into RAS.
+#[test]
+fn metaimage_placements_that_cannot_be_made_are_notes() {
+    let d = tmp("metaimage-placement");
+    std::fs::write(d.join("v.raw"), [1u8, 2, 3, 4]).unwrap();
+    let cases = [
+        ("ElementSpacing = 1 abc 1\n", Some("ElementSpacing")),
+        ("TransformMatrix = 1 0 0 1 0 0 0 0 1\n", Some("degenerate")),
+        ("", None),
+    ];
+    for (key, note) in cases {
+        let mhd = d.join("v.mhd");
+        std::fs::write(
+            &mhd,
+            format!(
+                "ObjectType = Image\nNDims = 3\nDimSize = 2 2 1\n{key}\
+                 ElementType = MET_UCHAR\nElementDataFile = v.raw\n"
+            ),
+        )
+        .unwrap();
+        let out = d.join("v.vlb");
+        let o = run(&["metaimage", s(&mhd), s(&out)]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        let g = Dataset::load(&out).unwrap().geometry().cloned();
+        match note {
+            Some(what) => {
+                assert!(
+                    err.contains("no placement") && err.contains(what),
+                    "{key}: {err}"
+                );
+                assert!(g.is_none(), "{key}");
+            }
+            None => {
+                let g = g.expect("ITK's default placement");
+                let want = [
+                    [-1.0, 0.0, 0.0, 0.0],
+                    [0.0, -1.0, 0.0, 0.0],
+                    [0.0, 0.0, 1.0, 0.0],
+                ];
+                assert_eq!(g.affine, want);
+            }
+        }
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }
 
