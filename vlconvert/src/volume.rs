@@ -183,6 +183,14 @@ impl Source<'_> {
         let range = self.range(&mut bar);
         bar.finish();
         let (lo, hi) = range.ok_or("no finite value: nothing to normalise by")?;
+        if let (None, Some(b)) = window {
+            if b <= lo {
+                return Err(format!(
+                    "--b {b} is at or below the data's smallest value {lo}: the window would be \
+                     inverted; give --a too (--window A B) if that is what you want"
+                ));
+            }
+        }
         let a = window.0.unwrap_or(lo);
         let b = window.1.unwrap_or(if hi > a { hi } else { a + 1.0 });
         if !(a.is_finite() && b.is_finite() && a != b) {

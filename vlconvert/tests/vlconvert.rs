@@ -71,6 +71,35 @@ fn raw_volumes_convert_in_both_byte_orders() {
     assert_eq!(v.raw(), &Voxels::U16(words));
     assert_eq!(v.range(), (-10.0, 7000.0));
 
+    // --b alone at or below the data's smallest value (7) would invert the window: refused;
+    // both ends given, an inverted window is what was asked for.
+    let common = [
+        "raw",
+        s(&raw16),
+        "--dims",
+        "2",
+        "2",
+        "2",
+        "--bytes",
+        "2",
+        "--endian",
+        "big",
+        "--skip",
+        "5",
+    ];
+    let inverted = d.join("inverted.vlb");
+    let o = run(&[&common[..], &[s(&inverted), "--b", "5"]].concat());
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--b 5 is at or below") && err.contains("7"),
+        "{err}"
+    );
+    assert!(!inverted.exists());
+    let o = run(&[&common[..], &[s(&inverted), "--window", "7000", "-10"]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(Dataset::load(&inverted).unwrap().range(), (7000.0, -10.0));
+
     // Too short for the dimensions: exit 1 with a message, no output.
     let out_bad = d.join("bad.vlb");
     let o = run(&["raw", s(&raw8), s(&out_bad), "--dims", "4", "4", "4"]);
