@@ -1,7 +1,9 @@
 //! Gives `libvlib.so` its SONAME, `libvlib.so.<major>` (the package's major version), on the ELF
-//! platforms whose linkers take `-soname`, so that every build of the shared library carries
-//! the name programs record and the loader looks for. Other platforms get no flag. The static
-//! library is not linked, so unaffected. (`vlib` is the `[lib]` name in `Cargo.toml`.)
+//! platforms whose linkers take `-soname`, so that every build of the shared library (plain
+//! `cargo build`, `cargo xtask install`, `cargo cinstall`) carries the name programs record
+//! and the loader looks for. cargo-c passes the same name (`version_suffix_components = 1` in
+//! `Cargo.toml`). Other platforms get no flag. The static library is not linked, so unaffected.
+//! (`vlib` is the `[lib]` name in `Cargo.toml`.)
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");

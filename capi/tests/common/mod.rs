@@ -102,15 +102,21 @@ pub fn ensure_tools() -> &'static Path {
     })
 }
 
-/// Runs `cargo build <args>` with this test binary's profile and target directory; returns
-/// `target/<profile>`.
-fn cargo_build(args: &[&str]) -> PathBuf {
+/// The cargo profile this test binary was built with (`dev` for `target/debug`).
+pub fn profile_name() -> String {
     let dir = profile_dir();
-    let profile = match dir.file_name().and_then(|n| n.to_str()) {
+    match dir.file_name().and_then(|n| n.to_str()) {
         Some("debug") => "dev".to_string(),
         Some(name) => name.to_string(),
         None => panic!("cannot tell the profile from {}", dir.display()),
-    };
+    }
+}
+
+/// Runs `cargo build <args>` with this test binary's profile and target directory; returns
+/// `target/<profile>`.
+pub fn cargo_build(args: &[&str]) -> PathBuf {
+    let dir = profile_dir();
+    let profile = profile_name();
     let target_dir = dir.parent().expect("target directory");
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let out = Command::new(cargo)
@@ -391,6 +397,17 @@ pub fn soname(lib: &Path) -> Option<String> {
         let rest = line.split_once("Library soname: [")?.1;
         Some(rest.trim_end().trim_end_matches(']').to_string())
     })
+}
+
+/// The libraries an ELF file needs (`NEEDED` in `readelf -d`).
+pub fn needed(file: &Path) -> Vec<String> {
+    binutils("readelf", &["-d"], file)
+        .lines()
+        .filter_map(|line| {
+            let rest = line.split_once("Shared library: [")?.1;
+            Some(rest.trim_end().trim_end_matches(']').to_string())
+        })
+        .collect()
 }
 
 /// Every symbol a shared library defines for other objects (`nm -D --defined-only`), of any kind.
