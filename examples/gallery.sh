@@ -10,6 +10,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
 cargo build --release --workspace --lib --bins --examples
+# The programs ask the loader for the library's SONAME (libvlib.so.0): link it to the build.
+soname=$(readelf -d target/release/libvlib.so | sed -n 's/.*Library soname: \[\(.*\)\]/\1/p')
+if [ -n "$soname" ]; then ln -sf libvlib.so "target/release/$soname"; fi
 mkdir -p out/bin out/inputs
 vlconvert=target/release/vlconvert
 # Inputs of the C examples, which run with cwd = out/: word.vlb (text.c) and the chess profiles

@@ -73,6 +73,41 @@ fn libraries_export_every_command() {
     }
 }
 
+/// `libvlib.so` as `cargo build` leaves it carries its SONAME (`capi/build.rs`) and exports
+/// vlib's names only: `nm -D --defined-only` lists nothing of Rust's or of the dependencies'.
+/// (capi/tests/install.rs checks the installed, stripped copy the same way.)
+#[test]
+fn the_shared_library_has_its_soname_and_exports_only_vlib_names() {
+    let lib = common::ensure_libraries().join("libvlib.so");
+    assert_eq!(
+        common::soname(&lib).as_deref(),
+        Some(common::SONAME),
+        "readelf -d {}",
+        lib.display()
+    );
+    let exports = common::exports(&lib);
+    let foreign: Vec<&String> = exports
+        .iter()
+        .filter(|n| !common::is_vlib_name(n))
+        .collect();
+    assert!(foreign.is_empty(), "exported beyond vl*/VL*: {foreign:?}");
+    // Every export is a command, an extension or a vlaux function: nothing else of ours leaks.
+    let ours: BTreeSet<&str> = COMMANDS
+        .iter()
+        .chain(&EXTENSIONS)
+        .chain(&VLAUX)
+        .copied()
+        .collect();
+    let unlisted: Vec<&String> = exports
+        .iter()
+        .filter(|n| !ours.contains(n.as_str()))
+        .collect();
+    assert!(
+        unlisted.is_empty(),
+        "exports not in the lists: {unlisted:?}"
+    );
+}
+
 /// The functions `include/vlib.h` declares, in order.
 #[test]
 fn the_header_declares_exactly_the_commands_in_the_order_of_the_list() {

@@ -39,13 +39,19 @@ pub fn profile_dir_arg() -> PathBuf {
     }
 }
 
-/// Makes sure `libvlib.so` and `libvlib.a` in `target/<profile>/` are fresh.
+/// The shared library's SONAME, `libvlib.so.<major>` (set by `capi/build.rs`): the name a
+/// program linked against `libvlib.so` asks the loader for.
+pub const SONAME: &str = concat!("libvlib.so.", env!("CARGO_PKG_VERSION_MAJOR"));
+
+/// Makes sure `libvlib.so` and `libvlib.a` in `target/<profile>/` are fresh, with the link
+/// `libvlib.so.<major>` -> `libvlib.so` beside them (as README's "Building a C program" makes it).
 ///
 /// `cargo test` builds the library (all three crate types) into `target/<profile>/deps/` but
 /// does not copy ("uplift") the `.so` and `.a` to `target/<profile>/`, where C programs link
 /// against them; so this runs `cargo build -p vlib-capi` with the same profile and target
 /// directory once per test binary. Cargo releases its build lock before running tests, so the
-/// nested build does not deadlock.
+/// nested build does not deadlock. Programs linked against `libvlib.so` record its SONAME, and
+/// the loader looks for that name in `LD_LIBRARY_PATH=target/<profile>`: hence the link.
 pub fn ensure_libraries() -> &'static Path {
     static BUILT: OnceLock<PathBuf> = OnceLock::new();
     BUILT.get_or_init(|| {
@@ -56,6 +62,14 @@ pub fn ensure_libraries() -> &'static Path {
                 "{} was not built",
                 dir.join(lib).display()
             );
+        }
+        let link = dir.join(SONAME);
+        if std::fs::read_link(&link).ok().as_deref() != Some(Path::new("libvlib.so")) {
+            let tmp = dir.join(format!(".{SONAME}.{}", std::process::id()));
+            let _ = std::fs::remove_file(&tmp);
+            std::os::unix::fs::symlink("libvlib.so", &tmp)
+                .and_then(|()| std::fs::rename(&tmp, &link))
+                .unwrap_or_else(|e| panic!("link {} -> libvlib.so: {e}", link.display()));
         }
         dir
     })
@@ -88,15 +102,21 @@ pub fn ensure_tools() -> &'static Path {
     })
 }
 
-/// Runs `cargo build <args>` with this test binary's profile and target directory; returns
-/// `target/<profile>`.
-fn cargo_build(args: &[&str]) -> PathBuf {
+/// The cargo profile this test binary was built with (`dev` for `target/debug`).
+pub fn profile_name() -> String {
     let dir = profile_dir();
-    let profile = match dir.file_name().and_then(|n| n.to_str()) {
+    match dir.file_name().and_then(|n| n.to_str()) {
         Some("debug") => "dev".to_string(),
         Some(name) => name.to_string(),
         None => panic!("cannot tell the profile from {}", dir.display()),
-    };
+    }
+}
+
+/// Runs `cargo build <args>` with this test binary's profile and target directory; returns
+/// `target/<profile>`.
+pub fn cargo_build(args: &[&str]) -> PathBuf {
+    let dir = profile_dir();
+    let profile = profile_name();
     let target_dir = dir.parent().expect("target directory");
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let out = Command::new(cargo)
@@ -363,4 +383,53 @@ pub fn run(exe: &Path, cwd: &Path, args: &[String]) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     stdout
+}
+
+/// Runs a binutils tool (`readelf`, `nm`) on `file`; its standard output.
+pub fn binutils(tool: &str, args: &[&str], file: &Path) -> String {
+    let out = Command::new(tool)
+        .args(args)
+        .arg(file)
+        .output()
+        .unwrap_or_else(|e| panic!("run {tool} (binutils) on {}: {e}", file.display()));
+    assert!(
+        out.status.success(),
+        "{tool} {args:?} {}: {}",
+        file.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// The SONAME an ELF shared library carries (`readelf -d`), if any.
+pub fn soname(lib: &Path) -> Option<String> {
+    binutils("readelf", &["-d"], lib).lines().find_map(|line| {
+        let rest = line.split_once("Library soname: [")?.1;
+        Some(rest.trim_end().trim_end_matches(']').to_string())
+    })
+}
+
+/// The libraries an ELF file needs (`NEEDED` in `readelf -d`).
+pub fn needed(file: &Path) -> Vec<String> {
+    binutils("readelf", &["-d"], file)
+        .lines()
+        .filter_map(|line| {
+            let rest = line.split_once("Shared library: [")?.1;
+            Some(rest.trim_end().trim_end_matches(']').to_string())
+        })
+        .collect()
+}
+
+/// Every symbol a shared library defines for other objects (`nm -D --defined-only`), of any kind.
+pub fn exports(lib: &Path) -> Vec<String> {
+    binutils("nm", &["-D", "--defined-only"], lib)
+        .lines()
+        .filter_map(|line| line.split_whitespace().nth(2).map(str::to_string))
+        .collect()
+}
+
+/// Whether an exported name is vlib's: the commands and extensions (`vl…`), vlaux (`vlu…`,
+/// `VL_…`, `VLU_…`).
+pub fn is_vlib_name(name: &str) -> bool {
+    name.starts_with("vl") || name.starts_with("VL")
 }

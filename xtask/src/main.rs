@@ -1,0 +1,213 @@
+//! The workspace's task runner, `cargo xtask <task>` (an alias in `.cargo/config.toml`). It owns
+//! the command line of the tasks; the one task, `install`, lives in [`install`] (building and
+//! copying) and [`pc`] (the pkg-config file). It needs only cargo, a C toolchain's `strip` and
+//! the standard library; it is not part of the C library or of the published crates.
+
+mod install;
+mod pc;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+const USAGE: &str = "\
+usage: cargo xtask install [options]
+
+Builds the C library (package vlib-capi) and installs it into a prefix:
+  <libdir>/libvlib.so.X.Y.Z, its links libvlib.so.X (the SONAME) and libvlib.so,
+  <libdir>/libvlib.a, <includedir>/vlib.h and vlaux.h, <libdir>/pkgconfig/vlib.pc.
+The libraries are stripped (strip, or $STRIP).
+
+options:
+  --prefix DIR          install under DIR (default /usr/local)
+  --libdir DIR          libraries, relative to the prefix or absolute (default lib)
+  --includedir DIR      headers, relative to the prefix or absolute (default include)
+  --destdir DIR         stage the files under DIR; vlib.pc still names the prefix
+  --library-type TYPE   cdylib (libvlib.so) or staticlib (libvlib.a); repeat for both
+                        (default both)
+  --profile NAME        the cargo profile to build (default release)
+  -h, --help            this text";
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match run(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("error: {message}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: &[String]) -> Result<(), String> {
+    match args.first().map(String::as_str) {
+        Some("install") if !args[1..].iter().any(|a| a == "-h" || a == "--help") => {
+            install::install(&parse_install(&args[1..])?)
+        }
+        Some("install" | "-h" | "--help" | "help") => {
+            println!("{USAGE}");
+            Ok(())
+        }
+        Some(other) => Err(format!("unknown task `{other}`\n\n{USAGE}")),
+        None => Err(format!("no task given\n\n{USAGE}")),
+    }
+}
+
+/// Which of the two libraries to install.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LibraryTypes {
+    pub shared: bool,
+    pub archive: bool,
+}
+
+/// The options of `install`.
+#[derive(Debug, PartialEq, Eq)]
+pub struct InstallOptions {
+    pub prefix: PathBuf,
+    pub libdir: PathBuf,
+    pub includedir: PathBuf,
+    pub destdir: Option<PathBuf>,
+    pub types: LibraryTypes,
+    pub profile: String,
+}
+
+fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
+    let mut prefix = PathBuf::from("/usr/local");
+    let mut libdir = PathBuf::from("lib");
+    let mut includedir = PathBuf::from("include");
+    let mut destdir = None;
+    let mut types: Option<LibraryTypes> = None;
+    let mut profile = String::from("release");
+    let mut i = 0;
+    while i < args.len() {
+        let arg = &args[i];
+        // `--name value` or `--name=value`.
+        let (name, inline) = match arg.split_once('=') {
+            Some((n, v)) if n.starts_with("--") => (n, Some(v.to_string())),
+            _ => (arg.as_str(), None),
+        };
+        let known = [
+            "--prefix",
+            "--libdir",
+            "--includedir",
+            "--destdir",
+            "--library-type",
+            "--profile",
+        ];
+        if !known.contains(&name) {
+            return Err(format!("unknown option `{arg}`\n\n{USAGE}"));
+        }
+        let value = match inline {
+            Some(v) => v,
+            None => {
+                i += 1;
+                args.get(i)
+                    .cloned()
+                    .ok_or_else(|| format!("{name} needs a value"))?
+            }
+        };
+        if value.is_empty() {
+            return Err(format!("{name} needs a non-empty value"));
+        }
+        match name {
+            "--prefix" => prefix = PathBuf::from(value),
+            "--libdir" => libdir = PathBuf::from(value),
+            "--includedir" => includedir = PathBuf::from(value),
+            "--destdir" => destdir = Some(PathBuf::from(value)),
+            "--profile" => profile = value,
+            _ => {
+                let t = types.get_or_insert(LibraryTypes {
+                    shared: false,
+                    archive: false,
+                });
+                match value.as_str() {
+                    "cdylib" => t.shared = true,
+                    "staticlib" => t.archive = true,
+                    other => {
+                        return Err(format!(
+                            "--library-type {other}: expected cdylib or staticlib"
+                        ))
+                    }
+                }
+            }
+        }
+        i += 1;
+    }
+    let prefix =
+        std::path::absolute(&prefix).map_err(|e| format!("--prefix {}: {e}", prefix.display()))?;
+    Ok(InstallOptions {
+        prefix,
+        libdir,
+        includedir,
+        destdir,
+        types: types.unwrap_or(LibraryTypes {
+            shared: true,
+            archive: true,
+        }),
+        profile,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[&str]) -> Result<InstallOptions, String> {
+        parse_install(&args.iter().map(|s| s.to_string()).collect::<Vec<_>>())
+    }
+
+    #[test]
+    fn defaults_install_both_libraries_under_usr_local() {
+        let o = parse(&[]).unwrap();
+        assert_eq!(o.prefix, PathBuf::from("/usr/local"));
+        assert_eq!(o.libdir, PathBuf::from("lib"));
+        assert_eq!(o.includedir, PathBuf::from("include"));
+        assert_eq!(o.destdir, None);
+        assert!(o.types.shared && o.types.archive);
+        assert_eq!(o.profile, "release");
+    }
+
+    #[test]
+    fn options_take_separate_or_inline_values() {
+        let o = parse(&[
+            "--prefix=/opt/vlib",
+            "--libdir",
+            "lib64",
+            "--library-type",
+            "staticlib",
+            "--destdir=/tmp/stage",
+            "--profile",
+            "dev",
+        ])
+        .unwrap();
+        assert_eq!(o.prefix, PathBuf::from("/opt/vlib"));
+        assert_eq!(o.libdir, PathBuf::from("lib64"));
+        assert_eq!(o.destdir, Some(PathBuf::from("/tmp/stage")));
+        assert_eq!(
+            o.types,
+            LibraryTypes {
+                shared: false,
+                archive: true
+            }
+        );
+        assert_eq!(o.profile, "dev");
+    }
+
+    #[test]
+    fn a_relative_prefix_is_taken_from_the_working_directory() {
+        let o = parse(&["--prefix", "stage"]).unwrap();
+        assert_eq!(o.prefix, std::env::current_dir().unwrap().join("stage"));
+    }
+
+    #[test]
+    fn bad_options_are_refused_with_a_reason() {
+        let err = |args: &[&str]| parse(args).unwrap_err();
+        assert!(err(&["--prefx", "/x"]).contains("unknown option `--prefx`"));
+        assert!(err(&["--prefix"]).contains("--prefix needs a value"));
+        assert!(err(&["--prefix="]).contains("non-empty"));
+        assert!(err(&["--library-type", "rlib"]).contains("expected cdylib or staticlib"));
+        assert!(run(&["uninstall".into()])
+            .unwrap_err()
+            .contains("unknown task"));
+        assert!(run(&[]).unwrap_err().contains("no task"));
+    }
+}
