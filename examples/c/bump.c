@@ -14,6 +14,7 @@
  *
  * Build (from the workspace root) and run:
  *   cc -std=gnu89 examples/c/bump.c -Iinclude -Ltarget/release -lvlib -lm -o bump
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./bump [width]   (writes bump.png, 2:1, default 640 wide)
  */
 #include <math.h>

@@ -23,6 +23,7 @@
  *
  * Build (from the workspace root) and run in the directory holding the .vlb files:
  *   cc -std=gnu89 examples/c/chess.c -Iinclude -Ltarget/release -lvlib -lm -o chess
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./chess [width]   (writes chess.png, 16:10, default 640 wide)
  */
 #include <math.h>

@@ -22,6 +22,7 @@
  *
  * Build (from the workspace root) and run:
  *   cc -std=gnu89 examples/c/cvg.c -Iinclude -Ltarget/release -lvlib -lm -o cvg
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./cvg [width]   (writes cvg.png, 10:3, default 800 wide)
  */
 #include <stdio.h>

@@ -30,6 +30,7 @@
  *
  * Build (from the workspace root) and run:
  *   cc -std=gnu89 examples/c/deform.c -Iinclude -Ltarget/release -lvlib -lm -o deform
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./deform [width]   (writes deform.png, 2:1, default 800 wide)
  */
 #include <math.h>

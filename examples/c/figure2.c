@@ -14,6 +14,7 @@
  *
  * Build (from the workspace root) and run:
  *   cc -std=gnu89 examples/c/figure2.c -Iinclude -Ltarget/release -lvlib -lm -o figure2
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./figure2        (writes stone.ppm, 100 x 100)
  */
 #include <stdio.h>

@@ -11,6 +11,7 @@
  *
  * Build (from the workspace root) and run:
  *   cc -std=gnu89 examples/c/figure5.c -Iinclude -Ltarget/release -lvlib -lm -o figure5
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./figure5     (writes marble.png and marble.ppm, 256 x 256)
  */
 #include <math.h>

@@ -30,6 +30,7 @@
  *
  * Build (from the workspace root) and run:
  *   cc -std=gnu89 examples/c/invisible.c -Iinclude -Ltarget/release -lvlib -lm -o invisible
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./invisible [width]   (writes invisible.png, 8:5, default 640)
  */
 #include <math.h>

@@ -18,6 +18,7 @@
  *
  * Build (from the workspace root) and run:
  *   cc -std=gnu89 examples/c/metaballs.c -Iinclude -Ltarget/release -lvlib -lm -o metaballs
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./metaballs [width]   (writes metaballs.png, 4:3, default 480)
  */
 #include <stdio.h>

@@ -28,6 +28,7 @@
  *
  * Build (from the workspace root) and run:
  *   cc -std=gnu89 examples/c/reflectance.c -Iinclude -Ltarget/release -lvlib -lm -o reflectance
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./reflectance [width]   (writes reflectance.png, 2:1,
  *                                                            default 640 wide)
  */

@@ -26,6 +26,7 @@
  *
  * Build (from the workspace root) and run:
  *   cc -std=gnu89 examples/c/refraction.c -Iinclude -Ltarget/release -lvlib -lm -o refraction
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./refraction [width]   (writes refraction.png, 4:3, default 480)
  */
 #include <math.h>

@@ -24,6 +24,7 @@
  *
  * Build (from the workspace root) and run:
  *   cc -std=gnu89 examples/c/smoke.c -Iinclude -Ltarget/release -lvlib -lm -o smoke
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./smoke [width]   (writes smoke.png, 3:4, default 480 wide)
  */
 #include <math.h>

@@ -18,6 +18,7 @@
  *
  * Build (from the workspace root) and run in the directory holding word.vlb:
  *   cc -std=gnu89 examples/c/text.c -Iinclude -Ltarget/release -lvlib -lm -o text
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./text [width]     (writes text.png, 16:9, default 640 wide)
  */
 #include <math.h>

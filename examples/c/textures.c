@@ -29,6 +29,7 @@
  *
  * Build (from the workspace root) and run:
  *   cc -std=gnu89 examples/c/textures.c -Iinclude -Ltarget/release -lvlib -lm -o textures
+ *   ln -sf libvlib.so target/release/libvlib.so.0   (once: the name programs ask for)
  *   LD_LIBRARY_PATH=target/release ./textures [width]   (writes textures.png, 16:10, default 800)
  */
 #include <math.h>
