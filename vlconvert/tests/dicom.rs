@@ -6,37 +6,12 @@
 //! frames, colour, compressed pixel data, hostile lengths) exits 1 with a message naming the
 //! file, and writes nothing.
 
+mod common;
+
+use common::{normalised, run, s, text, tmp};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use vlib::Dataset;
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vlconvert"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-/// A scratch directory of its own for each call (the tests run at once).
-fn tmp(tag: &str) -> PathBuf {
-    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let d = std::env::temp_dir().join(format!(
-        "vlconvert-dicom-{tag}-{}-{call}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -55,22 +30,6 @@ fn numbers(file: &str) -> Vec<Vec<f64>> {
 
 fn writers_values(series: &str) -> Vec<f64> {
     numbers(&format!("{series}.txt")).concat()
-}
-
-/// Each node's normalised value, clamp((voxel − a)/(b − a), 0, 1), x fastest.
-fn normalised(v: &Dataset) -> Vec<f64> {
-    let [nx, ny, nz] = v.dims();
-    let (a, b) = v.range();
-    let (a, b) = (a as f64, b as f64);
-    let mut out = Vec::new();
-    for k in 0..nz {
-        for j in 0..ny {
-            for i in 0..nx {
-                out.push(((v.raw_node(i, j, k) - a) / (b - a)).clamp(0.0, 1.0));
-            }
-        }
-    }
-    out
 }
 
 /// Runs `args`, which write `out`, and loads it.

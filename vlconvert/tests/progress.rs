@@ -2,27 +2,11 @@
 //! reader; drawn under a pseudo-terminal (util-linux `script`), blanked out before the report,
 //! and absent there too with `--quiet`.
 
+mod common;
+
+use common::{fixture, s, tmp, BIN};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-const BIN: &str = env!("CARGO_BIN_EXE_vlconvert");
-
-fn tmp(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("vlconvert-progress-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 /// A 1 MiB raw u8 volume (1024 x 1024 x 1), more than the 64 KiB a read needs for a line.
 fn big_raw(d: &Path) -> PathBuf {

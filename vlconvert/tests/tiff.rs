@@ -4,36 +4,17 @@
 //! folder of slices whose names need natural order; the spacing sidecar; the format told from
 //! the file or folder; and each refusal (colour, pages of two sizes or types, hostile sizes).
 
+mod common;
+
+use common::{run, s, text, tmp};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use vlib::Dataset;
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vlconvert"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn tmp(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("vlconvert-tiff-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/fixtures/tiff")
         .join(name)
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
 }
 
 /// The numbers of `NAME.txt` (one a line) or `NAME.spacing.txt` (on one line).

@@ -4,27 +4,12 @@
 //! colour images, `info`, and the exit codes for bad input, bad command
 //! lines and an output closed or full.
 
+mod common;
+
+use common::{normalised, run, s, tmp};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 use vlib::{Dataset, Voxels};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vlconvert"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn tmp(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("vlconvert-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 #[test]
 fn raw_volumes_convert_in_both_byte_orders() {
@@ -47,33 +32,8 @@ fn raw_volumes_convert_in_both_byte_orders() {
     let raw16 = d.join("v16.raw");
     std::fs::write(&raw16, &file).unwrap();
     let out16 = d.join("v16.vlb");
-    let o = run(&[
-        "raw",
-        s(&raw16),
-        s(&out16),
-        "--dims",
-        "2",
-        "2",
-        "2",
-        "--bytes",
-        "2",
-        "--endian",
-        "big",
-        "--skip",
-        "5",
-        "--a",
-        "-10",
-        "--b",
-        "7000",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v = Dataset::load(&out16).unwrap();
-    assert_eq!(v.raw(), &Voxels::U16(words));
-    assert_eq!(v.range(), (-10.0, 7000.0));
-
-    // --b alone at or below the data's smallest value (7) would invert the window: refused;
-    // both ends given, an inverted window is what was asked for.
-    let common = [
+    // The file's layout, for every conversion of it below.
+    let raw16_args = [
         "raw",
         s(&raw16),
         "--dims",
@@ -87,8 +47,16 @@ fn raw_volumes_convert_in_both_byte_orders() {
         "--skip",
         "5",
     ];
+    let o = run(&[&raw16_args[..], &[s(&out16), "--a", "-10", "--b", "7000"]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v = Dataset::load(&out16).unwrap();
+    assert_eq!(v.raw(), &Voxels::U16(words));
+    assert_eq!(v.range(), (-10.0, 7000.0));
+
+    // --b alone at or below the data's smallest value (7) would invert the window: refused;
+    // both ends given, an inverted window is what was asked for.
     let inverted = d.join("inverted.vlb");
-    let o = run(&[&common[..], &[s(&inverted), "--b", "5"]].concat());
+    let o = run(&[&raw16_args[..], &[s(&inverted), "--b", "5"]].concat());
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -96,7 +64,7 @@ fn raw_volumes_convert_in_both_byte_orders() {
         "{err}"
     );
     assert!(!inverted.exists());
-    let o = run(&[&common[..], &[s(&inverted), "--window", "7000", "-10"]].concat());
+    let o = run(&[&raw16_args[..], &[s(&inverted), "--window", "7000", "-10"]].concat());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(Dataset::load(&inverted).unwrap().range(), (7000.0, -10.0));
 
@@ -229,23 +197,6 @@ fn command_line_errors_exit_2_and_help_exits_0() {
     let help = run(&["--help"]);
     assert_eq!(help.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&help.stdout).contains("nifti"));
-}
-
-/// The normalised value of every node of `v`, from its voxels and a, b as the file states
-/// them: clamp((voxel − a)/(b − a), 0, 1), x fastest.
-fn normalised(v: &Dataset) -> Vec<f64> {
-    let [nx, ny, nz] = v.dims();
-    let (a, b) = v.range();
-    let (a, b) = (a as f64, b as f64);
-    let mut out = Vec::new();
-    for k in 0..nz {
-        for j in 0..ny {
-            for i in 0..nx {
-                out.push(((v.raw_node(i, j, k) - a) / (b - a)).clamp(0.0, 1.0));
-            }
-        }
-    }
-    out
 }
 
 /// The values an independent writer put in a fixture, from `NAME.txt` beside it: one a line,
