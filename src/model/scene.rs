@@ -127,7 +127,7 @@ pub const DEFAULT_SAMPLES_PER_DIAGONAL: f64 = 256.0;
 pub struct RenderState {
     /// Rendering algorithm.
     pub render_type: RenderType,
-    /// World-space sampling interval; `None` until `vlStepSize` sets it: then
+    /// World-space sampling interval; `None` until `vlStepSize` sets it, and while `None`
     /// [`RenderState::step_for`] derives it from the object's size.
     pub step: Option<f32>,
     /// World-space interval over which opacity is exact.

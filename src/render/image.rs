@@ -33,6 +33,7 @@ pub(crate) fn render_into(
 
 /// What a render shows where its rays leave the scene.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Backdrop {
     /// The scene's background colour (`vlBackground`), as in RGB images: every pixel is
     /// opaque.
@@ -52,6 +53,7 @@ pub enum Backdrop {
 /// RGBA colour is premultiplied, as OpenEXR and compositing arithmetic take it. The values
 /// are those of the C constants (`VL_RGB8` ... of `vlRenderBuffer`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum PixelFormat {
     /// 3 bytes a pixel (`VL_RGB8`).
     Rgb8 = 1,

@@ -1,9 +1,10 @@
 //! Which format a file is, from its first bytes (`vlconvert IN OUT.vlb`): NRRD by its magic,
 //! NIfTI-1 by `n+1` at byte 344 (inside gzip too), MetaImage by its `ObjectType`/`NDims` header
 //! keys, DICOM by `DICM` at byte 128, TIFF (and BigTIFF) by `II*\0`/`MM\0*` (`II+\0`/`MM\0+`),
-//! PNG and PNM images by theirs; a folder holding TIFF files is a stack, any other folder a
-//! DICOM series. A headerless raw volume cannot be recognised: it needs `vlconvert raw` with
-//! its dimensions and type.
+//! PNG and PNM images by theirs; a folder holding TIFF files is a stack, one holding DICOM files
+//! a series; a folder of neither, or of both, is refused (`vlconvert tiff` or `vlconvert dicom`
+//! chooses). A headerless raw volume cannot be recognised: it needs `vlconvert raw` with its
+//! dimensions and type.
 
 use std::io::Read;
 use std::path::Path;
@@ -23,12 +24,19 @@ pub enum Format {
 /// The format of the file at `path`.
 pub fn format(path: &Path) -> Result<Format, String> {
     if std::fs::metadata(path).is_ok_and(|m| m.is_dir()) {
-        // A folder of TIFFs is a stack; one holding a DICOM file a series.
-        if !crate::tiffstack::folder_files(path)?.is_empty() {
-            return Ok(Format::Tiff);
-        }
-        if holds_dicom(path) {
-            return Ok(Format::Dicom);
+        // A folder of TIFFs is a stack; one holding a DICOM file a series; both, neither: refused.
+        let tiff = !crate::tiffstack::folder_files(path)?.is_empty();
+        match (tiff, holds_dicom(path)) {
+            (true, false) => return Ok(Format::Tiff),
+            (false, true) => return Ok(Format::Dicom),
+            (true, true) => {
+                return Err(format!(
+                    "{}: a folder with TIFF files (.tif, .tiff) and DICOM files: say which to \
+                     read, `vlconvert tiff` or `vlconvert dicom`",
+                    path.display()
+                ))
+            }
+            (false, false) => {}
         }
         return Err(format!(
             "{}: a folder without TIFF files (.tif, .tiff) or DICOM files (DICM at byte 128): \

@@ -113,8 +113,8 @@ enum Endian {
 #[derive(Subcommand)]
 enum Cmd {
     /// Any volume or image whose format its first bytes tell (NIfTI-1, NRRD, MetaImage, DICOM,
-    /// TIFF, PNG, PNM), or a folder (of TIFFs: a stack; otherwise DICOM slices): `vlconvert IN
-    /// OUT.vlb` is short for `vlconvert convert IN OUT.vlb`.
+    /// TIFF, PNG, PNM), or a folder (of TIFFs: a stack; of DICOM files: a series):
+    /// `vlconvert IN OUT.vlb` is short for `vlconvert convert IN OUT.vlb`.
     Convert {
         input: PathBuf,
         output: PathBuf,
@@ -567,7 +567,8 @@ fn nrrd_file(input: &Path, output: &Path, window: &Window) -> Res<()> {
     convert(&v.source(), window, output, v.geometry)
 }
 
-/// Converts `input`, whose format its first bytes tell (a folder: a DICOM series).
+/// Converts `input`, whose format its first bytes tell (a folder: a TIFF stack or a DICOM
+/// series, `detect`).
 fn auto(input: &Path, output: &Path, window: &Window, series: Option<&str>) -> Res<()> {
     let format = detect::format(input)?;
     if series.is_some() && format != detect::Format::Dicom {

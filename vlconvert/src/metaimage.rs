@@ -8,12 +8,12 @@
 //! MetaIO's type table), `ElementByteOrderMSB` / `BinaryDataByteOrderMSB`, `CompressedData`
 //! (zlib), `HeaderSize` (bytes to skip from the start of the data's file; −1: the data ends the
 //! file) and `ElementNumberOfChannels` (only 1 converts). The placement, as ITK reads it:
-//! `ElementSpacing` (mm), `Offset` (or `Origin`, `Position`: node 0's position) and
-//! `TransformMatrix` (or `Rotation`, `Orientation`: the direction of each axis in turn, three
-//! numbers each) in ITK's LPS space, turned into RAS for the sidecar; missing keys are ITK's
-//! defaults (spacing 1, offset 0, identity). `AnatomicalOrientation` is ignored, as ITK ignores
-//! it. `ElementMin` / `ElementMax` and the intensity functions are ignored too: ITK does not
-//! apply them.
+//! `ElementSpacing` (mm; else `ElementSize`, as MetaIO does), `Offset` (or `Origin`,
+//! `Position`: node 0's position) and `TransformMatrix` (or `Rotation`, `Orientation`: the
+//! direction of each axis in turn, three numbers each) in ITK's LPS space, turned into RAS for
+//! the sidecar; missing keys are ITK's defaults (spacing 1, offset 0, identity).
+//! `AnatomicalOrientation` is ignored, as ITK ignores it. `ElementMin` / `ElementMax` and the
+//! intensity functions are ignored too: ITK does not apply them.
 
 use crate::progress::{Progress, Reading, Unit};
 use crate::volume::{Source, Type};
@@ -45,7 +45,8 @@ struct Header {
     file: DataFile,
     /// The byte after the header's last line, in the header's file.
     end: usize,
-    /// The placement keys' values: `ElementSpacing`, `Offset`, `TransformMatrix`.
+    /// The placement keys' values: `ElementSpacing` (else `ElementSize`, as MetaIO reads it),
+    /// `Offset`, `TransformMatrix`.
     spacing: Option<String>,
     offset: Option<String>,
     matrix: Option<String>,
@@ -87,6 +88,7 @@ fn parse(text: &[u8], dir: &Path) -> Res<Header> {
     let (mut ndims, mut dimsize, mut ty, mut file) = (None, None, None, None);
     let (mut big, mut compressed, mut skip) = (false, false, None);
     let (mut spacing, mut offset, mut matrix) = (None, None, None);
+    let mut size = None;
     let mut start = 0;
     let mut number = 0;
     while file.is_none() {
@@ -153,6 +155,7 @@ fn parse(text: &[u8], dir: &Path) -> Res<Header> {
             }
             "CompressedData" => compressed = boolean(key, value).map_err(at)?,
             "ElementSpacing" => spacing = Some(value.to_string()),
+            "ElementSize" => size = Some(value.to_string()),
             "Offset" | "Origin" | "Position" => offset = Some(value.to_string()),
             "TransformMatrix" | "Rotation" | "Orientation" => matrix = Some(value.to_string()),
             "HeaderSize" => {
@@ -208,7 +211,7 @@ fn parse(text: &[u8], dir: &Path) -> Res<Header> {
         skip,
         file: file.expect("the loop ends at ElementDataFile"),
         end: start,
-        spacing,
+        spacing: spacing.or(size),
         offset,
         matrix,
     })

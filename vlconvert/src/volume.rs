@@ -183,15 +183,23 @@ impl Source<'_> {
         let range = self.range(&mut bar);
         bar.finish();
         let (lo, hi) = range.ok_or("no finite value: nothing to normalise by")?;
-        if let (None, Some(b)) = window {
-            if b <= lo {
+        match window {
+            (None, Some(b)) if b <= lo => {
                 return Err(format!(
                     "--b {b} is at or below the data's smallest value {lo}: the window would be \
                      inverted; give --a too (--window A B) if that is what you want"
-                ));
+                ))
             }
+            (Some(a), None) if a >= hi => {
+                return Err(format!(
+                    "--a {a} is at or above the data's largest value {hi}: every voxel would be \
+                     0; give --b too (--window A B) if that is what you want"
+                ))
+            }
+            _ => {}
         }
         let a = window.0.unwrap_or(lo);
+        // (A constant volume, lo = hi, and no --b: b one above, so every voxel is 0.)
         let b = window.1.unwrap_or(if hi > a { hi } else { a + 1.0 });
         if !(a.is_finite() && b.is_finite() && a != b) {
             return Err(format!("window {a} … {b}: both ends finite and different"));

@@ -215,7 +215,28 @@ fn a_folder_and_a_single_file_are_told_apart() {
         "{}",
         text(&o.stderr)
     );
-    assert!(!d.join("x.vlb").exists() && !d.join("y.vlb").exists());
+    // A folder of DICOM files and a stray TIFF: neither reader is chosen for the user.
+    let mixed = d.join("mixed");
+    std::fs::create_dir(&mixed).unwrap();
+    let slice = std::fs::read_dir(&dir).unwrap().find_map(|e| {
+        let p = e.unwrap().path();
+        p.extension().is_some_and(|x| x == "dcm").then_some(p)
+    });
+    let slice = slice.expect("a .dcm slice in the fixture");
+    std::fs::copy(&slice, mixed.join("a.dcm")).unwrap();
+    std::fs::copy(
+        common::fixture("tiff/uint16_be.tif"),
+        mixed.join("screenshot.tif"),
+    )
+    .unwrap();
+    let o = run(&[s(&mixed), s(&d.join("z.vlb"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text(&o.stderr).contains("TIFF files (.tif, .tiff) and DICOM files"),
+        "{}",
+        text(&o.stderr)
+    );
+    assert!(!d.join("x.vlb").exists() && !d.join("y.vlb").exists() && !d.join("z.vlb").exists());
     std::fs::remove_dir_all(&d).unwrap();
 }
 

@@ -53,14 +53,23 @@ fn raw_volumes_convert_in_both_byte_orders() {
     assert_eq!(v.raw(), &Voxels::U16(words));
     assert_eq!(v.range(), (-10.0, 7000.0));
 
-    // --b alone at or below the data's smallest value (7) would invert the window: refused;
-    // both ends given, an inverted window is what was asked for.
+    // --b alone at or below the data's smallest value (7) would invert the window, --a alone at
+    // or above its largest (7007) would make every voxel 0: both refused; both ends given, an
+    // inverted window is what was asked for.
     let inverted = d.join("inverted.vlb");
     let o = run(&[&raw16_args[..], &[s(&inverted), "--b", "5"]].concat());
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("--b 5 is at or below") && err.contains("7"),
+        err.contains("--b 5 is at or below the data's smallest value 7:"),
+        "{err}"
+    );
+    assert!(!inverted.exists());
+    let o = run(&[&raw16_args[..], &[s(&inverted), "--a", "7007"]].concat());
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--a 7007 is at or above the data's largest value 7007:"),
         "{err}"
     );
     assert!(!inverted.exists());
@@ -625,7 +634,8 @@ fn metaimage_big_endian_data_at_the_end_of_its_file() {
 
 /// A placement that cannot be made (a malformed `ElementSpacing`, parallel axes in
 /// `TransformMatrix`) is a note: the volume converts without a sidecar. Without placement keys
-/// the sidecar is ITK's default: 1 mm spacing, node 0 at the origin, LPS axes turned into RAS.
+/// the sidecar is ITK's default: 1 mm spacing (or `ElementSize`'s, as MetaIO reads it without
+/// `ElementSpacing`), node 0 at the origin, LPS axes turned into RAS.
 #[test]
 fn metaimage_placements_that_cannot_be_made_are_notes() {
     let d = tmp("metaimage-placement");
@@ -634,6 +644,7 @@ fn metaimage_placements_that_cannot_be_made_are_notes() {
         ("ElementSpacing = 1 abc 1\n", Some("ElementSpacing")),
         ("TransformMatrix = 1 0 0 1 0 0 0 0 1\n", Some("degenerate")),
         ("", None),
+        ("ElementSize = 0.5 0.5 2\n", None),
     ];
     for (key, note) in cases {
         let mhd = d.join("v.mhd");
@@ -660,10 +671,16 @@ fn metaimage_placements_that_cannot_be_made_are_notes() {
             }
             None => {
                 let g = g.expect("ITK's default placement");
+                // ElementSize stands for a missing ElementSpacing, as MetaIO reads it.
+                let d = if key.is_empty() {
+                    [1.0, 1.0, 1.0]
+                } else {
+                    [0.5, 0.5, 2.0]
+                };
                 let want = [
-                    [-1.0, 0.0, 0.0, 0.0],
-                    [0.0, -1.0, 0.0, 0.0],
-                    [0.0, 0.0, 1.0, 0.0],
+                    [-d[0], 0.0, 0.0, 0.0],
+                    [0.0, -d[1], 0.0, 0.0],
+                    [0.0, 0.0, d[2], 0.0],
                 ];
                 assert_eq!(g.affine, want);
             }
