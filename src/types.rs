@@ -194,10 +194,13 @@ macro_rules! int_enum {
             pub const ALL: &'static [$name] = &[$($name::$variant),+];
 
             /// Validates a raw integer from the C interface.
-            pub fn from_raw(raw: i32) -> Result<$name> {
+            pub fn from_raw(raw: i32) -> $crate::error::Result<$name> {
                 match raw {
                     $($value => Ok($name::$variant),)+
-                    _ => err(ErrorCode::BadEnum, format!(concat!("{} is not a valid ", $what), raw)),
+                    _ => $crate::error::err(
+                        $crate::error::ErrorCode::BadEnum,
+                        format!(concat!("{} is not a valid ", $what), raw),
+                    ),
                 }
             }
 
@@ -208,6 +211,8 @@ macro_rules! int_enum {
         }
     };
 }
+/// The C interface's integer enums, for the layers above (`render::PixelFormat`).
+pub(crate) use int_enum;
 
 int_enum!(
     /// Rendering algorithms (`vlRenderType`).

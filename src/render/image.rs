@@ -46,56 +46,30 @@ pub enum Backdrop {
     Transparent,
 }
 
-/// A layout of pixels in memory: row-major, top row first, channels interleaved, values in
-/// the machine's byte order. RGB layouts show the scene over its background; RGBA layouts
-/// are rendered with a transparent backdrop ([`Backdrop::Transparent`]) and carry alpha
-/// `1 − T`. Integer RGBA colour is straight (not premultiplied), as PNG stores it; float
-/// RGBA colour is premultiplied, as OpenEXR and compositing arithmetic take it. The values
-/// are those of the C constants (`VL_RGB8` ... of `vlRenderBuffer`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[non_exhaustive]
-pub enum PixelFormat {
-    /// 3 bytes a pixel (`VL_RGB8`).
-    Rgb8 = 1,
-    /// 4 bytes a pixel, straight colour (`VL_RGBA8`).
-    Rgba8 = 2,
-    /// 3 `u16` a pixel, 6 bytes (`VL_RGB16`).
-    Rgb16 = 3,
-    /// 4 `u16` a pixel, 8 bytes, straight colour (`VL_RGBA16`).
-    Rgba16 = 4,
-    /// 3 `f32` a pixel, 12 bytes, in [0, 1] (`VL_RGB32F`).
-    Rgb32F = 5,
-    /// 4 `f32` a pixel, 16 bytes, premultiplied colour, in [0, 1] (`VL_RGBA32F`).
-    Rgba32F = 6,
-}
+crate::types::int_enum!(
+    /// A layout of pixels in memory: row-major, top row first, channels interleaved, values in
+    /// the machine's byte order. RGB layouts show the scene over its background; RGBA layouts
+    /// are rendered with a transparent backdrop ([`Backdrop::Transparent`]) and carry alpha
+    /// `1 − T`. Integer RGBA colour is straight (not premultiplied), as PNG stores it; float
+    /// RGBA colour is premultiplied, as OpenEXR and compositing arithmetic take it. The values
+    /// are those of the C constants (`VL_RGB8` ... of `vlRenderBuffer`).
+    PixelFormat, "pixel format" {
+        /// 3 bytes a pixel (`VL_RGB8`).
+        Rgb8 = 1,
+        /// 4 bytes a pixel, straight colour (`VL_RGBA8`).
+        Rgba8 = 2,
+        /// 3 `u16` a pixel, 6 bytes (`VL_RGB16`).
+        Rgb16 = 3,
+        /// 4 `u16` a pixel, 8 bytes, straight colour (`VL_RGBA16`).
+        Rgba16 = 4,
+        /// 3 `f32` a pixel, 12 bytes, in [0, 1] (`VL_RGB32F`).
+        Rgb32F = 5,
+        /// 4 `f32` a pixel, 16 bytes, premultiplied colour, in [0, 1] (`VL_RGBA32F`).
+        Rgba32F = 6,
+    }
+);
 
 impl PixelFormat {
-    /// Every format, in numeric order.
-    pub const ALL: [PixelFormat; 6] = [
-        PixelFormat::Rgb8,
-        PixelFormat::Rgba8,
-        PixelFormat::Rgb16,
-        PixelFormat::Rgba16,
-        PixelFormat::Rgb32F,
-        PixelFormat::Rgba32F,
-    ];
-
-    /// Validates a raw integer from the C interface (`BadEnum` for another).
-    pub fn from_raw(raw: i32) -> crate::error::Result<PixelFormat> {
-        match PixelFormat::ALL.iter().find(|f| f.raw() == raw) {
-            Some(&f) => Ok(f),
-            None => crate::error::err(
-                crate::error::ErrorCode::BadEnum,
-                format!("{raw} is not a valid pixel format"),
-            ),
-        }
-    }
-
-    /// The raw integer of the C interface.
-    pub fn raw(self) -> i32 {
-        self as i32
-    }
-
     /// The channels of a pixel: 3 or 4.
     pub fn channels(self) -> usize {
         if self.has_alpha() {
