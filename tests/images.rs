@@ -163,17 +163,22 @@ fn png(path: &Path) -> Decoded {
     let out = d.decode().unwrap();
     let (width, height) = d.dimensions().unwrap();
     let channels = d.colorspace().unwrap().num_components();
-    let (bits, samples) = match out {
-        DecodingResult::U8(v) => (8, v.into_iter().map(u32::from).collect()),
-        DecodingResult::U16(v) => (16, v.into_iter().map(u32::from).collect()),
-        _ => panic!("{}: neither 8 nor 16 bits", path.display()),
-    };
+    let (bits, samples) = integer_samples(out, path);
     Decoded {
         width,
         height,
         channels,
         bits,
         samples,
+    }
+}
+
+/// The bit depth and the samples of an 8- or 16-bit decoding of `path`.
+fn integer_samples(out: DecodingResult, path: &Path) -> (u32, Vec<u32>) {
+    match out {
+        DecodingResult::U8(v) => (8, v.into_iter().map(u32::from).collect()),
+        DecodingResult::U16(v) => (16, v.into_iter().map(u32::from).collect()),
+        _ => panic!("{}: neither 8 nor 16 bits", path.display()),
     }
 }
 
@@ -190,11 +195,7 @@ fn pnm(path: &Path) -> (usize, usize, DecodingResult) {
 /// A PPM as a [`Decoded`].
 fn ppm(path: &Path) -> Decoded {
     let (width, height, out) = pnm(path);
-    let (bits, samples) = match out {
-        DecodingResult::U8(v) => (8, v.into_iter().map(u32::from).collect()),
-        DecodingResult::U16(v) => (16, v.into_iter().map(u32::from).collect()),
-        _ => panic!("{}: neither 8 nor 16 bits", path.display()),
-    };
+    let (bits, samples) = integer_samples(out, path);
     Decoded {
         width,
         height,
