@@ -45,6 +45,7 @@ mod metaimage;
 mod nrrd;
 mod progress;
 mod tiffstack;
+mod vector;
 mod volume;
 
 use volume::{Source, Type};

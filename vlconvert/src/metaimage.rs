@@ -258,17 +258,8 @@ fn geometry(h: &Header) -> Res<vlib::Geometry> {
     let mut step = [1.0f64; 3];
     step[..n].copy_from_slice(&spacing);
     if n == 2 {
-        let (a, b) = (dir[0], dir[1]);
-        let c = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        let len = c.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if len <= 0.0 {
-            return Err("TransformMatrix: the image's two axes are parallel".into());
-        }
-        dir[2] = c.map(|v| v / len);
+        dir[2] = crate::vector::unit_normal(dir[0], dir[1])
+            .ok_or("TransformMatrix: the image's two axes are parallel")?;
     }
     let ras = [-1.0, -1.0, 1.0];
     let row = |r: usize| {

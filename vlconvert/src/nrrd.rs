@@ -108,15 +108,10 @@ fn geometry(field: &dyn Fn(&[&str]) -> Option<String>) -> Result<Option<vlib::Ge
             return Err(format!("space directions {dirs:?}: 2 or 3 vectors"));
         }
         // A 2D image's third axis: the unit normal of its plane.
+        // (Parallel directions give a zero axis, which the placement refuses as degenerate.)
         let normal = if cols.len() == 2 {
-            let (a, b) = (&cols[0], &cols[1]);
-            let n = [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ];
-            let len = n.iter().map(|v| v * v).sum::<f64>().sqrt();
-            n.map(|v| if len > 0.0 { v / len } else { 0.0 })
+            let v = |c: &[f64]| [c[0], c[1], c[2]];
+            crate::vector::unit_normal(v(&cols[0]), v(&cols[1])).unwrap_or([0.0; 3])
         } else {
             [0.0; 3]
         };

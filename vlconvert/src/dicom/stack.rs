@@ -16,6 +16,7 @@
 //! times its SliceThickness, or 1 mm). It is turned into RAS by negating x and y.
 
 use super::slice::Slice;
+use crate::vector::{cross, dot};
 
 type Res<T> = Result<T, String>;
 
@@ -40,18 +41,6 @@ const TURN: f64 = 1e-3;
 /// positions are often written), whichever is larger.
 pub fn gap_tolerance(step: f64) -> f64 {
     (0.01 * step).max(0.01)
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 fn name(s: &Slice) -> String {
