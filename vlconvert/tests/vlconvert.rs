@@ -416,31 +416,11 @@ fn raw_volumes_of_every_type_keep_their_values() {
     }
     // --bytes 3 is refused (exit 1); --type and --bytes together are a command-line error.
     let raw = d.join("i16false.raw");
-    let o = run(&[
-        "raw",
-        s(&raw),
-        s(&d.join("x.vlb")),
-        "--dims",
-        "2",
-        "2",
-        "2",
-        "--bytes",
-        "3",
-    ]);
+    let out = d.join("x.vlb");
+    let base = ["raw", s(&raw), s(&out), "--dims", "2", "2", "2"];
+    let o = run(&[&base[..], &["--bytes", "3"]].concat());
     assert_eq!(o.status.code(), Some(1));
-    let o = run(&[
-        "raw",
-        s(&raw),
-        s(&d.join("x.vlb")),
-        "--dims",
-        "2",
-        "2",
-        "2",
-        "--bytes",
-        "2",
-        "--type",
-        "i16",
-    ]);
+    let o = run(&[&base[..], &["--bytes", "2", "--type", "i16"]].concat());
     assert_eq!(o.status.code(), Some(2));
     std::fs::remove_dir_all(&d).unwrap();
 }
