@@ -16,10 +16,10 @@
 //! The MNI dataset is converted with `vlconvert` on first use into `target/bench-data/mni.vlb`
 //! (as `benches/mni.rs` does), or taken from `$VLIB_MNI_VLB`.
 
-#[path = "common/mni_scene.rs"]
+#[path = "../common/mni_scene.rs"]
 mod mni_scene;
 
-#[path = "common/say.rs"]
+#[path = "../common/say.rs"]
 mod say;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -1535,7 +1535,7 @@ fn main() -> Res<()> {
         d,
         "## The accuracy study: error against time for each control\n\n\
          Everything in this section is written by `cargo run --release --example accuracy` \
-         (`examples/accuracy.rs`); the last run took {:.0} s on {}, {} cores \
+         (`examples/accuracy/`); the last run took {:.0} s on {}, {} cores \
          ({} rayon threads), {}. The machine is shared: the load average was {} at the start \
          and {} at the end (other work shared it), so times are noisy. A time is the \
          wall-clock time of `Library::render_preview`, the best of several runs after an \
