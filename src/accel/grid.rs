@@ -175,6 +175,35 @@ impl std::hash::Hasher for MemoHasher {
 /// The most blocks a grid may have.
 const MAX_BLOCKS: usize = 1 << 24;
 
+/// Where a block lies along one axis against the datasets' cube [0, 1] (a dataset is 0
+/// outside it, `Dataset::covers`), in the order of their ranges' widening: every sample it
+/// holds reads the datasets, some may read 0, or all read 0. Ordered, so that a block's place
+/// is the greatest of its three axes'.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Outside {
+    Inside,
+    Partly,
+    Wholly,
+}
+
+impl Outside {
+    /// The place of the block [lo, hi] along an axis. A sample the walk attributes to the
+    /// block lies in it up to the walk's round-off (relative 10⁻¹⁵, in object units): so a
+    /// block whose box reaches past 0 or 1 at all may hold samples outside the dataset, and
+    /// one whose box is further than twice the tolerance beyond a face holds no sample the
+    /// dataset covers.
+    fn of(lo: f64, hi: f64) -> Outside {
+        let far = 2.0 * crate::data::FACE_TOLERANCE as f64;
+        if hi < -far || lo > 1.0 + far {
+            Outside::Wholly
+        } else if lo < 0.0 || hi > 1.0 {
+            Outside::Partly
+        } else {
+            Outside::Inside
+        }
+    }
+}
+
 /// The brick of `d`'s ranges `bricks` that holds object coordinate `x` along `axis` (clamped to
 /// the grid).
 fn brick_at(d: &Dataset, bricks: &Bricks, x: f64, axis: usize) -> usize {
@@ -358,6 +387,20 @@ impl SkipGrid {
             },
         );
         let mut dist = vec![0u8; total];
+        // Where the box reaches outside the datasets' cube, where each block lies along each
+        // axis (see [`Outside`]); all `Inside` where it does not.
+        let clip = !crate::data::box_covered(box_min, box_max);
+        let outside: [Vec<Outside>; 3] = std::array::from_fn(|axis| {
+            (0..dims[axis])
+                .map(|c| {
+                    if !clip {
+                        return Outside::Inside;
+                    }
+                    let lo = origin[axis] + c as f64 * cell[axis];
+                    Outside::of(lo, lo + cell[axis])
+                })
+                .collect()
+        });
         // The datasets' brick ranges first (each built once, itself in parallel) and the
         // bricks each block meets along each axis, then the blocks plane by plane in parallel.
         type Source<'a> = (&'a Bricks, Filter, f64, [Vec<(usize, usize)>; 3]);
@@ -387,10 +430,16 @@ impl SkipGrid {
                 let mut last: Option<(Vec<(u32, u32)>, bool)> = None;
                 for j in 0..dims[1] {
                     for i in 0..dims[0] {
+                        let place = outside[0][i].max(outside[1][j]).max(outside[2][k]);
                         key.clear();
                         key.extend(data.iter().map(|(bricks, f, over, spans)| {
                             let at = [spans[0][i], spans[1][j], spans[2][k]];
-                            let (a, b) = bricks_range(bricks, *f, *over, at);
+                            let (a, b) = match place {
+                                Outside::Inside => bricks_range(bricks, *f, *over, at),
+                                // (0 is below every value: the range then starts there.)
+                                Outside::Partly => (0.0, bricks_range(bricks, *f, *over, at).1),
+                                Outside::Wholly => (0.0, 0.0),
+                            };
                             (a.to_bits(), b.to_bits())
                         }));
                         let known = match &last {

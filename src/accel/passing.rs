@@ -182,16 +182,18 @@ pub(super) fn passing_boxes(
                     }
                     let lo_cell = [gi * BRICK, gj * BRICK, gk * BRICK];
                     let (first, last, _) = layer[at].get(lo_cell)?;
+                    // At a face of the dataset, out to where it still covers points.
+                    let reach = crate::data::FACE_TOLERANCE as f64;
                     let lo = DVec3::from_array(std::array::from_fn(|a| {
                         if first[a] == 0 {
-                            box_min[a].min(0.0)
+                            box_min[a].max(-reach).min(0.0)
                         } else {
                             first[a] as f64 / cells[a] as f64
                         }
                     }));
                     let hi = DVec3::from_array(std::array::from_fn(|a| {
                         if last[a] + 1 == cells[a] {
-                            box_max[a].max(1.0)
+                            box_max[a].min(1.0 + reach).max(1.0)
                         } else {
                             (last[a] + 1) as f64 / cells[a] as f64
                         }
@@ -212,8 +214,9 @@ impl SkipGrid {
     ///
     /// Per 4³ cells of the dataset, the box of those that can pass: a sample's value comes
     /// from the cell that holds its point, so a sample whose opacity is above 0 lies in such
-    /// a box. A box whose cells touch a face of the dataset reaches to the object box there
-    /// (a sample outside the dataset takes the value of the nearest edge cell). Left out: the
+    /// a box. A box whose cells touch a face of the dataset reaches past it by
+    /// `FACE_TOLERANCE` where the object box does (a sample there still reads the edge cell;
+    /// further out the dataset is 0, `Dataset::covers`). Left out: the
     /// groups whose cells all pass, with all 26 neighbouring groups the same: a ray that meets
     /// opacity first in one has crossed a neighbour's box before (or starts in a region of them,
     /// enclosed by boxes some of which are then behind the eye: no map). `None` for a

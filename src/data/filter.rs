@@ -4,8 +4,9 @@
 //! tricubic filters (B = 0, C = 0.5 is Catmull–Rom, the default; B = 1, C = 0 the cubic B-spline).
 //! Values and gradients use the same filter: the gradient at a point is the filter applied to the
 //! central-difference gradients of the nodes (one-sided at the faces), so a linear field has an
-//! exact gradient everywhere. Points outside [0, 1]^3 take the value of the nearest face
-//! (clamp to edge).
+//! exact gradient everywhere. A dataset is a bounded field: 0, with a gradient of 0, outside
+//! [0, 1]^3 ([`Dataset::covers`]); points within [`FACE_TOLERANCE`] outside a face (where
+//! round-off puts a point computed on it) take the value at the face.
 //!
 //! This file owns the filters' definitions (the BC kernel and its bound), the public entry points
 //! [`Dataset::sample`] and [`Dataset::gradient`], the generic filter every path must agree with
@@ -81,7 +82,34 @@ pub fn bc_kernel(x: f64, b: f64, c: f64) -> f64 {
     }
 }
 
+/// How far outside [0, 1] an object coordinate may lie and still read the dataset (at its
+/// face): 2⁻²⁰, a thousand times the round-off of a point computed on a face from a ray in f64
+/// and far below a node's spacing (2⁻²⁰ of the cube is 5·10⁻⁴ of a voxel of a 512-node axis).
+pub(crate) const FACE_TOLERANCE: f32 = 1.0 / (1u32 << 20) as f32;
+
+/// Whether object coordinate `x` lies in [−[`FACE_TOLERANCE`], 1 + [`FACE_TOLERANCE`]]
+/// (NaN does not).
+#[inline(always)]
+fn covered(x: f32) -> bool {
+    (-FACE_TOLERANCE..=1.0 + FACE_TOLERANCE).contains(&x)
+}
+
+/// Whether the dataset covers every sample of an object whose box is [min, max] in object
+/// space: the box lies inside [0, 1]³ (its points, computed in f64 up to round-off and rounded
+/// to f32, are then covered), so that a march need not test its samples.
+pub(crate) fn box_covered(min: glam::DVec3, max: glam::DVec3) -> bool {
+    min.cmpge(glam::DVec3::ZERO).all() && max.cmple(glam::DVec3::ONE).all()
+}
+
 impl Dataset {
+    /// Whether object point `p` reads the dataset: every coordinate in [0, 1] up to
+    /// [`FACE_TOLERANCE`]. Elsewhere the dataset is 0 and so is its gradient (a dataset is a
+    /// bounded field, as the paper's fields are: beyond its last node nothing continues it).
+    #[inline(always)]
+    pub fn covers(&self, p: [f32; 3]) -> bool {
+        covered(p[0]) & covered(p[1]) & covered(p[2])
+    }
+
     /// The continuous index of object coordinate `p` along axis `axis`, clamped to the grid
     /// (NaN → 0).
     #[inline]
@@ -92,7 +120,8 @@ impl Dataset {
         u.max(0.0).min(last)
     }
 
-    /// The interpolated normalised value at object coordinates `p`.
+    /// The interpolated normalised value at object coordinates `p` (0 where the dataset does
+    /// not [cover](Dataset::covers) `p`).
     #[inline]
     pub fn sample(&self, p: [f32; 3], filter: Filter) -> f32 {
         if filter == Filter::Trilinear {
@@ -103,6 +132,9 @@ impl Dataset {
 
     #[inline(never)]
     fn sample_generic(&self, p: [f32; 3], filter: Filter) -> f32 {
+        if !self.covers(p) {
+            return 0.0;
+        }
         let u = [
             self.index(p[0], 0),
             self.index(p[1], 1),
@@ -219,7 +251,8 @@ impl Dataset {
     }
 
     /// The gradient of the normalised field with respect to object coordinates at `p`, from
-    /// node gradients interpolated with `filter`.
+    /// node gradients interpolated with `filter` (0 where the dataset does not
+    /// [cover](Dataset::covers) `p`).
     #[inline]
     pub fn gradient(&self, p: [f32; 3], filter: Filter) -> [f64; 3] {
         self.gradient_cached(p, filter, &mut CellGradients::default())
@@ -245,6 +278,10 @@ impl Dataset {
 
     #[inline(never)]
     pub(super) fn gradient_generic(&self, p: [f32; 3], filter: Filter) -> [f64; 3] {
+        // (The interior paths never see such a point: its clamped cell lies on a face.)
+        if !self.covers(p) {
+            return [0.0; 3];
+        }
         let u = [
             self.index(p[0], 0),
             self.index(p[1], 1),

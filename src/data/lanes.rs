@@ -9,6 +9,7 @@
 //! (`render`), nor the packet march's own gathers (`render::simd`).
 
 use super::cells::reaches;
+use super::filter::FACE_TOLERANCE;
 use super::{CellGradients, CellMask, Dataset, Filter};
 
 /// The cells of [`Dataset::trilinear8`]'s points, handed out so that the batched march can
@@ -59,10 +60,17 @@ impl Dataset {
                     let mut c = [<$I>::default(); 3];
                     let mut cf = [<$F>::ZERO; 3];
                     let (f, cus) = (&mut cells.f, &mut cells.cu);
+                    // The lanes whose points the dataset covers (`Dataset::covers`: NaN fails
+                    // both comparisons).
+                    let mut covered = <$F>::splat(-1.0).simd_eq(<$F>::splat(-1.0));
                     for axis in 0..3 {
                         let l = self.splats.$S[0][axis];
                         let lanes: [f32; $N] = std::array::from_fn(|i| p[axis][i]);
-                        let u = (<$F>::new(lanes) * l).fast_max(<$F>::ZERO).fast_min(l);
+                        let x = <$F>::new(lanes);
+                        covered = covered
+                            & x.simd_ge(<$F>::splat(-FACE_TOLERANCE))
+                            & x.simd_le(<$F>::splat(1.0 + FACE_TOLERANCE));
+                        let u = (x * l).fast_max(<$F>::ZERO).fast_min(l);
                         let cu = u.fast_min(self.splats.$S[1][axis]);
                         cus[axis][..$N].copy_from_slice(&cu.to_array());
                         c[axis] = cu.fast_trunc_int();
@@ -90,6 +98,16 @@ impl Dataset {
                         });
                         let rows = (self.strides[1], self.strides[2]);
                         self.values_in_cells(at, |a| a, rows, &cells.f, count, mask, out);
+                    }
+                    // Outside the dataset: 0 (the cells found there, clamped onto a face,
+                    // are never interior, so no gradient is taken in them).
+                    let outside = !(covered.to_bitmask() as u32) & ((1u32 << count) - 1);
+                    if outside != 0 {
+                        for (i, v) in out.iter_mut().enumerate().take(count) {
+                            if outside >> i & 1 != 0 {
+                                *v = 0.0;
+                            }
+                        }
                     }
                 }};
             }

@@ -131,6 +131,7 @@ impl Dataset {
     /// Trilinear interpolation, specialised for speed: f32 index arithmetic (its rounding,
     /// below 2⁻¹⁶ of a voxel for grids under 512 nodes a side, is far below anything visible),
     /// i32 conversions, and the cell's nodes read as four x-pairs (one bounds check each).
+    /// 0 where the dataset does not [cover](Dataset::covers) `p`.
     #[inline]
     pub(crate) fn trilinear(&self, p: [f32; 3]) -> f32 {
         self.trilinear_in(p, None)
@@ -138,6 +139,9 @@ impl Dataset {
 
     #[inline(always)]
     pub(super) fn trilinear_in(&self, p: [f32; 3], mask: Option<&CellMask>) -> f32 {
+        if !self.covers(p) {
+            return 0.0;
+        }
         let (cell, f) = self.cell32(p);
         let base = self.node_index(cell);
         if mask.is_some_and(|m| !m.may_reach(base)) {

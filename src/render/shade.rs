@@ -57,9 +57,13 @@ impl CObj {
         self.sampled_gradient(w, field)
     }
 
-    /// [`CObj::field_gradient`] by world-space central differences of the field.
+    /// [`CObj::field_gradient`] by world-space central differences of the field; for a field
+    /// folded to a constant, from the box's faces ([`CObj::face_gradient`]).
     #[inline(never)]
     fn sampled_gradient(&self, w: DVec3, field: usize) -> (DVec3, bool) {
+        if let Some(c) = self.constants[field] {
+            return self.face_gradient(w, c as f64);
+        }
         let mut diff = DVec3::ZERO;
         let mut grad = DVec3::ZERO;
         for i in 0..3 {
@@ -70,6 +74,63 @@ impl CObj {
             grad[i] = d / (2.0 * self.delta[i]);
         }
         (grad, diff.abs().max_element() <= ZERO_GRADIENT)
+    }
+
+    /// The gradient at `w` of a field that is the constant `c` inside the box and 0 outside
+    /// (a folded field): where the central differences' stencil (`w ± δ` along each world
+    /// axis) has points on both sides of the box's surface, the field jumps by c across the
+    /// face nearest to `w` (perpendicular world distance; the first in the order −x, +x, −y,
+    /// +y, −z, +z on ties) among the faces whose planes the stencil crosses, and the gradient is
+    /// −c / (2δ) times that face's outward unit normal (2δ the stencil's widest span, so the
+    /// size is that of the jump over it). The direction is the face's analytic normal (the
+    /// object-to-world transpose-inverse of the object axis), not the sign pattern the
+    /// differences would give a tilted face. Elsewhere (the stencil wholly inside or wholly
+    /// outside) the differences are all 0, and so is this: it vanishes, as it does where
+    /// c ≤ [`ZERO_GRADIENT`].
+    pub(super) fn face_gradient(&self, w: DVec3, c: f64) -> (DVec3, bool) {
+        let p = self.to_object.transform_point3(w);
+        // The stencil's offsets in object space: column i of the linear part, times δ_i.
+        let offsets: [DVec3; 3] =
+            std::array::from_fn(|i| self.to_object.col(i).truncate() * self.delta[i]);
+        let points = offsets.iter().flat_map(|&o| [p + o, p - o]);
+        let (mut inside, mut outside) = (false, false);
+        for q in points {
+            let i = self.inside(q);
+            inside |= i;
+            outside |= !i;
+        }
+        if !(inside && outside) || c <= ZERO_GRADIENT {
+            return (DVec3::ZERO, true);
+        }
+        // ∇_world of object coordinate a: row a of world → object, i.e. column a of its
+        // transpose (`grad_to_world`).
+        let mut best: Option<(f64, DVec3)> = None;
+        for a in 0..3 {
+            let row = self.grad_to_world.col(a);
+            let len = row.length();
+            if !(len > 0.0 && len.is_finite()) {
+                continue;
+            }
+            for (plane, sign) in [(self.box_min[a], -1.0), (self.box_max[a], 1.0)] {
+                let gap = (p[a] - plane) * sign; // > 0: beyond the plane
+                                                 // The stencil crosses the plane where some point lies beyond it.
+                let crosses = gap + max_offset(&offsets, a) > 0.0;
+                if !crosses {
+                    continue;
+                }
+                let distance = gap.abs() / len;
+                if best.is_none_or(|(d, _)| distance < d) {
+                    best = Some((distance, row * (sign / len)));
+                }
+            }
+        }
+        match best {
+            Some((_, n)) => {
+                let width = 2.0 * self.delta.max_element();
+                (-n * (c / width), false)
+            }
+            None => (DVec3::ZERO, true),
+        }
     }
 
     /// The normal from the gradient alone: −∇F at `w` (object point `p`), flipped towards the
@@ -113,6 +174,11 @@ impl CObj {
             None
         }
     }
+}
+
+/// The largest reach of the stencil `offsets` (±each) along object axis `axis`.
+fn max_offset(offsets: &[DVec3; 3], axis: usize) -> f64 {
+    offsets.iter().map(|o| o[axis].abs()).fold(0.0, f64::max)
 }
 
 /// A dataset's gradient `g`, and whether it vanishes (no component above [`ZERO_GRADIENT`]

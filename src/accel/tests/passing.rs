@@ -46,7 +46,8 @@ impl GroupCode {
 }
 
 /// The first parameter at which `o + t·d` (t ≥ 0) enters the box of a cell that can pass
-/// (a cell on a face of the dataset reaching to the object box there); ∞ if none.
+/// (a cell on a face of the dataset reaching as far as the object box does there, up to the
+/// face tolerance 2⁻²⁰ past it: further out the dataset is 0); ∞ if none.
 fn first_passing(
     data: &Dataset,
     mask: &CellMask,
@@ -64,13 +65,14 @@ fn first_passing(
                     continue;
                 }
                 let c = [i, j, k];
+                let tol = 1.0 / 1048576.0;
                 let lo = DVec3::from_array(std::array::from_fn(|a| match c[a] {
-                    0 => box_min[a].min(0.0),
+                    0 => box_min[a].max(-tol).min(0.0),
                     v => v as f64 / cells[a] as f64,
                 }));
                 let hi = DVec3::from_array(std::array::from_fn(|a| {
                     if c[a] + 1 == cells[a] {
-                        box_max[a].max(1.0)
+                        box_max[a].min(1.0 + tol).max(1.0)
                     } else {
                         (c[a] + 1) as f64 / cells[a] as f64
                     }

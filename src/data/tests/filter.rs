@@ -11,14 +11,19 @@ fn trilinear_reproduces_linear_functions() {
     for dims in [[5, 7, 3], [2, 2, 2], [9, 1, 4]] {
         let (d, f) = linear(dims);
         for _ in 0..2000 {
-            // Includes points outside [0, 1]^3, which clamp to the faces.
+            // Includes points outside [0, 1]^3, where the dataset is 0.
             let p = [
                 rng.next() * 1.2 - 0.1,
                 rng.next() * 1.2 - 0.1,
                 rng.next() * 1.2 - 0.1,
             ];
             let got = d.sample(p.map(|x| x as f32), Filter::Trilinear) as f64;
-            let want = f([p[0] as f32 as f64, p[1] as f32 as f64, p[2] as f32 as f64]);
+            let q = p.map(|x| x as f32 as f64);
+            let want = if q.iter().all(|x| (0.0..=1.0).contains(x)) {
+                f(q)
+            } else {
+                0.0
+            };
             // f32 node values and result: a few ulps of values < 1.
             assert!((got - want).abs() < 1e-6, "{dims:?} {p:?}: {got} vs {want}");
         }
@@ -122,9 +127,11 @@ fn interior_cubic_path_is_the_generic_filter_bit_for_bit() {
                 interior += 1;
                 assert_eq!(v.to_bits(), generic.to_bits(), "{p:?} b {b} c {c}");
             }
+            // (Outside the cube the dataset is 0: `a_dataset_is_zero_outside_its_cube`.)
+            let want = if d.covers(p) { generic } else { 0.0 };
             assert_eq!(
                 d.sample(p, f).to_bits(),
-                (generic as f32).clamp(0.0, 1.0).to_bits()
+                (want as f32).clamp(0.0, 1.0).to_bits()
             );
             for axis in 0..3 {
                 let want = d.filter(u, f, |i, j, k| d.node_derivative(i, j, k, axis));
@@ -143,4 +150,62 @@ fn interior_cubic_path_is_the_generic_filter_bit_for_bit() {
         derivative > 1000,
         "the derivative path was taken {derivative} times"
     );
+}
+
+/// A dataset is a bounded field: 0, with a gradient of 0, at every point outside [0, 1]³ by
+/// more than the face tolerance 2⁻²⁰, for every filter (the value of a constant dataset of 1
+/// would be 1 anywhere under clamping, so a 0 can only come from the bound); within the
+/// tolerance a point reads the face, exactly as the point on the face does.
+#[test]
+fn a_dataset_is_zero_outside_its_cube() {
+    use crate::data::FACE_TOLERANCE;
+    let filters = [
+        Filter::Nearest,
+        Filter::Trilinear,
+        Filter::Cubic { b: 0.0, c: 0.5 },
+        Filter::Cubic { b: 1.0, c: 0.0 },
+    ];
+    let ones = Dataset::new([4, 5, 3], Voxels::U8(vec![255; 60]), 0.0, 255.0).unwrap();
+    let (lin, _) = linear([6, 5, 4]);
+    let slab = random_u8([5, 1, 4], 9);
+    let mut rng = Lcg(21);
+    let tol = FACE_TOLERANCE;
+    for filter in filters {
+        for d in [&ones, &lin, &slab] {
+            for _ in 0..300 {
+                let inner: [f32; 3] = std::array::from_fn(|_| rng.next() as f32);
+                for axis in 0..3 {
+                    // Beyond either face, by 2.5 tolerances up to half the cube.
+                    for out in [
+                        -2.5 * tol,
+                        1.0 + 2.5 * tol,
+                        -0.5 * rng.next() as f32 - 2.5 * tol,
+                        1.0 + 0.5 * rng.next() as f32 + 2.5 * tol,
+                    ] {
+                        let mut p = inner;
+                        p[axis] = out;
+                        assert!(!d.covers(p));
+                        assert_eq!(d.sample(p, filter), 0.0, "{filter:?} {:?} {p:?}", d.dims);
+                        assert_eq!(d.gradient(p, filter), [0.0; 3], "{filter:?} {p:?}");
+                    }
+                    // Within the tolerance: the face's value and gradient.
+                    for (near, face) in [(-0.5 * tol, 0.0), (1.0 + 0.5 * tol, 1.0)] {
+                        let (mut p, mut q) = (inner, inner);
+                        p[axis] = near;
+                        q[axis] = face;
+                        assert!(d.covers(p));
+                        assert_eq!(d.sample(p, filter), d.sample(q, filter), "{filter:?}");
+                        assert_eq!(d.gradient(p, filter), d.gradient(q, filter), "{filter:?}");
+                    }
+                }
+            }
+            // NaN is no point of the cube.
+            assert_eq!(d.sample([f32::NAN, 0.5, 0.5], filter), 0.0);
+        }
+        // Inside, the constant dataset is 1 everywhere (the bound is the cube's faces, not
+        // a fade inside them).
+        for p in [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [0.0, 0.5, 1.0]] {
+            assert_eq!(ones.sample(p, filter), 1.0, "{filter:?} {p:?}");
+        }
+    }
 }

@@ -152,8 +152,13 @@ fn interior8_is_the_tests_axis_by_axis() {
 }
 
 /// A cell's value as the eight nodes read one by one (the second node along an axis of one
-/// node is the first) and interpolated in the order of [`Dataset::trilinear_cell`].
+/// node is the first) and interpolated in the order of [`Dataset::trilinear_cell`]; 0 where
+/// a coordinate lies outside [−2⁻²⁰, 1 + 2⁻²⁰] (the dataset is 0 there) or is NaN.
 fn trilinear_by_nodes(d: &Dataset, p: [f32; 3]) -> f32 {
+    let tol = 1.0 / 1048576.0;
+    if !p.iter().all(|&x| x >= -tol && x <= 1.0 + tol) {
+        return 0.0;
+    }
     let ([i, j, k], [fx, fy, fz]) = d.cell32_scalar(p);
     let [nx, ny, nz] = d.dims;
     let n = |a: usize, b: usize, c: usize| {

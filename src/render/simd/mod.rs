@@ -105,7 +105,7 @@
 //! correction); the unit tests in `tests.rs`.
 
 use super::*;
-use crate::data::{Filter, Voxels};
+use crate::data::{Filter, Voxels, FACE_TOLERANCE};
 use crate::model::mapping::Mapping;
 use crate::render::kernel::DirectShading;
 use crate::types::MappingType;
@@ -205,6 +205,9 @@ pub(super) struct Packets<'a> {
     /// correction).
     common: f64,
     stop: f32,
+    /// Whether the object's box reaches outside the dataset's cube [0, 1]³ (by more than
+    /// `FACE_TOLERANCE`), so that a sample must be tested for it ([`Packets::step`]).
+    clip: bool,
     /// n − 1, max(n − 2, 0) and n − 2 per axis, as f32; the strides; 0.5·(n − 1) as f32.
     last: [f32; 3],
     top: [f32; 3],
@@ -360,6 +363,7 @@ impl<'a> Packets<'a> {
             inv_ref: obj.inv_ref,
             common,
             stop: scene.settings.optimise.stop_below() as f32,
+            clip: !crate::data::box_covered(obj.box_min, obj.box_max),
             last: dims.map(|n| (n - 1) as f32),
             top: dims.map(|n| (n - 2) as f32),
             inner: dims.map(|n| (n - 2) as f32),

@@ -63,6 +63,17 @@ impl Packets<'_> {
         // The cells (every sample here lies in one that may reach the bound: `to_take`).
         let (f, base, interior) = self.cells(s, &p);
         let mut pass = live;
+        if self.clip {
+            // Outside the dataset its value is 0, which fails the zero test (z ≥ 0): those
+            // lanes drop out here (`Dataset::covers`; NaN fails both comparisons).
+            let (lo, hi) = (s.splat(-FACE_TOLERANCE), s.splat(1.0 + FACE_TOLERANCE));
+            for pa in p {
+                pass &= s.bits(s.and_m(s.ge(pa, lo), s.le(pa, hi)));
+            }
+            if pass == 0 {
+                return 0;
+            }
+        }
         // The eight nodes and the trilinear value (`trilinear_rows`' lerps).
         // (Lanes without a sample read node 0 instead: no memory traffic for them.)
         let base = s.keep_i(pass, base);
