@@ -20,6 +20,9 @@
 //! diagonal is longer than its sides), so the object's boundary is enlarged: vl.boundary(1.5,
 //! 1.5, 1.5), which holds any turn of a slice (its half-diagonal is 152 mm, its half-sides
 //! 98 and 116; 1.5 gives 147 and 174), and leaves z room as the paper's §4.7 example does.
+//! Points Ψ carries outside the brain's grid read 0 (a dataset is 0 outside the unit cube,
+//! `docs/compat.md`), so the margin shows only the turned brain: the last axial slice, which
+//! cuts the brainstem, ends it there instead of repeating through the box's lower half.
 //!
 //! With a spatial function in its opacity program the object is rendered without empty-space
 //! skipping, and its normals are central differences of the whole program (the dataset's own

@@ -1,7 +1,7 @@
 //! Reflection and refraction at surfaces against closed forms (Snell's law itself is a unit test
 //! of the renderer): the lateral offset of a parallel-sided slab, and a mirror's angle in = angle
 //! out checked by where a reflected marker lands, with the mirror's normal as it is and as its
-//! normal functions tilt it.
+//! normal functions tilt it, and a slab's refraction under a normal its normal function tilts.
 //!
 //! The ray tree's bounds: two facing mirrors cost linear work in the recursion depth with the
 //! closed-form pixel (depth + 1)·a, a branch ends where its weight falls below the termination
@@ -13,8 +13,13 @@ use vlib::{Camera, Feature, Fields, Library, RenderType};
 
 /// The scene: an opaque wall at z ≥ 100 whose left half (x < 0) is black and right half white,
 /// seen from z = −2000 through an optional glass slab (index 1.5, thickness `h`) at the origin,
-/// turned by `deg` about y. Returns the image's middle row.
+/// turned by `deg` about y, whose normal function (if `normal` is given) replaces every
+/// normal by `normal`. Returns the image's middle row.
 fn slab_row(h: f32, deg: f32, glass: bool, width: u32) -> Vec<f32> {
+    slab_row_with(h, deg, glass, width, None)
+}
+
+fn slab_row_with(h: f32, deg: f32, glass: bool, width: u32, normal: Option<DVec3>) -> Vec<f32> {
     let mut vl = Library::new();
     vl.scene().unwrap();
     // The field of view spans the shorter (vertical) side: choose it so that the image is 3°
@@ -61,6 +66,10 @@ fn slab_row(h: f32, deg: f32, glass: bool, width: u32) -> Vec<f32> {
         .unwrap();
         vl.set(Fields::RF, vlib::types::refraction_to_field(1.5))
             .unwrap();
+        if let Some(n) = normal {
+            let n = n.as_vec3().to_array();
+            vl.normal(move |nv, _s| *nv = n).unwrap();
+        }
         vl.end().unwrap();
     }
     let img = vl.render_preview(width, 3, width as f32 / 3.0).unwrap();
@@ -75,17 +84,24 @@ fn edge(row: &[f32]) -> f64 {
 /// Where, independently of the renderer, the ray through column `col` lands on the wall
 /// (x coordinate), after crossing the slab: two planes n·p = ∓h/2, Snell's law by angles.
 fn landing_x(col: f64, width: f64, h: f64, deg: f64) -> f64 {
+    let th = deg.to_radians();
+    // R_y(θ) applied to +z.
+    let n = DVec3::new(th.sin(), 0.0, th.cos());
+    landing_x_bent(col, width, h, n, n)
+}
+
+/// [`landing_x`] for the slab's planes of unit normal `plane` whose rays bend as Snell's law
+/// says about the unit normal `optical` (a perturbed normal; both pointing along +z).
+fn landing_x_bent(col: f64, width: f64, h: f64, plane: DVec3, optical: DVec3) -> f64 {
     let eye = DVec3::new(0.0, 0.0, -2000.0);
     let half_w = (1.5f64).to_radians().tan();
     let sx = (col + 0.5) / width * 2.0 - 1.0;
     let mut d = DVec3::new(sx * half_w, 0.0, 1.0).normalize();
-    let th = deg.to_radians();
-    // R_y(θ) applied to +z.
-    let n = DVec3::new(th.sin(), 0.0, th.cos());
     let mut p = eye;
-    for (plane, n1, n2) in [(-h / 2.0, 1.0, 1.5), (h / 2.0, 1.5, 1.0)] {
-        let t = (plane - n.dot(p)) / n.dot(d);
+    for (offset, n1, n2) in [(-h / 2.0, 1.0, 1.5), (h / 2.0, 1.5, 1.0)] {
+        let t = (offset - plane.dot(p)) / plane.dot(d);
         p += t * d;
+        let n = optical;
         let dn = d.dot(n) * n;
         let dt = d - dn;
         let sin_t = n1 / n2 * dt.length();
@@ -129,6 +145,39 @@ fn a_parallel_slab_displaces_rays_by_the_closed_form_offset() {
         "shift {shift:.2} vs offset {offset:.2} (pixel {px:.3})"
     );
     assert!(offset > 10.0 * px, "the test must see a real displacement");
+}
+
+/// Refracted rays leave along the normal the shading uses, the object's normal functions
+/// included: a glass slab facing the camera (its planes z = ±h/2) whose normal function tilts
+/// every normal by 25° about y bends each ray at both planes as Snell's law says for the
+/// tilted normal, so the rays leave parallel to their entry but shifted sideways, and the
+/// wall's edge appears where an independent trace with that normal puts it (within a column:
+/// the edge is found to a pixel), tens of columns from where the untilted slab shows it.
+#[test]
+fn refracted_rays_follow_the_normal_functions() {
+    let (width, h) = (512u32, 40.0f64);
+    let tilt = 25f64.to_radians();
+    let optical = DVec3::new(tilt.sin(), 0.0, tilt.cos());
+    let flat = edge(&slab_row(h as f32, 0.0, true, width));
+    let bent = edge(&slab_row_with(h as f32, 0.0, true, width, Some(optical)));
+    let first = |optical: DVec3| {
+        (0..width)
+            .find(|&c| landing_x_bent(c as f64, width as f64, h, DVec3::Z, optical) >= 0.0)
+            .unwrap() as f64
+    };
+    let (want_flat, want_bent) = (first(DVec3::Z), first(optical));
+    assert!(
+        (flat - want_flat).abs() <= 1.0,
+        "flat: {flat} vs {want_flat}"
+    );
+    assert!(
+        (bent - want_bent).abs() <= 1.0,
+        "tilted normal: edge at column {bent}, expected {want_bent}"
+    );
+    assert!(
+        (want_bent - want_flat).abs() > 10.0,
+        "the tilt must move the edge: {want_bent} vs {want_flat}"
+    );
 }
 
 /// Projects a world point with the renderer's camera model; returns pixel coordinates.
