@@ -83,8 +83,9 @@ pub fn bc_kernel(x: f64, b: f64, c: f64) -> f64 {
 }
 
 /// How far outside [0, 1] an object coordinate may lie and still read the dataset (at its
-/// face): 2⁻²⁰, a thousand times the round-off of a point computed on a face from a ray in f64
-/// and far below a node's spacing (2⁻²⁰ of the cube is 5·10⁻⁴ of a voxel of a 512-node axis).
+/// face): 2⁻²⁰, far above the round-off of a point computed on a face (from a ray in f64,
+/// then rounded to f32: at most an f32 ulp of the coordinate) and far below a node's spacing
+/// (2⁻²⁰ of the cube is 5·10⁻⁴ of a voxel of a 512-node axis).
 pub(crate) const FACE_TOLERANCE: f32 = 1.0 / (1u32 << 20) as f32;
 
 /// Whether object coordinate `x` lies in [−[`FACE_TOLERANCE`], 1 + [`FACE_TOLERANCE`]]
