@@ -33,6 +33,7 @@ mod bricks;
 mod cells;
 mod filter;
 mod geometry;
+mod gradient;
 mod lanes;
 #[cfg(test)]
 mod tests;
@@ -45,6 +46,7 @@ use cells::CellMasks;
 pub(crate) use filter::bc_abs_sum;
 pub use filter::Filter;
 pub use geometry::Geometry;
+pub use gradient::GradientFilter;
 pub(crate) use lanes::Cells8;
 pub(crate) use trilinear::CellGradients;
 pub(crate) use vlb::header as vlb_header;

@@ -10,7 +10,7 @@
 //! This module does not know about rays or the C interface: the C layer wraps C function pointers
 //! into closures of the types below.
 
-use crate::data::{Dataset, Filter};
+use crate::data::{Dataset, Filter, GradientFilter};
 use crate::error::{err, Error, ErrorCode, Result};
 use crate::model::mapping::Mapping;
 pub(crate) use crate::num::clamp_field;
@@ -356,6 +356,8 @@ pub enum Instr {
         data: Arc<Dataset>,
         /// The interpolation captured at `vlDataset`.
         filter: Filter,
+        /// The gradient filter captured at `vlDataset`.
+        gradient: GradientFilter,
     },
     /// `vlSpatial`: a spatial transfer function that may move the point.
     Spatial {
@@ -406,9 +408,10 @@ impl fmt::Debug for Instr {
                 fields,
                 data,
                 filter,
+                gradient,
             } => write!(
                 f,
-                "Dataset({fields:?}, {:p}, {filter:?})",
+                "Dataset({fields:?}, {:p}, {filter:?}, {gradient:?})",
                 Arc::as_ptr(data)
             ),
             Instr::Map {
@@ -441,6 +444,7 @@ pub fn run(program: &[Instr], s: &mut Sample<'_>) {
                 fields,
                 data,
                 filter,
+                ..
             } => {
                 let v = data.sample(s.p, *filter);
                 s.write(*fields, v);

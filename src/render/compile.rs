@@ -28,7 +28,7 @@ pub(super) struct CObj {
     pub(super) normals: Vec<NormalFn>,
     /// Where the geometry field is a dataset's value (its last writer is `vlDataset`), normals
     /// come from that dataset's interpolated grid gradients.
-    pub(super) f_dataset: Option<(Arc<Dataset>, Filter)>,
+    pub(super) f_dataset: Option<(Arc<Dataset>, Filter, GradientFilter)>,
     /// The linear part of object → world for gradients: ∇_world F = Aᵀ ∇_object F, A the linear
     /// part of world → object.
     pub(super) grad_to_world: glam::DMat3,
@@ -128,7 +128,12 @@ impl CObj {
             .iter()
             .any(|i| matches!(i, Instr::Spatial { .. }));
         let f_dataset = match f_prefix.checked_sub(1).map(|i| &o.program[i]) {
-            Some(Instr::Dataset { data, filter, .. }) if !moved => Some((data.clone(), *filter)),
+            Some(Instr::Dataset {
+                data,
+                filter,
+                gradient,
+                ..
+            }) if !moved => Some((data.clone(), *filter, *gradient)),
             _ => None,
         };
         let to_object = to_world.inverse();

@@ -51,8 +51,8 @@ impl CObj {
         field: usize,
         cache: &mut CellGradients,
     ) -> (DVec3, bool) {
-        if let (9, Some((data, filter))) = (field, &self.f_dataset) {
-            return vanishing(data.gradient_cached(p, *filter, cache));
+        if let (9, Some((data, filter, gradient))) = (field, &self.f_dataset) {
+            return vanishing(data.gradient_by(p, *filter, *gradient, cache));
         }
         self.sampled_gradient(w, field)
     }
