@@ -132,6 +132,9 @@ pub struct Sample<'a> {
     /// The fields the running function may write.
     pub(crate) mask: Fields,
     pub(crate) role: SampleRole,
+    /// Whether the sample is one of a normal's central differences: its dataset instructions
+    /// then read through the BC-spline of their gradient filter where that is cubic.
+    pub(crate) for_gradient: bool,
     env: Option<&'a SampleEnv>,
 }
 
@@ -145,6 +148,7 @@ impl Sample<'static> {
             fields: [0.0; FIELD_COUNT],
             mask: Fields::NONE,
             role: SampleRole::Field,
+            for_gradient: false,
             env: None,
         }
     }
@@ -159,6 +163,7 @@ impl<'a> Sample<'a> {
             fields: [0.0; FIELD_COUNT],
             mask: Fields::NONE,
             role: SampleRole::Field,
+            for_gradient: false,
             env: Some(env),
         }
     }
@@ -444,9 +449,15 @@ pub fn run(program: &[Instr], s: &mut Sample<'_>) {
                 fields,
                 data,
                 filter,
-                ..
+                gradient,
             } => {
-                let v = data.sample(s.p, *filter);
+                let filter = match gradient {
+                    GradientFilter::Cubic { b, c } if s.for_gradient => {
+                        Filter::Cubic { b: *b, c: *c }
+                    }
+                    _ => *filter,
+                };
+                let v = data.sample(s.p, filter);
                 s.write(*fields, v);
             }
             Instr::Spatial { f } => {

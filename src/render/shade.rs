@@ -65,7 +65,7 @@ impl CObj {
         for i in 0..3 {
             let mut e = DVec3::ZERO;
             e[i] = self.delta[i];
-            let d = self.field_at(w + e, field) - self.field_at(w - e, field);
+            let d = self.field_for_gradient(w + e, field) - self.field_for_gradient(w - e, field);
             diff[i] = d;
             grad[i] = d / (2.0 * self.delta[i]);
         }
