@@ -76,7 +76,10 @@ fn sampled(n: usize, bits16: bool) -> Res<Dataset> {
         }
     }
     let d = if bits16 {
-        let raw = values.iter().map(|v| (v * 65535.0).round() as u16).collect();
+        let raw = values
+            .iter()
+            .map(|v| (v * 65535.0).round() as u16)
+            .collect();
         Dataset::new([n; 3], Voxels::U16(raw), 0.0, 65535.0)?
     } else {
         let raw = values.iter().map(|v| (v * 255.0).round() as u8).collect();
