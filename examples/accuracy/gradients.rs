@@ -41,9 +41,9 @@ const FILTERS: [(&str, Filter, GradientFilter); 5] = [
 ];
 
 /// The synthetic volume: F(p) = ½ + 0.2 sin(ω x + 0.3) cos(0.8 ω y) + 0.15 sin(1.3 ω z + 0.5)
-/// + 0.1 cos(0.7 ω (x + y − z)), p in object units [0, 1]³, ω = 2π · 3: smooth, with features
-/// about a third of the box across in every direction, oblique to the grid. Its gradient is
-/// known in closed form.
+/// plus 0.1 cos(0.7 ω (x + y − z)), p in object units [0, 1]³, ω = 2π · 3: smooth, with
+/// features about a third of the box across in every direction, oblique to the grid. Its
+/// gradient is known in closed form.
 const OMEGA: f64 = 2.0 * std::f64::consts::PI * 3.0;
 
 fn field(p: [f64; 3]) -> f64 {
