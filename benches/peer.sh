@@ -86,15 +86,15 @@ done
 cp "$work/out/shaded_estimates.json" "$est"
 
 cargo build --release --example mni -q
-target/release/examples/mni target/bench-data/mni.vlb "$work/out/vlib_mni.png" 0.5 >/dev/null
+target/release/examples/mni target/bench-data/mni.vlb "$work/out/vlib_mni.png" 0.5 --gradient=nodes >/dev/null
 # The same at VTK's termination threshold (its fixed-point remaining opacity below 0xff/0x7fff;
 # the exact double of mni_scene::VTK_TERMINATION, 255.0 / 32767.0, as Python prints it).
 target/release/examples/mni target/bench-data/mni.vlb "$work/out/vlib_mni_vtk_termination.png" 0.5 \
-  --termination="$(python3 -c 'print(255 / 32767)')" >/dev/null
+  --gradient=nodes --termination="$(python3 -c 'print(255 / 32767)')" >/dev/null
 # The converged reference both images are measured against: step 0.125 voxel, Catmull–Rom,
 # adaptive 2×2 super-sampling (several seconds).
 ref="$work/out/reference_mni.png"
-target/release/examples/mni target/bench-data/mni.vlb "$ref" 0.125 --cubic --ss=2 >/dev/null
+target/release/examples/mni target/bench-data/mni.vlb "$ref" 0.125 --cubic --ss=2 --gradient=nodes >/dev/null
 python3 - "$work/out/vtk_mni.png" "$work/out/vlib_mni.png" "$root/docs/performance-mni.png" <<'PY'
 import sys
 from PIL import Image

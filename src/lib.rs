@@ -56,7 +56,7 @@ pub use api::library::{Closed, Library, Sampler};
 pub use api::scope;
 pub use api::scope::{Command, Scope};
 pub use control::{CancelFlag, ProgressFn, RenderControl};
-pub use data::{Dataset, Filter, Geometry, Voxels};
+pub use data::{Dataset, Filter, Geometry, GradientFilter, Voxels};
 pub use error::{Error, ErrorCode, Result};
 pub use model::program::{FieldFn, NormalFn, Sample, SampleRole};
 pub use model::scene::{Camera, Optimise, DEFAULT_FOV};

@@ -77,4 +77,9 @@ pub const COMMAND_COUNT: usize = COMMANDS.len();
 
 /// The C names of the extensions (`extensions`: functions beyond the commands, declared after
 /// them in `vlib.h`), in header order.
-pub const EXTENSIONS: [&str; 3] = ["vlProgress", "vlCancel", "vlRenderBuffer"];
+pub const EXTENSIONS: [&str; 4] = [
+    "vlProgress",
+    "vlCancel",
+    "vlRenderBuffer",
+    "vlGradientFilter",
+];

@@ -5,6 +5,7 @@
 //! - `vlProgress` registers a progress function for the renders of the library's scenes.
 //! - `vlCancel` stops the render in progress, from any thread.
 //! - `vlRenderBuffer` renders the open scene into the caller's memory.
+//! - `vlGradientFilter` chooses how the gradients of dataset fields are reconstructed.
 //!
 //! The core's [`vlib_core::RenderControl`] and [`Library::render_into`] do the work; this
 //! module holds the C forms: the process's cancel flag, the wrapper of the C progress
@@ -12,10 +13,12 @@
 
 use crate::ffi::{ffi_boundary, lock_state, null, rendering, Rendering};
 use crate::sample;
-use crate::types::{vlfloat, vlint, VL_FALSE, VL_TRUE};
+use crate::types::{vlfloat, vlint, VL_FALSE, VL_GRADIENT_CUBIC, VL_GRADIENT_NODES, VL_TRUE};
 use std::os::raw::{c_ulong, c_void};
 use std::sync::{Arc, OnceLock};
-use vlib_core::{CancelFlag, Error, ErrorCode, Library, PixelFormat, RenderControl, Result};
+use vlib_core::{
+    CancelFlag, Error, ErrorCode, GradientFilter, Library, PixelFormat, RenderControl, Result,
+};
 
 /// The process's cancel flag: set by `vlCancel` while a scene renders, cleared when a render
 /// starts and when it ends.
@@ -192,5 +195,48 @@ pub unsafe extern "C" fn vlRenderBuffer(
         let _rendering = Rendering::start(lib.sampler());
         lib.render_into(w, h, aspect, format, buffer)?;
         Ok(VL_TRUE)
+    })
+}
+
+/// Extension. Chooses how the gradients of dataset fields, which light their samples, are
+/// reconstructed from the nodes, for the datasets `vlDataset` casts from now on (it captures
+/// the choice with the interpolation): `VL_GRADIENT_NODES` (the default, the paper's: central
+/// differences at the nodes, interpolated with the dataset's filter; `b` and `c` are ignored)
+/// or `VL_GRADIENT_CUBIC` (the exact gradient of the BC-spline with parameters `b`, `c` of the
+/// node values, whatever the interpolation: smooth normals without grid-aligned hatching;
+/// 1, 0 is the cubic B-spline's, the smoothest; 0, 0.5 Catmull-Rom's). Legal at library and
+/// scene scope; `VL_BADENUM` for another `type`, `VL_BADVALUE` for a `b` or `c` that is not
+/// finite.
+#[no_mangle]
+pub extern "C" fn vlGradientFilter(r#type: vlint, b: vlfloat, c: vlfloat) {
+    ffi_boundary((), || {
+        const NAME: &str = "vlGradientFilter";
+        if sample::active() || rendering() {
+            return Err(Error::new(
+                ErrorCode::BadScope,
+                format!("{NAME}: not while a scene renders"),
+            ));
+        }
+        let mut state = lock_state();
+        let lib: &mut Library = match state.as_mut() {
+            Some(lib) if lib.scope() != vlib_core::Scope::Object => lib,
+            _ => {
+                return Err(Error::new(
+                    ErrorCode::BadScope,
+                    format!("{NAME}: at library or scene scope only"),
+                ))
+            }
+        };
+        let gradient = match r#type {
+            VL_GRADIENT_NODES => GradientFilter::Nodes,
+            VL_GRADIENT_CUBIC => GradientFilter::Cubic { b, c },
+            t => {
+                return Err(Error::new(
+                    ErrorCode::BadEnum,
+                    format!("{NAME}: {t} is not a gradient filter"),
+                ))
+            }
+        };
+        lib.gradient_filter(gradient)
     })
 }

@@ -67,7 +67,7 @@ for_each_command!(reexport);
 pub use commands::{COMMANDS, COMMAND_COUNT, EXTENSIONS};
 
 // The extensions (after the commands in `vlib.h`).
-pub use extensions::{vlCancel, vlProgress, vlRenderBuffer};
+pub use extensions::{vlCancel, vlGradientFilter, vlProgress, vlRenderBuffer};
 
 // vlaux (`vlaux.h`).
 pub use vlaux::{

@@ -193,6 +193,15 @@ pub const VL_RGB32F: vlint = 5;
 pub const VL_RGBA32F: vlint = 6;
 
 // ---------------------------------------------------------------------------------------------
+// Gradient filters (extension: `vlGradientFilter`; docs/extensions.md)
+
+/// Extension: the paper's dataset gradients, central differences at the nodes interpolated with
+/// the dataset's filter (the default).
+pub const VL_GRADIENT_NODES: vlint = 0;
+/// Extension: the exact gradient of the BC-spline reconstruction of the node values.
+pub const VL_GRADIENT_CUBIC: vlint = 1;
+
+// ---------------------------------------------------------------------------------------------
 // Normalisation of the specular exponent and the refraction index
 
 /// The specular exponent that the field value 1 stands for.

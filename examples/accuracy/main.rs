@@ -7,8 +7,8 @@
 //! ```
 //!
 //! Controls: the step size, the super-sampling rate, the interpolation filter (datasets), the
-//! central-difference neighbourhood of the normals, and direct evaluation against voxelized
-//! fields. Errors are against closed-form answers where they exist (a constant medium, a colour
+//! central-difference neighbourhood of the normals, the gradient filter of datasets' normals
+//! (`gradients.rs`), and direct evaluation against voxelized fields. Errors are against closed-form answers where they exist (a constant medium, a colour
 //! ramp linear in depth, an iso-sphere rendered by DSR) and against a converged reference
 //! otherwise (the MNI brain, a noise hypertexture). Only the study's own marked section of the
 //! document is replaced; the round-trip section written by `examples/roundtrip.rs` is kept.
@@ -21,6 +21,8 @@ mod mni_scene;
 
 #[path = "../common/say.rs"]
 mod say;
+
+mod gradients;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -1471,6 +1473,8 @@ fn main() -> Res<()> {
     let an = analytic(&p, &mut cache, start)?;
     let (mni, brain) = mni_study(&p, &mut cache, start)?;
     let (hyper, voxel) = hyper_study(&p, &mut cache, start)?;
+    let mut gradient_doc = String::new();
+    let grads = gradients::study(p.quick, p.size, &brain, &mut gradient_doc)?;
     let total = start.elapsed().as_secs_f64();
     let load_end = load_average();
 
@@ -1797,6 +1801,8 @@ fn main() -> Res<()> {
         &[],
     );
 
+    d.push_str(&gradient_doc);
+
     // The recommendation, from the combined grids and the sweeps.
     let (pv, fig, rf) = (8.0, 2.0, 0.5);
     let mut rec = format!(
@@ -1880,6 +1886,15 @@ fn main() -> Res<()> {
         } else {
             lost.join(", ")
         },
+    );
+    let _ = write!(
+        rec,
+        " For lit scanned volumes, the cubic B-spline gradient filter (gradient filters, \
+         above) removes the grid hatching of the default normals (on the 8-bit synthetic \
+         volume its normals err by {:.2} times the default's RMS angle, on the 16-bit one by \
+         {:.2} times) at {:.1} times the brain's frame time: worth it for a still image, not for \
+         an interactive preview.",
+        grads.ratio_8bit, grads.ratio_16bit, grads.brain_cost
     );
     let _ = writeln!(d, "{rec}");
 

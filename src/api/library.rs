@@ -12,7 +12,7 @@
 //! a scene closes; it neither renders nor writes files itself.
 
 use crate::api::scope::{require, Command, Scope};
-use crate::data::{Dataset, Filter};
+use crate::data::{Dataset, Filter, GradientFilter};
 use crate::error::{err, ErrorCode, Result};
 use crate::model::mapping::Mapping;
 use crate::model::scene::{Camera, ImageRequest, Light, ObjectDesc, SceneDesc, Settings};
@@ -503,6 +503,25 @@ impl Library {
         self.check(Command::CubicFilter)?;
         finite("vlCubicFilter", &[b, c])?;
         self.settings_mut().render.cubic = (b, c);
+        Ok(())
+    }
+
+    /// How the gradients of dataset fields, which light their samples, are reconstructed from
+    /// the nodes, for the datasets cast from now on (`vlGradientFilter`, an extension): the
+    /// paper's [`GradientFilter::Nodes`] (the default) or the exact gradient of a BC-spline,
+    /// [`GradientFilter::Cubic`] with finite B and C (`docs/extensions.md`). Library and scene
+    /// scope, like [`Library::interpolation`]; `vlDataset` captures it.
+    pub fn gradient_filter(&mut self, gradient: GradientFilter) -> Result<()> {
+        if !matches!(self.scope(), Scope::Library | Scope::Scene) {
+            return err(
+                ErrorCode::BadScope,
+                "vlGradientFilter: library or scene scope only",
+            );
+        }
+        if let GradientFilter::Cubic { b, c } = gradient {
+            finite("vlGradientFilter", &[b, c])?;
+        }
+        self.settings_mut().render.gradient = gradient;
         Ok(())
     }
 

@@ -219,10 +219,12 @@ impl Library {
                 Error::new(ErrorCode::BadId, format!("vlDataset: no dataset {id}"))
             })?;
         let filter = self.filter();
+        let gradient = self.settings().render.gradient;
         self.object_mut().program.push(Instr::Dataset {
             fields,
             data,
             filter,
+            gradient,
         });
         Ok(())
     }

@@ -33,6 +33,7 @@ mod bricks;
 mod cells;
 mod filter;
 mod geometry;
+mod gradient;
 mod lanes;
 #[cfg(test)]
 mod tests;
@@ -45,6 +46,7 @@ use cells::CellMasks;
 pub use filter::Filter;
 pub(crate) use filter::{bc_abs_sum, box_covered, FACE_TOLERANCE};
 pub use geometry::Geometry;
+pub use gradient::GradientFilter;
 pub(crate) use lanes::Cells8;
 pub(crate) use trilinear::CellGradients;
 pub(crate) use vlb::header as vlb_header;

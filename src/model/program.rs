@@ -10,7 +10,7 @@
 //! This module does not know about rays or the C interface: the C layer wraps C function pointers
 //! into closures of the types below.
 
-use crate::data::{Dataset, Filter};
+use crate::data::{Dataset, Filter, GradientFilter};
 use crate::error::{err, Error, ErrorCode, Result};
 use crate::model::mapping::Mapping;
 pub(crate) use crate::num::clamp_field;
@@ -132,6 +132,9 @@ pub struct Sample<'a> {
     /// The fields the running function may write.
     pub(crate) mask: Fields,
     pub(crate) role: SampleRole,
+    /// Whether the sample is one of a normal's central differences: its dataset instructions
+    /// then read through the BC-spline of their gradient filter where that is cubic.
+    pub(crate) for_gradient: bool,
     env: Option<&'a SampleEnv>,
 }
 
@@ -145,6 +148,7 @@ impl Sample<'static> {
             fields: [0.0; FIELD_COUNT],
             mask: Fields::NONE,
             role: SampleRole::Field,
+            for_gradient: false,
             env: None,
         }
     }
@@ -159,6 +163,7 @@ impl<'a> Sample<'a> {
             fields: [0.0; FIELD_COUNT],
             mask: Fields::NONE,
             role: SampleRole::Field,
+            for_gradient: false,
             env: Some(env),
         }
     }
@@ -356,6 +361,8 @@ pub enum Instr {
         data: Arc<Dataset>,
         /// The interpolation captured at `vlDataset`.
         filter: Filter,
+        /// The gradient filter captured at `vlDataset`.
+        gradient: GradientFilter,
     },
     /// `vlSpatial`: a spatial transfer function that may move the point.
     Spatial {
@@ -406,9 +413,10 @@ impl fmt::Debug for Instr {
                 fields,
                 data,
                 filter,
+                gradient,
             } => write!(
                 f,
-                "Dataset({fields:?}, {:p}, {filter:?})",
+                "Dataset({fields:?}, {:p}, {filter:?}, {gradient:?})",
                 Arc::as_ptr(data)
             ),
             Instr::Map {
@@ -441,8 +449,15 @@ pub fn run(program: &[Instr], s: &mut Sample<'_>) {
                 fields,
                 data,
                 filter,
+                gradient,
             } => {
-                let v = data.sample(s.p, *filter);
+                let filter = match gradient {
+                    GradientFilter::Cubic { b, c } if s.for_gradient => {
+                        Filter::Cubic { b: *b, c: *c }
+                    }
+                    _ => *filter,
+                };
+                let v = data.sample(s.p, filter);
                 s.write(*fields, v);
             }
             Instr::Spatial { f } => {

@@ -5,6 +5,7 @@
 //! command by command and hands a finished [`SceneDesc`] to the output layer when the scene
 //! closes. How they are rendered is not this module's business.
 
+use crate::data::GradientFilter;
 use crate::error::{err, ErrorCode, Result};
 use crate::model::program::{Instr, NormalFn};
 use crate::types::{Attenuation, Feature, Fields, Interpolation, RenderType};
@@ -142,6 +143,8 @@ pub struct RenderState {
     pub interpolation: Interpolation,
     /// B and C of the tricubic filter.
     pub cubic: (f32, f32),
+    /// How dataset gradients are reconstructed (`Library::gradient_filter`).
+    pub gradient: GradientFilter,
     /// Central-difference neighbourhood in world units; `None` = automatic (see
     /// `docs/compat.md`: half the step, at least 1/1000 of the object's smallest extent).
     pub neighborhood: Option<[f32; 3]>,
@@ -160,6 +163,7 @@ impl Default for RenderState {
             recursion: 4,
             interpolation: Interpolation::Trilinear,
             cubic: (0.0, 0.5),
+            gradient: GradientFilter::Nodes,
             neighborhood: None,
         }
     }

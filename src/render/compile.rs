@@ -28,7 +28,7 @@ pub(super) struct CObj {
     pub(super) normals: Vec<NormalFn>,
     /// Where the geometry field is a dataset's value (its last writer is `vlDataset`), normals
     /// come from that dataset's interpolated grid gradients.
-    pub(super) f_dataset: Option<(Arc<Dataset>, Filter)>,
+    pub(super) f_dataset: Option<(Arc<Dataset>, Filter, GradientFilter)>,
     /// The linear part of object → world for gradients: ∇_world F = Aᵀ ∇_object F, A the linear
     /// part of world → object.
     pub(super) grad_to_world: glam::DMat3,
@@ -128,7 +128,12 @@ impl CObj {
             .iter()
             .any(|i| matches!(i, Instr::Spatial { .. }));
         let f_dataset = match f_prefix.checked_sub(1).map(|i| &o.program[i]) {
-            Some(Instr::Dataset { data, filter, .. }) if !moved => Some((data.clone(), *filter)),
+            Some(Instr::Dataset {
+                data,
+                filter,
+                gradient,
+                ..
+            }) if !moved => Some((data.clone(), *filter, *gradient)),
             _ => None,
         };
         let to_object = to_world.inverse();
@@ -266,6 +271,18 @@ impl CObj {
     /// Field `field` at world point `w` (0 outside the boundary: fields are bounded), running
     /// only the part of the program that can change it.
     pub(super) fn field_at(&self, w: DVec3, field: usize) -> f64 {
+        self.field_read(w, field, false)
+    }
+
+    /// [`CObj::field_at`] for a normal's central differences: each dataset read through the
+    /// BC-spline of its gradient filter where that is [`GradientFilter::Cubic`], so that the
+    /// differences are those of the spline whose gradient that filter takes, also where a
+    /// spatial function moved the point and the dataset's own gradient does not apply.
+    pub(super) fn field_for_gradient(&self, w: DVec3, field: usize) -> f64 {
+        self.field_read(w, field, true)
+    }
+
+    fn field_read(&self, w: DVec3, field: usize, for_gradient: bool) -> f64 {
         let p = self.to_object.transform_point3(w);
         if !self.inside(p) {
             return 0.0;
@@ -274,6 +291,7 @@ impl CObj {
             return v as f64;
         }
         let mut s = Sample::with_env(p.as_vec3().to_array(), w.to_array(), &self.env);
+        s.for_gradient = for_gradient;
         run(&self.program[..self.prefixes[field]], &mut s);
         s.value(field) as f64
     }

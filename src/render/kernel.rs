@@ -426,6 +426,7 @@ fn compile(program: &[Instr]) -> Option<Vec<Op>> {
                 fields,
                 data,
                 filter,
+                ..
             } => ops.push(Op::Data {
                 mask: mask(*fields),
                 data: data.clone(),

@@ -35,7 +35,7 @@
 // the render module's names with `use super::*` (or `use crate::render::*`).
 use crate::accel::{EntryMap, EntryMarks, Pinhole, SkipGrid, Walk};
 use crate::control::Progress;
-use crate::data::{CellGradients, Cells8, Dataset, Filter};
+use crate::data::{CellGradients, Cells8, Dataset, Filter, GradientFilter};
 use crate::error::{Error, ErrorCode, Result};
 use crate::model::program::{prefix_for, run, Instr, NormalFn, Sample, SampleEnv, SampleRole};
 use crate::model::scene::{Light, ObjectDesc, SceneDesc, Settings};

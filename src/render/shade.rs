@@ -51,8 +51,8 @@ impl CObj {
         field: usize,
         cache: &mut CellGradients,
     ) -> (DVec3, bool) {
-        if let (9, Some((data, filter))) = (field, &self.f_dataset) {
-            return vanishing(data.gradient_cached(p, *filter, cache));
+        if let (9, Some((data, filter, gradient))) = (field, &self.f_dataset) {
+            return vanishing(data.gradient_by(p, *filter, *gradient, cache));
         }
         self.sampled_gradient(w, field)
     }
@@ -69,7 +69,7 @@ impl CObj {
         for i in 0..3 {
             let mut e = DVec3::ZERO;
             e[i] = self.delta[i];
-            let d = self.field_at(w + e, field) - self.field_at(w - e, field);
+            let d = self.field_for_gradient(w + e, field) - self.field_for_gradient(w - e, field);
             diff[i] = d;
             grad[i] = d / (2.0 * self.delta[i]);
         }

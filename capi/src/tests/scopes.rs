@@ -729,3 +729,57 @@ fn non_utf8_image_paths_work() {
     );
     reset_to(Scope::Uninitialised);
 }
+
+#[test]
+fn gradient_filter_is_validated_and_recorded() {
+    let _g = serial();
+    refused(
+        Scope::Library,
+        "vlGradientFilter(2, …)",
+        VL_BADENUM,
+        || vlGradientFilter(2, 1.0, 0.0),
+    );
+    refused(
+        Scope::Scene,
+        "vlGradientFilter(-1, …)",
+        VL_BADENUM,
+        || vlGradientFilter(-1, 1.0, 0.0),
+    );
+    refused(Scope::Scene, "vlGradientFilter B NaN", VL_BADVALUE, || {
+        vlGradientFilter(VL_GRADIENT_CUBIC, f32::NAN, 0.0)
+    });
+    refused(
+        Scope::Library,
+        "vlGradientFilter C ∞",
+        VL_BADVALUE,
+        || vlGradientFilter(VL_GRADIENT_CUBIC, 1.0, f32::INFINITY),
+    );
+    refused(
+        Scope::Object,
+        "vlGradientFilter in an object",
+        VL_BADSCOPE,
+        || vlGradientFilter(VL_GRADIENT_CUBIC, 1.0, 0.0),
+    );
+    refused(
+        Scope::Uninitialised,
+        "vlGradientFilter before vlInit",
+        VL_BADSCOPE,
+        || vlGradientFilter(VL_GRADIENT_CUBIC, 1.0, 0.0),
+    );
+    // Legal at library and scene scope: recorded, and back to the paper's with
+    // VL_GRADIENT_NODES (whose B and C are ignored, even when not finite).
+    for scope in [Scope::Library, Scope::Scene] {
+        reset_to(scope);
+        let before = state_fingerprint();
+        vlGradientFilter(VL_GRADIENT_CUBIC, 1.0, 0.0);
+        assert_eq!(drain(), Vec::<i32>::new());
+        let cubic = state_fingerprint();
+        assert!(
+            cubic.contains("gradient: Cubic { b: 1.0, c: 0.0 }"),
+            "{cubic}"
+        );
+        vlGradientFilter(VL_GRADIENT_NODES, f32::NAN, 0.0);
+        assert_eq!(drain(), Vec::<i32>::new());
+        assert_eq!(state_fingerprint(), before);
+    }
+}

@@ -8,6 +8,7 @@ mod bricks;
 mod cells;
 mod filter;
 mod format;
+mod gradient;
 mod lanes;
 mod trilinear;
 

@@ -227,7 +227,7 @@ impl Compiled {
         let mut cells8 = Cells8::default();
         let same_cells = matches!(
             &obj.f_dataset,
-            Some((d, Filter::Trilinear)) if std::ptr::eq(Arc::as_ptr(d), data)
+            Some((d, Filter::Trilinear, GradientFilter::Nodes)) if std::ptr::eq(Arc::as_ptr(d), data)
         );
         // The usual program's shaded samples of a run, in order: their compositing weights,
         // colours (then lit colours) and gradients, by axis.

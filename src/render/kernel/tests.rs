@@ -26,6 +26,7 @@ fn programs() -> Vec<Vec<Instr>> {
         fields,
         data: d.clone(),
         filter: Filter::Trilinear,
+        gradient: crate::data::GradientFilter::Nodes,
     };
     let map = |targets, source, mapping: &Arc<Mapping>, output| Instr::Map {
         targets,

@@ -105,7 +105,7 @@
 //! correction); the unit tests in `tests.rs`.
 
 use super::*;
-use crate::data::{Filter, Voxels, FACE_TOLERANCE};
+use crate::data::{Filter, GradientFilter, Voxels, FACE_TOLERANCE};
 use crate::model::mapping::Mapping;
 use crate::render::kernel::DirectShading;
 use crate::types::MappingType;
@@ -270,7 +270,8 @@ impl<'a> Packets<'a> {
                 // The gradient must be this very dataset's, trilinear (as the batched march's
                 // `same_cells`), in object space.
                 match &obj.f_dataset {
-                    Some((d, Filter::Trilinear)) if std::ptr::eq(Arc::as_ptr(d), data) => {}
+                    Some((d, Filter::Trilinear, GradientFilter::Nodes))
+                        if std::ptr::eq(Arc::as_ptr(d), data) => {}
                     _ => return None,
                 }
                 let f = |v: &Lanes| v.to_array()[0] as f32;
