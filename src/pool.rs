@@ -56,3 +56,12 @@ pub(crate) fn install<T: Send>(f: impl FnOnce() -> Result<T> + Send) -> Result<T
     }
     pool()?.install(f)
 }
+
+/// The threads of the library's pool (of the pool that would be built: rayon's default,
+/// `RAYON_NUM_THREADS` or one a core).
+pub(crate) fn threads() -> usize {
+    match pool() {
+        Ok(p) => p.current_num_threads(),
+        Err(_) => rayon::current_num_threads(),
+    }
+}

@@ -20,6 +20,8 @@ pub extern "C" fn vlInit() {
                 require(Command::Init, scope_of(state))?;
                 let mut lib = Library::new();
                 lib.set_render_control(crate::extensions::initial_control());
+                #[cfg(feature = "mpi")]
+                crate::mpi::attach(&mut lib);
                 *state = Some(lib);
                 Ok(())
             },
@@ -45,7 +47,12 @@ pub extern "C" fn vlEnd() {
                 // the state until the render ends.
                 let _rendering =
                     (lib.scope() == Scope::Scene).then(|| Rendering::start(lib.sampler()));
-                if lib.end()? == Closed::Library {
+                let closed = lib.end();
+                #[cfg(feature = "mpi")]
+                if _rendering.is_some() {
+                    crate::mpi::report(lib);
+                }
+                if closed? == Closed::Library {
                     *state = None;
                 }
                 Ok(())
