@@ -3,7 +3,9 @@
 //! library if the program has not), so that each scene renders split over the ranks and rank
 //! 0 writes the files; after each scene's `vlEnd`, rank 0 writes the ranks' busy times to the
 //! file `VLIB_MPI_BUSY` names, if set. Without a launcher, with one rank, or with
-//! `VLIB_MPI=0`, the library is the plain one.
+//! `VLIB_MPI=0`, the library is the plain one. The errors that field functions record while
+//! a scene renders are recorded on the rank that ran them; [`share_errors`] gives every rank
+//! every rank's.
 
 use std::sync::OnceLock;
 use vlib_core::{Library, Team};
@@ -36,6 +38,28 @@ pub(crate) fn report(lib: &Library) {
     if team.rank() == 0 {
         if let Err(e) = vlib_core::write_atomic(path.as_ref(), team.stats_text().as_bytes()) {
             crate::errors::record(e);
+        }
+    }
+}
+
+/// After a render of `lib`'s team: the codes recorded since `mark` on each rank (by field,
+/// normal and spatial functions, on the rank that rendered their samples) are queued on every
+/// rank, rank 0's first (collective; nothing without a team).
+pub(crate) fn share_errors(lib: &Library, mark: u64) {
+    let Some(team) = lib.team() else { return };
+    let mine: Vec<u8> = crate::errors::take_since(mark)
+        .iter()
+        .flat_map(|c| (*c as i32).to_le_bytes())
+        .collect();
+    for (rank, codes) in team.gather(&mine).iter().enumerate() {
+        for code in codes.chunks_exact(4) {
+            let raw = i32::from_le_bytes(code.try_into().expect("4 bytes"));
+            let code =
+                vlib_core::ErrorCode::from_raw(raw).unwrap_or(vlib_core::ErrorCode::Internal);
+            crate::errors::record(vlib_core::Error::new(
+                code,
+                format!("recorded on rank {rank} while rendering"),
+            ));
         }
     }
 }

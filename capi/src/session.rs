@@ -47,9 +47,12 @@ pub extern "C" fn vlEnd() {
                 // the state until the render ends.
                 let _rendering =
                     (lib.scope() == Scope::Scene).then(|| Rendering::start(lib.sampler()));
+                #[cfg(feature = "mpi")]
+                let mark = crate::errors::mark();
                 let closed = lib.end();
                 #[cfg(feature = "mpi")]
                 if _rendering.is_some() {
+                    crate::mpi::share_errors(lib, mark);
                     crate::mpi::report(lib);
                 }
                 if closed? == Closed::Library {

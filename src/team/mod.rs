@@ -117,6 +117,26 @@ impl Team {
         self.0.threads
     }
 
+    /// Every rank's `mine`, by rank (collective: every rank of the team calls it, in the same
+    /// order as every other collective call of the team).
+    pub fn gather(&self, mine: &[u8]) -> Vec<Vec<u8>> {
+        let link = &*self.0.link;
+        let counts: Vec<usize> = link
+            .gather_u64(&[mine.len() as u64])
+            .iter()
+            .map(|&c| c as usize)
+            .collect();
+        let all = link.gather_u8(mine, &counts);
+        let mut at = 0;
+        counts
+            .iter()
+            .map(|&c| {
+                at += c;
+                all[at - c..at].to_vec()
+            })
+            .collect()
+    }
+
     /// Every rank's statistics, by rank, as of the last step of work (the same on every rank).
     pub fn stats(&self) -> Vec<RankStats> {
         self.state().stats.clone()
