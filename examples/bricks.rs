@@ -49,6 +49,12 @@ fn slab(data: &Dataset, j0: usize, j1: usize) -> Result<Dataset, vlib::Error> {
                 .flat_map(|at| v[at..at + nx].iter().copied())
                 .collect(),
         ),
+        _ => {
+            return Err(vlib::Error::new(
+                vlib::ErrorCode::BadValue,
+                "8 or 16-bit voxels",
+            ))
+        }
     };
     Dataset::new([nx, j1 - j0 + 1, nz], voxels, a, b)
 }
@@ -72,7 +78,7 @@ fn slab_scene(
     vl.scale(ext[0], (j1 - j0) as f32, ext[2])?;
     vl.translate(0.0, j0 as f32, 0.0)?;
     mni_scene::fields(vl, shaded)?;
-    vl.end()
+    vl.end().map(|_| ())
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -126,11 +132,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut colour = vec![[0f32; 3]; n];
         let mut trans = vec![1f32; n];
         for img in &images {
-            for p in 0..n {
-                for c in 0..3 {
-                    colour[p][c] += trans[p] * img.pixels[p][c];
+            for ((c, t), (src, t_src)) in colour
+                .iter_mut()
+                .zip(trans.iter_mut())
+                .zip(img.pixels.iter().zip(&img.transmittance))
+            {
+                for (c, s) in c.iter_mut().zip(src) {
+                    *c += *t * s;
                 }
-                trans[p] *= img.transmittance[p];
+                *t *= t_src;
             }
         }
         let composite_s = t.elapsed().as_secs_f64();

@@ -87,7 +87,9 @@ impl std::fmt::Debug for Team {
 }
 
 impl Team {
-    /// The team over `link`; collective (the ranks tell each other their threads).
+    /// The team over `link`; collective (the ranks tell each other their threads). Without the
+    /// `mpi` feature only the tests make teams.
+    #[cfg_attr(not(any(test, feature = "mpi")), allow(dead_code))]
     pub(crate) fn from_link(link: Box<dyn Link>) -> Team {
         let stats = vec![RankStats::default(); link.size()];
         let threads = link
