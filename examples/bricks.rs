@@ -19,6 +19,8 @@
 
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
+#[path = "common/say.rs"]
+mod say;
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -105,10 +107,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let reference = vl.render(size, size, 1.0, Backdrop::Background)?;
     let one = t.elapsed().as_secs_f64();
     let reference = reference.to_bytes(PixelFormat::Rgb8);
-    println!(
+    say::say(format_args!(
         "MNI {size}², {}: one process {one:.3} s",
         if shaded { "shaded" } else { "unshaded" }
-    );
+    ))?;
 
     for k in ks {
         // Slab s holds nodes [cut[s], cut[s + 1]]; slab 0 is the one at the largest y (nearest
@@ -161,7 +163,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let by_one = diff.iter().filter(|&&d| d == 1).count();
         let more = diff.iter().filter(|&&d| d > 1).count();
         let slowest = render_s.iter().copied().fold(0.0, f64::max);
-        println!(
+        say::say(format_args!(
             "K = {k}: largest difference {max} levels; {by_one} of {} channel values differ by 1, \
              {more} by more; slab renders {} s (slowest {slowest:.3} s), compositing {:.4} s \
              ({:.1}% of the slowest slab)",
@@ -173,7 +175,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .join(" + "),
             composite_s,
             100.0 * composite_s / slowest
-        );
+        ))?;
     }
     Ok(())
 }

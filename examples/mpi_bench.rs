@@ -19,6 +19,8 @@
 mod figure2_scene;
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
+#[path = "common/say.rs"]
+mod say;
 
 use std::time::Instant;
 
@@ -65,9 +67,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     times.sort_by(f64::total_cmp);
     vl.end()?;
     if rank == 0 {
-        println!("median_s {:.6}", times[frames / 2]);
+        say::say(format_args!("median_s {:.6}", times[frames / 2]))?;
         if let Some(team) = vl.team() {
-            print!("{}", team.stats_text());
+            say::say(format_args!("{}", team.stats_text().trim_end()))?;
         }
     }
     Ok(())

@@ -47,7 +47,7 @@ pub(crate) trait Link: Send + Sync {
     fn gather_u8(&self, mine: &[u8], counts: &[usize]) -> Vec<u8>;
 }
 
-/// The ranks of a job that render together: every scene a [`crate::Library`] with a team
+/// The ranks of a job that render together: every scene a `Library` with a team
 /// renders is split among them (`Library::set_team`), rank 0 writes the files, and every rank
 /// gets every image's pixels. Cloning it shares it.
 #[derive(Clone)]
