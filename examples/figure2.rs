@@ -8,83 +8,17 @@
 //! cargo run --release --example figure2 -- out/stone-rust.png
 //! ```
 
+#[path = "common/figure2_scene.rs"]
+mod figure2_scene;
 #[path = "common/say.rs"]
 mod say;
-use vlib::MappingId;
-use vlib::{vlaux, Attenuation, Camera, Fields, Library, MappingType};
-
-/// Granite, as `stone` in `examples/c/figure2.c` computes it, operation for operation in f32,
-/// so the two programs write the same bytes: a base grey-brown whose lightness follows
-/// turbulence, a low-frequency warm/cool tint, dark mica specks and light quartz grains.
-fn stone(s: &mut vlib::Sample) {
-    let p = s.position();
-    let t = vlaux::turbulence(p, 5.0, 5, 1); // mostly 0.1 .. 0.9
-    let warm = 0.5 + 0.5 * vlaux::noise(p, 2.5, 2); // 0 .. 1
-    let grain = vlaux::noise(p, 48.0, 3); // -1 .. 1
-    let speck = vlaux::noise(p, 23.0, 4); // -1 .. 1
-    let shade = 0.42 + 0.35 * t.min(1.0) + 0.08 * grain;
-    let (mut r, mut g, mut b) = (
-        shade * (0.88 + 0.22 * warm),
-        shade * (0.84 + 0.12 * warm),
-        shade * (0.80 + 0.04 * warm),
-    );
-    if speck > 0.42 {
-        // dark mica flakes
-        r *= 0.35;
-        g *= 0.35;
-        b *= 0.38;
-    } else if grain > 0.55 {
-        // light quartz grains
-        r = 0.5 * (r + 0.95);
-        g = 0.5 * (g + 0.93);
-        b = 0.5 * (b + 0.90);
-    }
-    let _ = s.set(Fields::R, r);
-    let _ = s.set(Fields::G, g);
-    let _ = s.set(Fields::B, b);
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "stone-rust.png".into());
-    let white = [1.0, 1.0, 1.0];
-    let mut vl = Library::new();
-    vl.scene()?;
-    vl.camera(&Camera {
-        eye: [175.0, 250.0, -350.0],
-        at: [175.0, 140.0, 70.0],
-        up: [0.0, 1.0, 0.0],
-        fov: vlib::DEFAULT_FOV,
-    })?;
-    vl.image(&out, 1.0, 100, 100)?;
-    vl.background(1.0, 1.0, 1.0)?;
-    vl.mapping(
-        MappingId(1),
-        MappingType::Lookup,
-        2,
-        1,
-        &[0.001, 1.0, 1.0, 0.3],
-    )?;
-    vl.point_light([-200.0, 380.0, -200.0], Attenuation::None, white, 1.0)?;
-    vl.ambient(1.0, 1.0, 1.0, 1.0)?;
-    vl.object()?;
-    vl.scale(350.0, 300.0, 300.0)?;
-    vl.function(Fields::F, |s| {
-        let _ = s.set(Fields::F, vlaux::parab1(s.position()));
-    })?;
-    vl.map(Fields::O, Fields::F, MappingId(1), 1)?;
-    // The paper's line 20 asks for output 2 of this one-output table: an error that changes
-    // nothing (`examples/c/figure2.c` reports it through vlError). It is kept so that both
-    // programs run the same commands; the error is expected and not reported here.
-    if vl.map(Fields::KS, Fields::F, MappingId(1), 2).is_ok() {
-        return Err("the paper's line 20 should be refused: output 2 of a one-output table".into());
-    }
-    vl.function(Fields::COLORS, stone)?;
-    vl.set(Fields::KA, 0.3)?;
-    vl.set(Fields::KD, 0.6)?;
-    vl.set(Fields::N, vlib::types::specular_to_field(20.0))?;
-    vl.end()?; // object
+    let mut vl = vlib::Library::new();
+    figure2_scene::build(&mut vl, &out, 100)?;
     vl.end()?; // scene: renders and writes the image
     say::say(format_args!("wrote {out}"))?;
     Ok(())

@@ -3,8 +3,14 @@
 //! reports to them ([`Progress`]). Part of the base layer: it counts units of work (pixels,
 //! voxelized nodes) and knows nothing of scenes; the renderer and the output layer say what a
 //! unit is and check for cancellation between and within their pieces of work.
+//!
+//! A render split over a [`Team`]'s ranks decides to stop only where the ranks exchange their
+//! work ([`Progress::map`]), so that every rank stops at the same step: a rank's own flag or
+//! progress function stops its work at once ([`Progress::cancelled`]), and the render fails
+//! on every rank at the end of that step ([`Progress::check`]).
 
 use crate::error::{Error, ErrorCode, Result};
+use crate::team::Team;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 
@@ -68,6 +74,10 @@ pub(crate) struct Progress {
     total: u64,
     done: AtomicU64,
     stopped: AtomicBool,
+    /// The ranks the render is split over, if any.
+    team: Option<Team>,
+    /// With a team: every rank has agreed to stop (at a step of [`Progress::map`]).
+    agreed_stop: AtomicBool,
 }
 
 impl Progress {
@@ -78,6 +88,43 @@ impl Progress {
             total,
             done: AtomicU64::new(0),
             stopped: AtomicBool::new(false),
+            team: None,
+            agreed_stop: AtomicBool::new(false),
+        }
+    }
+
+    /// The render split over `team`'s ranks (a team of one, or none, is a render of one
+    /// process).
+    pub(crate) fn with_team(mut self, team: Option<&Team>) -> Progress {
+        self.team = team.filter(|t| t.size() > 1).cloned();
+        self
+    }
+
+    /// The ranks the render is split over, if more than one.
+    pub(crate) fn team(&self) -> Option<&Team> {
+        self.team.as_ref()
+    }
+
+    /// Evaluates `f(i)` for each item `i` in 0 … `n` in parallel, split over the team's ranks
+    /// where there is a team ([`crate::team::map`]), and gives every item's result in order;
+    /// `Err(Cancelled)` where the render is to stop ([`Progress::check`] after the step).
+    /// `f` should return at once (anything) when [`Progress::cancelled`].
+    pub(crate) fn map<T, F>(&self, n: usize, f: F) -> Result<Vec<Vec<T>>>
+    where
+        T: crate::team::Floats,
+        F: Fn(usize) -> Vec<T> + Sync + Send,
+    {
+        let out = crate::team::map(self.team(), n, &|| self.cancelled(), f);
+        match out {
+            Err(e) if e.code == ErrorCode::Cancelled => {
+                self.agreed_stop.store(true, Ordering::Relaxed);
+                Err(e)
+            }
+            Err(e) => Err(e),
+            Ok(v) => {
+                self.check()?;
+                Ok(v)
+            }
         }
     }
 
@@ -98,9 +145,14 @@ impl Progress {
                 .is_some_and(|c| c.is_cancelled())
     }
 
-    /// `Err(Cancelled)` where the render is to stop.
+    /// `Err(Cancelled)` where the render is to stop: with a team, where the ranks agreed to
+    /// at the last step of [`Progress::map`] (so that every rank gives the same answer).
     pub(crate) fn check(&self) -> Result<()> {
-        if self.cancelled() {
+        let stop = match &self.team {
+            Some(_) => self.agreed_stop.load(Ordering::Relaxed),
+            None => self.cancelled(),
+        };
+        if stop {
             Err(cancelled())
         } else {
             Ok(())

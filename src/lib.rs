@@ -48,6 +48,7 @@ mod num;
 mod output;
 mod pool;
 mod render;
+mod team;
 #[cfg(test)]
 mod testing;
 pub mod types;
@@ -63,6 +64,7 @@ pub use model::scene::{Camera, Optimise, DEFAULT_FOV};
 pub use model::{cvg, vlaux};
 pub use output::{write_atomic, write_image};
 pub use render::{Backdrop, Image, PixelFormat, Plan};
+pub use team::{RankStats, Team};
 pub use types::{
     Attenuation, DatasetId, Feature, Fields, Interpolation, MappingId, MappingType, RenderType,
     T_MIN,

@@ -56,3 +56,13 @@ pub(crate) fn install<T: Send>(f: impl FnOnce() -> Result<T> + Send) -> Result<T
     }
     pool()?.install(f)
 }
+
+/// The threads of the library's pool (of the pool that would be built: rayon's default,
+/// `RAYON_NUM_THREADS` or one a core). Used by teams, which the plain build makes only in tests.
+#[cfg_attr(not(any(test, feature = "mpi")), allow(dead_code))]
+pub(crate) fn threads() -> usize {
+    match pool() {
+        Ok(p) => p.current_num_threads(),
+        Err(_) => rayon::current_num_threads(),
+    }
+}

@@ -1,7 +1,7 @@
 //! The crate's layers import downward only (`docs/dev/architecture.md`): the state machine (`api`)
 //! → output (`output`) → the renderer (`render`) → empty-space skipping (`accel`) → the object
 //! model (`model`) → datasets (`data`) → the base types (`types`, `error`, `num`, `pool`,
-//! `control`). This reads every production source file under `src/` (unit tests excluded: they may
+//! `control`, `team`). This reads every production source file under `src/` (unit tests excluded: they may
 //! reach any layer) and fails on a `crate::` path into a higher layer, whether in code or in a doc
 //! link, through a module or a name the crate root re-exports. Paths by `super::super::…` are not
 //! followed; the code reaches other layers by `crate::` paths.
@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 /// The layers, lowest first; a layer may use its own and every lower one.
 const LAYERS: [&[&str]; 7] = [
-    &["types", "error", "num", "pool", "control"],
+    &["types", "error", "num", "pool", "control", "team"],
     &["data"],
     &["model"],
     &["accel"],
@@ -21,7 +21,7 @@ const LAYERS: [&[&str]; 7] = [
 
 /// The names `src/lib.rs` re-exports at the crate root, with the layer each comes from, so that
 /// `crate::Library` counts as a path into `api`.
-const ROOT: [(&str, &str); 34] = [
+const ROOT: [(&str, &str); 36] = [
     ("Library", "api"),
     ("Closed", "api"),
     ("Sampler", "api"),
@@ -56,6 +56,8 @@ const ROOT: [(&str, &str); 34] = [
     ("CancelFlag", "control"),
     ("ProgressFn", "control"),
     ("RenderControl", "control"),
+    ("Team", "team"),
+    ("RankStats", "team"),
 ];
 
 /// The top-level modules that belong to no layer: the crate root and the unit tests' helpers.

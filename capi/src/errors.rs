@@ -21,11 +21,14 @@ pub const MAX_QUEUED: usize = 1024;
 struct Queue {
     codes: VecDeque<ErrorCode>,
     last_message: Option<String>,
+    /// Codes pushed since the process started (the last of them is the queue's back).
+    pushed: u64,
 }
 
 static QUEUE: Mutex<Queue> = Mutex::new(Queue {
     codes: VecDeque::new(),
     last_message: None,
+    pushed: 0,
 });
 
 fn queue() -> MutexGuard<'static, Queue> {
@@ -38,8 +41,25 @@ pub(crate) fn record(e: Error) {
     let mut q = queue();
     if q.codes.len() < MAX_QUEUED {
         q.codes.push_back(e.code);
+        q.pushed += 1;
     }
     q.last_message = Some(e.message);
+}
+
+/// A mark of the queue's end, for [`take_since`].
+#[cfg(feature = "mpi")]
+pub(crate) fn mark() -> u64 {
+    queue().pushed
+}
+
+/// Removes and returns the codes recorded after `mark` that are still queued, oldest first.
+#[cfg(feature = "mpi")]
+pub(crate) fn take_since(mark: u64) -> Vec<ErrorCode> {
+    let mut q = queue();
+    let newer = (q.pushed.saturating_sub(mark) as usize).min(q.codes.len());
+    let at = q.codes.len() - newer;
+    q.pushed -= newer as u64;
+    q.codes.split_off(at).into()
 }
 
 /// Removes and returns the oldest recorded error code.

@@ -193,7 +193,12 @@ pub unsafe extern "C" fn vlRenderBuffer(
         // only written, never read, so its bytes need not have been initialised.
         let buffer = unsafe { std::slice::from_raw_parts_mut(buf.cast::<u8>(), len) };
         let _rendering = Rendering::start(lib.sampler());
-        lib.render_into(w, h, aspect, format, buffer)?;
+        #[cfg(feature = "mpi")]
+        let mark = crate::errors::mark();
+        let rendered = lib.render_into(w, h, aspect, format, buffer);
+        #[cfg(feature = "mpi")]
+        crate::mpi::share_errors(lib, mark);
+        rendered?;
         Ok(VL_TRUE)
     })
 }

@@ -49,6 +49,9 @@ mod errors;
 /// cbindgen:ignore
 mod ffi;
 /// cbindgen:ignore
+#[cfg(feature = "mpi")]
+mod mpi;
+/// cbindgen:ignore
 mod sample;
 /// cbindgen:ignore
 pub mod vlaux;

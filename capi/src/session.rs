@@ -20,6 +20,8 @@ pub extern "C" fn vlInit() {
                 require(Command::Init, scope_of(state))?;
                 let mut lib = Library::new();
                 lib.set_render_control(crate::extensions::initial_control());
+                #[cfg(feature = "mpi")]
+                crate::mpi::attach(&mut lib);
                 *state = Some(lib);
                 Ok(())
             },
@@ -45,7 +47,15 @@ pub extern "C" fn vlEnd() {
                 // the state until the render ends.
                 let _rendering =
                     (lib.scope() == Scope::Scene).then(|| Rendering::start(lib.sampler()));
-                if lib.end()? == Closed::Library {
+                #[cfg(feature = "mpi")]
+                let mark = crate::errors::mark();
+                let closed = lib.end();
+                #[cfg(feature = "mpi")]
+                if _rendering.is_some() {
+                    crate::mpi::share_errors(lib, mark);
+                    crate::mpi::report(lib);
+                }
+                if closed? == Closed::Library {
                     *state = None;
                 }
                 Ok(())

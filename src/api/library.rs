@@ -95,6 +95,8 @@ pub struct Library {
     pub(super) ended: bool,
     /// How renders are followed and stopped ([`Library::set_render_control`]).
     pub(super) control: crate::control::RenderControl,
+    /// The ranks renders are split over ([`Library::set_team`]).
+    pub(super) team: Option<crate::team::Team>,
 }
 
 pub(super) fn finite(cmd: &str, vals: &[f32]) -> Result<()> {
@@ -215,7 +217,12 @@ impl Library {
                     datasets: self.datasets.clone(),
                 };
                 crate::pool::install(|| {
-                    crate::output::render_outputs(&desc, &s.grids, &self.control)
+                    crate::output::render_outputs(
+                        &desc,
+                        &s.grids,
+                        &self.control,
+                        self.team.as_ref(),
+                    )
                 })?;
                 Ok(Closed::Scene)
             }

@@ -2,7 +2,8 @@
 //! to memory ([`Library::render`], [`Library::render_into`] a caller's buffer, which the C
 //! extension `vlRenderBuffer` uses), its render plan ([`Library::render_plan`]), the
 //! pixel-preserving speed-ups ([`Library::set_optimise`]), progress and cancellation
-//! ([`Library::set_render_control`]) and a snapshot of the state for tests
+//! ([`Library::set_render_control`]), the ranks renders are split over ([`Library::set_team`])
+//! and a snapshot of the state for tests
 //! ([`Library::fingerprint`]). None of these is a command of the C API; only `set_optimise`
 //! and `set_render_control` change state, and a render fills the open scene's caches, nothing
 //! else.
@@ -33,7 +34,8 @@ impl Library {
         check_size("render", width, height, aspect)?;
         crate::pool::install(|| {
             let progress =
-                crate::control::Progress::new(&self.control, width as u64 * height as u64);
+                crate::control::Progress::new(&self.control, width as u64 * height as u64)
+                    .with_team(self.team.as_ref());
             let scene = self.compile(&desc)?;
             crate::render::render_image(&scene, (width, height, aspect), backdrop, &progress)
         })
@@ -78,7 +80,8 @@ impl Library {
         let buffer = &mut buffer[..bytes];
         crate::pool::install(|| {
             let progress =
-                crate::control::Progress::new(&self.control, width as u64 * height as u64);
+                crate::control::Progress::new(&self.control, width as u64 * height as u64)
+                    .with_team(self.team.as_ref());
             let scene = self.compile(&desc)?;
             crate::render::render_into(&scene, (width, height, aspect), format, &progress, buffer)
         })
@@ -155,6 +158,21 @@ impl Library {
     /// `vlProgress` and `vlCancel` use it).
     pub fn set_render_control(&mut self, control: crate::control::RenderControl) {
         self.control = control;
+    }
+
+    /// Splits the renders of this library over the ranks of `team` (`None`: this process
+    /// renders alone), at any scope: each scene's outputs at its `end`, and [`Library::render`]
+    /// and [`Library::render_into`], whose pixels every rank gets. Rank 0 alone writes files;
+    /// every rank must make the same calls (the renders are collective), and every rank's
+    /// render ends with the same result (docs/mpi.md). A team of one renders as no team does.
+    /// Not a command of the C API (the MPI build of the C library sets it at `vlInit`).
+    pub fn set_team(&mut self, team: Option<crate::team::Team>) {
+        self.team = team;
+    }
+
+    /// The team renders are split over ([`Library::set_team`]).
+    pub fn team(&self) -> Option<&crate::team::Team> {
+        self.team.as_ref()
     }
 
     /// A textual snapshot of the whole state, for tests that check a refused call changed

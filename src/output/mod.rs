@@ -7,11 +7,17 @@
 //! [`crate::Image::save`]), datasets through [`crate::data::Dataset::save`] (defined here, so
 //! that no layer below this one writes a file); every file atomically ([`write_atomic`],
 //! `files`). It does not trace rays or evaluate fields itself.
+//!
+//! Split over a [`Team`]'s ranks, every rank renders its share of each output and rank 0
+//! alone writes the files; every output's result is agreed among the ranks
+//! ([`crate::team::agree`]), so every rank goes through the same outputs and ends with the same
+//! error (docs/mpi.md).
 
 use crate::control::{Progress, RenderControl};
 use crate::error::{Error, ErrorCode, Result};
 use crate::model::scene::{ImageRequest, SceneDesc};
 use crate::render::{render_into, Compiled, Grids};
+use crate::team::Team;
 
 mod files;
 mod formats;
@@ -51,8 +57,14 @@ impl crate::data::Dataset {
 /// render (`control`) stops at once: the outputs finished before it are written, the one in
 /// progress and the rest are not, and its error counts the outputs that failed before. The
 /// progress function hears 1 at the end whatever failed. A panic anywhere in it, the progress
-/// function's too, is an error ([`crate::error::catch`]).
-pub fn render_outputs(desc: &SceneDesc, grids: &Grids, control: &RenderControl) -> Result<()> {
+/// function's too, is an error ([`crate::error::catch`]). With a `team` the work is split over
+/// its ranks (collective: every rank calls it with the same scene).
+pub fn render_outputs(
+    desc: &SceneDesc,
+    grids: &Grids,
+    control: &RenderControl,
+    team: Option<&Team>,
+) -> Result<()> {
     if desc.images.is_empty() && desc.volumes.is_empty() {
         return Ok(());
     }
@@ -66,7 +78,7 @@ pub fn render_outputs(desc: &SceneDesc, grids: &Grids, control: &RenderControl) 
                 .map(|r| r.nodes.iter().product::<usize>() as u64),
         )
         .fold(0u64, u64::saturating_add);
-    let progress = Progress::new(control, total);
+    let progress = Progress::new(control, total).with_team(team);
     let mut errors: Vec<Error> = Vec::new();
     let cancelled = crate::error::catch("rendering the scene", || {
         let compiled = Compiled::build(desc, grids)?;
@@ -109,14 +121,23 @@ pub fn render_outputs(desc: &SceneDesc, grids: &Grids, control: &RenderControl) 
 /// RGBA), and writes it. The memory it takes is the file's pixels (the output's own bytes,
 /// 3 to 12 a pixel, held whole for the encoder), a strip of the render, and for PNG the
 /// compressed stream (and for 16-bit PNG the encoder's big-endian copy of the pixels).
+/// With a team, rank 0 alone opens and writes the file, and every rank returns its result.
 fn image(compiled: &Compiled, req: &ImageRequest, progress: &Progress) -> Result<()> {
     let (w, h) = (req.width, req.height);
+    let team = progress.team();
     // A name the file cannot have, or a destination that cannot be written, is refused
     // before rendering.
-    let format = formats::ImageFormat::from_path(&req.path)?;
-    let file = files::AtomicFile::create(&req.path)?;
-    let bytes = format.pixels.image_bytes(w, h);
-    let mut pixels = crate::num::try_vec(bytes.unwrap_or(usize::MAX), 0u8, "the image's pixels")?;
+    let prepared = (|| {
+        let format = formats::ImageFormat::from_path(&req.path)?;
+        let file = match crate::team::writes(team) {
+            true => Some(files::AtomicFile::create(&req.path)?),
+            false => None,
+        };
+        let bytes = format.pixels.image_bytes(w, h);
+        let pixels = crate::num::try_vec(bytes.unwrap_or(usize::MAX), 0u8, "the image's pixels")?;
+        Ok((format, file, pixels))
+    })();
+    let (format, file, mut pixels) = crate::team::agree(team, prepared)?;
     render_into(
         compiled,
         (w, h, req.aspect),
@@ -124,5 +145,9 @@ fn image(compiled: &Compiled, req: &ImageRequest, progress: &Progress) -> Result
         progress,
         &mut pixels,
     )?;
-    formats::encode_into(file, format, w, h, &pixels)
+    let written = match file {
+        Some(file) => formats::encode_into(file, format, w, h, &pixels),
+        None => Ok(()),
+    };
+    crate::team::agree(team, written)
 }

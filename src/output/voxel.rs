@@ -51,24 +51,29 @@ pub fn file_name(req: &VolumeRequest, field: usize) -> PathBuf {
     PathBuf::from(name)
 }
 
+/// The nodes of a slab taken as one item of work (by a thread, or a rank of a team).
+const CHUNK_NODES: usize = 256;
+
 /// Samples the scene at the nodes `first`, `first` + 1, … (in file order, x fastest) into
-/// `out`, one node per element, in parallel; a node is skipped once the render is cancelled
-/// (the caller's check after the slab reports it).
+/// `out`, one node per element, in parallel ([`CHUNK_NODES`] at a time, split over the ranks
+/// of the render's team if it has one); a node is skipped once the render is cancelled, and
+/// the slab fails with `Cancelled` at the end (`Progress::map`).
 fn sample_slab(
     scene: &Compiled,
     req: &VolumeRequest,
     first: usize,
     out: &mut [[f32; FIELD_COUNT]],
     progress: &Progress,
-) {
+) -> Result<()> {
     let [nx, ny, nz] = req.nodes;
     let (a, b) = (req.corner0, req.corner1);
-    out.par_iter_mut()
-        .with_min_len(64)
-        .enumerate()
-        .for_each(|(t, f)| {
+    let len = out.len();
+    let chunks = progress.map(len.div_ceil(CHUNK_NODES), |c| {
+        let nodes = c * CHUNK_NODES..((c + 1) * CHUNK_NODES).min(len);
+        let mut fields = Vec::with_capacity(nodes.len());
+        for t in nodes {
             if progress.cancelled() {
-                return;
+                break;
             }
             let o = first + t;
             let (i, j, k) = (o % nx, o / nx % ny, o / (nx * ny));
@@ -77,8 +82,14 @@ fn sample_slab(
                 node(a[1], b[1], j, ny),
                 node(a[2], b[2], k, nz),
             );
-            *f = scene.fields_at(p);
-        });
+            fields.push(scene.fields_at(p));
+        }
+        fields
+    })?;
+    out.par_chunks_mut(CHUNK_NODES)
+        .zip(chunks)
+        .for_each(|(o, c)| o[..c.len()].copy_from_slice(&c));
+    Ok(())
 }
 
 /// Quantises one field of a slab's nodes into `out`: `bytes` (1 or 2) little-endian bytes per
@@ -101,7 +112,19 @@ fn quantise(nodes: &[[f32; FIELD_COUNT]], field: usize, bytes: u32, out: &mut [u
 /// to `progress`. A field whose file cannot be written is an error of its own and the other
 /// fields are still written (the first error is returned); a failure of the voxelization
 /// itself (`NoMemory` for its buffers, `Internal` for a panic, `Cancelled`) writes no file.
+/// With a team (`Progress::team`), the nodes are sampled by every rank, rank 0 alone opens
+/// and writes the files, and every rank follows what rank 0's files allow and returns its
+/// errors.
 pub fn write(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Result<()> {
+    let team = progress.team();
+    let result = write_files(scene, req, progress);
+    crate::team::agree(team, result)
+}
+
+/// [`write`] before the ranks agree on its result.
+fn write_files(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Result<()> {
+    let team = progress.team();
+    let writes = crate::team::writes(team);
     let total = req
         .nodes
         .iter()
@@ -116,19 +139,26 @@ pub fn write(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Resu
     let max = if req.bytes == 1 { 255.0 } else { 65535.0 };
     let header = vlb_header(req.nodes, req.bytes, 0.0, max as f32);
     let mut first_error: Option<Error> = None;
-    let mut files: Vec<(usize, AtomicFile)> = Vec::new();
+    // Each requested field's file: rank 0's (every process's without a team); the other ranks
+    // keep the fields whose files rank 0 has open, without a file.
+    let mut files: Vec<(usize, Option<AtomicFile>)> = Vec::new();
     for field in req.fields.indices() {
+        if !writes {
+            files.push((field, None));
+            continue;
+        }
         let opened = AtomicFile::create(&file_name(req, field)).and_then(|mut f| {
             f.write(&header)?;
             Ok(f)
         });
         match opened {
-            Ok(f) => files.push((field, f)),
+            Ok(f) => files.push((field, Some(f))),
             Err(e) => {
                 first_error.get_or_insert(e);
             }
         }
     }
+    follow_root(team, &mut files);
     let slab = SLAB_NODES.min(total);
     let mut nodes = try_vec(slab, [0f32; FIELD_COUNT], "a voxelization's slab")?;
     let mut bytes = try_vec(slab * req.bytes as usize, 0u8, "a voxelization's slab")?;
@@ -138,21 +168,23 @@ pub fn write(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Resu
         let n = slab.min(total - done);
         let nodes = &mut nodes[..n];
         crate::error::catch("voxelization", || {
-            sample_slab(scene, req, done, nodes, progress);
-            Ok(())
+            sample_slab(scene, req, done, nodes, progress)
         })?;
         progress.check()?;
         let bytes = &mut bytes[..n * req.bytes as usize];
         files.retain_mut(|(field, file)| {
+            let Some(file) = file else { return true };
             quantise(nodes, *field, req.bytes, bytes);
             file.write(bytes)
                 .map_err(|e| first_error.get_or_insert(e))
                 .is_ok()
         });
+        follow_root(team, &mut files);
         done += n;
         progress.advance(n as u64)?;
     }
     for (field, file) in files {
+        let Some(file) = file else { continue };
         // (A voxelization's nodes lie in the scene's world, not in millimetres: no geometry,
         // and a sidecar an earlier file left is removed.)
         let path = file_name(req, field);
@@ -163,6 +195,16 @@ pub fn write(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Resu
         }
     }
     first_error.map_or(Ok(()), Err)
+}
+
+/// With a team, keeps on every rank the fields whose files rank 0 still has (collective).
+fn follow_root(team: Option<&crate::team::Team>, files: &mut Vec<(usize, Option<AtomicFile>)>) {
+    if team.is_none() {
+        return;
+    }
+    let mask = files.iter().fold(0u64, |m, (field, _)| m | 1 << field);
+    let root = crate::team::from_root(team, mask);
+    files.retain(|(field, _)| root & 1 << field != 0);
 }
 
 #[cfg(test)]

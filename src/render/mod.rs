@@ -171,7 +171,7 @@ fn render_in_strips(
         #[cfg(target_arch = "x86_64")]
         let packets = simd::Packets::new(scene);
         #[cfg(target_arch = "x86_64")]
-        let packet_side = packet_tile(width, height);
+        let packet_side = packet_side(width, height, progress);
         let n = scene.settings.super_sample.max(1) as u32;
         // The first pass of rows `rows`, with an entry map that holds them.
         let first_pass = |rows: std::ops::Range<u32>, entry: Option<&EntryMap>| {

@@ -1,7 +1,8 @@
 //! Tile scheduling: the primary-ray generator of an image ([`view`]), the split of the image
 //! into square tiles traced in parallel (rayon) and reassembled in a fixed order, so that an
-//! image's bytes do not depend on the number of threads ([`per_pixel`], [`per_tile`]), and the
-//! tile side of the packet march ([`packet_tile`]). The super-sampling driver that uses them is
+//! image's bytes do not depend on the number of threads ([`per_pixel`], [`per_tile`]; nor on
+//! the number of processes: with a team, `Progress::map` hands the tiles out over its ranks),
+//! and the tile side of the packet march ([`packet_tile`]). The super-sampling driver that uses them is
 //! [`super::render_image`]; what a ray shows is `integrate`'s.
 
 use super::*;
@@ -16,9 +17,25 @@ pub(super) const PACKET_TILE: u32 = 32;
 /// The packet march's tile side for an image of `width × height`: [`PACKET_TILE`] where that
 /// gives at least 16 tiles a thread (work-stealing balances tiles of unequal cost only when
 /// there are many), else [`TILE`]. Only the order of the work depends on it, not a pixel.
+#[cfg(test)]
 pub(super) fn packet_tile(width: u32, height: u32) -> u32 {
+    packet_tile_for(width, height, rayon::current_num_threads())
+}
+
+/// [`packet_tile`] for a render followed by `progress`: split over a team's ranks, the
+/// threads counted are those of every rank ([`crate::Team::threads`]), so that every rank cuts
+/// the image alike.
+pub(super) fn packet_side(width: u32, height: u32, progress: &Progress) -> u32 {
+    let threads = progress
+        .team()
+        .map_or_else(rayon::current_num_threads, |t| t.threads());
+    packet_tile_for(width, height, threads)
+}
+
+/// [`packet_tile`] for `threads` threads.
+fn packet_tile_for(width: u32, height: u32, threads: usize) -> u32 {
     let big = width.div_ceil(PACKET_TILE) as usize * height.div_ceil(PACKET_TILE) as usize;
-    if big >= 16 * rayon::current_num_threads() {
+    if big >= 16 * threads {
         PACKET_TILE
     } else {
         TILE
@@ -102,17 +119,20 @@ where
 {
     type Tile = ((u32, u32), Vec<Pixel>);
     let (top, bottom) = (rows.start, rows.end);
-    let results: Vec<Tile> = tiles(width, rows, side)
-        .into_par_iter()
-        .map(|(tx, ty)| {
+    let corners = tiles(width, rows, side);
+    let results: Vec<Tile> = progress
+        .map(corners.len(), |i| {
+            let (tx, ty) = corners[i];
             if progress.cancelled() {
-                return ((tx, ty), Vec::new());
+                return Vec::new();
             }
             let (tw, th) = ((tx + side).min(width) - tx, (ty + side).min(bottom) - ty);
-            ((tx, ty), f((tx, ty, tw, th)))
-        })
+            f((tx, ty, tw, th))
+        })?
+        .into_iter()
+        .zip(&corners)
+        .map(|(out, &corner)| (corner, out))
         .collect();
-    progress.check()?;
     // The tiles come in row-major order: each band of `side` rows is a row of tiles, copied
     // into place in parallel, a tile row at a time.
     let per_row = width.div_ceil(side) as usize;

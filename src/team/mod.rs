@@ -1,0 +1,373 @@
+//! Rendering split over the processes of a job (a [`Team`]: the ranks of an MPI communicator,
+//! docs/mpi.md). Part of the base layer: it hands out numbered items of work (tiles, slabs of
+//! voxelized nodes; what an item is, the renderer and the output layer say) dynamically among
+//! the ranks, and gives every rank every item's result, in item order; it agrees the ranks'
+//! errors. It knows nothing of scenes, pixels or files.
+//!
+//! [`map`] is one collective step: every rank calls it with the same count of items; each
+//! rank's threads take items from one counter the team shares (an atomic fetch-and-add, so a
+//! rank that finishes its items early takes more: dynamic load balance), evaluate them, and at
+//! the end every rank sends the results it made to every other (an all-gather). The results
+//! are put in item order whichever rank made them, so the bytes of an image do not depend on
+//! the number of ranks or on who rendered what. Each rank also sends its status (done,
+//! stopped, failed), so every rank comes out of a step with the same answer: cancelling on one
+//! rank cancels the render on all of them at the end of the step in progress.
+//!
+//! The counter only grows: each step knows where it started (`base`) and, from the sum of
+//! every rank's additions that the all-gather carries, where the next one starts.
+//!
+//! The transport is a [`Link`]: MPI (`mpi.rs`, the `mpi` feature) or, in the unit tests,
+//! threads of one process.
+
+use crate::error::{Error, ErrorCode, Result};
+use rayon::prelude::*;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+#[cfg(feature = "mpi")]
+mod mpi;
+
+#[cfg(test)]
+mod tests;
+
+/// What a team's transport does: the MPI communicator's operations [`map`] and [`agree`] need.
+/// Every method but `fetch_add` is collective: every rank calls it, in the same order.
+pub(crate) trait Link: Send + Sync {
+    /// This process's rank, 0 … `size()` − 1.
+    fn rank(&self) -> usize;
+    /// The number of ranks.
+    fn size(&self) -> usize;
+    /// Adds `n` to the team's counter and returns its value before (atomically across ranks).
+    fn fetch_add(&self, n: u64) -> u64;
+    /// Every rank's `mine` (each of the same length on every rank), rank after rank.
+    fn gather_u64(&self, mine: &[u64]) -> Vec<u64>;
+    /// Every rank's `mine`, rank after rank; `counts[r]` is the length of rank r's.
+    fn gather_f32(&self, mine: &[f32], counts: &[usize]) -> Vec<f32>;
+    /// As [`Link::gather_f32`], for bytes.
+    fn gather_u8(&self, mine: &[u8], counts: &[usize]) -> Vec<u8>;
+}
+
+/// The ranks of a job that render together: every scene a `Library` with a team
+/// renders is split among them (`Library::set_team`), rank 0 writes the files, and every rank
+/// gets every image's pixels. Cloning it shares it.
+#[derive(Clone)]
+pub struct Team(Arc<Inner>);
+
+struct Inner {
+    link: Box<dyn Link>,
+    /// The threads of every rank, summed.
+    threads: usize,
+    /// The counter's value where the next step starts, and the ranks' statistics.
+    state: Mutex<State>,
+}
+
+#[derive(Default)]
+struct State {
+    base: u64,
+    stats: Vec<RankStats>,
+}
+
+/// What one rank of a [`Team`] has done since the team was made: the sum over its threads of
+/// the time spent on items of work (tiles, slabs of voxelized nodes), and their number.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RankStats {
+    /// Time in items of work, summed over the rank's threads.
+    pub busy: Duration,
+    /// Items of work done.
+    pub items: u64,
+}
+
+impl std::fmt::Debug for Team {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Team")
+            .field("rank", &self.rank())
+            .field("size", &self.size())
+            .finish()
+    }
+}
+
+impl Team {
+    /// The team over `link`; collective (the ranks tell each other their threads). Without the
+    /// `mpi` feature only the tests make teams.
+    #[cfg_attr(not(any(test, feature = "mpi")), allow(dead_code))]
+    pub(crate) fn from_link(link: Box<dyn Link>) -> Team {
+        let stats = vec![RankStats::default(); link.size()];
+        let threads = link
+            .gather_u64(&[crate::pool::threads() as u64])
+            .iter()
+            .sum::<u64>() as usize;
+        Team(Arc::new(Inner {
+            link,
+            threads,
+            state: Mutex::new(State { base: 0, stats }),
+        }))
+    }
+
+    /// This process's rank: 0 writes the files.
+    pub fn rank(&self) -> usize {
+        self.0.link.rank()
+    }
+
+    /// The number of ranks.
+    pub fn size(&self) -> usize {
+        self.0.link.size()
+    }
+
+    /// The threads of the library's pools of every rank, summed (what the tile sizes are
+    /// chosen for).
+    pub fn threads(&self) -> usize {
+        self.0.threads
+    }
+
+    /// Every rank's `mine`, by rank (collective: every rank of the team calls it, in the same
+    /// order as every other collective call of the team).
+    pub fn gather(&self, mine: &[u8]) -> Vec<Vec<u8>> {
+        let link = &*self.0.link;
+        let counts: Vec<usize> = link
+            .gather_u64(&[mine.len() as u64])
+            .iter()
+            .map(|&c| c as usize)
+            .collect();
+        let all = link.gather_u8(mine, &counts);
+        let mut at = 0;
+        counts
+            .iter()
+            .map(|&c| {
+                at += c;
+                all[at - c..at].to_vec()
+            })
+            .collect()
+    }
+
+    /// Every rank's statistics, by rank, as of the last step of work (the same on every rank).
+    pub fn stats(&self) -> Vec<RankStats> {
+        self.state().stats.clone()
+    }
+
+    /// The statistics as text, a line per rank (`rank busy_seconds items`), after a header
+    /// line: what `VLIB_MPI_BUSY` writes (docs/mpi.md).
+    pub fn stats_text(&self) -> String {
+        let mut s = String::from("# rank busy_seconds items\n");
+        for (r, st) in self.stats().iter().enumerate() {
+            s += &format!("{r} {:.6} {}\n", st.busy.as_secs_f64(), st.items);
+        }
+        s
+    }
+
+    fn state(&self) -> std::sync::MutexGuard<'_, State> {
+        self.0.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// A value an item of work gives: a fixed number of `f32`s (a pixel, a voxelized node's
+/// fields), the form in which results travel between ranks.
+pub(crate) trait Floats: Copy + Send + Sync {
+    /// Its `f32`s.
+    const N: usize;
+    fn put(&self, out: &mut Vec<f32>);
+    fn get(from: &[f32]) -> Self;
+}
+
+impl<const K: usize> Floats for [f32; K] {
+    const N: usize = K;
+    fn put(&self, out: &mut Vec<f32>) {
+        out.extend_from_slice(self);
+    }
+    fn get(from: &[f32]) -> Self {
+        let mut v = [0.0; K];
+        v.copy_from_slice(&from[..K]);
+        v
+    }
+}
+
+/// How an item's evaluation ended on a rank, as the all-gather carries it.
+const DONE: u64 = 0;
+const STOPPED: u64 = 1;
+const FAILED: u64 = 2;
+
+/// Evaluates `f(i)` for every item `i` in 0 … `n`, in parallel: on the library's threads
+/// without a team (or a team of one), else split dynamically over the team's ranks ([the
+/// module](self)). Every rank gets every item's result, in item order. `stop()` says that this
+/// rank is to stop (it takes no more items); then, with a team, every rank fails with
+/// `Cancelled` at the end of the step. Without a team, the caller checks for cancellation: an
+/// item `f` skipped is whatever `f` returned. A panic in `f` on one rank makes every rank fail
+/// with `Internal` (with a team; without, it unwinds to the caller's `catch`).
+pub(crate) fn map<T, F>(
+    team: Option<&Team>,
+    n: usize,
+    stop: &(dyn Fn() -> bool + Sync),
+    f: F,
+) -> Result<Vec<Vec<T>>>
+where
+    T: Floats,
+    F: Fn(usize) -> Vec<T> + Sync + Send,
+{
+    let Some(team) = team.filter(|t| t.size() > 1) else {
+        return Ok((0..n).into_par_iter().map(f).collect());
+    };
+    let link = &*team.0.link;
+    let base = team.state().base;
+    // This rank's part: items as they are taken, whatever thread took them.
+    let mine: Mutex<Vec<(usize, Vec<T>)>> = Mutex::new(Vec::new());
+    let added = std::sync::atomic::AtomicU64::new(0);
+    let busy = std::sync::atomic::AtomicU64::new(0);
+    let failed = std::sync::atomic::AtomicBool::new(false);
+    let fetch_lock = Mutex::new(());
+    // One fetch at a time on a rank (the MPI library is asked for serialised calls only).
+    let fetch = |k: u64| -> u64 {
+        let _one = fetch_lock.lock().unwrap_or_else(|e| e.into_inner());
+        added.fetch_add(k, std::sync::atomic::Ordering::Relaxed);
+        link.fetch_add(k)
+    };
+    let worker = || loop {
+        if stop() || failed.load(std::sync::atomic::Ordering::Relaxed) {
+            // Every rank's next fetch passes the end: the team stops within an item.
+            fetch(n as u64);
+            return;
+        }
+        let i = fetch(1) - base;
+        if i >= n as u64 {
+            return;
+        }
+        let start = Instant::now();
+        let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(i as usize)));
+        busy.fetch_add(
+            start.elapsed().as_nanos() as u64,
+            std::sync::atomic::Ordering::Relaxed,
+        );
+        match out {
+            Ok(v) => mine
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .push((i as usize, v)),
+            Err(_) => failed.store(true, std::sync::atomic::Ordering::Relaxed),
+        }
+    };
+    rayon::broadcast(|_| worker());
+    let mine = mine.into_inner().unwrap_or_else(|e| e.into_inner());
+    let status = if failed.into_inner() {
+        FAILED
+    } else if stop() {
+        STOPPED
+    } else {
+        DONE
+    };
+    // The step's exchange: each rank's status, additions to the counter, busy time and
+    // items, then the items' numbers and lengths, then their values.
+    let mut index = Vec::with_capacity(mine.len() * 2);
+    let mut values = Vec::new();
+    for (i, v) in &mine {
+        index.extend([*i as u64, v.len() as u64]);
+        v.iter().for_each(|x| x.put(&mut values));
+    }
+    let heads = link.gather_u64(&[
+        status,
+        added.into_inner(),
+        busy.into_inner(),
+        mine.len() as u64,
+        values.len() as u64,
+    ]);
+    drop(mine);
+    let heads: Vec<&[u64]> = heads.chunks(5).collect();
+    let index_counts: Vec<usize> = heads.iter().map(|h| h[3] as usize * 2).collect();
+    let value_counts: Vec<usize> = heads.iter().map(|h| h[4] as usize).collect();
+    let all_index = gather_index(link, &index, &index_counts);
+    let all_values = link.gather_f32(&values, &value_counts);
+    drop(values);
+    {
+        let mut state = team.state();
+        state.base = base + heads.iter().map(|h| h[1]).sum::<u64>();
+        for (s, h) in state.stats.iter_mut().zip(&heads) {
+            s.busy += Duration::from_nanos(h[2]);
+            s.items += h[3];
+        }
+    }
+    if let Some(r) = heads.iter().position(|h| h[0] == FAILED) {
+        return Err(Error::new(
+            ErrorCode::Internal,
+            format!("a panic while rendering on rank {r}"),
+        ));
+    }
+    if heads.iter().any(|h| h[0] == STOPPED) {
+        return Err(crate::control::cancelled());
+    }
+    // Every item once, in order, whichever rank made it.
+    let mut out: Vec<Option<Vec<T>>> = Vec::new();
+    out.try_reserve_exact(n)
+        .map_err(|_| crate::num::no_memory("the results of a step of work", None))?;
+    out.resize_with(n, || None);
+    let mut at = 0;
+    for pair in all_index.chunks_exact(2) {
+        let (i, len) = (pair[0] as usize, pair[1] as usize);
+        let floats = len * T::N;
+        let v = all_values[at..at + floats]
+            .chunks_exact(T::N)
+            .map(T::get)
+            .collect();
+        at += floats;
+        if let Some(slot) = out.get_mut(i) {
+            *slot = Some(v);
+        }
+    }
+    out.into_iter()
+        .enumerate()
+        .map(|(i, v)| {
+            v.ok_or_else(|| {
+                Error::new(
+                    ErrorCode::Internal,
+                    format!("item {i} of a step of work came back from no rank"),
+                )
+            })
+        })
+        .collect()
+}
+
+/// The items' numbers and lengths of every rank (the all-gather of `u64`s, through bytes).
+fn gather_index(link: &dyn Link, mine: &[u64], counts: &[usize]) -> Vec<u64> {
+    let bytes: Vec<u8> = mine.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let counts: Vec<usize> = counts.iter().map(|c| c * 8).collect();
+    link.gather_u8(&bytes, &counts)
+        .chunks_exact(8)
+        .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
+        .collect()
+}
+
+/// The outcome every rank of the team agrees on: `mine` where every rank succeeded, else the
+/// error of the first rank (by rank) that failed, on every rank. Without a team, `mine`.
+/// Collective.
+pub(crate) fn agree<T>(team: Option<&Team>, mine: Result<T>) -> Result<T> {
+    let Some(team) = team.filter(|t| t.size() > 1) else {
+        return mine;
+    };
+    let link = &*team.0.link;
+    let (code, message) = match &mine {
+        Ok(_) => (0u64, Vec::new()),
+        Err(e) => (e.code as i32 as u64, e.message.clone().into_bytes()),
+    };
+    let heads = link.gather_u64(&[code, message.len() as u64]);
+    let counts: Vec<usize> = heads.chunks(2).map(|h| h[1] as usize).collect();
+    let messages = link.gather_u8(&message, &counts);
+    let Some(r) = heads.chunks(2).position(|h| h[0] != 0) else {
+        return mine;
+    };
+    if r == team.rank() {
+        return mine;
+    }
+    let at: usize = counts[..r].iter().sum();
+    let text = String::from_utf8_lossy(&messages[at..at + counts[r]]);
+    let code = ErrorCode::from_raw(heads[2 * r] as i32).unwrap_or(ErrorCode::Internal);
+    Err(Error::new(code, format!("{text} (on rank {r})")))
+}
+
+/// The value `v` of rank 0, on every rank (collective); `v` without a team.
+pub(crate) fn from_root(team: Option<&Team>, v: u64) -> u64 {
+    match team.filter(|t| t.size() > 1) {
+        Some(t) => t.0.link.gather_u64(&[v])[0],
+        None => v,
+    }
+}
+
+/// Whether this process writes the files: rank 0 of a team, or a process without one.
+pub(crate) fn writes(team: Option<&Team>) -> bool {
+    team.is_none_or(|t| t.rank() == 0)
+}
