@@ -5,7 +5,7 @@
 //! target/release/vlconvert nifti ../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz out/mni.vlb
 //! cargo run --release --example mni -- out/mni.vlb out/mni.png [step] [--unshaded] [--size=N] \
 //!     [--cubic] [--gradient=G] [--ss=N] [--termination=T] [--frames=N] [--no-packets] [--eight]
-//!     [--test-every-run]
+//!     [--test-every-run] [--fit]
 //! ```
 //!
 //! `--gradient=G` chooses the normals' gradient filter: `bspline` (the default, the gallery's:
@@ -21,7 +21,9 @@
 //! `--no-packets` traces every ray by the scalar march (`Optimise::packets` off); `--eight`
 //! keeps the packet march to AVX2's eight lanes where the processor has AVX-512
 //! (`Optimise::wide_lanes` off); `--test-every-run` tests every run of samples against the cell
-//! mask (`Optimise::trust_whole_runs` off).
+//! mask (`Optimise::trust_whole_runs` off). `--fit` treats a volume of other dimensions as the
+//! template at (ny − 1)/232 voxels per millimetre (`benches/scaling.sh`): the camera and the
+//! opacity's unit length scale with it.
 
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
@@ -57,6 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let packets = !all.iter().any(|a| a == "--no-packets");
     let wide_lanes = !all.iter().any(|a| a == "--eight");
     let trust_whole_runs = !all.iter().any(|a| a == "--test-every-run");
+    let fit = all.iter().any(|a| a == "--fit");
     let start = Instant::now();
     let mut vl = vlib::Library::new();
     vl.load(mni_scene::BRAIN, vlb)?;
@@ -79,7 +82,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         vlib::Interpolation::Trilinear
     };
     vl.gradient_filter(gradient)?;
-    mni_scene::build_with(&mut vl, dims, step, shaded, filter)?;
+    // The template's y extent is 232 voxels of 1 mm.
+    let scale = if fit {
+        (dims[1] - 1) as f32 / 232.0
+    } else {
+        1.0
+    };
+    mni_scene::build_scaled(&mut vl, dims, step, shaded, filter, scale)?;
     if frames > 0 {
         let mut times: Vec<f64> = (0..frames)
             .map(|_| {

@@ -151,18 +151,38 @@ pub fn build_with(
     shaded: bool,
     interpolation: vlib::Interpolation,
 ) -> Result<(), vlib::Error> {
-    view(vl, dims)?;
-    vl.step_size(step, 1.0)?;
+    build_scaled(vl, dims, step, shaded, interpolation, 1.0)
+}
+
+/// [`build_with`] for a volume of `scale` voxels per millimetre (the scaling table of
+/// `benches/scaling.sh`: the template resampled or repeated): the camera `360 · scale` voxels
+/// from the centre and opacity per `scale` voxels (1 mm), so that every such volume is seen
+/// and weighted as the template is; `step` stays in voxels. A scale of 1 is [`build_with`].
+pub fn build_scaled(
+    vl: &mut Library,
+    dims: [usize; 3],
+    step: f32,
+    shaded: bool,
+    interpolation: vlib::Interpolation,
+    scale: f32,
+) -> Result<(), vlib::Error> {
+    view_from(vl, dims, 360.0 * scale)?;
+    vl.step_size(step, scale)?;
     vl.interpolation(interpolation)?;
     object(vl, dims, shaded)
 }
 
 /// The camera, background and lights of the peer scene (VTK's view of the brain).
 pub fn view(vl: &mut Library, dims: [usize; 3]) -> Result<(), vlib::Error> {
+    view_from(vl, dims, 360.0)
+}
+
+/// [`view`] with the eye `distance` voxels in front of the volume's centre.
+pub fn view_from(vl: &mut Library, dims: [usize; 3], distance: f32) -> Result<(), vlib::Error> {
     let ext = dims.map(|n| (n - 1) as f32);
     let centre = ext.map(|e| e / 2.0);
     vl.camera(&Camera {
-        eye: [centre[0], centre[1] + 360.0, centre[2]],
+        eye: [centre[0], centre[1] + distance, centre[2]],
         at: centre,
         up: [0.0, 0.0, 1.0],
         fov: 30.0,

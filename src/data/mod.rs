@@ -114,6 +114,10 @@ pub struct Dataset {
     /// ranges, the cell masks) never makes them: for a scan, four times its voxels' memory,
     /// and a large part of its first image's time.
     values: std::sync::OnceLock<Vec<f32>>,
+    /// For 16-bit voxels, the node value of every voxel value (entry v is the normalisation of
+    /// v, the same f32 as a node's): made on first use ([`Dataset::table16`]), 256 KiB, so that
+    /// the packet march reads 16-bit voxels without the node values' four bytes a voxel.
+    table16: std::sync::OnceLock<Box<[f32; 1 << 16]>>,
     /// Brick ranges, computed on first use: for reach 1 (nearest, trilinear) and 2 (cubic).
     bricks: [std::sync::OnceLock<Bricks>; 2],
     /// Cell masks built so far, by the bits of their bound (see [`Dataset::cells_above`]).
@@ -230,6 +234,7 @@ impl Dataset {
             index_lanes: (raw.len() <= 1 << 24).then(|| strides.map(|s| s as f32)),
             splats: Default::default(),
             values: std::sync::OnceLock::new(),
+            table16: std::sync::OnceLock::new(),
             raw,
         }
         .with_splats())
@@ -302,6 +307,21 @@ impl Dataset {
     /// a later call tries again).
     pub fn try_values(&self) -> Result<&[f32]> {
         get_or_try_init(&self.values, || self.compute_values()).map(|v| v.as_slice())
+    }
+
+    /// For 16-bit voxels, the node value of each voxel value v at entry v (the node values'
+    /// normalisation, so `table16()[raw[i]]` is bit for bit `values()[i]`), made on first use;
+    /// `None` for 8-bit voxels.
+    pub(crate) fn table16(&self) -> Option<&[f32; 1 << 16]> {
+        let Voxels::U16(_) = self.raw else {
+            return None;
+        };
+        Some(self.table16.get_or_init(|| {
+            let norm = normaliser(self.a, self.b);
+            // (Built on the heap: 256 KiB would not fit every worker thread's stack.)
+            let table: Vec<f32> = (0..1u32 << 16).map(|v| norm(v as f64)).collect();
+            table.into_boxed_slice().try_into().expect("2^16 entries")
+        }))
     }
 
     /// Whether the node values have been made ([`Dataset::values`]): a render that reads only

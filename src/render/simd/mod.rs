@@ -66,7 +66,9 @@
 //! - the entry points: a few lines each that make the width's token under its
 //!   `#[target_feature]` attribute, which a generic function cannot carry (every instantiation
 //!   would get the attribute's features, not its width's);
-//! - eight lanes only: node values by per-lane loads ([`Nodes`]) and tables of more than seven
+//! - eight lanes only: node values by per-lane loads ([`Nodes`]; for 16-bit voxels, the voxels
+//!   through the dataset's table of their node values, [`NodeValues`], the same f32 without
+//!   the node values' memory) and tables of more than seven
 //!   rows by their segment pairs ([`Packets::pairs_eval`]), [`Simd`] hooks the sixteen-lane
 //!   implementation never reaches, as [`Packets::new`] gives sixteen lanes only to scenes with
 //!   8-bit voxels and tables in registers; and the ray starts ([`starts`]), four rays in f64
@@ -182,7 +184,8 @@ pub(super) struct Packets<'a> {
     tables: &'a DirectShading,
     /// The object's skip grid where empty-space skipping is on.
     grid: Option<&'a SkipGrid>,
-    values: &'a [f32],
+    /// The node values, or 16-bit voxels and their table (empty where `raw8` is read).
+    values: NodeValues<'a>,
     /// The dataset's 8-bit voxels, read instead of `values` where its normalisation is
     /// linear over every byte ([`Raw8::of`]).
     raw8: Option<Raw8<'a>>,
@@ -256,13 +259,14 @@ impl<'a> Packets<'a> {
         if dims.iter().any(|&n| n < 4) || dims.iter().product::<usize>() >= i32::MAX as usize / 2 {
             return None;
         }
-        // The node values only where the voxels are not read instead (made on first use).
+        // The node values only where the voxels are not read instead (made on first use):
+        // 8-bit voxels straight ([`Raw8`]), 16-bit voxels through their table of node values.
         let raw8 = Raw8::of(data);
         let raw8_fits = raw8.is_some();
-        let values = if raw8.is_some() {
-            &[][..]
-        } else {
-            data.values()
+        let values = match (&raw8, data.raw()) {
+            (Some(_), _) => NodeValues::F32(&[]),
+            (None, Voxels::U16(raw)) => NodeValues::U16(raw, data.table16()?),
+            (None, _) => NodeValues::F32(data.values()),
         };
         let [ka, kd, ks, spec] = tables.coefficients;
         let light = match scene.lanes[0].as_ref() {

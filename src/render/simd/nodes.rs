@@ -275,9 +275,28 @@ pub(super) fn side_offsets(sy: i32, sz: i32) -> [i32; 8] {
 /// past it lie inside the slice: [`Nodes::row4`] and [`Nodes::pairs2`] of offsets within
 /// `0..=span` then read inside it in every lane.
 pub(super) struct Nodes<'a> {
-    pub(super) values: &'a [f32],
+    pub(super) values: NodeValues<'a>,
     pub(super) at: __m256i,
     pub(super) span: i32,
+}
+
+/// Where the eight-lane march reads node values: the dataset's f32 node values, or its 16-bit
+/// voxels through the table of their normalised values (`Dataset::table16`, entry v the node
+/// value of voxel v: the same f32, without the node values' four bytes a voxel).
+#[derive(Clone, Copy)]
+pub(super) enum NodeValues<'a> {
+    F32(&'a [f32]),
+    U16(&'a [u16], &'a [f32; 1 << 16]),
+}
+
+impl NodeValues<'_> {
+    /// The number of nodes.
+    pub(super) fn len(&self) -> usize {
+        match self {
+            NodeValues::F32(v) => v.len(),
+            NodeValues::U16(r, _) => r.len(),
+        }
+    }
 }
 
 impl<'a> Nodes<'a> {
@@ -285,27 +304,61 @@ impl<'a> Nodes<'a> {
     /// [`Packets::new`] ensures: every axis has at least 4 nodes; asserted all the same).
     #[inline]
     #[target_feature(enable = "avx2")]
-    pub(super) fn new(values: &'a [f32], at: __m256i, span: i32) -> Nodes<'a> {
-        assert!(span >= 0 && (span as usize) < values.len() && values.len() <= i32::MAX as usize);
-        let hi = _mm256_set1_epi32((values.len() - 1) as i32 - span);
+    pub(super) fn new(values: NodeValues<'a>, at: __m256i, span: i32) -> Nodes<'a> {
+        let len = values.len();
+        assert!(span >= 0 && (span as usize) < len && len <= i32::MAX as usize);
+        let hi = _mm256_set1_epi32((len - 1) as i32 - span);
         let at = _mm256_min_epi32(_mm256_max_epi32(at, _mm256_setzero_si256()), hi);
         Nodes { values, at, span }
     }
 }
 
 impl Nodes<'_> {
+    /// The node values of the 16-bit voxels at `at + off` and `at + off + 1` per lane, through
+    /// their table: one gather of 32 bits at each lane's voxel `at + off` (the two voxels, low
+    /// and high half), then a gather of the table at each.
+    ///
+    /// # Safety
+    /// `raw` must be this `Nodes`' voxels and `0 ≤ off < span`, so that both voxels lie inside
+    /// `raw` (`at` is in [0, len − 1 − span], `Nodes::new`); the processor must have AVX2.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn voxel_pairs(&self, raw: &[u16], table: &[f32; 1 << 16], off: i32) -> [__m256; 2] {
+        debug_assert!(off >= 0 && off < self.span);
+        let at = _mm256_add_epi32(self.at, _mm256_set1_epi32(off));
+        // SAFETY: the four bytes at voxel at + off are voxels at + off and at + off + 1, both in
+        // `raw` (the caller's bound); a gather has no alignment requirement. Every index into
+        // the table is a u16, below its 2^16 entries.
+        unsafe {
+            let both = _mm256_i32gather_epi32::<2>(raw.as_ptr() as *const i32, at);
+            let lo = _mm256_and_si256(both, _mm256_set1_epi32(0xFFFF));
+            let hi = _mm256_srli_epi32::<16>(both);
+            [
+                _mm256_i32gather_ps::<4>(table.as_ptr(), lo),
+                _mm256_i32gather_ps::<4>(table.as_ptr(), hi),
+            ]
+        }
+    }
+
     /// `values[at + off + k]` for k in 0..4, per lane, as four registers (register k holds
     /// the k-th of each lane's four): a 16-byte load per lane, then a transposition.
     #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) fn row4(&self, off: i32) -> [__m256; 4] {
         assert!(off >= 0 && off + 3 <= self.span);
+        if let NodeValues::U16(r, t) = self.values {
+            // SAFETY: the nodes at + off … at + off + 3 lie inside `r` (as below).
+            let [n0, n1] = unsafe { self.voxel_pairs(r, t, off) };
+            let [n2, n3] = unsafe { self.voxel_pairs(r, t, off + 2) };
+            return [n0, n1, n2, n3];
+        }
         let at = self.indices();
-        let p = self.values.as_ptr();
-        let lane = |i: usize| {
+        let off = off as usize;
+        let lane = |i: usize| match self.values {
             // SAFETY: `at[i]` is in [0, len − 1 − span] (`Nodes::new`) and
             // 0 ≤ off ≤ span − 3, so the four f32 at `at[i] + off` lie inside `values`.
-            unsafe { _mm_loadu_ps(p.add(at[i] + off as usize)) }
+            NodeValues::F32(v) => unsafe { _mm_loadu_ps(v.as_ptr().add(at[i] + off)) },
+            NodeValues::U16(..) => unreachable!("read above"),
         };
         transpose(std::array::from_fn(|i| {
             _mm256_set_m128(lane(i + 4), lane(i))
@@ -318,19 +371,27 @@ impl Nodes<'_> {
     #[target_feature(enable = "avx2")]
     pub(super) fn pairs2(&self, a: i32, b: i32) -> [__m256; 4] {
         assert!(a >= 0 && b >= 0 && a < self.span && b < self.span);
+        if let NodeValues::U16(r, t) = self.values {
+            // SAFETY: the nodes at + a, at + a + 1, at + b, at + b + 1 lie inside `r` (below).
+            let [n0, n1] = unsafe { self.voxel_pairs(r, t, a) };
+            let [n2, n3] = unsafe { self.voxel_pairs(r, t, b) };
+            return [n0, n1, n2, n3];
+        }
         let at = self.indices();
-        let p = self.values.as_ptr();
-        let lane = |i: usize| {
+        let (a, b) = (a as usize, b as usize);
+        let lane = |i: usize| match self.values {
             // SAFETY: `at[i]` is in [0, len − 1 − span] and 0 ≤ a, b < span, so the two
-            // f32 at `at[i] + a` and the two at `at[i] + b` lie inside `values`; the loads
+            // nodes at `at[i] + a` and the two at `at[i] + b` lie inside `values`; the loads
             // have no alignment requirement.
-            unsafe {
-                let lo = _mm_castpd_ps(_mm_load_sd(p.add(at[i] + a as usize) as *const f64));
+            NodeValues::F32(v) => unsafe {
+                let p = v.as_ptr();
+                let lo = _mm_castpd_ps(_mm_load_sd(p.add(at[i] + a) as *const f64));
                 _mm_castpd_ps(_mm_loadh_pd(
                     _mm_castps_pd(lo),
-                    p.add(at[i] + b as usize) as *const f64,
+                    p.add(at[i] + b) as *const f64,
                 ))
-            }
+            },
+            NodeValues::U16(..) => unreachable!("read above"),
         };
         transpose(std::array::from_fn(|i| {
             _mm256_set_m128(lane(i + 4), lane(i))

@@ -247,3 +247,57 @@ fn packet_strips_change_no_pixel() {
         "an image, not a colour"
     );
 }
+
+/// Nodes read from 16-bit voxels through their table (`Dataset::table16`) are the node values
+/// bit for bit: `Nodes::row4` and `Nodes::pairs2` of every lane, at random indices (negative
+/// and past the end ones among them, which both clamp alike), from voxels over the whole
+/// 16-bit range and a normalisation that clamps some of them to 0 and 1.
+#[test]
+fn nodes_of_16_bit_voxels_are_the_node_values() {
+    if !is_x86_feature_detected!("avx2") {
+        return;
+    }
+    use crate::data::{Dataset, Voxels};
+    let rng = crate::testing::Xorshift::new(5);
+    let dims = [9usize, 7, 6];
+    let n = dims.iter().product::<usize>();
+    let raw: Vec<u16> = (0..n).map(|_| rng.bits() as u16).collect();
+    let data = Dataset::new(dims, Voxels::U16(raw.clone()), 1000.0, 60000.0).unwrap();
+    let table = data.table16().expect("16-bit voxels have a table");
+    let values = data.values();
+    let (from_raw, from_values) = (NodeValues::U16(&raw, table), NodeValues::F32(values));
+    let span = 1 + 9 + 63;
+    let same = |a: [__m256; 4], b: [__m256; 4]| {
+        let bits = |r: [__m256; 4]| {
+            r.map(|x| {
+                let mut out = [0f32; 8];
+                // SAFETY: `out` holds eight f32; the store has no alignment requirement.
+                unsafe { _mm256_storeu_ps(out.as_mut_ptr(), x) };
+                out.map(f32::to_bits)
+            })
+        };
+        bits(a) == bits(b)
+    };
+    for _ in 0..200 {
+        let at: [i32; 8] = std::array::from_fn(|_| (rng.bits() % (n as u64 + 40)) as i32 - 20);
+        // SAFETY: the processor has AVX2 (checked above), all these functions need.
+        unsafe {
+            let at = _mm256_loadu_si256(at.as_ptr() as *const __m256i);
+            let (a, b) = (
+                Nodes::new(from_raw, at, span),
+                Nodes::new(from_values, at, span),
+            );
+            for off in [0, 5, span - 3] {
+                assert!(same(a.row4(off), b.row4(off)), "row4 at offset {off}");
+            }
+            for (p, q) in [(0, 9), (63, 72), (1, span - 1)] {
+                assert!(same(a.pairs2(p, q), b.pairs2(p, q)), "pairs2 {p}, {q}");
+            }
+        }
+    }
+    // The normalisation clamps: some voxels are below a = 1000 and above b = 60000.
+    assert!(raw.iter().any(|&v| v < 1000) && raw.iter().any(|&v| v > 60000));
+    assert!(data.table16().is_some());
+    let bytes = Dataset::new(dims, Voxels::U8(vec![0; n]), 0.0, 255.0).unwrap();
+    assert!(bytes.table16().is_none(), "8-bit voxels have no table");
+}
