@@ -21,6 +21,8 @@ mod mni_scene;
 
 #[path = "../common/say.rs"]
 mod say;
+
+mod preintegration;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -1467,9 +1469,23 @@ fn main() -> Res<()> {
     let load_start = load_average();
     let threads = rayon::current_num_threads();
 
+    if std::env::args().any(|a| a == "--preintegration-only") {
+        // The pre-integration section alone, printed (for its development; nothing written).
+        let path = mni_dataset()?;
+        let data = Dataset::load(&path)?;
+        data.precompute(vlib::Filter::Trilinear)?;
+        let brain = Brain {
+            data: Arc::new(data),
+            path,
+        };
+        let preint = preintegration::study(&p, &brain, start)?;
+        println!("{}", preint.doc);
+        return Ok(());
+    }
     let mut cache = Cache::new();
     let an = analytic(&p, &mut cache, start)?;
     let (mni, brain) = mni_study(&p, &mut cache, start)?;
+    let preint = preintegration::study(&p, &brain, start)?;
     let (hyper, voxel) = hyper_study(&p, &mut cache, start)?;
     let total = start.elapsed().as_secs_f64();
     let load_end = load_average();
@@ -1882,6 +1898,7 @@ fn main() -> Res<()> {
         },
     );
     let _ = writeln!(d, "{rec}");
+    d.push_str(&preint.doc);
 
     let doc_path = p.out_dir.join("accuracy.md");
     write_section(&doc_path, &d)?;
@@ -1893,6 +1910,7 @@ fn main() -> Res<()> {
         &nbhd_plot,
         &voxel_plot,
         &combined_plot,
+        &preint.plot,
     ];
     say::say(format_args!(
         "wrote {} and {} plots in {:.0} s",

@@ -240,6 +240,14 @@ pub struct Optimise {
     /// runs pass whole, and at fine steps the test is a third of a sample's work. On by
     /// default; off, every run is tested.
     pub trust_whole_runs: bool,
+    /// Pre-integrated transfer functions (Engel, Kraus and Ertl 2001) for a scanned volume
+    /// whose opacity and colour come from its value through transfer functions (the lean
+    /// kernel's direct-shading programs), rendered alone by DVR: each slab between two
+    /// samples takes the opacity and colour of the value varying linearly along it, so that
+    /// steep transfer functions need no finer step (`docs/accuracy.md`, pre-integration).
+    /// On by default; off, every segment is its midpoint sample. Such a scene then takes the
+    /// scalar march, not the packet march.
+    pub preintegrate: bool,
 }
 
 impl Optimise {
@@ -262,6 +270,7 @@ impl Default for Optimise {
             termination: crate::types::T_MIN,
             wide_lanes: true,
             trust_whole_runs: true,
+            preintegrate: true,
             lean_kernel: true,
             packets: true,
         }

@@ -51,6 +51,7 @@ mod image;
 mod integrate;
 mod kernel;
 mod lanes;
+mod preint;
 mod shade;
 mod tiles;
 
