@@ -4,7 +4,8 @@
 //! ```text
 //! target/release/vlconvert nifti ../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz out/mni.vlb
 //! cargo run --release --example mni -- out/mni.vlb out/mni.png [step] [--unshaded] [--size=N] \
-//!     [--cubic] [--ss=N] [--termination=T] [--frames=N] [--no-packets] [--eight] [--test-every-run]
+//!     [--cubic] [--ss=N] [--termination=T] [--frames=N] [--no-packets] [--eight] [--test-every-run] \
+//!     [--preintegrate]
 //! ```
 //!
 //! `--cubic` samples the dataset with the Catmull–Rom filter instead of trilinear, `--ss=N` turns
@@ -16,7 +17,9 @@
 //! `--no-packets` traces every ray by the scalar march (`Optimise::packets` off); `--eight`
 //! keeps the packet march to AVX2's eight lanes where the processor has AVX-512
 //! (`Optimise::wide_lanes` off); `--test-every-run` tests every run of samples against the cell
-//! mask (`Optimise::trust_whole_runs` off).
+//! mask (`Optimise::trust_whole_runs` off). `--preintegrate` renders with pre-integrated
+//! transfer functions (`Optimise::preintegrate` on: the scalar pre-integrated march instead of
+//! the packet march's midpoint samples).
 
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
@@ -51,6 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let packets = !all.iter().any(|a| a == "--no-packets");
     let wide_lanes = !all.iter().any(|a| a == "--eight");
     let trust_whole_runs = !all.iter().any(|a| a == "--test-every-run");
+    let preintegrate = all.iter().any(|a| a == "--preintegrate");
     let start = Instant::now();
     let mut vl = vlib::Library::new();
     vl.load(mni_scene::BRAIN, vlb)?;
@@ -63,6 +67,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         packets,
         wide_lanes,
         trust_whole_runs,
+        preintegrate,
         ..vlib::Optimise::default()
     })?;
     vl.image(png, 1.0, size, size)?;

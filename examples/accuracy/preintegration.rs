@@ -143,7 +143,7 @@ fn document(
          under a steep, iso-surface-like opacity ramp: 0 at and below F = {}, rising linearly \
          to 1 at F = {} and 1 above, at {size}×{size} pixels, 1 sample per pixel. The \
          reference is step {} voxel without pre-integration ({} s). With pre-integration \
-         (`Optimise::preintegrate`, on by default) each slab between two samples takes the \
+         (`Optimise::preintegrate`, off by default) each slab between two samples takes the \
          opacity and colour of the value varying linearly from one sample to the next \
          (a 128 × 128 table per object and step, built with the scene: its build is inside \
          every time below); without it, each segment is its midpoint sample. Pre-integrated \
@@ -212,11 +212,11 @@ fn document(
     };
     let _ = writeln!(
         d,
-        "\n**Recommendation for steep transfer functions.** Keep pre-integration on (the \
-         default) and raise the step: the cheapest setting under 2 grey levels RMS is {}, \
-         under 1 {}, under 0.5 {}. At every step pre-integration removes the terracing of a \
-         steep ramp (the error of the midpoint rule grows with the step, the pre-integrated \
-         one much more slowly): compare the two columns at 2 and 4 voxels.",
+        "\n**Recommendation for steep transfer functions.** The cheapest setting under 2 grey \
+         levels RMS is {}, under 1 {}, under 0.5 {}. At a given step pre-integration lowers \
+         the error (the terracing of a steep ramp); at a given time the packet march's \
+         midpoint samples at a finer step may still win, which is why it is off by default: \
+         switch it on where the step must stay coarse.",
         cheapest(2.0),
         cheapest(1.0),
         cheapest(0.5),

@@ -26,7 +26,7 @@ use crate::data::or_unwind;
 use crate::error::ErrorCode;
 use crate::render::kernel::DirectShading;
 
-/// Table nodes per axis (value spacing 1/(n − 1)): 128² entries of four f32, 256 KiB, built in
+/// Table nodes per axis (value spacing 1/(n − 1)): 128² entries of five f32, 320 KiB, built in
 /// about a millisecond (`docs/accuracy.md`, pre-integration).
 pub(super) const TABLE_NODES: usize = 128;
 
@@ -35,9 +35,9 @@ pub(super) const TABLE_NODES: usize = 128;
 pub(crate) struct PreIntegrated {
     /// The transfer functions, for slabs integrated on the spot and constant slabs.
     pub(super) shading: DirectShading,
-    /// Per (front node i, back node j), at `i·TABLE_NODES + j`: α and the premultiplied
-    /// r, g, b of the slab of length `kappa` from value i/(n − 1) to j/(n − 1).
-    table: Vec<[f32; 4]>,
+    /// Per (front node i, back node j), at `i·TABLE_NODES + j`: the [`Slab`] of the step's
+    /// length from value i/(n − 1) to j/(n − 1).
+    table: Vec<Slab>,
 }
 
 /// One sub-slab's transfer-function values: ln(1 − o) (−∞ where o = 1) and the colour.
@@ -63,13 +63,13 @@ impl PreIntegrated {
     /// caches, see [`or_unwind`]).
     pub(super) fn new(shading: &DirectShading, kappa: f64) -> PreIntegrated {
         let n = TABLE_NODES;
-        let mut table: Vec<[f32; 4]> = Vec::new();
+        let mut table: Vec<Slab> = Vec::new();
         or_unwind(
             table.try_reserve_exact(n * n).map_err(|_| {
                 crate::error::Error::new(ErrorCode::NoMemory, "pre-integration table")
             }),
         );
-        table.resize(n * n, [0.0; 4]);
+        table.resize(n * n, [0.0; 5]);
         let h = 1.0 / (n - 1) as f64;
         // The transfer functions at the nodes (the diagonal) and at the cells' midpoints.
         let nodes: Vec<Cell> = (0..n)
@@ -84,11 +84,19 @@ impl PreIntegrated {
             let diag = &nodes[i];
             let t = transmit_ln(diag.ln_t, kappa, 1.0);
             let a = 1.0 - t;
+            // The constant slab's depth: ∫₀¹ s·k·e^(−k·s) ds = (1 − t)/k − t for k = −ln t.
+            let k = -(diag.ln_t * kappa);
+            let depth = if a > 0.0 && k.is_finite() {
+                a / k - t
+            } else {
+                0.0
+            };
             table[i * n + i] = [
                 a as f32,
                 (a * diag.rgb[0]) as f32,
                 (a * diag.rgb[1]) as f32,
                 (a * diag.rgb[2]) as f32,
+                depth as f32,
             ];
         }
         for d in 1..n {
@@ -97,9 +105,9 @@ impl PreIntegrated {
             }
             for i in 0..n - d {
                 // Up: cells i … i + d − 1 in increasing order; down: the same cells reversed.
-                table[i * n + i + d] = composite((i..i + d).map(|c| (trans[c], &mids[c].rgb)));
+                table[i * n + i + d] = composite(d, (i..i + d).map(|c| (trans[c], &mids[c].rgb)));
                 table[(i + d) * n + i] =
-                    composite((i..i + d).rev().map(|c| (trans[c], &mids[c].rgb)));
+                    composite(d, (i..i + d).rev().map(|c| (trans[c], &mids[c].rgb)));
             }
         }
         PreIntegrated {
@@ -108,10 +116,10 @@ impl PreIntegrated {
         }
     }
 
-    /// α and the premultiplied colour of a slab of the table's length from value `vf` to
+    /// The [`Slab`] of a slab of the table's length from value `vf` to
     /// value `vb` (both in [0, 1]): the table's bilinear interpolation.
     #[inline]
-    pub(super) fn lookup(&self, vf: f32, vb: f32) -> [f32; 4] {
+    pub(super) fn lookup(&self, vf: f32, vb: f32) -> Slab {
         let n = TABLE_NODES;
         let last = (n - 1) as f32;
         let (x, y) = (vf.clamp(0.0, 1.0) * last, vb.clamp(0.0, 1.0) * last);
@@ -127,36 +135,24 @@ impl PreIntegrated {
         })
     }
 
-    /// α and the premultiplied colour of a slab `kappa` reference lengths long from value `vf`
+    /// The [`Slab`] of a slab `kappa` reference lengths long from value `vf`
     /// to value `vb`, integrated on the spot: sub-slabs of at most one table cell of value
     /// each (at least one), at their midpoint values. The table's entries are this integral at
     /// its nodes.
-    pub(super) fn integrate(&self, vf: f32, vb: f32, kappa: f64) -> [f32; 4] {
+    pub(super) fn integrate(&self, vf: f32, vb: f32, kappa: f64) -> Slab {
         let (vf, vb) = (vf.clamp(0.0, 1.0) as f64, vb.clamp(0.0, 1.0) as f64);
         let span = vb - vf;
         // ⌈|span|·(n − 1)⌉ sub-slabs, at most n − 1 (the span is at most 1); a constant slab is
         // one.
         let m = ((span.abs() * (TABLE_NODES - 1) as f64).ceil() as usize).clamp(1, TABLE_NODES - 1);
-        let cells = (0..m).map(|s| {
-            let v = vf + span * ((s as f64 + 0.5) / m as f64);
-            let c = Cell::at(&self.shading, v as f32);
-            (transmit_ln(c.ln_t, kappa, m as f64), c.rgb)
-        });
-        let mut t = 1.0f64;
-        let mut col = [0.0f64; 3];
-        for (tr, rgb) in cells {
-            let w = t * (1.0 - tr);
-            for (a, x) in col.iter_mut().zip(rgb) {
-                *a += w * x;
-            }
-            t *= tr;
-        }
-        [
-            (1.0 - t) as f32,
-            col[0] as f32,
-            col[1] as f32,
-            col[2] as f32,
-        ]
+        let cells: Vec<(f64, [f64; 3])> = (0..m)
+            .map(|s| {
+                let v = vf + span * ((s as f64 + 0.5) / m as f64);
+                let c = Cell::at(&self.shading, v as f32);
+                (transmit_ln(c.ln_t, kappa, m as f64), c.rgb)
+            })
+            .collect();
+        composite(m, cells.iter().map(|(t, rgb)| (*t, rgb)))
     }
 }
 
@@ -171,17 +167,25 @@ fn transmit_ln(ln_t: f64, kappa: f64, m: f64) -> f64 {
     }
 }
 
-/// The front-to-back composite of sub-slabs (transmittance, colour), in order: α and the
-/// premultiplied colour, as f32.
+/// A slab's α, premultiplied colour (r, g, b) and premultiplied depth: the weighted sum of
+/// where in the slab (0 at its front, 1 at its back) its light comes from, each sub-slab
+/// counted at its middle with its compositing weight; over α, the depth where the slab is
+/// lit (`integrate::preint`).
+pub(super) type Slab = [f32; 5];
+
+/// The front-to-back composite of `m` sub-slabs of equal length (transmittance, colour), in
+/// order: the [`Slab`], as f32.
 #[inline]
-fn composite<'a>(cells: impl Iterator<Item = (f64, &'a [f64; 3])>) -> [f32; 4] {
+fn composite<'a>(m: usize, cells: impl Iterator<Item = (f64, &'a [f64; 3])>) -> Slab {
     let mut t = 1.0f64;
-    let mut col = [0.0f64; 3];
-    for (tr, rgb) in cells {
+    let mut col = [0.0f64; 4];
+    let inv = 1.0 / m as f64;
+    for (s, (tr, rgb)) in cells.enumerate() {
         let w = t * (1.0 - tr);
         col[0] += w * rgb[0];
         col[1] += w * rgb[1];
         col[2] += w * rgb[2];
+        col[3] += w * ((s as f64 + 0.5) * inv);
         t *= tr;
     }
     [
@@ -189,5 +193,6 @@ fn composite<'a>(cells: impl Iterator<Item = (f64, &'a [f64; 3])>) -> [f32; 4] {
         col[0] as f32,
         col[1] as f32,
         col[2] as f32,
+        col[3] as f32,
     ]
 }

@@ -13,8 +13,8 @@ use crate::render::*;
 impl Compiled {
     /// [`Compiled::march_one`] of a direct-shading program (see [`PreIntegrated`]) with its
     /// table `pre`: the slabs between consecutive samples front to back, plus half a segment
-    /// before the first sample and after the last (their outer values extrapolated linearly
-    /// from the two nearest samples; a single segment is constant). A sample the skipping
+    /// before the first sample and after the last (from and to the interval's ends, whose
+    /// values are read there too: one segment is two half slabs). A sample the skipping
     /// passes over (an empty block, before the entry map's bound) has a value at most the
     /// zero test's bound z: a slab between two of them, and any slab whose two values are at
     /// most z, adds nothing (the opacity table is 0 on [0, z]); a slab between a sample taken
@@ -48,36 +48,38 @@ impl Compiled {
         // ray ends there.
         let mut slab = |acc: &mut Integral, ta: f64, va: f32, tb: f64, vb: f32| -> bool {
             let len = tb - ta;
-            if !(len > 0.0) || (va <= z && vb <= z) {
+            if len.is_nan() || len <= 0.0 || (va <= z && vb <= z) {
                 return false;
             }
-            let (alpha, rgb) = if va == vb {
+            // The slab's α, mean colour and the fraction of its length where it is lit.
+            let (alpha, rgb, at) = if va == vb {
                 // A constant medium: the midpoint march's sample, bit for bit.
                 let (o, Some(rgb)) = shading.opacity_colour(va) else {
                     return false;
                 };
-                (obj.alpha(o as f64, len), rgb.map(|x| x as f64))
+                (obj.alpha(o as f64, len), rgb.map(|x| x as f64), 0.5)
             } else {
                 // (Midpoints one step apart differ by the step to rounding: a relative 10⁻⁹
                 // of κ changes α far below f32's resolution.)
-                let [a, r, g, b] = if (len - step).abs() <= step * 1e-9 {
+                let [a, r, g, b, depth] = if (len - step).abs() <= step * 1e-9 {
                     pre.lookup(va, vb)
                 } else {
                     pre.integrate(va, vb, len * obj.inv_ref)
                 };
-                if !(a > 0.0) {
+                if a.is_nan() || a <= 0.0 {
                     return false;
                 }
                 // The slab's mean colour (its premultiplied colour over its α), in [0, 1]
                 // against rounding.
                 let a = a.min(1.0);
                 (
-                    (a as f64),
+                    a as f64,
                     [r, g, b].map(|x| (x / a).clamp(0.0, 1.0) as f64),
+                    (depth / a).clamp(0.0, 1.0) as f64,
                 )
             };
             let c = DVec3::from_array(rgb);
-            let tm = 0.5 * (ta + tb);
+            let tm = ta + at * len;
             let (p, w) = (point(tm), origin + tm * dir);
             let normal = || obj.gradient_normal(w, -dir, p, 9, &mut cache);
             let lit = match &headlit {
@@ -86,20 +88,15 @@ impl Compiled {
             };
             acc.add(alpha, lit)
         };
-        // The last sample whose value is known: its number, ray parameter and value; and the
-        // one before it, where that is the previous segment's (for the back half).
+        // The last sample taken: its number, ray parameter and value.
         let mut last: Option<(u64, f64, f32)> = None;
-        let mut before: Option<(f64, f32)> = None;
         while let Some(mid) = c.peek(grid) {
             let i = c.k;
             c.take();
             let v = value(mid);
             let ends = match last {
                 // The slab from the previous sample.
-                Some((j, tj, vj)) if j + 1 == i => {
-                    before = Some((tj, vj));
-                    slab(&mut acc, tj, vj, mid, v)
-                }
+                Some((j, tj, vj)) if j + 1 == i => slab(&mut acc, tj, vj, mid, v),
                 // Samples passed over between: the slab after the last one taken and the one
                 // before this one, reading the values of the samples passed over.
                 Some((j, tj, vj)) => {
@@ -111,26 +108,14 @@ impl Compiled {
                         let tp = c.mid(i - 1);
                         (tp, value(tp))
                     };
-                    before = Some((tp, vp));
                     slab(&mut acc, tj, vj, t1, v1) || slab(&mut acc, tp, vp, mid, v)
                 }
                 None if i > 0 => {
                     let tp = c.mid(i - 1);
-                    let vp = value(tp);
-                    before = Some((tp, vp));
-                    slab(&mut acc, tp, vp, mid, v)
+                    slab(&mut acc, tp, value(tp), mid, v)
                 }
-                // The first segment: its front half, the value at the interval's start
-                // extrapolated from the first two samples (constant for a single segment).
-                None => {
-                    let vf = if n > 1 {
-                        let t1 = c.mid(1);
-                        extrapolate(mid, v, t1, value(t1), c.t0)
-                    } else {
-                        v
-                    };
-                    slab(&mut acc, c.t0, vf, mid, v)
-                }
+                // The first segment's front half, from the interval's start.
+                None => slab(&mut acc, c.t0, value(c.t0), mid, v),
             };
             last = Some((i, mid, v));
             if ends {
@@ -138,35 +123,11 @@ impl Compiled {
             }
         }
         // After the last sample taken: the slab to the next one (passed over), or the last
-        // segment's back half.
+        // segment's back half, to the interval's end.
         if let Some((j, tj, vj)) = last {
-            if j + 1 < n {
-                let t1 = c.mid(j + 1);
-                slab(&mut acc, tj, vj, t1, value(t1));
-            } else {
-                let vb = match before {
-                    Some((tp, vp)) => extrapolate(tj, vj, tp, vp, c.t1),
-                    None if n > 1 => {
-                        let tp = c.mid(j - 1);
-                        extrapolate(tj, vj, tp, value(tp), c.t1)
-                    }
-                    None => vj,
-                };
-                slab(&mut acc, tj, vj, c.t1, vb);
-            }
+            let tb = if j + 1 < n { c.mid(j + 1) } else { c.t1 };
+            slab(&mut acc, tj, vj, tb, value(tb));
         }
         acc.result()
     }
-}
-
-/// The value at ray parameter `t` of the line through (ta, va) and (tb, vb) (ta ≠ tb), clamped
-/// to [0, 1] as a field value; `va` where the two parameters coincide.
-#[inline]
-fn extrapolate(ta: f64, va: f32, tb: f64, vb: f32, t: f64) -> f32 {
-    let d = tb - ta;
-    if d == 0.0 {
-        return va;
-    }
-    let v = va as f64 + (vb as f64 - va as f64) * ((t - ta) / d);
-    clamp_field(v as f32)
 }
