@@ -168,3 +168,83 @@ fn a_constant_value_keeps_the_exact_opacity_of_a_constant_medium() {
         }
     }
 }
+
+/// A 32³ dataset of two soft balls (8-bit), through a steep opacity ramp and a colour ramp,
+/// lit by a directional light, rendered with pre-integration and `skip_empty` as given.
+fn balls(skip_empty: bool, step: f32) -> Vec<u8> {
+    let n = 32usize;
+    let raw: Vec<u8> = (0..n * n * n)
+        .map(|i| {
+            let (x, y, z) = (i % n, (i / n) % n, i / (n * n));
+            let ball = |c: [f32; 3], r: f32| {
+                let d = ((x as f32 - c[0]).powi(2)
+                    + (y as f32 - c[1]).powi(2)
+                    + (z as f32 - c[2]).powi(2))
+                .sqrt();
+                (1.0 - d / r).clamp(0.0, 1.0)
+            };
+            let v = ball([10.0, 12.0, 14.0], 9.0).max(ball([21.0, 19.0, 17.0], 8.0));
+            (v * 255.0) as u8
+        })
+        .collect();
+    let mut vl = Library::new();
+    let data = Dataset::new([n, n, n], Voxels::U8(raw), 0.0, 255.0).unwrap();
+    vl.add_dataset(DatasetId(1), data).unwrap();
+    vl.mapping(
+        MappingId(1),
+        MappingType::Ramp,
+        2,
+        1,
+        &[0.3, 0.0, 0.45, 1.0],
+    )
+    .unwrap();
+    let mut c = vec![0.3f32];
+    c.extend(C0);
+    c.push(0.8);
+    c.extend(C1);
+    vl.mapping(MappingId(2), MappingType::Ramp, 2, 3, &c)
+        .unwrap();
+    vl.scene().unwrap();
+    vl.set_optimise(Optimise {
+        preintegrate: true,
+        skip_empty,
+        ..Optimise::default()
+    })
+    .unwrap();
+    vl.camera(&Camera {
+        eye: [0.3, 0.2, -2.5],
+        at: [0.0, 0.0, 0.0],
+        up: [0.0, 1.0, 0.0],
+        fov: 30.0,
+    })
+    .unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 0.3).unwrap();
+    vl.directional_light([1.0, -1.0, 1.0], [1.0, 1.0, 1.0], 1.0)
+        .unwrap();
+    vl.step_size(step, 0.05).unwrap();
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, -0.5).unwrap();
+    vl.dataset(Fields::F, DatasetId(1)).unwrap();
+    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
+    vl.map(Fields::R, Fields::F, MappingId(2), 1).unwrap();
+    vl.map(Fields::G, Fields::F, MappingId(2), 2).unwrap();
+    vl.map(Fields::B, Fields::F, MappingId(2), 3).unwrap();
+    vl.set(Fields::KA, 0.3).unwrap();
+    vl.set(Fields::KD, 0.7).unwrap();
+    vl.end().unwrap();
+    vl.render_preview(40, 40, 1.0).unwrap().to_rgb8()
+}
+
+#[test]
+fn empty_space_skipping_changes_no_pre_integrated_pixel() {
+    // A sample the skipping passes over has a value the opacity table maps to 0; the slabs
+    // next to it read its value, so the same slabs are composited with and without skipping.
+    for step in [0.013f32, 0.05, 0.11] {
+        let (on, off) = (balls(true, step), balls(false, step));
+        assert!(
+            on.iter().any(|&b| b > 40),
+            "step {step}: the balls are visible"
+        );
+        assert!(on == off, "step {step}: skipping changed a pixel");
+    }
+}

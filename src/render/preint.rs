@@ -10,7 +10,7 @@
 //!
 //! where `v(s) = vf + (vb − vf)·s`, κ is the slab's length in reference lengths, `σ(v) =
 //! −ln(1 − o(v))` the extinction of the opacity table's value o (an opacity per reference
-//! length, as [`CObj::alpha`] reads it) and c the colour table's colour; `C` is the
+//! length, as `CObj::alpha` reads it) and c the colour table's colour; `C` is the
 //! opacity-weighted (premultiplied) colour. The integral is evaluated by cutting the slab into
 //! sub-slabs of at most one table cell of value each, each taken at its midpoint value with the
 //! exact transmittance `(1 − o)^(κ/M)` of its length: a constant value (`vf = vb`) is one
