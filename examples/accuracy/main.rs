@@ -4,6 +4,7 @@
 //! ```text
 //! cargo run --release --example accuracy             # docs/accuracy.md, docs/accuracy-*.png
 //! cargo run --release --example accuracy -- --quick  # a fast smoke run into out/accuracy/
+//! cargo run --release --example accuracy -- --preintegration-only  # that section, printed
 //! ```
 //!
 //! Controls: the step size, the super-sampling rate, the interpolation filter (datasets), the

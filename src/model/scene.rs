@@ -244,7 +244,7 @@ pub struct Optimise {
     /// whose opacity and colour come from its value through transfer functions (the lean
     /// kernel's direct-shading programs), rendered alone by DVR: each slab between two
     /// samples takes the opacity and colour of the value varying linearly along it, so that
-    /// steep transfer functions need a coarser step for the same error (`docs/accuracy.md`,
+    /// steep transfer functions reach the same error at a coarser step (`docs/accuracy.md`,
     /// pre-integration). Such a scene then takes the scalar march, not the packet march, and
     /// at equal time the packet march's midpoint samples at a finer step are still more
     /// accurate, so it is off by default (every segment its midpoint sample).

@@ -26,8 +26,8 @@ use crate::data::or_unwind;
 use crate::error::ErrorCode;
 use crate::render::kernel::DirectShading;
 
-/// Table nodes per axis (value spacing 1/(n − 1)): 128² entries of five f32, 320 KiB, built in
-/// about a millisecond (`docs/accuracy.md`, pre-integration).
+/// Table nodes per axis (value spacing 1/(n − 1)): 128² entries of five f32, 320 KiB, built
+/// with the compiled scene in O(n³) operations (`docs/accuracy.md`, pre-integration).
 pub(super) const TABLE_NODES: usize = 128;
 
 /// The pre-integration table of one object's transfer functions (see the module
