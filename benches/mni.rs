@@ -82,6 +82,7 @@ fn bench(c: &mut Criterion) {
                 packets: name != "shaded_scalar",
                 wide_lanes: name != "shaded_eight_lanes",
                 trust_whole_runs: true,
+                preintegrate: false,
             },
         );
         g.bench_function(name, |b| {

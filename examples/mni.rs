@@ -5,7 +5,7 @@
 //! target/release/vlconvert nifti ../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz out/mni.vlb
 //! cargo run --release --example mni -- out/mni.vlb out/mni.png [step] [--unshaded] [--size=N] \
 //!     [--cubic] [--gradient=G] [--ss=N] [--termination=T] [--frames=N] [--no-packets] [--eight]
-//!     [--test-every-run] [--fit]
+//!     [--test-every-run] [--fit] [--preintegrate]
 //! ```
 //!
 //! `--gradient=G` chooses the normals' gradient filter: `bspline` (the default, the gallery's:
@@ -24,6 +24,9 @@
 //! mask (`Optimise::trust_whole_runs` off). `--fit` treats a volume of other dimensions as the
 //! template at (ny − 1)/232 voxels per millimetre (`benches/scaling.sh`): the camera and the
 //! opacity's unit length scale with it.
+//! `--preintegrate` renders with pre-integrated
+//! transfer functions (`Optimise::preintegrate` on: the scalar pre-integrated march instead of
+//! the packet march's midpoint samples).
 
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
@@ -60,6 +63,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let wide_lanes = !all.iter().any(|a| a == "--eight");
     let trust_whole_runs = !all.iter().any(|a| a == "--test-every-run");
     let fit = all.iter().any(|a| a == "--fit");
+    let preintegrate = all.iter().any(|a| a == "--preintegrate");
     let start = Instant::now();
     let mut vl = vlib::Library::new();
     vl.load(mni_scene::BRAIN, vlb)?;
@@ -72,6 +76,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         packets,
         wide_lanes,
         trust_whole_runs,
+        preintegrate,
         ..vlib::Optimise::default()
     })?;
     vl.image(png, 1.0, size, size)?;

@@ -4,6 +4,7 @@
 //! ```text
 //! cargo run --release --example accuracy             # docs/accuracy.md, docs/accuracy-*.png
 //! cargo run --release --example accuracy -- --quick  # a fast smoke run into out/accuracy/
+//! cargo run --release --example accuracy -- --preintegration-only  # that section, printed
 //! ```
 //!
 //! Controls: the step size, the super-sampling rate, the interpolation filter (datasets), the
@@ -23,6 +24,7 @@ mod mni_scene;
 mod say;
 
 mod gradients;
+mod preintegration;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -1469,9 +1471,23 @@ fn main() -> Res<()> {
     let load_start = load_average();
     let threads = rayon::current_num_threads();
 
+    if std::env::args().any(|a| a == "--preintegration-only") {
+        // The pre-integration section alone, printed (for its development; nothing written).
+        let path = mni_dataset()?;
+        let data = Dataset::load(&path)?;
+        data.precompute(vlib::Filter::Trilinear)?;
+        let brain = Brain {
+            data: Arc::new(data),
+            path,
+        };
+        let preint = preintegration::study(&p, &brain, start)?;
+        println!("{}", preint.doc);
+        return Ok(());
+    }
     let mut cache = Cache::new();
     let an = analytic(&p, &mut cache, start)?;
     let (mni, brain) = mni_study(&p, &mut cache, start)?;
+    let preint = preintegration::study(&p, &brain, start)?;
     let (hyper, voxel) = hyper_study(&p, &mut cache, start)?;
     let mut gradient_doc = String::new();
     let grads = gradients::study(p.quick, p.size, &brain, &mut gradient_doc)?;
@@ -1897,6 +1913,7 @@ fn main() -> Res<()> {
         grads.ratio_8bit, grads.ratio_16bit, grads.brain_cost
     );
     let _ = writeln!(d, "{rec}");
+    d.push_str(&preint.doc);
 
     let doc_path = p.out_dir.join("accuracy.md");
     write_section(&doc_path, &d)?;
@@ -1908,6 +1925,7 @@ fn main() -> Res<()> {
         &nbhd_plot,
         &voxel_plot,
         &combined_plot,
+        &preint.plot,
     ];
     say::say(format_args!(
         "wrote {} and {} plots in {:.0} s",

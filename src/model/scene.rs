@@ -244,6 +244,15 @@ pub struct Optimise {
     /// runs pass whole, and at fine steps the test is a third of a sample's work. On by
     /// default; off, every run is tested.
     pub trust_whole_runs: bool,
+    /// Pre-integrated transfer functions (Engel, Kraus and Ertl 2001) for a scanned volume
+    /// whose opacity and colour come from its value through transfer functions (the lean
+    /// kernel's direct-shading programs), rendered alone by DVR: each slab between two
+    /// samples takes the opacity and colour of the value varying linearly along it, so that
+    /// steep transfer functions reach the same error at a coarser step (`docs/accuracy.md`,
+    /// pre-integration). Such a scene then takes the scalar march, not the packet march, and
+    /// at equal time the packet march's midpoint samples at a finer step are still more
+    /// accurate, so it is off by default (every segment its midpoint sample).
+    pub preintegrate: bool,
 }
 
 impl Optimise {
@@ -266,6 +275,7 @@ impl Default for Optimise {
             termination: crate::types::T_MIN,
             wide_lanes: true,
             trust_whole_runs: true,
+            preintegrate: false,
             lean_kernel: true,
             packets: true,
         }

@@ -35,6 +35,10 @@ pub(super) struct CObj {
     /// The program compiled for the lean kernel, where it reads only constants, datasets and
     /// transfer functions (and the kernel is not switched off).
     pub(super) lean: Option<Lean>,
+    /// Where the lean program has direct shading and a value head, the object is rendered by
+    /// DVR without normal functions and `Optimise::preintegrate` is on: its pre-integration
+    /// table for slabs of its step (`preint`).
+    pub(super) preint: Option<crate::render::preint::PreIntegrated>,
     pub(super) env: SampleEnv,
     /// Blocks where opacity is provably 0.
     pub(super) skip: Option<Arc<SkipGrid>>,
@@ -144,6 +148,20 @@ impl CObj {
         } else {
             None
         };
+        let inv_ref = 1.0 / o.state.reference as f64;
+        let kappa = step * inv_ref;
+        let preint = lean
+            .as_ref()
+            .filter(|l| l.value_head().is_some())
+            .and_then(Lean::direct_shading)
+            .filter(|_| {
+                optimise.preintegrate
+                    && r.render_type == RenderType::Dvr
+                    && o.normals.is_empty()
+                    && kappa.is_finite()
+                    && kappa > 0.0
+            })
+            .map(|s| crate::render::preint::PreIntegrated::new(s, kappa));
         let prefixes: [usize; FIELD_COUNT] =
             std::array::from_fn(|i| prefix_for(&o.program, Fields::from_index(i)));
         let constants =
@@ -183,6 +201,7 @@ impl CObj {
                 })
                 .map(|(data, z)| data.cells_above(z)),
             lean,
+            preint,
             env: SampleEnv {
                 datasets: datasets.clone(),
                 filter: Filter::new(r.interpolation, r.cubic),
@@ -194,7 +213,7 @@ impl CObj {
             box_min,
             box_max,
             step,
-            inv_ref: 1.0 / o.state.reference as f64,
+            inv_ref,
             delta,
             visible: o.state.toggle(Feature::Visible),
             flip_normals: o.state.toggle(Feature::FlipNormals),

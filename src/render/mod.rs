@@ -20,7 +20,10 @@
 //! step size, the last one shorter (`cursor`), and each segment is represented by the sample
 //! at its midpoint with opacity `α = 1 − (1 − o)^(ℓ / reference)` for its true length ℓ. For
 //! constant media the product of the transmittances is therefore exactly the Beer–Lambert value
-//! `(1 − o)^(L/ref)` for any step. Samples of overlapping objects are merged in order of depth,
+//! `(1 − o)^(L/ref)` for any step. A scanned volume whose opacity and colour are its value
+//! through transfer functions is instead composited by slabs between samples with
+//! pre-integrated transfer functions where `Optimise::preintegrate` is on (`preint`,
+//! `integrate::preint`). Samples of overlapping objects are merged in order of depth,
 //! together with the surface hits of DSR objects and the layers of MIP objects (`integrate`).
 //! Compositing is front to back with early termination once the transmittance falls below
 //! `Optimise::termination` (default [`crate::T_MIN`]). Shadow rays use the same segments; mirror and
@@ -51,6 +54,7 @@ mod image;
 mod integrate;
 mod kernel;
 mod lanes;
+mod preint;
 mod shade;
 mod tiles;
 

@@ -170,6 +170,9 @@ impl Compiled {
         let obj = &self.objects[c.object];
         if let Some(lean) = &obj.lean {
             if let Some((data, z)) = lean.value_head() {
+                if let Some(pre) = &obj.preint {
+                    return self.march_preintegrated(obj, pre, data, z, c, origin, dir);
+                }
                 if obj.normals.is_empty() {
                     return self.march_batched::<true>(obj, lean, data, z, c, origin, dir);
                 }

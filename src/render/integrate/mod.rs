@@ -11,6 +11,7 @@ use crate::render::*;
 
 mod dvr;
 mod mip;
+mod preint;
 mod surface;
 
 pub(in crate::render) use dvr::*;

@@ -246,6 +246,10 @@ impl<'a> Packets<'a> {
         if !(obj.seen_by(Ray::PRIMARY) && obj.render_type == RenderType::Dvr) {
             return None;
         }
+        // Pre-integration is the scalar march's (`integrate::preint`).
+        if obj.preint.is_some() {
+            return None;
+        }
         let lean = obj.lean.as_ref()?;
         let (data, z) = lean.value_head()?;
         if !obj.normals.is_empty() {
