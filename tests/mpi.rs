@@ -105,3 +105,38 @@ fn two_ranks_render_what_one_process_renders() {
     assert!(read("split.png") == read("alone.png"), "the file differs");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A process that starts MPI itself with `MPI_Init` (thread level single), run by
+/// [`a_team_needs_mpi_thread_serialized`]: `Team::world` refuses, naming the level.
+#[test]
+#[ignore = "a process that a_team_needs_mpi_thread_serialized starts"]
+fn mpi_started_single() {
+    let _universe = mpi::initialize().expect("MPI_Init");
+    let level = mpi::environment::threading_support();
+    let refused = Team::world().expect_err("a team after MPI_Init");
+    // The message goes to stdout for the parent: the level MPI granted, and the refusal.
+    println!("level {level:?}; {:?}: {}", refused.code, refused.message);
+}
+
+#[test]
+fn a_team_needs_mpi_thread_serialized() {
+    let exe = std::env::current_exe().expect("this test binary");
+    let out = Command::new(&exe)
+        .args(["--ignored", "--exact", "mpi_started_single", "--nocapture"])
+        .args(["--test-threads=1"])
+        .output()
+        .expect("run this test binary");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // MPI_Init grants MPI_THREAD_SINGLE (Open MPI) or FUNNELED: both are refused.
+    assert!(
+        text.contains("level Single; BadValue: MPI was started with thread level Single")
+            || text
+                .contains("level Funneled; BadValue: MPI was started with thread level Funneled"),
+        "{text}"
+    );
+}

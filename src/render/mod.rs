@@ -171,9 +171,16 @@ fn render_in_strips(
         let image = scene.image_rays(view.eye, backdrop);
         // What a pixel whose bound is +∞ shows, where that is known without its ray.
         let unbounded = scene.unbounded_colour(&image).map(|c| pixel(c, 1.0));
-        // Rays in packets of SIMD lanes, where that applies (one ray per pixel).
+        // Rays in packets of SIMD lanes, where that applies (one ray per pixel) on every rank
+        // of a team: ranks of other processors take the same march and cut the image alike.
         #[cfg(target_arch = "x86_64")]
-        let packets = simd::Packets::new(scene);
+        let packets = {
+            let here = simd::Packets::new(scene);
+            let everywhere = crate::team::all(progress.team(), here.is_some());
+            here.filter(|_| everywhere)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = crate::team::all(progress.team(), false);
         #[cfg(target_arch = "x86_64")]
         let packet_side = packet_side(width, height, progress);
         let n = scene.settings.super_sample.max(1) as u32;

@@ -367,6 +367,14 @@ pub(crate) fn from_root(team: Option<&Team>, v: u64) -> u64 {
     }
 }
 
+/// Whether `here` holds on every rank (collective); `here` without a team.
+pub(crate) fn all(team: Option<&Team>, here: bool) -> bool {
+    match team.filter(|t| t.size() > 1) {
+        Some(t) => t.0.link.gather_u64(&[here as u64]).iter().all(|&v| v == 1),
+        None => here,
+    }
+}
+
 /// Whether this process writes the files: rank 0 of a team, or a process without one.
 pub(crate) fn writes(team: Option<&Team>) -> bool {
     team.is_none_or(|t| t.rank() == 0)

@@ -76,6 +76,19 @@ impl Team {
     /// which it duplicates: the team's messages never meet the program's. Collective over
     /// `comm`. The duplicate and the team's window live until MPI is finalised.
     pub fn from_communicator(comm: &SimpleCommunicator) -> Result<Team> {
+        // The team's MPI calls are made from the library's rendering threads, one at a time:
+        // MPI must have been started with MPI_THREAD_SERIALIZED or more.
+        use mpi::environment::Threading;
+        let level = mpi::environment::threading_support();
+        if !matches!(level, Threading::Serialized | Threading::Multiple) {
+            return Err(Error::new(
+                ErrorCode::BadValue,
+                format!(
+                    "MPI was started with thread level {level:?}: a team needs \
+                     MPI_THREAD_SERIALIZED or MPI_THREAD_MULTIPLE (MPI_Init_thread)"
+                ),
+            ));
+        }
         let dup = std::mem::ManuallyDrop::new(comm.duplicate());
         let raw = dup.as_raw();
         let (rank, size) = (dup.rank() as usize, dup.size() as usize);

@@ -181,3 +181,14 @@ fn ranks_agree_on_the_first_failing_ranks_error() {
     let roots = on_ranks(3, |team| from_root(Some(&team), 10 + team.rank() as u64));
     assert_eq!(roots, vec![10; 3]);
 }
+
+#[test]
+fn a_condition_holds_for_the_team_only_where_it_holds_on_every_rank() {
+    // Rank 1 alone lacks it (a host without the packet march's instructions): every rank
+    // hears false; where every rank has it, every rank hears true.
+    let one_lacks = on_ranks(3, |team| all(Some(&team), team.rank() != 1));
+    assert_eq!(one_lacks, vec![false; 3]);
+    let all_have = on_ranks(3, |team| all(Some(&team), true));
+    assert_eq!(all_have, vec![true; 3]);
+    assert!(!all(None, false) && all(None, true));
+}
