@@ -104,7 +104,7 @@ pub(crate) fn box_covered(min: glam::DVec3, max: glam::DVec3) -> bool {
 
 impl Dataset {
     /// Whether object point `p` reads the dataset: every coordinate in [0, 1] up to
-    /// [`FACE_TOLERANCE`]. Elsewhere the dataset is 0 and so is its gradient (a dataset is a
+    /// `FACE_TOLERANCE`. Elsewhere the dataset is 0 and so is its gradient (a dataset is a
     /// bounded field, as the paper's fields are: beyond its last node nothing continues it).
     #[inline(always)]
     pub fn covers(&self, p: [f32; 3]) -> bool {

@@ -121,7 +121,7 @@ pub fn write(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Resu
     crate::team::agree(team, result)
 }
 
-/// [`write`] before the ranks agree on its result.
+/// [`write()`] before the ranks agree on its result.
 fn write_files(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Result<()> {
     let team = progress.team();
     let writes = crate::team::writes(team);

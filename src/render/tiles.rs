@@ -2,7 +2,7 @@
 //! into square tiles traced in parallel (rayon) and reassembled in a fixed order, so that an
 //! image's bytes do not depend on the number of threads ([`per_pixel`], [`per_tile`]; nor on
 //! the number of processes: with a team, `Progress::map` hands the tiles out over its ranks),
-//! and the tile side of the packet march ([`packet_tile`]). The super-sampling driver that uses them is
+//! and the tile side of the packet march (`packet_tile`). The super-sampling driver that uses them is
 //! [`super::render_image`]; what a ray shows is `integrate`'s.
 
 use super::*;
@@ -10,7 +10,7 @@ use super::*;
 /// Side of the square pixel tiles traced in parallel.
 pub(super) const TILE: u32 = 16;
 
-/// Side of the packet march's tiles where the image has enough of them ([`packet_tile`]): a
+/// Side of the packet march's tiles where the image has enough of them (`packet_tile`): a
 /// tile's 32 lanes stay full for longer before its last rays drain them.
 pub(super) const PACKET_TILE: u32 = 32;
 
@@ -22,7 +22,7 @@ pub(super) fn packet_tile(width: u32, height: u32) -> u32 {
     packet_tile_for(width, height, rayon::current_num_threads())
 }
 
-/// [`packet_tile`] for a render followed by `progress`: split over a team's ranks, the
+/// `packet_tile` for a render followed by `progress`: split over a team's ranks, the
 /// threads counted are those of every rank ([`crate::Team::threads`]), so that every rank cuts
 /// the image alike.
 pub(super) fn packet_side(width: u32, height: u32, progress: &Progress) -> u32 {
@@ -32,7 +32,7 @@ pub(super) fn packet_side(width: u32, height: u32, progress: &Progress) -> u32 {
     packet_tile_for(width, height, threads)
 }
 
-/// [`packet_tile`] for `threads` threads.
+/// `packet_tile` for `threads` threads.
 fn packet_tile_for(width: u32, height: u32, threads: usize) -> u32 {
     let big = width.div_ceil(PACKET_TILE) as usize * height.div_ceil(PACKET_TILE) as usize;
     if big >= 16 * threads {
