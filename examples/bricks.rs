@@ -26,11 +26,9 @@ use std::sync::Arc;
 use std::time::Instant;
 use vlib::{Backdrop, Dataset, Image, Library, PixelFormat, Voxels};
 
-/// The value of the flag `name` (`--name=`) among `all`, parsed, or `default` without it.
-fn flag<T: std::str::FromStr>(all: &[String], name: &str, default: T) -> Result<T, T::Err> {
-    let value = all.iter().find_map(|a| a.strip_prefix(name));
-    Ok(value.map(str::parse).transpose()?.unwrap_or(default))
-}
+#[path = "common/flags.rs"]
+mod flags;
+use flags::flag;
 
 /// The nodes `j0 ..= j1` in y of `data` (x fastest, then y, then z) as a dataset of their own,
 /// on the same value scale.

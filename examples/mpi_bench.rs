@@ -24,11 +24,9 @@ mod say;
 
 use std::time::Instant;
 
-/// The value of the flag `name` (`--name=`) among `all`, parsed, or `default` without it.
-fn flag<T: std::str::FromStr>(all: &[String], name: &str, default: T) -> Result<T, T::Err> {
-    let value = all.iter().find_map(|a| a.strip_prefix(name));
-    Ok(value.map(str::parse).transpose()?.unwrap_or(default))
-}
+#[path = "common/flags.rs"]
+mod flags;
+use flags::flag;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let all: Vec<String> = std::env::args().skip(1).collect();
