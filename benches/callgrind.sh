@@ -9,7 +9,8 @@
 #
 # The step (voxels, default 0.5) and further flags go to examples/mni.rs: the usual count is
 # `bash benches/callgrind.sh` (the packet march at 0.5 voxel); the pre-integrated march at a
-# coarser step, say, `bash benches/callgrind.sh 2 --preintegrate`.
+# coarser step, say, `bash benches/callgrind.sh 2 --preintegrate`; the accuracy study's steep ramp
+# with `--ramp=0.35,0.55`.
 #
 # valgrind does not run AVX-512, so this counts the eight-lane (AVX2) packet march.
 set -euo pipefail

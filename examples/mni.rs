@@ -5,7 +5,7 @@
 //! target/release/vlconvert nifti ../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz out/mni.vlb
 //! cargo run --release --example mni -- out/mni.vlb out/mni.png [step] [--unshaded] [--size=N] \
 //!     [--cubic] [--gradient=G] [--ss=N] [--termination=T] [--frames=N] [--no-packets] [--eight]
-//!     [--test-every-run] [--fit] [--preintegrate]
+//!     [--test-every-run] [--fit] [--preintegrate] [--ramp=LO,HI]
 //! ```
 //!
 //! `--gradient=G` chooses the normals' gradient filter: `bspline` (the default, the gallery's:
@@ -26,7 +26,8 @@
 //! opacity's unit length scale with it.
 //! `--preintegrate` renders with pre-integrated
 //! transfer functions (`Optimise::preintegrate` on: the scalar pre-integrated march instead of
-//! the packet march's midpoint samples).
+//! the packet march's midpoint samples). `--ramp=LO,HI` replaces the opacity table by the
+//! accuracy study's steep ramp: 0 at and below F = LO, rising linearly to 1 at F = HI.
 
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
@@ -62,12 +63,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let trust_whole_runs = !all.iter().any(|a| a == "--test-every-run");
     let fit = all.iter().any(|a| a == "--fit");
     let preintegrate = all.iter().any(|a| a == "--preintegrate");
+    let ramp: Option<(f32, f32)> = match flag(&all, "--ramp=", String::new())?.as_str() {
+        "" => None,
+        r => {
+            let (lo, hi) = r.split_once(',').ok_or("--ramp=LO,HI")?;
+            Some((lo.parse()?, hi.parse()?))
+        }
+    };
     let start = Instant::now();
     let mut vl = vlib::Library::new();
     vl.load(mni_scene::BRAIN, vlb)?;
     let loaded = start.elapsed().as_secs_f64();
     let dims = vl.dataset_of(mni_scene::BRAIN).expect("loaded").dims();
     mni_scene::mappings(&mut vl)?;
+    if let Some((lo, hi)) = ramp {
+        vl.mapping(
+            mni_scene::OPACITY,
+            vlib::MappingType::Ramp,
+            2,
+            1,
+            &[lo, 0.0, hi, 1.0],
+        )?;
+    }
     vl.scene()?;
     vl.set_optimise(vlib::Optimise {
         termination,

@@ -90,12 +90,18 @@ fn scene_of(step: f32, preintegrate: bool, voxel: impl Fn(usize) -> u16) -> Libr
 /// per reference length, by the composite midpoint rule in f64 over a million steps (its
 /// error, of order (len/10⁶)²·σ'', is far below f32's resolution).
 fn exact(len: f64) -> [f64; 3] {
+    exact_along(len, |s| s / len)
+}
+
+/// The emission–absorption integral along a ray of path length `len` whose value at distance
+/// s from its front is `value(s)`, as [`exact`].
+fn exact_along(len: f64, value: impl Fn(f64) -> f64) -> [f64; 3] {
     let n = 1_000_000;
     let ds = len / n as f64;
     let mut tau = 0.0f64;
     let mut col = [0.0f64; 3];
     for i in 0..n {
-        let v = (i as f64 + 0.5) / n as f64;
+        let v = value((i as f64 + 0.5) * ds);
         let sigma = -(1.0 - opacity(v)).ln() / REFERENCE as f64;
         // The step's own attenuation at its middle: e^(−τ − σ ds/2).
         let w = sigma * ds * (-(tau + 0.5 * sigma * ds)).exp();
@@ -141,6 +147,39 @@ fn preintegration_is_exact_on_a_linear_ramp_at_any_step() {
 }
 
 #[test]
+fn slabs_are_halved_where_the_data_bends() {
+    // Node k along depth (at z = k) holds a value that zigzags, so the value is linear within
+    // each cell and bends at every node. At step 2 the samples lie at odd z and every slab
+    // between them spans two cells with a bend at its middle: the midpoint's value is off the
+    // mean of the ends, so the slab is halved there, and each half lies within one cell, where
+    // the value is linear and its table integral exact (the same bound as on the linear ramp).
+    // The half slabs to and from the faces lie within one cell too.
+    const ZIGZAG: [f64; NZ] = [0.3, 0.9, 0.4, 0.8, 0.5, 0.95, 0.35, 0.7, 0.6, 1.0, 0.45];
+    let top = (65535 / (NZ - 1) as u16) as f64 * (NZ - 1) as f64;
+    let voxel = |k: usize| (ZIGZAG[k] * top).round() as u16;
+    let node = |k: usize| voxel(k) as f64 / top;
+    let expected = exact_along(DEPTH, |z| {
+        let k = (z.floor() as usize).min(NZ - 2);
+        node(k) + (node(k + 1) - node(k)) * (z - k as f64)
+    });
+    let err = |pre: bool| {
+        let img = scene_of(2.0, pre, voxel).render_preview(3, 3, 1.0).unwrap();
+        let p = img.pixel(1, 1);
+        (0..3)
+            .map(|k| (p[k] as f64 - expected[k]).abs())
+            .fold(0.0, f64::max)
+    };
+    let on = err(true);
+    assert!(
+        on < 2e-4,
+        "pre-integrated: error {on:e}, expected {expected:?}"
+    );
+    // The midpoint rule at the same step is far off (the test tells the two apart).
+    let off = err(false);
+    assert!(off > 1e-2, "midpoint rule: {off:e}");
+}
+
+#[test]
 fn a_constant_value_keeps_the_exact_opacity_of_a_constant_medium() {
     // Every node 0.6 of the ramp's top: value 0.6 (to f32 rounding of the normalisation),
     // opacity o and colour c constant, so the pixel is c·(1 − (1 − o)^DEPTH) for any step,
@@ -172,6 +211,11 @@ fn a_constant_value_keeps_the_exact_opacity_of_a_constant_medium() {
 /// A 32³ dataset of two soft balls (8-bit), through a steep opacity ramp and a colour ramp,
 /// lit by a directional light, rendered with pre-integration and `skip_empty` as given.
 fn balls(skip_empty: bool, step: f32) -> Vec<u8> {
+    balls_on(skip_empty, step, 0)
+}
+
+/// [`balls`] on a pool of `threads` threads (0: rayon's default).
+fn balls_on(skip_empty: bool, step: f32, threads: usize) -> Vec<u8> {
     let n = 32usize;
     let raw: Vec<u8> = (0..n * n * n)
         .map(|i| {
@@ -232,7 +276,13 @@ fn balls(skip_empty: bool, step: f32) -> Vec<u8> {
     vl.set(Fields::KA, 0.3).unwrap();
     vl.set(Fields::KD, 0.7).unwrap();
     vl.end().unwrap();
-    vl.render_preview(40, 40, 1.0).unwrap().to_rgb8()
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(|| vl.render_preview(40, 40, 1.0))
+        .unwrap()
+        .to_rgb8()
 }
 
 #[test]
@@ -246,5 +296,19 @@ fn empty_space_skipping_changes_no_pre_integrated_pixel() {
             "step {step}: the balls are visible"
         );
         assert!(on == off, "step {step}: skipping changed a pixel");
+    }
+}
+
+#[test]
+fn pre_integrated_bytes_do_not_depend_on_the_thread_count() {
+    // The tables' rows are built in parallel and the tiles traced in parallel; each entry and
+    // each pixel is computed on its own, so the bytes are the same on any number of threads.
+    let one = balls_on(true, 0.05, 1);
+    assert!(one.iter().any(|&b| b > 40), "the balls are visible");
+    for threads in [2, 3, 8] {
+        assert!(
+            balls_on(true, 0.05, threads) == one,
+            "{threads} threads differ from one"
+        );
     }
 }

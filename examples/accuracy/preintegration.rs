@@ -144,9 +144,11 @@ fn document(
          to 1 at F = {} and 1 above, at {size}×{size} pixels, 1 sample per pixel. The \
          reference is step {} voxel without pre-integration ({} s). With pre-integration \
          (`Optimise::preintegrate`, off by default) each slab between two samples takes the \
-         opacity and colour of the value varying linearly from one sample to the next \
-         (a 128 × 128 table per object and step, built with the scene: its build is inside \
-         every time below); without it, each segment is its midpoint sample. Pre-integrated \
+         opacity and colour of the value varying linearly from one sample to the next, cut \
+         in halves down to a quarter of the step where the data bends along it (128 × 128 \
+         tables per object for the step, its half and its quarter, built with the scene: \
+         their build is inside every time below); without it, each segment is its midpoint \
+         sample. Pre-integrated \
          images are traced by the scalar march, the others by the packet march where the \
          processor has AVX2. A ★ marks the Pareto front of both sweeps together.\n",
         RAMP.0,

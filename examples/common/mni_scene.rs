@@ -75,7 +75,7 @@ pub fn converted_dataset() -> Result<PathBuf, String> {
 }
 
 /// Mapping ids used by the scene.
-const OPACITY: MappingId = MappingId(1);
+pub const OPACITY: MappingId = MappingId(1);
 const COLOUR: MappingId = MappingId(2);
 
 /// Dataset id of the brain.

@@ -16,28 +16,40 @@
 //! exact transmittance `(1 − o)^(κ/M)` of its length: a constant value (`vf = vb`) is one
 //! sub-slab, the midpoint rule's value exactly.
 //!
-//! [`PreIntegrated`] holds the table of one object: the slab of the step's length for
-//! `TABLE_NODES`² (front, back) value pairs, read with bilinear interpolation; slabs of another
-//! length (the ends of a ray's interval in the box) are integrated on the spot
+//! [`PreIntegrated`] holds the tables of one object: the slab of the step's length, of half and
+//! of a quarter of it (the halves `integrate::preint` cuts where the data bends within a slab)
+//! for `TABLE_NODES`² (front, back) value pairs, read with bilinear interpolation; slabs of
+//! another length (the ends of a ray's interval in the box) are integrated on the spot
 //! ([`PreIntegrated::integrate`]). Built once per compiled scene, in O(n³) operations on n
-//! nodes. The march that uses it is `integrate::preint`'s; the tables themselves are `model`'s.
+//! nodes, fewer where the opacity table is 0 or 1 over part of its range. The march that uses
+//! them is `integrate::preint`'s; the transfer functions themselves are `model`'s.
 
 use crate::data::or_unwind;
 use crate::error::ErrorCode;
 use crate::render::kernel::DirectShading;
+use rayon::prelude::*;
 
-/// Table nodes per axis (value spacing 1/(n − 1)): 128² entries of five f32, 320 KiB, built
-/// with the compiled scene in O(n³) operations (`docs/accuracy.md`, pre-integration).
+/// Table nodes per axis (value spacing 1/(n − 1)): 128² entries of five f32, 320 KiB a table,
+/// built with the compiled scene in O(n³) operations (`docs/accuracy.md`, pre-integration).
 pub(super) const TABLE_NODES: usize = 128;
 
-/// The pre-integration table of one object's transfer functions (see the module
+/// How many times a slab may be halved where the data is not linear along it (see
+/// `integrate::preint`): down to a quarter of the step. A table per level.
+pub(super) const REFINE_LEVELS: u32 = 2;
+
+/// A slab is halved where the value at its middle differs from the mean of its ends by more
+/// than this: half a table cell of value, below which the table cannot tell the two apart.
+pub(super) const REFINE_TOLERANCE: f32 = 0.5 / (TABLE_NODES - 1) as f32;
+
+/// The pre-integration tables of one object's transfer functions (see the module
 /// documentation).
 pub(crate) struct PreIntegrated {
     /// The transfer functions, for slabs integrated on the spot and constant slabs.
     pub(super) shading: DirectShading,
-    /// Per (front node i, back node j), at `i·TABLE_NODES + j`: the [`Slab`] of the step's
-    /// length from value i/(n − 1) to j/(n − 1).
-    table: Vec<Slab>,
+    /// Per level l (0 to [`REFINE_LEVELS`]), per (front node i, back node j), at
+    /// `i·TABLE_NODES + j`: the [`Slab`] of 1/2^l of the step's length from value i/(n − 1) to
+    /// j/(n − 1).
+    tables: Vec<Vec<Slab>>,
 }
 
 /// One sub-slab's transfer-function values: ln(1 − o) (−∞ where o = 1) and the colour.
@@ -58,75 +70,31 @@ impl Cell {
 }
 
 impl PreIntegrated {
-    /// The table of `shading` for slabs `kappa` reference lengths long (κ > 0 and finite).
-    /// Unwinds with `NoMemory` where the table cannot be allocated (as the renderer's other
-    /// caches, see [`or_unwind`]).
+    /// The tables of `shading` for slabs `kappa` reference lengths long (κ > 0 and finite)
+    /// and their halves and quarters. Unwinds with `NoMemory` where a table cannot be
+    /// allocated (as the renderer's other caches, see [`or_unwind`]).
     pub(super) fn new(shading: &DirectShading, kappa: f64) -> PreIntegrated {
-        let n = TABLE_NODES;
-        let mut table: Vec<Slab> = Vec::new();
-        or_unwind(
-            table.try_reserve_exact(n * n).map_err(|_| {
-                crate::error::Error::new(ErrorCode::NoMemory, "pre-integration table")
-            }),
-        );
-        table.resize(n * n, [0.0; 5]);
-        let h = 1.0 / (n - 1) as f64;
-        // The transfer functions at the nodes (the diagonal) and at the cells' midpoints.
-        let nodes: Vec<Cell> = (0..n)
-            .map(|i| Cell::at(shading, (i as f64 * h) as f32))
+        let tables = (0..=REFINE_LEVELS)
+            .map(|l| table(shading, kappa / (1u32 << l) as f64))
             .collect();
-        let mids: Vec<Cell> = (0..n - 1)
-            .map(|c| Cell::at(shading, ((c as f64 + 0.5) * h) as f32))
-            .collect();
-        // Per slab of d cells, each cell's sub-slab transmittance for a length κ/d.
-        let mut trans = vec![0.0f64; n - 1];
-        for i in 0..n {
-            let diag = &nodes[i];
-            let t = transmit_ln(diag.ln_t, kappa, 1.0);
-            let a = 1.0 - t;
-            // The constant slab's depth: ∫₀¹ s·k·e^(−k·s) ds = (1 − t)/k − t for k = −ln t.
-            let k = -(diag.ln_t * kappa);
-            let depth = if a > 0.0 && k.is_finite() {
-                a / k - t
-            } else {
-                0.0
-            };
-            table[i * n + i] = [
-                a as f32,
-                (a * diag.rgb[0]) as f32,
-                (a * diag.rgb[1]) as f32,
-                (a * diag.rgb[2]) as f32,
-                depth as f32,
-            ];
-        }
-        for d in 1..n {
-            for (tr, c) in trans.iter_mut().zip(&mids) {
-                *tr = transmit_ln(c.ln_t, kappa, d as f64);
-            }
-            for i in 0..n - d {
-                // Up: cells i … i + d − 1 in increasing order; down: the same cells reversed.
-                table[i * n + i + d] = composite(d, (i..i + d).map(|c| (trans[c], &mids[c].rgb)));
-                table[(i + d) * n + i] =
-                    composite(d, (i..i + d).rev().map(|c| (trans[c], &mids[c].rgb)));
-            }
-        }
         PreIntegrated {
             shading: shading.clone(),
-            table,
+            tables,
         }
     }
 
-    /// The [`Slab`] of a slab of the table's length from value `vf` to
-    /// value `vb` (both in [0, 1]): the table's bilinear interpolation.
+    /// The [`Slab`] of a slab of level `level`'s length (1/2^level of the step) from value
+    /// `vf` to value `vb` (both in [0, 1]): the table's bilinear interpolation.
     #[inline]
-    pub(super) fn lookup(&self, vf: f32, vb: f32) -> Slab {
+    pub(super) fn lookup(&self, level: u32, vf: f32, vb: f32) -> Slab {
+        let table = &self.tables[level as usize];
         let n = TABLE_NODES;
         let last = (n - 1) as f32;
         let (x, y) = (vf.clamp(0.0, 1.0) * last, vb.clamp(0.0, 1.0) * last);
         // (Clamped so that i + 1 and j + 1 are nodes; x − i is then in [0, 1].)
         let (i, j) = ((x as usize).min(n - 2), (y as usize).min(n - 2));
         let (fx, fy) = (x - i as f32, y - j as f32);
-        let at = |a: usize, b: usize| self.table[a * n + b];
+        let at = |a: usize, b: usize| table[a * n + b];
         let (a, b, c, d) = (at(i, j), at(i, j + 1), at(i + 1, j), at(i + 1, j + 1));
         std::array::from_fn(|k| {
             let lo = a[k] + fy * (b[k] - a[k]);
@@ -152,8 +120,93 @@ impl PreIntegrated {
                 (transmit_ln(c.ln_t, kappa, m as f64), c.rgb)
             })
             .collect();
-        composite(m, cells.iter().map(|(t, rgb)| (*t, rgb)))
+        composite(
+            m,
+            cells.iter().enumerate().map(|(s, (t, rgb))| (s, *t, rgb)),
+        )
     }
+}
+
+/// The table of slabs `kappa` reference lengths long (see [`PreIntegrated`]): rows built in
+/// parallel, each entry independently, so the same bits on any thread count.
+fn table(shading: &DirectShading, kappa: f64) -> Vec<Slab> {
+    let n = TABLE_NODES;
+    let mut table: Vec<Slab> = Vec::new();
+    or_unwind(
+        table
+            .try_reserve_exact(n * n)
+            .map_err(|_| crate::error::Error::new(ErrorCode::NoMemory, "pre-integration table")),
+    );
+    table.resize(n * n, [0.0; 5]);
+    let h = 1.0 / (n - 1) as f64;
+    // The transfer functions at the nodes (the diagonal) and at the cells' midpoints.
+    let nodes: Vec<Cell> = (0..n)
+        .map(|i| Cell::at(shading, (i as f64 * h) as f32))
+        .collect();
+    let mids: Vec<Cell> = (0..n - 1)
+        .map(|c| Cell::at(shading, ((c as f64 + 0.5) * h) as f32))
+        .collect();
+    // Per slab of d cells (at d·(n − 1) + c), cell c's sub-slab transmittance for a length κ/d.
+    let trans: Vec<f64> = (0..n * (n - 1))
+        .map(|k| {
+            let (d, c) = (k / (n - 1), k % (n - 1));
+            if d == 0 {
+                0.0
+            } else {
+                transmit_ln(mids[c].ln_t, kappa, d as f64)
+            }
+        })
+        .collect();
+    // The cells lo … hi − 1 hold every cell of positive opacity: the others are clear.
+    let lo = mids.iter().position(|c| c.ln_t != 0.0).unwrap_or(n - 1);
+    let hi = mids
+        .iter()
+        .rposition(|c| c.ln_t != 0.0)
+        .map_or(lo, |c| c + 1);
+    table.par_chunks_mut(n).enumerate().for_each(|(i, row)| {
+        for (j, e) in row.iter_mut().enumerate() {
+            *e = if i == j {
+                constant(&nodes[i], kappa)
+            } else if i < j {
+                // Up: cells i … j − 1 in increasing order (cell c is sub-slab c − i).
+                let d = j - i;
+                let cells = i.max(lo)..j.min(hi);
+                composite(
+                    d,
+                    cells.map(|c| (c - i, trans[d * (n - 1) + c], &mids[c].rgb)),
+                )
+            } else {
+                // Down: cells i − 1 … j in decreasing order (cell c is sub-slab i − 1 − c).
+                let d = i - j;
+                let cells = (j.max(lo)..i.min(hi)).rev();
+                composite(
+                    d,
+                    cells.map(|c| (i - 1 - c, trans[d * (n - 1) + c], &mids[c].rgb)),
+                )
+            };
+        }
+    });
+    table
+}
+
+/// The [`Slab`] of a constant value (transfer-function values `cell`) over `kappa` reference
+/// lengths: α = 1 − t and its depth ∫₀¹ s·k·e^(−k·s) ds = (1 − t)/k − t for k = −ln t.
+fn constant(cell: &Cell, kappa: f64) -> Slab {
+    let t = transmit_ln(cell.ln_t, kappa, 1.0);
+    let a = 1.0 - t;
+    let k = -(cell.ln_t * kappa);
+    let depth = if a > 0.0 && k.is_finite() {
+        a / k - t
+    } else {
+        0.0
+    };
+    [
+        a as f32,
+        (a * cell.rgb[0]) as f32,
+        (a * cell.rgb[1]) as f32,
+        (a * cell.rgb[2]) as f32,
+        depth as f32,
+    ]
 }
 
 /// The transmittance `exp(ln_t·κ/m)` of a sub-slab `κ/m` reference lengths long through a
@@ -173,14 +226,19 @@ fn transmit_ln(ln_t: f64, kappa: f64, m: f64) -> f64 {
 /// lit (`integrate::preint`).
 pub(super) type Slab = [f32; 5];
 
-/// The front-to-back composite of `m` sub-slabs of equal length (transmittance, colour), in
-/// order: the [`Slab`], as f32.
+/// The front-to-back composite of `m` sub-slabs of equal length, given in order as (position
+/// in the slab, transmittance, colour): the [`Slab`], as f32. Sub-slabs left out are clear
+/// (transmittance 1: they add nothing); those after the transmittance reaches 0 add nothing
+/// either and are not read.
 #[inline]
-fn composite<'a>(m: usize, cells: impl Iterator<Item = (f64, &'a [f64; 3])>) -> Slab {
+fn composite<'a>(m: usize, cells: impl Iterator<Item = (usize, f64, &'a [f64; 3])>) -> Slab {
     let mut t = 1.0f64;
     let mut col = [0.0f64; 4];
     let inv = 1.0 / m as f64;
-    for (s, (tr, rgb)) in cells.enumerate() {
+    for (s, tr, rgb) in cells {
+        if t == 0.0 {
+            break;
+        }
         let w = t * (1.0 - tr);
         col[0] += w * rgb[0];
         col[1] += w * rgb[1];
