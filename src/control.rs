@@ -78,6 +78,9 @@ pub(crate) struct Progress {
     team: Option<Team>,
     /// With a team: every rank has agreed to stop (at a step of [`Progress::map`]).
     agreed_stop: AtomicBool,
+    /// With a team: an error this rank met between steps, for the next step (or
+    /// [`Progress::settle`]) to fail every rank with ([`Progress::hold`]).
+    held: std::sync::Mutex<Option<Error>>,
 }
 
 impl Progress {
@@ -90,6 +93,7 @@ impl Progress {
             stopped: AtomicBool::new(false),
             team: None,
             agreed_stop: AtomicBool::new(false),
+            held: std::sync::Mutex::new(None),
         }
     }
 
@@ -114,7 +118,7 @@ impl Progress {
         T: crate::team::Floats,
         F: Fn(usize) -> Vec<T> + Sync + Send,
     {
-        let out = crate::team::map(self.team(), n, &|| self.cancelled(), f);
+        let out = crate::team::map(self.team(), n, &|| self.cancelled(), self.take_held(), f);
         match out {
             Err(e) if e.code == ErrorCode::Cancelled => {
                 self.agreed_stop.store(true, Ordering::Relaxed);
@@ -126,6 +130,47 @@ impl Progress {
                 Ok(v)
             }
         }
+    }
+
+    /// An error this rank met outside a step of [`Progress::map`] (a buffer it could not
+    /// allocate, a panic in the caller's sink or progress function). Without a team,
+    /// `Err(e)`: the render fails at once. With a team, `Ok`: the error is held, the rank
+    /// carries on to the next step as the others do, taking no work, and that step fails on
+    /// every rank with it ([`crate::team::map`]), or [`Progress::settle`] where no step
+    /// follows: the ranks leave the render together instead of one waiting for another that
+    /// has gone.
+    pub(crate) fn hold<T>(&self, r: Result<T>) -> Result<Option<T>> {
+        match r {
+            Ok(v) => Ok(Some(v)),
+            Err(e) if self.team.is_some() => {
+                self.held
+                    .lock()
+                    .unwrap_or_else(|p| p.into_inner())
+                    .get_or_insert(e);
+                Ok(None)
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Whether this rank holds an error ([`Progress::hold`]): it is to take no more work.
+    pub(crate) fn holds(&self) -> bool {
+        self.held
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .is_some()
+    }
+
+    /// The end of a piece of work with no step after it (collective with a team): the error a
+    /// rank holds, on every rank ([`crate::team::agree`]); `Ok` without a team.
+    pub(crate) fn settle(&self) -> Result<()> {
+        let held = self.take_held();
+        crate::team::agree(self.team(), held.map_or(Ok(()), Err))
+    }
+
+    /// The error held, taken.
+    fn take_held(&self) -> Option<Error> {
+        self.held.lock().unwrap_or_else(|p| p.into_inner()).take()
     }
 
     /// A render nobody follows (tests, internal renders).
@@ -169,12 +214,17 @@ impl Progress {
 
     /// The render has ended (every output done or failed, none cancelled): where the work
     /// counted falls short of the total (an output failed), the progress function hears 1.
-    /// Its answer is not asked for: nothing is left to stop.
-    pub(crate) fn finish(&self) {
+    /// Its answer is not asked for: nothing is left to stop. A panic in it is the error
+    /// returned (`Internal`).
+    pub(crate) fn finish(&self) -> Result<()> {
         let done = self.done.swap(self.total, Ordering::Relaxed);
         if done < self.total {
-            self.tell(self.total);
+            crate::error::catch("the progress function", || {
+                self.tell(self.total);
+                Ok(())
+            })?;
         }
+        Ok(())
     }
 
     /// Tells the progress function the fraction `done` of the total; records a `false`.

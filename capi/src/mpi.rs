@@ -51,7 +51,14 @@ pub(crate) fn share_errors(lib: &Library, mark: u64) {
         .iter()
         .flat_map(|c| (*c as i32).to_le_bytes())
         .collect();
-    for (rank, codes) in team.gather(&mine).iter().enumerate() {
+    let all = match team.gather(&mine) {
+        Ok(all) => all,
+        Err(e) => {
+            crate::errors::record(e);
+            return;
+        }
+    };
+    for (rank, codes) in all.iter().enumerate() {
         for code in codes.chunks_exact(4) {
             let raw = i32::from_le_bytes(code.try_into().expect("4 bytes"));
             let code =

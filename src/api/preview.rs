@@ -36,7 +36,11 @@ impl Library {
             let progress =
                 crate::control::Progress::new(&self.control, width as u64 * height as u64)
                     .with_team(self.team.as_ref());
-            let scene = self.compile(&desc)?;
+            // (With a team, a rank that cannot compile the scene fails every rank.)
+            let scene = crate::team::agree(
+                progress.team(),
+                crate::error::catch("compiling the scene", || self.compile(&desc)),
+            )?;
             crate::render::render_image(&scene, (width, height, aspect), backdrop, &progress)
         })
     }
@@ -82,7 +86,11 @@ impl Library {
             let progress =
                 crate::control::Progress::new(&self.control, width as u64 * height as u64)
                     .with_team(self.team.as_ref());
-            let scene = self.compile(&desc)?;
+            // (With a team, a rank that cannot compile the scene fails every rank.)
+            let scene = crate::team::agree(
+                progress.team(),
+                crate::error::catch("compiling the scene", || self.compile(&desc)),
+            )?;
             crate::render::render_into(&scene, (width, height, aspect), format, &progress, buffer)
         })
     }

@@ -81,7 +81,11 @@ pub fn render_outputs(
     let progress = Progress::new(control, total).with_team(team);
     let mut errors: Vec<Error> = Vec::new();
     let cancelled = crate::error::catch("rendering the scene", || {
-        let compiled = Compiled::build(desc, grids)?;
+        // (With a team, a rank that cannot compile the scene fails every rank.)
+        let compiled = crate::team::agree(
+            team,
+            crate::error::catch("compiling the scene", || Compiled::build(desc, grids)),
+        )?;
         let images = desc
             .images
             .iter()
@@ -105,9 +109,9 @@ pub fn render_outputs(
         }
         return Err(e);
     }
-    progress.finish();
+    let finished = progress.finish();
     match errors.len() {
-        0 => Ok(()),
+        0 => finished,
         1 => Err(errors.remove(0)),
         n => {
             let mut e = errors.remove(0);

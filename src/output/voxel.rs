@@ -86,9 +86,14 @@ fn sample_slab(
         }
         fields
     })?;
-    out.par_chunks_mut(CHUNK_NODES)
-        .zip(chunks)
-        .for_each(|(o, c)| o[..c.len()].copy_from_slice(&c));
+    // (The step's error is every rank's; one of this rank alone is held for the next step,
+    // `Progress::hold`.)
+    progress.hold(crate::error::catch("voxelization", || {
+        out.par_chunks_mut(CHUNK_NODES)
+            .zip(chunks)
+            .for_each(|(o, c)| o[..c.len()].copy_from_slice(&c));
+        Ok(())
+    }))?;
     Ok(())
 }
 
@@ -158,10 +163,16 @@ fn write_files(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Re
             }
         }
     }
-    follow_root(team, &mut files);
+    follow_root(team, &mut files)?;
     let slab = SLAB_NODES.min(total);
-    let mut nodes = try_vec(slab, [0f32; FIELD_COUNT], "a voxelization's slab")?;
-    let mut bytes = try_vec(slab * req.bytes as usize, 0u8, "a voxelization's slab")?;
+    // (With a team, a rank that cannot hold the slab fails every rank.)
+    let buffers = (|| {
+        Ok((
+            try_vec(slab, [0f32; FIELD_COUNT], "a voxelization's slab")?,
+            try_vec(slab * req.bytes as usize, 0u8, "a voxelization's slab")?,
+        ))
+    })();
+    let (mut nodes, mut bytes) = crate::team::agree(team, buffers)?;
     progress.check()?;
     let mut done = 0;
     while done < total && !files.is_empty() {
@@ -172,17 +183,24 @@ fn write_files(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Re
         })?;
         progress.check()?;
         let bytes = &mut bytes[..n * req.bytes as usize];
-        files.retain_mut(|(field, file)| {
-            let Some(file) = file else { return true };
-            quantise(nodes, *field, req.bytes, bytes);
-            file.write(bytes)
-                .map_err(|e| first_error.get_or_insert(e))
-                .is_ok()
-        });
-        follow_root(team, &mut files);
+        if !progress.holds() {
+            files.retain_mut(|(field, file)| {
+                let Some(file) = file else { return true };
+                quantise(nodes, *field, req.bytes, bytes);
+                file.write(bytes)
+                    .map_err(|e| first_error.get_or_insert(e))
+                    .is_ok()
+            });
+        }
+        follow_root(team, &mut files)?;
         done += n;
-        progress.advance(n as u64)?;
+        progress.hold(crate::error::catch("the progress function", || {
+            progress.advance(n as u64)
+        }))?;
     }
+    // (With a team, an error held after the last step fails every rank here, before any
+    // file is committed.)
+    progress.settle()?;
     for (field, file) in files {
         let Some(file) = file else { continue };
         // (A voxelization's nodes lie in the scene's world, not in millimetres: no geometry,
@@ -198,13 +216,17 @@ fn write_files(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Re
 }
 
 /// With a team, keeps on every rank the fields whose files rank 0 still has (collective).
-fn follow_root(team: Option<&crate::team::Team>, files: &mut Vec<(usize, Option<AtomicFile>)>) {
+fn follow_root(
+    team: Option<&crate::team::Team>,
+    files: &mut Vec<(usize, Option<AtomicFile>)>,
+) -> Result<()> {
     if team.is_none() {
-        return;
+        return Ok(());
     }
     let mask = files.iter().fold(0u64, |m, (field, _)| m | 1 << field);
-    let root = crate::team::from_root(team, mask);
+    let root = crate::team::from_root(team, mask)?;
     files.retain(|(field, _)| root & 1 << field != 0);
+    Ok(())
 }
 
 #[cfg(test)]

@@ -111,8 +111,14 @@ pub fn render_image(
     progress: &Progress,
 ) -> Result<Image> {
     let n = width as usize * height as usize;
-    let mut pixels = crate::num::try_with_capacity(n, "the image")?;
-    let mut transmittance = crate::num::try_with_capacity(n, "the image's transmittance")?;
+    // (With a team, a rank that cannot hold the image fails every rank.)
+    let buffers = (|| {
+        Ok((
+            crate::num::try_with_capacity(n, "the image")?,
+            crate::num::try_with_capacity(n, "the image's transmittance")?,
+        ))
+    })();
+    let (mut pixels, mut transmittance) = crate::team::agree(progress.team(), buffers)?;
     render_strips(
         scene,
         (width, height, aspect),
@@ -165,22 +171,30 @@ fn render_in_strips(
 ) -> Result<()> {
     scene.check_work()?;
     progress.check()?;
+    let team = progress.team();
     let run = || -> Result<()> {
-        let view = view(&scene.settings, width, height, aspect);
-        let marks = scene.entry_marks(&view);
-        let image = scene.image_rays(view.eye, backdrop);
-        // What a pixel whose bound is +∞ shows, where that is known without its ray.
-        let unbounded = scene.unbounded_colour(&image).map(|c| pixel(c, 1.0));
+        // What every strip needs, made on each rank (its caches may fail to allocate): with a
+        // team, a failure on one rank fails every rank here.
+        let prologue = crate::error::catch("rendering", || {
+            let view = view(&scene.settings, width, height, aspect);
+            let marks = scene.entry_marks(&view);
+            let image = scene.image_rays(view.eye, backdrop);
+            // What a pixel whose bound is +∞ shows, where that is known without its ray.
+            let unbounded = scene.unbounded_colour(&image).map(|c| pixel(c, 1.0));
+            #[cfg(target_arch = "x86_64")]
+            let here = simd::Packets::new(scene);
+            #[cfg(not(target_arch = "x86_64"))]
+            let here: Option<()> = None;
+            Ok((view, marks, image, unbounded, here))
+        });
+        let (view, marks, image, unbounded, here) = crate::team::agree(team, prologue)?;
         // Rays in packets of SIMD lanes, where that applies (one ray per pixel) on every rank
         // of a team: ranks of other processors take the same march and cut the image alike.
+        let everywhere = crate::team::all(team, here.is_some())?;
         #[cfg(target_arch = "x86_64")]
-        let packets = {
-            let here = simd::Packets::new(scene);
-            let everywhere = crate::team::all(progress.team(), here.is_some());
-            here.filter(|_| everywhere)
-        };
+        let packets = here.filter(|_| everywhere);
         #[cfg(not(target_arch = "x86_64"))]
-        let _ = crate::team::all(progress.team(), false);
+        let _ = (here, everywhere);
         #[cfg(target_arch = "x86_64")]
         let packet_side = packet_side(width, height, progress);
         let n = scene.settings.super_sample.max(1) as u32;
@@ -215,13 +229,15 @@ fn render_in_strips(
             } else {
                 (y0, y1)
             };
+            // (Here and below, an error of this rank alone is held for the next step with a
+            // team, `Progress::hold`, and the rank takes no work in it.)
             let entry = match &marks {
                 Some(m) => {
                     let rows = need_lo as usize..need_hi as usize;
                     let bytes = rows.len() * row * size_of::<f64>();
-                    Some(m.rows(rows).ok_or_else(|| {
+                    progress.hold(m.rows(rows).ok_or_else(|| {
                         crate::num::no_memory("a strip of the entry map", Some(bytes))
-                    })?)
+                    }))?
                 }
                 None => None,
             };
@@ -236,12 +252,16 @@ fn render_in_strips(
             let fresh = first_pass(hi..need_hi, entry.as_ref())?;
             if n == 1 {
                 // One ray a pixel: the first pass is the strip, handed on as it is.
-                sink(y0, &fresh)?;
+                if !progress.holds() {
+                    progress.hold(crate::error::catch("rendering", || sink(y0, &fresh)))?;
+                }
             } else {
-                first.try_reserve(fresh.len()).map_err(|_| {
+                progress.hold(first.try_reserve(fresh.len()).map_err(|_| {
                     crate::num::no_memory("a strip of the image", Some(fresh.len() * 16))
-                })?;
-                first.extend_from_slice(&fresh);
+                }))?;
+                if !progress.holds() {
+                    first.extend_from_slice(&fresh);
+                }
                 drop(fresh);
                 hi = need_hi;
                 let at = |x: u32, y: u32| first[(y - lo) as usize * row + x as usize];
@@ -287,11 +307,17 @@ fn render_in_strips(
                     let samples = (n * n) as f64;
                     pixel(sum / samples, t_sum / samples)
                 })?;
-                sink(y0, &refined)?;
+                if !progress.holds() {
+                    progress.hold(crate::error::catch("rendering", || sink(y0, &refined)))?;
+                }
             }
-            progress.advance((y1 - y0) as u64 * width as u64)?;
+            let units = (y1 - y0) as u64 * width as u64;
+            progress.hold(crate::error::catch("the progress function", || {
+                progress.advance(units)
+            }))?;
         }
-        Ok(())
+        // (With a team, an error held after the last step fails every rank here.)
+        progress.settle()
     };
     crate::error::catch("rendering", run)
 }

@@ -10,8 +10,12 @@
 //! the end every rank sends the results it made to every other (an all-gather). The results
 //! are put in item order whichever rank made them, so the bytes of an image do not depend on
 //! the number of ranks or on who rendered what. Each rank also sends its status (done,
-//! stopped, failed), so every rank comes out of a step with the same answer: cancelling on one
-//! rank cancels the render on all of them at the end of the step in progress.
+//! stopped, failed with an error), so every rank comes out of a step with the same answer:
+//! cancelling on one rank cancels the render on all of them at the end of the step in
+//! progress, and an error on one rank, in the step or held from between steps
+//! (`Progress::hold`), fails it on all of them. [`agree`] does the same for a result made
+//! outside the steps; [`exchange`] agrees that every rank can hold what it is about to
+//! receive. So no rank leaves a render while another still waits for it.
 //!
 //! The counter only grows: each step knows where it started (`base`) and, from the sum of
 //! every rank's additions that the all-gather carries, where the next one starts.
@@ -31,20 +35,50 @@ mod mpi;
 mod tests;
 
 /// What a team's transport does: the MPI communicator's operations [`map`] and [`agree`] need.
-/// Every method but `fetch_add` is collective: every rank calls it, in the same order.
+/// Every method but `fetch_add` is collective: every rank calls it, in the same order. A
+/// failure of the transport itself (an MPI error) is an `Internal` error, not an abort.
 pub(crate) trait Link: Send + Sync {
     /// This process's rank, 0 … `size()` − 1.
     fn rank(&self) -> usize;
     /// The number of ranks.
     fn size(&self) -> usize;
     /// Adds `n` to the team's counter and returns its value before (atomically across ranks).
-    fn fetch_add(&self, n: u64) -> u64;
+    fn fetch_add(&self, n: u64) -> Result<u64>;
     /// Every rank's `mine` (each of the same length on every rank), rank after rank.
-    fn gather_u64(&self, mine: &[u64]) -> Vec<u64>;
-    /// Every rank's `mine`, rank after rank; `counts[r]` is the length of rank r's.
-    fn gather_f32(&self, mine: &[f32], counts: &[usize]) -> Vec<f32>;
+    fn gather_u64(&self, mine: &[u64]) -> Result<Vec<u64>>;
+    /// Every rank's `mine`, rank after rank, into `out` (the sum of `counts` long); `counts[r]`
+    /// is the length of rank r's.
+    fn gather_f32(&self, mine: &[f32], counts: &[usize], out: &mut [f32]) -> Result<()>;
     /// As [`Link::gather_f32`], for bytes.
-    fn gather_u8(&self, mine: &[u8], counts: &[usize]) -> Vec<u8>;
+    fn gather_u8(&self, mine: &[u8], counts: &[usize], out: &mut [u8]) -> Result<()>;
+}
+
+/// Every rank's `mine` by `gather` ([`Link::gather_f32`] or [`Link::gather_u8`]), `counts` by
+/// rank, into a buffer this allocates: where any rank cannot allocate its buffer, every rank
+/// fails with `NoMemory` before any data moves (collective).
+fn exchange<T: Copy + Default>(
+    link: &dyn Link,
+    mine: &[T],
+    counts: &[usize],
+    gather: impl FnOnce(&[T], &[usize], &mut [T]) -> Result<()>,
+) -> Result<Vec<T>> {
+    let total = counts
+        .iter()
+        .try_fold(0usize, |a, &c| a.checked_add(c))
+        .unwrap_or(usize::MAX);
+    let out = crate::num::try_vec(total, T::default(), "a team's exchange");
+    let ok = link.gather_u64(&[out.is_ok() as u64])?;
+    if let Some(r) = ok.iter().position(|&v| v != 1) {
+        return Err(out.err().unwrap_or_else(|| {
+            crate::num::no_memory(
+                &format!("a team's exchange (on rank {r})"),
+                total.checked_mul(size_of::<T>()),
+            )
+        }));
+    }
+    let mut out = out?;
+    gather(mine, counts, &mut out)?;
+    Ok(out)
 }
 
 /// The ranks of a job that render together: every scene a `Library` with a team
@@ -90,17 +124,17 @@ impl Team {
     /// The team over `link`; collective (the ranks tell each other their threads). Without the
     /// `mpi` feature only the tests make teams.
     #[cfg_attr(not(any(test, feature = "mpi")), allow(dead_code))]
-    pub(crate) fn from_link(link: Box<dyn Link>) -> Team {
+    pub(crate) fn from_link(link: Box<dyn Link>) -> Result<Team> {
         let stats = vec![RankStats::default(); link.size()];
         let threads = link
-            .gather_u64(&[crate::pool::threads() as u64])
+            .gather_u64(&[crate::pool::threads() as u64])?
             .iter()
             .sum::<u64>() as usize;
-        Team(Arc::new(Inner {
+        Ok(Team(Arc::new(Inner {
             link,
             threads,
             state: Mutex::new(State { base: 0, stats }),
-        }))
+        })))
     }
 
     /// This process's rank: 0 writes the files.
@@ -120,23 +154,24 @@ impl Team {
     }
 
     /// Every rank's `mine`, by rank (collective: every rank of the team calls it, in the same
-    /// order as every other collective call of the team).
-    pub fn gather(&self, mine: &[u8]) -> Vec<Vec<u8>> {
+    /// order as every other collective call of the team). Errors, the same on every rank:
+    /// `NoMemory` where a rank cannot hold them all, `Internal` where MPI fails.
+    pub fn gather(&self, mine: &[u8]) -> Result<Vec<Vec<u8>>> {
         let link = &*self.0.link;
         let counts: Vec<usize> = link
-            .gather_u64(&[mine.len() as u64])
+            .gather_u64(&[mine.len() as u64])?
             .iter()
             .map(|&c| c as usize)
             .collect();
-        let all = link.gather_u8(mine, &counts);
+        let all = exchange(link, mine, &counts, |m, c, o| link.gather_u8(m, c, o))?;
         let mut at = 0;
-        counts
+        Ok(counts
             .iter()
             .map(|&c| {
                 at += c;
                 all[at - c..at].to_vec()
             })
-            .collect()
+            .collect())
     }
 
     /// Every rank's statistics, by rank, as of the last step of work (the same on every rank).
@@ -180,7 +215,7 @@ impl<const K: usize> Floats for [f32; K] {
     }
 }
 
-/// How an item's evaluation ended on a rank, as the all-gather carries it.
+/// How a step ended on a rank, as the all-gather carries it.
 const DONE: u64 = 0;
 const STOPPED: u64 = 1;
 const FAILED: u64 = 2;
@@ -190,12 +225,19 @@ const FAILED: u64 = 2;
 /// module](self)). Every rank gets every item's result, in item order. `stop()` says that this
 /// rank is to stop (it takes no more items); then, with a team, every rank fails with
 /// `Cancelled` at the end of the step. Without a team, the caller checks for cancellation: an
-/// item `f` skipped is whatever `f` returned. A panic in `f` on one rank makes every rank fail
-/// with `Internal` (with a team; without, it unwinds to the caller's `catch`).
+/// item `f` skipped is whatever `f` returned.
+///
+/// With a team, a failure on one rank fails the step on every rank, with that rank's error
+/// (the first failing rank's, by rank, "on rank r"): `held`, an error the rank met since its
+/// last step (it then takes no item), an error or panic in `f` (a panic is `Internal`; an
+/// error raised by [`crate::error::raise`], such as `NoMemory` for a cache, keeps its code),
+/// or the memory for the results. Without a team, `held` is returned as it is and a panic in
+/// `f` unwinds to the caller's `catch`.
 pub(crate) fn map<T, F>(
     team: Option<&Team>,
     n: usize,
     stop: &(dyn Fn() -> bool + Sync),
+    held: Option<Error>,
     f: F,
 ) -> Result<Vec<Vec<T>>>
 where
@@ -203,62 +245,85 @@ where
     F: Fn(usize) -> Vec<T> + Sync + Send,
 {
     let Some(team) = team.filter(|t| t.size() > 1) else {
+        if let Some(e) = held {
+            return Err(e);
+        }
         return Ok((0..n).into_par_iter().map(f).collect());
     };
     let link = &*team.0.link;
     let base = team.state().base;
+    // The results' slots, before any work: a rank that cannot hold them fails the step.
+    let mut out: Vec<Option<Vec<T>>> = Vec::new();
+    let failure: Mutex<Option<Error>> = Mutex::new(held);
+    if out.try_reserve_exact(n).is_err() {
+        fail(
+            &failure,
+            crate::num::no_memory("the results of a step of work", None),
+        );
+    }
     // This rank's part: items as they are taken, whatever thread took them.
     let mine: Mutex<Vec<(usize, Vec<T>)>> = Mutex::new(Vec::new());
     let added = std::sync::atomic::AtomicU64::new(0);
     let busy = std::sync::atomic::AtomicU64::new(0);
-    let failed = std::sync::atomic::AtomicBool::new(false);
+    let failed = std::sync::atomic::AtomicBool::new(lock(&failure).is_some());
     let fetch_lock = Mutex::new(());
     // One fetch at a time on a rank (the MPI library is asked for serialised calls only).
-    let fetch = |k: u64| -> u64 {
-        let _one = fetch_lock.lock().unwrap_or_else(|e| e.into_inner());
+    let fetch = |k: u64| -> Result<u64> {
+        let _one = lock(&fetch_lock);
         added.fetch_add(k, std::sync::atomic::Ordering::Relaxed);
         link.fetch_add(k)
     };
     let worker = || loop {
         if stop() || failed.load(std::sync::atomic::Ordering::Relaxed) {
             // Every rank's next fetch passes the end: the team stops within an item.
-            fetch(n as u64);
+            if let Err(e) = fetch(n as u64) {
+                fail(&failure, e);
+            }
             return;
         }
-        let i = fetch(1) - base;
+        let i = match fetch(1) {
+            Ok(v) => v - base,
+            Err(e) => {
+                fail(&failure, e);
+                failed.store(true, std::sync::atomic::Ordering::Relaxed);
+                return;
+            }
+        };
         if i >= n as u64 {
             return;
         }
         let start = Instant::now();
-        let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(i as usize)));
+        let result = crate::error::catch("rendering", || Ok(f(i as usize)));
         busy.fetch_add(
             start.elapsed().as_nanos() as u64,
             std::sync::atomic::Ordering::Relaxed,
         );
-        match out {
-            Ok(v) => mine
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .push((i as usize, v)),
-            Err(_) => failed.store(true, std::sync::atomic::Ordering::Relaxed),
+        match result {
+            Ok(v) => lock(&mine).push((i as usize, v)),
+            Err(e) => {
+                fail(&failure, e);
+                failed.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
         }
     };
     rayon::broadcast(|_| worker());
     let mine = mine.into_inner().unwrap_or_else(|e| e.into_inner());
-    let status = if failed.into_inner() {
-        FAILED
-    } else if stop() {
-        STOPPED
-    } else {
-        DONE
+    let failure = failure.into_inner().unwrap_or_else(|e| e.into_inner());
+    let (status, code, message) = match &failure {
+        Some(e) => (FAILED, e.code as i32 as u64, e.message.as_bytes()),
+        None if stop() => (STOPPED, 0, &[][..]),
+        None => (DONE, 0, &[][..]),
     };
-    // The step's exchange: each rank's status, additions to the counter, busy time and
-    // items, then the items' numbers and lengths, then their values.
+    // The step's exchange: each rank's status, additions to the counter, busy time, items,
+    // values and error; then, where a rank failed, the errors' messages, else the items'
+    // numbers and lengths, then their values.
     let mut index = Vec::with_capacity(mine.len() * 2);
     let mut values = Vec::new();
-    for (i, v) in &mine {
-        index.extend([*i as u64, v.len() as u64]);
-        v.iter().for_each(|x| x.put(&mut values));
+    if failure.is_none() {
+        for (i, v) in &mine {
+            index.extend([*i as u64, v.len() as u64]);
+            v.iter().for_each(|x| x.put(&mut values));
+        }
     }
     let heads = link.gather_u64(&[
         status,
@@ -266,14 +331,11 @@ where
         busy.into_inner(),
         mine.len() as u64,
         values.len() as u64,
-    ]);
+        code,
+        message.len() as u64,
+    ])?;
     drop(mine);
-    let heads: Vec<&[u64]> = heads.chunks(5).collect();
-    let index_counts: Vec<usize> = heads.iter().map(|h| h[3] as usize * 2).collect();
-    let value_counts: Vec<usize> = heads.iter().map(|h| h[4] as usize).collect();
-    let all_index = gather_index(link, &index, &index_counts);
-    let all_values = link.gather_f32(&values, &value_counts);
-    drop(values);
+    let heads: Vec<&[u64]> = heads.chunks(7).collect();
     {
         let mut state = team.state();
         state.base = base + heads.iter().map(|h| h[1]).sum::<u64>();
@@ -283,18 +345,28 @@ where
         }
     }
     if let Some(r) = heads.iter().position(|h| h[0] == FAILED) {
-        return Err(Error::new(
-            ErrorCode::Internal,
-            format!("a panic while rendering on rank {r}"),
+        let counts: Vec<usize> = heads.iter().map(|h| h[6] as usize).collect();
+        let messages = exchange(link, message, &counts, |m, c, o| link.gather_u8(m, c, o))?;
+        return Err(rank_error(
+            team,
+            r,
+            heads[r][5],
+            &messages,
+            &counts,
+            failure,
         ));
     }
     if heads.iter().any(|h| h[0] == STOPPED) {
         return Err(crate::control::cancelled());
     }
+    let index_counts: Vec<usize> = heads.iter().map(|h| h[3] as usize * 2).collect();
+    let value_counts: Vec<usize> = heads.iter().map(|h| h[4] as usize).collect();
+    let all_index = gather_index(link, &index, &index_counts)?;
+    let all_values = exchange(link, &values, &value_counts, |m, c, o| {
+        link.gather_f32(m, c, o)
+    })?;
+    drop(values);
     // Every item once, in order, whichever rank made it.
-    let mut out: Vec<Option<Vec<T>>> = Vec::new();
-    out.try_reserve_exact(n)
-        .map_err(|_| crate::num::no_memory("the results of a step of work", None))?;
     out.resize_with(n, || None);
     let mut at = 0;
     for pair in all_index.chunks_exact(2) {
@@ -322,14 +394,51 @@ where
         .collect()
 }
 
+/// Records `e` as the step's failure on this rank, unless one is recorded already.
+fn fail(failure: &Mutex<Option<Error>>, e: Error) {
+    lock(failure).get_or_insert(e);
+}
+
+/// The mutex's value, whether or not a thread panicked holding it.
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The error of rank `r` (code `code`, its message in `messages` at the place `counts` give)
+/// as every rank reports it: the rank's own error as it is on that rank, and with "(on rank
+/// r)" on the others.
+fn rank_error(
+    team: &Team,
+    r: usize,
+    code: u64,
+    messages: &[u8],
+    counts: &[usize],
+    own: Option<Error>,
+) -> Error {
+    if r == team.rank() {
+        if let Some(e) = own {
+            return e;
+        }
+    }
+    let at: usize = counts[..r].iter().sum();
+    let text = String::from_utf8_lossy(&messages[at..at + counts[r]]);
+    let code = i32::try_from(code)
+        .ok()
+        .and_then(ErrorCode::from_raw)
+        .unwrap_or(ErrorCode::Internal);
+    Error::new(code, format!("{text} (on rank {r})"))
+}
+
 /// The items' numbers and lengths of every rank (the all-gather of `u64`s, through bytes).
-fn gather_index(link: &dyn Link, mine: &[u64], counts: &[usize]) -> Vec<u64> {
+fn gather_index(link: &dyn Link, mine: &[u64], counts: &[usize]) -> Result<Vec<u64>> {
     let bytes: Vec<u8> = mine.iter().flat_map(|v| v.to_le_bytes()).collect();
     let counts: Vec<usize> = counts.iter().map(|c| c * 8).collect();
-    link.gather_u8(&bytes, &counts)
-        .chunks_exact(8)
-        .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
-        .collect()
+    Ok(
+        exchange(link, &bytes, &counts, |m, c, o| link.gather_u8(m, c, o))?
+            .chunks_exact(8)
+            .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
+            .collect(),
+    )
 }
 
 /// The outcome every rank of the team agrees on: `mine` where every rank succeeded, else the
@@ -341,37 +450,38 @@ pub(crate) fn agree<T>(team: Option<&Team>, mine: Result<T>) -> Result<T> {
     };
     let link = &*team.0.link;
     let (code, message) = match &mine {
-        Ok(_) => (0u64, Vec::new()),
-        Err(e) => (e.code as i32 as u64, e.message.clone().into_bytes()),
+        Ok(_) => (0u64, &[][..]),
+        Err(e) => (e.code as i32 as u64, e.message.as_bytes()),
     };
-    let heads = link.gather_u64(&[code, message.len() as u64]);
-    let counts: Vec<usize> = heads.chunks(2).map(|h| h[1] as usize).collect();
-    let messages = link.gather_u8(&message, &counts);
+    let heads = link.gather_u64(&[code, message.len() as u64])?;
     let Some(r) = heads.chunks(2).position(|h| h[0] != 0) else {
         return mine;
     };
-    if r == team.rank() {
-        return mine;
-    }
-    let at: usize = counts[..r].iter().sum();
-    let text = String::from_utf8_lossy(&messages[at..at + counts[r]]);
-    let code = ErrorCode::from_raw(heads[2 * r] as i32).unwrap_or(ErrorCode::Internal);
-    Err(Error::new(code, format!("{text} (on rank {r})")))
+    let counts: Vec<usize> = heads.chunks(2).map(|h| h[1] as usize).collect();
+    let messages = exchange(link, message, &counts, |m, c, o| link.gather_u8(m, c, o))?;
+    Err(rank_error(
+        team,
+        r,
+        heads[2 * r],
+        &messages,
+        &counts,
+        mine.err(),
+    ))
 }
 
 /// The value `v` of rank 0, on every rank (collective); `v` without a team.
-pub(crate) fn from_root(team: Option<&Team>, v: u64) -> u64 {
+pub(crate) fn from_root(team: Option<&Team>, v: u64) -> Result<u64> {
     match team.filter(|t| t.size() > 1) {
-        Some(t) => t.0.link.gather_u64(&[v])[0],
-        None => v,
+        Some(t) => Ok(t.0.link.gather_u64(&[v])?[0]),
+        None => Ok(v),
     }
 }
 
 /// Whether `here` holds on every rank (collective); `here` without a team.
-pub(crate) fn all(team: Option<&Team>, here: bool) -> bool {
+pub(crate) fn all(team: Option<&Team>, here: bool) -> Result<bool> {
     match team.filter(|t| t.size() > 1) {
-        Some(t) => t.0.link.gather_u64(&[here as u64]).iter().all(|&v| v == 1),
-        None => here,
+        Some(t) => Ok(t.0.link.gather_u64(&[here as u64])?.iter().all(|&v| v == 1)),
+        None => Ok(here),
     }
 }
 

@@ -2,7 +2,9 @@
 //! starting and ending MPI for a program that does not ([`Team::world`]), a team over a
 //! communicator ([`Team::from_communicator`]), and the [`Link`] operations: the shared
 //! counter is one `u64` in an MPI window on rank 0, taken with `MPI_Fetch_and_op` under a
-//! passive-target epoch (no rank has to serve it), the exchanges are `MPI_Allgather(v)`.
+//! passive-target epoch (no rank has to serve it), the exchanges are `MPI_Allgather(v)`. The
+//! team's communicator and window have `MPI_ERRORS_RETURN`: an MPI call that fails is an
+//! `Internal` error of the render, not the job's abort.
 //!
 //! Calls are made from one of the library's threads at a time (serialised by the caller,
 //! `map`'s fetch lock and the render's single driver), so the library asks MPI for
@@ -91,6 +93,13 @@ impl Team {
         }
         let dup = std::mem::ManuallyDrop::new(comm.duplicate());
         let raw = dup.as_raw();
+        // The team's MPI calls return their errors (each becomes the library's `Internal`)
+        // instead of aborting the job, MPI's default.
+        // SAFETY: the duplicate just made, and MPI's predefined handler.
+        check(
+            unsafe { ffi::MPI_Comm_set_errhandler(raw, ffi::RSMPI_ERRORS_RETURN) },
+            "MPI_Comm_set_errhandler",
+        )?;
         let (rank, size) = (dup.rank() as usize, dup.size() as usize);
         let mut base: *mut c_void = std::ptr::null_mut();
         let mut win: ffi::MPI_Win = unsafe { std::mem::zeroed() };
@@ -107,27 +116,25 @@ impl Team {
                 &mut win,
             )
         };
-        if rc != 0 {
-            return Err(Error::new(
-                ErrorCode::Internal,
-                format!("MPI_Win_allocate failed ({rc})"),
-            ));
-        }
+        check(rc, "MPI_Win_allocate")?;
+        // SAFETY: the window just made, and MPI's predefined handler.
+        check(
+            unsafe { ffi::MPI_Win_set_errhandler(win, ffi::RSMPI_ERRORS_RETURN) },
+            "MPI_Win_set_errhandler",
+        )?;
         if rank == 0 {
             // SAFETY: rank 0's 8 bytes of the window, before any rank opens its epoch.
             unsafe { base.cast::<u64>().write(0) };
         }
         // SAFETY: the window just made; the barrier orders rank 0's zero before every fetch.
-        unsafe {
-            ffi::MPI_Barrier(raw);
-            ffi::MPI_Win_lock_all(0, win);
-        }
-        Ok(Team::from_link(Box::new(MpiLink {
+        check(unsafe { ffi::MPI_Barrier(raw) }, "MPI_Barrier")?;
+        check(unsafe { ffi::MPI_Win_lock_all(0, win) }, "MPI_Win_lock_all")?;
+        Team::from_link(Box::new(MpiLink {
             comm: raw,
             win,
             rank,
             size,
-        })))
+        }))
     }
 }
 
@@ -145,39 +152,70 @@ struct MpiLink {
 unsafe impl Send for MpiLink {}
 unsafe impl Sync for MpiLink {}
 
-/// Counts and displacements for MPI (which takes `int`s) of `counts` elements.
-fn partition(counts: &[usize]) -> (Vec<c_int>, Vec<c_int>) {
+/// `Ok` where MPI's return code `rc` of `what` is `MPI_SUCCESS` (0), else `Internal`: the
+/// team's communicator and window return errors instead of aborting the job
+/// (`MPI_ERRORS_RETURN`).
+fn check(rc: c_int, what: &str) -> Result<()> {
+    if rc == 0 {
+        Ok(())
+    } else {
+        Err(Error::new(
+            ErrorCode::Internal,
+            format!("{what} failed (MPI error {rc})"),
+        ))
+    }
+}
+
+/// Counts and displacements for MPI (which takes `int`s) of `counts` elements; `BadValue`
+/// where an exchange passes 2³¹ − 1 elements (the same on every rank: every rank knows every
+/// count).
+fn partition(counts: &[usize]) -> Result<(Vec<c_int>, Vec<c_int>)> {
+    let too_many = || {
+        Error::new(
+            ErrorCode::BadValue,
+            "an exchange between the ranks of more than 2^31 - 1 elements (a smaller image or \
+             volume, or more ranks)",
+        )
+    };
     let mut displs = Vec::with_capacity(counts.len());
     let mut at = 0usize;
     for &c in counts {
-        displs.push(c_int::try_from(at).expect("an exchange under 2^31 elements"));
+        displs.push(c_int::try_from(at).map_err(|_| too_many())?);
         at += c;
     }
+    c_int::try_from(at).map_err(|_| too_many())?;
     let counts = counts
         .iter()
-        .map(|&c| c_int::try_from(c).expect("an exchange under 2^31 elements"))
-        .collect();
-    (counts, displs)
+        .map(|&c| c_int::try_from(c).map_err(|_| too_many()))
+        .collect::<Result<_>>()?;
+    Ok((counts, displs))
 }
 
 impl MpiLink {
-    /// `MPI_Allgatherv` of `mine` (`T` of MPI type `ty`), `counts` by rank.
-    fn gather_var<T: Copy + Default>(
+    /// `MPI_Allgatherv` of `mine` (`T` of MPI type `ty`), `counts` by rank, into `out`.
+    fn gather_var<T: Copy>(
         &self,
         mine: &[T],
         counts: &[usize],
+        out: &mut [T],
         ty: ffi::MPI_Datatype,
-    ) -> Vec<T> {
+    ) -> Result<()> {
         let total: usize = counts.iter().sum();
-        let mut out = vec![T::default(); total];
         if total == 0 {
             // Every rank knows every count: none of them sends (and two empty buffers would be
             // the same dangling address, which MPI refuses as aliasing).
-            return out;
+            return Ok(());
         }
-        let (c, d) = partition(counts);
-        // SAFETY: `out` holds the sum of `counts` elements; each rank sends `counts[rank]`.
-        unsafe {
+        let (c, d) = partition(counts)?;
+        if out.len() != total || mine.len() != counts[self.rank] {
+            return Err(Error::new(
+                ErrorCode::Internal,
+                "an exchange's buffers do not match its counts",
+            ));
+        }
+        // SAFETY: `out` holds the sum of `counts` elements; each rank sends `counts[rank]`,
+        // the length of its `mine`.
+        let rc = unsafe {
             ffi::MPI_Allgatherv(
                 mine.as_ptr().cast(),
                 c[self.rank],
@@ -189,7 +227,7 @@ impl MpiLink {
                 self.comm,
             )
         };
-        out
+        check(rc, "MPI_Allgatherv")
     }
 }
 
@@ -202,11 +240,11 @@ impl Link for MpiLink {
         self.size
     }
 
-    fn fetch_add(&self, n: u64) -> u64 {
+    fn fetch_add(&self, n: u64) -> Result<u64> {
         let mut before = 0u64;
         // SAFETY: an atomic add on rank 0's u64 of the window, inside the epoch opened by
         // MPI_Win_lock_all; the flush completes it before `before` is read.
-        unsafe {
+        let rc = unsafe {
             ffi::MPI_Fetch_and_op(
                 (&n as *const u64).cast(),
                 (&mut before as *mut u64).cast(),
@@ -215,17 +253,21 @@ impl Link for MpiLink {
                 0,
                 ffi::RSMPI_SUM,
                 self.win,
-            );
-            ffi::MPI_Win_flush(0, self.win);
-        }
-        before
+            )
+        };
+        check(rc, "MPI_Fetch_and_op")?;
+        // SAFETY: as above.
+        check(unsafe { ffi::MPI_Win_flush(0, self.win) }, "MPI_Win_flush")?;
+        Ok(before)
     }
 
-    fn gather_u64(&self, mine: &[u64]) -> Vec<u64> {
+    fn gather_u64(&self, mine: &[u64]) -> Result<Vec<u64>> {
+        // (A header of a few words from each rank: small, whatever the render.)
         let mut out = vec![0u64; mine.len() * self.size];
-        let n = c_int::try_from(mine.len()).expect("a short header");
+        let n = c_int::try_from(mine.len())
+            .map_err(|_| Error::new(ErrorCode::Internal, "a header of more than 2^31 - 1 words"))?;
         // SAFETY: `out` holds `size` times `mine`.
-        unsafe {
+        let rc = unsafe {
             ffi::MPI_Allgather(
                 mine.as_ptr().cast(),
                 n,
@@ -236,14 +278,15 @@ impl Link for MpiLink {
                 self.comm,
             )
         };
-        out
+        check(rc, "MPI_Allgather")?;
+        Ok(out)
     }
 
-    fn gather_f32(&self, mine: &[f32], counts: &[usize]) -> Vec<f32> {
-        self.gather_var(mine, counts, unsafe { ffi::RSMPI_FLOAT })
+    fn gather_f32(&self, mine: &[f32], counts: &[usize], out: &mut [f32]) -> Result<()> {
+        self.gather_var(mine, counts, out, unsafe { ffi::RSMPI_FLOAT })
     }
 
-    fn gather_u8(&self, mine: &[u8], counts: &[usize]) -> Vec<u8> {
-        self.gather_var(mine, counts, unsafe { ffi::RSMPI_UINT8_T })
+    fn gather_u8(&self, mine: &[u8], counts: &[usize], out: &mut [u8]) -> Result<()> {
+        self.gather_var(mine, counts, out, unsafe { ffi::RSMPI_UINT8_T })
     }
 }

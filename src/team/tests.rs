@@ -36,29 +36,32 @@ impl Link for ThreadLink {
     fn size(&self) -> usize {
         self.hub.size
     }
-    fn fetch_add(&self, n: u64) -> u64 {
-        self.hub.counter.fetch_add(n, Ordering::SeqCst)
+    fn fetch_add(&self, n: u64) -> Result<u64> {
+        Ok(self.hub.counter.fetch_add(n, Ordering::SeqCst))
     }
-    fn gather_u64(&self, mine: &[u64]) -> Vec<u64> {
+    fn gather_u64(&self, mine: &[u64]) -> Result<Vec<u64>> {
         let bytes = mine.iter().flat_map(|v| v.to_le_bytes()).collect();
-        self.gather_bytes(bytes)
+        Ok(self
+            .gather_bytes(bytes)
             .concat()
             .chunks_exact(8)
             .map(|b| u64::from_le_bytes(b.try_into().unwrap()))
-            .collect()
+            .collect())
     }
-    fn gather_f32(&self, mine: &[f32], counts: &[usize]) -> Vec<f32> {
+    fn gather_f32(&self, mine: &[f32], counts: &[usize], out: &mut [f32]) -> Result<()> {
         assert_eq!(mine.len(), counts[self.rank]);
         let bytes = mine.iter().flat_map(|v| v.to_le_bytes()).collect();
-        self.gather_bytes(bytes)
-            .concat()
-            .chunks_exact(4)
-            .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
-            .collect()
+        let all = self.gather_bytes(bytes).concat();
+        assert_eq!(all.len(), out.len() * 4);
+        for (o, b) in out.iter_mut().zip(all.chunks_exact(4)) {
+            *o = f32::from_le_bytes(b.try_into().unwrap());
+        }
+        Ok(())
     }
-    fn gather_u8(&self, mine: &[u8], counts: &[usize]) -> Vec<u8> {
+    fn gather_u8(&self, mine: &[u8], counts: &[usize], out: &mut [u8]) -> Result<()> {
         assert_eq!(mine.len(), counts[self.rank]);
-        self.gather_bytes(mine.to_vec()).concat()
+        out.copy_from_slice(&self.gather_bytes(mine.to_vec()).concat());
+        Ok(())
     }
 }
 
@@ -81,7 +84,9 @@ fn on_ranks<R: Send>(size: usize, body: impl Fn(Team) -> R + Sync) -> Vec<R> {
                         .num_threads(2)
                         .build()
                         .unwrap();
-                    pool.install(|| body(Team::from_link(Box::new(ThreadLink { hub, rank }))))
+                    pool.install(|| {
+                        body(Team::from_link(Box::new(ThreadLink { hub, rank })).unwrap())
+                    })
                 })
             })
             .collect();
@@ -101,8 +106,8 @@ fn every_rank_gets_every_item_in_order_and_the_work_is_shared() {
     let expected: Vec<Vec<[f32; 2]>> = (0..n).map(item).collect();
     let results = on_ranks(3, |team| {
         // Two steps: the second starts where the first's counter ended.
-        let a = map(Some(&team), n, &|| false, item).unwrap();
-        let b = map(Some(&team), n, &|| false, item).unwrap();
+        let a = map(Some(&team), n, &|| false, None, item).unwrap();
+        let b = map(Some(&team), n, &|| false, None, item).unwrap();
         (a, b, team.stats(), team.threads())
     });
     for (a, b, stats, threads) in &results {
@@ -119,8 +124,10 @@ fn every_rank_gets_every_item_in_order_and_the_work_is_shared() {
 #[test]
 fn a_team_of_one_and_no_team_give_the_same_items() {
     let n = 37;
-    let alone = map::<[f32; 2], _>(None, n, &|| false, item).unwrap();
-    let one = on_ranks(1, |team| map(Some(&team), n, &|| false, item).unwrap());
+    let alone = map::<[f32; 2], _>(None, n, &|| false, None, item).unwrap();
+    let one = on_ranks(1, |team| {
+        map(Some(&team), n, &|| false, None, item).unwrap()
+    });
     assert_eq!(alone, one[0]);
     assert_eq!(alone, (0..n).map(item).collect::<Vec<_>>());
 }
@@ -129,9 +136,9 @@ fn a_team_of_one_and_no_team_give_the_same_items() {
 fn a_stop_on_one_rank_stops_every_rank() {
     let results = on_ranks(3, |team| {
         let stop = || team.rank() == 1;
-        let cancelled = map(Some(&team), 500, &stop, item);
+        let cancelled = map(Some(&team), 500, &stop, None, item);
         // The next step starts cleanly after a stopped one.
-        let next = map(Some(&team), 20, &|| false, item);
+        let next = map(Some(&team), 20, &|| false, None, item);
         (
             cancelled.map(|_| ()).map_err(|e| e.code),
             next.unwrap().len(),
@@ -153,7 +160,7 @@ fn a_panic_on_one_rank_fails_every_rank_with_internal() {
             }
             item(i)
         };
-        map(Some(&team), 100, &|| false, f)
+        map(Some(&team), 100, &|| false, None, f)
             .map(|_| ())
             .map_err(|e| e.code)
     });
@@ -178,7 +185,9 @@ fn ranks_agree_on_the_first_failing_ranks_error() {
         results[2],
         Err((ErrorCode::IoError, "disk 1 full (on rank 1)".into()))
     );
-    let roots = on_ranks(3, |team| from_root(Some(&team), 10 + team.rank() as u64));
+    let roots = on_ranks(3, |team| {
+        from_root(Some(&team), 10 + team.rank() as u64).unwrap()
+    });
     assert_eq!(roots, vec![10; 3]);
 }
 
@@ -186,9 +195,179 @@ fn ranks_agree_on_the_first_failing_ranks_error() {
 fn a_condition_holds_for_the_team_only_where_it_holds_on_every_rank() {
     // Rank 1 alone lacks it (a host without the packet march's instructions): every rank
     // hears false; where every rank has it, every rank hears true.
-    let one_lacks = on_ranks(3, |team| all(Some(&team), team.rank() != 1));
+    let one_lacks = on_ranks(3, |team| all(Some(&team), team.rank() != 1).unwrap());
     assert_eq!(one_lacks, vec![false; 3]);
-    let all_have = on_ranks(3, |team| all(Some(&team), true));
+    let all_have = on_ranks(3, |team| all(Some(&team), true).unwrap());
     assert_eq!(all_have, vec![true; 3]);
-    assert!(!all(None, false) && all(None, true));
+    assert!(!all(None, false).unwrap() && all(None, true).unwrap());
+}
+
+#[test]
+fn an_error_one_rank_holds_fails_the_step_on_every_rank() {
+    // Rank 1 met an error between steps (it could not allocate a strip of the entry map, say):
+    // it takes no item, and every rank's step fails with its error; the next step is whole.
+    let results = on_ranks(3, |team| {
+        let held =
+            (team.rank() == 1).then(|| Error::new(ErrorCode::NoMemory, "a strip of the entry map"));
+        let failed = map(Some(&team), 300, &|| false, held, item);
+        let next = map(Some(&team), 30, &|| false, None, item);
+        (
+            failed.map(|_| ()).map_err(|e| (e.code, e.message)),
+            next.unwrap(),
+        )
+    });
+    let expected: Vec<Vec<[f32; 2]>> = (0..30).map(item).collect();
+    for (rank, (failed, next)) in results.into_iter().enumerate() {
+        let message = match rank {
+            1 => "a strip of the entry map".to_string(),
+            _ => "a strip of the entry map (on rank 1)".to_string(),
+        };
+        assert_eq!(failed, Err((ErrorCode::NoMemory, message)));
+        assert_eq!(next, expected);
+    }
+}
+
+#[test]
+fn an_error_raised_in_an_item_keeps_its_code_on_every_rank() {
+    // A cache that cannot be allocated inside an item unwinds with `NoMemory`
+    // (`crate::error::raise`): every rank fails with that code, not `Internal`.
+    let results = on_ranks(2, |team| {
+        let f = |i: usize| {
+            if i == 3 {
+                crate::error::raise(Error::new(ErrorCode::NoMemory, "a cell mask"));
+            }
+            item(i)
+        };
+        map(Some(&team), 50, &|| false, None, f)
+            .map(|_| ())
+            .map_err(|e| e.code)
+    });
+    assert_eq!(results, vec![Err(ErrorCode::NoMemory); 2]);
+}
+
+#[test]
+fn a_rank_that_cannot_hold_an_exchange_fails_it_on_every_rank() {
+    // Rank 1 is asked for more than any address space holds (its allocation fails), rank 0
+    // for a few bytes: both fail with `NoMemory` before any data moves, and neither waits for
+    // the other; the next exchange goes through.
+    let results = on_ranks(2, |team| {
+        let link = &*team.0.link;
+        let counts = match team.rank() {
+            0 => vec![2, 2],
+            _ => vec![usize::MAX / 2, 2],
+        };
+        let mine = [team.rank() as u8; 2];
+        let failed = exchange(link, &mine, &counts, |m, c, o| link.gather_u8(m, c, o));
+        let next = exchange(link, &mine, &[2, 2], |m, c, o| link.gather_u8(m, c, o));
+        (failed.map_err(|e| e.code), next.unwrap())
+    });
+    for (failed, next) in results {
+        assert_eq!(failed, Err(ErrorCode::NoMemory));
+        assert_eq!(next, vec![0, 0, 1, 1]);
+    }
+}
+
+/// [`on_ranks`] on another thread, failing the test where the ranks do not all return
+/// within two minutes: a rank left waiting for one that has gone is what the tests below
+/// look for.
+fn on_ranks_within<R: Send + 'static>(
+    size: usize,
+    body: impl Fn(Team) -> R + Sync + Send + 'static,
+) -> Vec<R> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(on_ranks(size, body));
+    });
+    rx.recv_timeout(Duration::from_secs(120))
+        .expect("the ranks did not all return: one waits for another that has left")
+}
+
+/// A library of `team` with a scene of one constant medium open, whose progress function
+/// panics at its first call on rank `panics_on` (a rank-local failure between steps).
+fn constant_medium(team: Team, panics_on: usize) -> crate::Library {
+    use crate::types::Fields;
+    let rank = team.rank();
+    let mut vl = crate::Library::new();
+    vl.set_team(Some(team));
+    if rank == panics_on {
+        let first = std::sync::atomic::AtomicBool::new(true);
+        let progress: crate::ProgressFn = Arc::new(move |_| {
+            if first.swap(false, std::sync::atomic::Ordering::Relaxed) {
+                panic!("the progress function failed");
+            }
+            true
+        });
+        vl.set_render_control(crate::RenderControl {
+            cancel: None,
+            progress: Some(progress),
+        });
+    }
+    vl.scene().unwrap();
+    vl.object().unwrap();
+    vl.set(Fields::O, 0.05).unwrap();
+    vl.set(Fields::R, 1.0).unwrap();
+    vl.end().unwrap();
+    vl
+}
+
+#[test]
+fn a_rank_whose_progress_function_panics_fails_the_render_on_every_rank() {
+    // Rank 1's progress function panics after its first strip: rank 1 holds the error and
+    // goes on to the second strip's step, which fails on both ranks with it (1024 × 1100
+    // pixels are two strips of about 2²⁰). Then the team renders the next image whole.
+    let results = on_ranks_within(2, |team| {
+        let vl = constant_medium(team, 1);
+        let failed = vl.render_preview(1024, 1100, 1.0).map(|_| ());
+        let next = vl.render_preview(8, 8, 1.0).unwrap();
+        (failed.map_err(|e| (e.code, e.message)), next.pixels)
+    });
+    let panicked = "the progress function stopped by a panic (in a field function?): the \
+                    progress function failed";
+    assert_eq!(
+        results[1].0,
+        Err((ErrorCode::Internal, panicked.to_string()))
+    );
+    assert_eq!(
+        results[0].0,
+        Err((ErrorCode::Internal, format!("{panicked} (on rank 1)")))
+    );
+    assert_eq!(
+        results[0].1, results[1].1,
+        "the next image is the same on both"
+    );
+    // One strip: the error is held past the last step and settled at the image's end.
+    let one_strip = on_ranks_within(2, |team| {
+        let vl = constant_medium(team, 0);
+        vl.render_preview(16, 16, 1.0)
+            .map(|_| ())
+            .map_err(|e| e.code)
+    });
+    assert_eq!(one_strip, vec![Err(ErrorCode::Internal); 2]);
+}
+
+#[test]
+fn a_rank_whose_progress_function_panics_fails_a_voxelization_and_writes_nothing() {
+    // A voxelization of 64³ nodes (slabs of 2¹⁶ nodes: several steps); rank 1's progress
+    // function panics after its first slab. Every rank fails with that error, rank 0 commits
+    // no file.
+    let dir = std::env::temp_dir().join(format!("vlib-team-voxel-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let prefix = dir.join("medium");
+    let results = on_ranks_within(2, move |team| {
+        let mut vl = constant_medium(team, 1);
+        vl.volume(
+            &prefix,
+            crate::types::Fields::O,
+            [0.0; 3],
+            [1.0; 3],
+            [64; 3],
+            1,
+        )
+        .unwrap();
+        vl.end().map(|_| ()).map_err(|e| e.code)
+    });
+    assert_eq!(results, vec![Err(ErrorCode::Internal); 2]);
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(left.is_empty(), "files left: {left:?}");
 }
