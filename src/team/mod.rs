@@ -422,10 +422,8 @@ fn rank_error(
     }
     let at: usize = counts[..r].iter().sum();
     let text = String::from_utf8_lossy(&messages[at..at + counts[r]]);
-    let code = i32::try_from(code)
-        .ok()
-        .and_then(ErrorCode::from_raw)
-        .unwrap_or(ErrorCode::Internal);
+    // (Sent as `code as i32 as u64`: the truncation gives the i32 back.)
+    let code = ErrorCode::from_raw(code as i32).unwrap_or(ErrorCode::Internal);
     Error::new(code, format!("{text} (on rank {r})"))
 }
 
