@@ -27,6 +27,9 @@
 //! opacity 0 is never essential, though the renderer must evaluate something to find that: the
 //! ratio is an upper bound on what could be cut.
 
+#[path = "../examples/common/figure2_scene.rs"]
+mod figure2_scene;
+
 use std::sync::{Arc, Mutex};
 use vlib::{vlaux, Attenuation, Camera, Fields, Library, MappingId, MappingType, Sample};
 
@@ -103,54 +106,20 @@ fn ramp(f: f32, a0: f32, a1: f32, b1: f32) -> f32 {
 
 fn figure2() -> Scene {
     let (f, stone) = (rec(), rec());
-    let camera = Camera {
-        eye: [175.0, 250.0, -350.0],
-        at: [175.0, 140.0, 70.0],
-        up: [0.0, 1.0, 0.0],
-        fov: vlib::DEFAULT_FOV,
-    };
+    let camera = figure2_scene::camera();
     let mut vl = Library::new();
-    vl.scene().unwrap();
-    vl.camera(&camera).unwrap();
-    vl.background(1.0, 1.0, 1.0).unwrap();
-    vl.mapping(
-        MappingId(1),
-        MappingType::Lookup,
-        2,
-        1,
-        &[0.001, 1.0, 1.0, 0.3],
-    )
-    .unwrap();
-    vl.point_light([-200.0, 380.0, -200.0], Attenuation::None, [1.0; 3], 1.0)
-        .unwrap();
-    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
-    vl.object().unwrap();
-    vl.scale(350.0, 300.0, 300.0).unwrap();
     let r = f.clone();
-    vl.function(Fields::F, move |s| {
+    let geometry = move |s: &mut Sample| {
         let v = vlaux::parab1(s.position());
         r.push(s, figure2_opacity(v));
         let _ = s.set(Fields::F, v);
-    })
-    .unwrap();
-    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
+    };
     let r = stone.clone();
-    vl.function(Fields::COLORS, move |s| {
+    let colours = move |s: &mut Sample| {
         r.push(s, f32::NAN);
-        let p = s.position();
-        let t = vlaux::turbulence(p, 6.0, 5, 11);
-        let speck = vlaux::noise(p, 40.0, 3);
-        let base = 0.45 + 0.35 * t - if speck > 0.45 { 0.25 } else { 0.0 };
-        let _ = s.set(Fields::R, base + 0.06);
-        let _ = s.set(Fields::G, base);
-        let _ = s.set(Fields::B, base - 0.05);
-    })
-    .unwrap();
-    vl.set(Fields::KA, 0.3).unwrap();
-    vl.set(Fields::KD, 0.6).unwrap();
-    vl.set(Fields::N, vlib::types::specular_to_field(20.0))
-        .unwrap();
-    vl.end().unwrap();
+        figure2_scene::bench_stone(s);
+    };
+    figure2_scene::build_with(&mut vl, None, geometry, colours, false).unwrap();
     Scene {
         name: "Figure 2 (`benches/scenes.rs`)",
         camera,

@@ -23,6 +23,8 @@
 //! with a message.
 
 mod common;
+#[path = "../examples/common/figure2_scene.rs"]
+mod figure2_scene;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use std::time::Duration;
@@ -42,52 +44,11 @@ fn render(vl: &Library) -> vlib::Image {
 /// The paper's Figure 2 with a simpler stone than `examples/figure2.rs` (the benchmark's scene
 /// is kept as measured in `docs/performance.md`), without its image output.
 fn figure2() -> Library {
-    /// A granite-like texture: turbulent greys with a warm tint and dark speckles.
-    fn stone(s: &mut vlib::Sample) {
-        let p = s.position();
-        let t = vlaux::turbulence(p, 6.0, 5, 11);
-        let speck = vlaux::noise(p, 40.0, 3);
-        let base = 0.45 + 0.35 * t - if speck > 0.45 { 0.25 } else { 0.0 };
-        let _ = s.set(Fields::R, base + 0.06);
-        let _ = s.set(Fields::G, base);
-        let _ = s.set(Fields::B, base - 0.05);
-    }
-    let white = [1.0, 1.0, 1.0];
     let mut vl = Library::new();
-    vl.scene().unwrap();
-    vl.camera(&Camera {
-        eye: [175.0, 250.0, -350.0],
-        at: [175.0, 140.0, 70.0],
-        up: [0.0, 1.0, 0.0],
-        fov: vlib::DEFAULT_FOV,
-    })
-    .unwrap();
-    vl.background(1.0, 1.0, 1.0).unwrap();
-    vl.mapping(
-        MappingId(1),
-        MappingType::Lookup,
-        2,
-        1,
-        &[0.001, 1.0, 1.0, 0.3],
-    )
-    .unwrap();
-    vl.point_light([-200.0, 380.0, -200.0], Attenuation::None, white, 1.0)
-        .unwrap();
-    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
-    vl.object().unwrap();
-    vl.scale(350.0, 300.0, 300.0).unwrap();
-    vl.function(Fields::F, |s| {
+    let geometry = |s: &mut vlib::Sample| {
         let _ = s.set(Fields::F, vlaux::parab1(s.position()));
-    })
-    .unwrap();
-    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
-    // (The paper's `vlMap(VL_KS, VL_F, 1, 2)` is refused and changes nothing: left out.)
-    vl.function(Fields::COLORS, stone).unwrap();
-    vl.set(Fields::KA, 0.3).unwrap();
-    vl.set(Fields::KD, 0.6).unwrap();
-    vl.set(Fields::N, vlib::types::specular_to_field(20.0))
-        .unwrap();
-    vl.end().unwrap();
+    };
+    figure2_scene::build_with(&mut vl, None, geometry, figure2_scene::bench_stone, false).unwrap();
     vl
 }
 
