@@ -27,6 +27,7 @@
 //! opacity 0 is never essential, though the renderer must evaluate something to find that: the
 //! ratio is an upper bound on what could be cut.
 
+mod common;
 #[path = "../examples/common/figure2_scene.rs"]
 mod figure2_scene;
 
@@ -136,49 +137,18 @@ fn figure2() -> Scene {
 
 fn hypertexture() -> Scene {
     let (f, oc) = (rec(), rec());
-    let camera = Camera {
-        eye: [0.0, 80.0, -380.0],
-        at: [0.0, 0.0, 0.0],
-        up: [0.0, 1.0, 0.0],
-        fov: 40.0,
-    };
-    let mut vl = Library::new();
-    vl.scene().unwrap();
-    vl.camera(&camera).unwrap();
-    vl.background(0.02, 0.02, 0.05).unwrap();
-    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
-    vl.point_light([-300.0, 300.0, -300.0], Attenuation::None, [1.0; 3], 0.8)
-        .unwrap();
-    vl.step_size(3.0, 6.0).unwrap();
-    vl.object().unwrap();
-    vl.translate(-0.5, -0.5, -0.5).unwrap();
-    vl.scale(200.0, 200.0, 200.0).unwrap();
+    let camera = common::hypertexture::camera();
     let r = f.clone();
-    vl.function(Fields::F, move |s| {
+    let geometry = move |s: &mut Sample| {
         r.push(s, f32::NAN);
-        let _ = s.set(Fields::F, vlaux::sphere(s.position()));
-    })
-    .unwrap();
+        common::hypertexture::geometry(s);
+    };
     let r = oc.clone();
-    vl.function(Fields::O | Fields::COLORS, move |s| {
-        let d = s.value(9);
-        if d < -0.2 {
-            r.push(s, 0.0);
-            let _ = s.set(Fields::O, 0.0);
-            return;
-        }
-        let t = vlaux::turbulence(s.position(), 6.0, 3, 3);
-        let density = (3.0 * (d - 0.25 + 0.3 * (t - 0.5))).clamp(0.0, 1.0);
-        r.push(s, 0.6 * density);
-        let _ = s.set(Fields::O, 0.6 * density);
-        let _ = s.set(Fields::R, 1.0);
-        let _ = s.set(Fields::G, 0.3 + 0.6 * density);
-        let _ = s.set(Fields::B, 0.1 + 0.6 * density * density);
-    })
-    .unwrap();
-    vl.set(Fields::KA, 0.6).unwrap();
-    vl.set(Fields::KD, 0.5).unwrap();
-    vl.end().unwrap();
+    let opacity_colours = move |s: &mut Sample| {
+        let o = common::hypertexture::opacity_colours(s);
+        r.push(s, o);
+    };
+    let vl = common::hypertexture::build(geometry, opacity_colours);
     Scene {
         name: "hypertexture (`benches/scenes.rs`)",
         camera,

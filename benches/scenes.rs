@@ -57,48 +57,9 @@ fn figure2() -> Library {
 /// 3), with a fiery colour ramp. The geometry F is the smooth sphere field, so the normals
 /// (central differences of F, for the diffuse term) do not re-evaluate the turbulence.
 fn hypertexture() -> Library {
-    let mut vl = Library::new();
-    vl.scene().unwrap();
-    vl.camera(&Camera {
-        eye: [0.0, 80.0, -380.0],
-        at: [0.0, 0.0, 0.0],
-        up: [0.0, 1.0, 0.0],
-        fov: 40.0,
+    common::hypertexture::build(common::hypertexture::geometry, |s| {
+        common::hypertexture::opacity_colours(s);
     })
-    .unwrap();
-    vl.background(0.02, 0.02, 0.05).unwrap();
-    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
-    vl.point_light([-300.0, 300.0, -300.0], Attenuation::None, [1.0; 3], 0.8)
-        .unwrap();
-    vl.step_size(3.0, 6.0).unwrap();
-    vl.object().unwrap();
-    vl.translate(-0.5, -0.5, -0.5).unwrap();
-    vl.scale(200.0, 200.0, 200.0).unwrap();
-    vl.function(Fields::F, |s| {
-        let _ = s.set(Fields::F, vlaux::sphere(s.position()));
-    })
-    .unwrap();
-    vl.function(Fields::O | Fields::COLORS, |s| {
-        // F: 1 at the centre, 0 on the inscribed sphere, negative outside. The density is
-        // F - 0.25 pushed out by up to 0.3 · (2 - 0.5) by turbulence (which lies in [0, 2)):
-        // nothing below F = -0.2 can become dense, and the turbulence is skipped there.
-        let d = s.value(9);
-        if d < -0.2 {
-            let _ = s.set(Fields::O, 0.0);
-            return;
-        }
-        let t = vlaux::turbulence(s.position(), 6.0, 3, 3);
-        let density = (3.0 * (d - 0.25 + 0.3 * (t - 0.5))).clamp(0.0, 1.0);
-        let _ = s.set(Fields::O, 0.6 * density);
-        let _ = s.set(Fields::R, 1.0);
-        let _ = s.set(Fields::G, 0.3 + 0.6 * density);
-        let _ = s.set(Fields::B, 0.1 + 0.6 * density * density);
-    })
-    .unwrap();
-    vl.set(Fields::KA, 0.6).unwrap();
-    vl.set(Fields::KD, 0.5).unwrap();
-    vl.end().unwrap();
-    vl
 }
 
 /// Direct surface rendering: five metaballs (the blobs of `examples/c/metaballs.c`) as two

@@ -1,5 +1,6 @@
 //! What the benchmarks share: the MNI brain's dataset and scene (used by `mni.rs` and by the
-//! thread-scaling group of `scenes.rs`), and a timer for in-process ratios.
+//! thread-scaling group of `scenes.rs`), the hypertexture (`scenes.rs`, `procedural.rs`), and a
+//! timer for in-process ratios.
 //!
 //! A directory module, so that cargo does not take it for a benchmark target of its own.
 
@@ -7,6 +8,8 @@
 
 #[path = "../../examples/common/mni_scene.rs"]
 pub mod mni_scene;
+
+pub mod hypertexture;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
