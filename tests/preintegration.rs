@@ -1,7 +1,9 @@
 //! Closed-form tests of pre-integrated transfer functions (`Optimise::preintegrate`): a dataset
 //! whose value is linear in depth (trilinear interpolation reproduces a linear function
 //! exactly), seen head-on through an opacity ramp and a colour ramp, against the
-//! emission–absorption integral along the ray computed independently here.
+//! emission–absorption integral along the ray computed independently here. Each pre-integrated
+//! check runs both marches: the packet march (`Optimise::packets`, where the processor has
+//! AVX2 and FMA: the samples and values in SIMD lanes) and the scalar one.
 
 use vlib::{Camera, Dataset, Fields, Library, MappingType, Optimise, Voxels};
 use vlib::{DatasetId, MappingId};
@@ -34,14 +36,14 @@ fn colour(v: f64) -> [f64; 3] {
 /// The scene: the slab [−200, 200]² × [0, DEPTH] whose value rises linearly from 0 at its
 /// front (z = 0) to 1 at its back, ambient light only (ka = 1), black background, seen
 /// head-on from z = −100.
-fn scene(step: f32, preintegrate: bool) -> Library {
+fn scene(step: f32, preintegrate: bool, packets: bool) -> Library {
     let per = 65535 / (NZ - 1) as u16;
-    scene_of(step, preintegrate, |k| k as u16 * per)
+    scene_of(step, preintegrate, packets, |k| k as u16 * per)
 }
 
 /// [`scene`] with node k along depth holding the voxel `voxel(k)` (normalised by the linear
-/// ramp's top voxel).
-fn scene_of(step: f32, preintegrate: bool, voxel: impl Fn(usize) -> u16) -> Library {
+/// ramp's top voxel), the packet march on or off.
+fn scene_of(step: f32, preintegrate: bool, packets: bool, voxel: impl Fn(usize) -> u16) -> Library {
     let mut vl = Library::new();
     let per = 65535 / (NZ - 1) as u16;
     let raw: Vec<u16> = (0..4 * 4 * NZ).map(|i| voxel(i / 16)).collect();
@@ -59,6 +61,7 @@ fn scene_of(step: f32, preintegrate: bool, voxel: impl Fn(usize) -> u16) -> Libr
     vl.scene().unwrap();
     vl.set_optimise(Optimise {
         preintegrate,
+        packets,
         ..Optimise::default()
     })
     .unwrap();
@@ -116,8 +119,10 @@ fn exact_along(len: f64, value: impl Fn(f64) -> f64) -> [f64; 3] {
 
 /// The largest difference between the centre pixel (a ray straight along z, path length
 /// DEPTH) and the closed form.
-fn centre_error(step: f32, preintegrate: bool, expected: &[f64; 3]) -> f64 {
-    let img = scene(step, preintegrate).render_preview(3, 3, 1.0).unwrap();
+fn centre_error(step: f32, preintegrate: bool, packets: bool, expected: &[f64; 3]) -> f64 {
+    let img = scene(step, preintegrate, packets)
+        .render_preview(3, 3, 1.0)
+        .unwrap();
     let p = img.pixel(1, 1);
     (0..3)
         .map(|k| (p[k] as f64 - expected[k]).abs())
@@ -134,15 +139,17 @@ fn preintegration_is_exact_on_a_linear_ramp_at_any_step() {
     // of α and the colour (below 1 here), so at most a few 10⁻⁵; 2·10⁻⁴ (a twentieth of an
     // 8-bit level) leaves room for the f32 arithmetic of the composite.
     for step in [0.37f32, 1.0, 2.5, 2.9, 7.0, 15.0] {
-        let err = centre_error(step, true, &expected);
-        assert!(
-            err < 2e-4,
-            "step {step}: error {err:e}, expected {expected:?}"
-        );
+        for packets in [true, false] {
+            let err = centre_error(step, true, packets, &expected);
+            assert!(
+                err < 2e-4,
+                "step {step}, packets {packets}: error {err:e}, expected {expected:?}"
+            );
+        }
     }
     // Without pre-integration the midpoint rule's error at coarse steps is far larger (the
     // test can tell the two apart).
-    let coarse = centre_error(7.0, false, &expected);
+    let coarse = centre_error(7.0, false, true, &expected);
     assert!(coarse > 1e-2, "midpoint rule at step 7: {coarse:e}");
 }
 
@@ -162,20 +169,24 @@ fn slabs_are_halved_where_the_data_bends() {
         let k = (z.floor() as usize).min(NZ - 2);
         node(k) + (node(k + 1) - node(k)) * (z - k as f64)
     });
-    let err = |pre: bool| {
-        let img = scene_of(2.0, pre, voxel).render_preview(3, 3, 1.0).unwrap();
+    let err = |pre: bool, packets: bool| {
+        let img = scene_of(2.0, pre, packets, voxel)
+            .render_preview(3, 3, 1.0)
+            .unwrap();
         let p = img.pixel(1, 1);
         (0..3)
             .map(|k| (p[k] as f64 - expected[k]).abs())
             .fold(0.0, f64::max)
     };
-    let on = err(true);
-    assert!(
-        on < 2e-4,
-        "pre-integrated: error {on:e}, expected {expected:?}"
-    );
+    for packets in [true, false] {
+        let on = err(true, packets);
+        assert!(
+            on < 2e-4,
+            "pre-integrated, packets {packets}: error {on:e}, expected {expected:?}"
+        );
+    }
     // The midpoint rule at the same step is far off (the test tells the two apart).
-    let off = err(false);
+    let off = err(false, true);
     assert!(off > 1e-2, "midpoint rule: {off:e}");
 }
 
@@ -192,8 +203,8 @@ fn a_constant_value_keeps_the_exact_opacity_of_a_constant_medium() {
     let alpha = 1.0 - (1.0 - o).powf(DEPTH / REFERENCE as f64);
     let c = colour(v);
     for step in [0.37f32, 1.0, 2.9, 15.0] {
-        for pre in [true, false] {
-            let img = scene_of(step, pre, |_| voxel)
+        for (pre, packets) in [(true, true), (true, false), (false, true)] {
+            let img = scene_of(step, pre, packets, |_| voxel)
                 .render_preview(3, 3, 1.0)
                 .unwrap();
             let p = img.pixel(1, 1);
@@ -201,7 +212,7 @@ fn a_constant_value_keeps_the_exact_opacity_of_a_constant_medium() {
                 let want = c[k] * alpha;
                 assert!(
                     (p[k] as f64 - want).abs() < 2e-6,
-                    "step {step}, pre-integration {pre}: {p:?} vs {want}"
+                    "step {step}, pre-integration {pre}, packets {packets}: {p:?} vs {want}"
                 );
             }
         }
@@ -210,12 +221,12 @@ fn a_constant_value_keeps_the_exact_opacity_of_a_constant_medium() {
 
 /// A 32³ dataset of two soft balls (8-bit), through a steep opacity ramp and a colour ramp,
 /// lit by a directional light, rendered with pre-integration and `skip_empty` as given.
-fn balls(skip_empty: bool, step: f32) -> Vec<u8> {
-    balls_on(skip_empty, step, 0)
+fn balls(skip_empty: bool, step: f32, packets: bool) -> Vec<u8> {
+    balls_on(skip_empty, step, 0, packets)
 }
 
 /// [`balls`] on a pool of `threads` threads (0: rayon's default).
-fn balls_on(skip_empty: bool, step: f32, threads: usize) -> Vec<u8> {
+fn balls_on(skip_empty: bool, step: f32, threads: usize, packets: bool) -> Vec<u8> {
     let n = 32usize;
     let raw: Vec<u8> = (0..n * n * n)
         .map(|i| {
@@ -252,6 +263,7 @@ fn balls_on(skip_empty: bool, step: f32, threads: usize) -> Vec<u8> {
     vl.set_optimise(Optimise {
         preintegrate: true,
         skip_empty,
+        packets,
         ..Optimise::default()
     })
     .unwrap();
@@ -289,13 +301,20 @@ fn balls_on(skip_empty: bool, step: f32, threads: usize) -> Vec<u8> {
 fn empty_space_skipping_changes_no_pre_integrated_pixel() {
     // A sample the skipping passes over has a value the opacity table maps to 0; the slabs
     // next to it read its value, so the same slabs are composited with and without skipping.
+    // The packet march passes over the samples its cell mask clears, the scalar march those
+    // in empty blocks: the same slabs either way.
     for step in [0.013f32, 0.05, 0.11] {
-        let (on, off) = (balls(true, step), balls(false, step));
-        assert!(
-            on.iter().any(|&b| b > 40),
-            "step {step}: the balls are visible"
-        );
-        assert!(on == off, "step {step}: skipping changed a pixel");
+        for packets in [true, false] {
+            let (on, off) = (balls(true, step, packets), balls(false, step, packets));
+            assert!(
+                on.iter().any(|&b| b > 40),
+                "step {step}: the balls are visible"
+            );
+            assert!(
+                on == off,
+                "step {step}, packets {packets}: skipping changed a pixel"
+            );
+        }
     }
 }
 
@@ -303,12 +322,14 @@ fn empty_space_skipping_changes_no_pre_integrated_pixel() {
 fn pre_integrated_bytes_do_not_depend_on_the_thread_count() {
     // The tables' rows are built in parallel and the tiles traced in parallel; each entry and
     // each pixel is computed on its own, so the bytes are the same on any number of threads.
-    let one = balls_on(true, 0.05, 1);
-    assert!(one.iter().any(|&b| b > 40), "the balls are visible");
-    for threads in [2, 3, 8] {
-        assert!(
-            balls_on(true, 0.05, threads) == one,
-            "{threads} threads differ from one"
-        );
+    for packets in [true, false] {
+        let one = balls_on(true, 0.05, 1, packets);
+        assert!(one.iter().any(|&b| b > 40), "the balls are visible");
+        for threads in [2, 3, 8] {
+            assert!(
+                balls_on(true, 0.05, threads, packets) == one,
+                "packets {packets}: {threads} threads differ from one"
+            );
+        }
     }
 }

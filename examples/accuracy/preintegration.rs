@@ -148,9 +148,9 @@ fn document(
          in halves down to a quarter of the step where the data bends along it (128 × 128 \
          tables per object for the step, its half and its quarter, built with the scene: \
          their build is inside every time below); without it, each segment is its midpoint \
-         sample. Pre-integrated \
-         images are traced by the scalar march, the others by the packet march where the \
-         processor has AVX2. A ★ marks the Pareto front of both sweeps together.\n",
+         sample. Both are traced by the packet march where the processor has AVX2 (for \
+         pre-integrated images, the samples and values in lanes and the slabs by scalar \
+         code). A ★ marks the Pareto front of both sweeps together.\n",
         RAMP.0,
         RAMP.1,
         REFERENCE_STEP,

@@ -249,9 +249,10 @@ pub struct Optimise {
     /// kernel's direct-shading programs), rendered alone by DVR: each slab between two
     /// samples takes the opacity and colour of the value varying linearly along it, so that
     /// steep transfer functions reach the same error at a coarser step (`docs/accuracy.md`,
-    /// pre-integration). Such a scene then takes the scalar march, not the packet march, and
-    /// at equal time the packet march's midpoint samples at a finer step are still more
-    /// accurate, so it is off by default (every segment its midpoint sample).
+    /// pre-integration). The packet march then finds the samples and their values in SIMD
+    /// lanes but composites each slab in scalar code, and at equal time its midpoint samples
+    /// at a finer step are still more accurate, so it is off by default (every segment its
+    /// midpoint sample).
     pub preintegrate: bool,
 }
 

@@ -202,6 +202,11 @@ fn render_in_strips(
         let first_pass = |rows: std::ops::Range<u32>, entry: Option<&EntryMap>| {
             #[cfg(target_arch = "x86_64")]
             if let Some(p) = &packets {
+                if p.preintegrated() {
+                    return per_tile(width, rows, packet_side, progress, |tile| {
+                        p.tile_pre(&view, entry, &image, unbounded, tile)
+                    });
+                }
                 return per_tile(width, rows, packet_side, progress, |tile| {
                     p.tile(&view, entry, &image, unbounded, tile)
                 });

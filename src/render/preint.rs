@@ -21,8 +21,9 @@
 //! for `TABLE_NODES`² (front, back) value pairs, read with bilinear interpolation; slabs of
 //! another length (the ends of a ray's interval in the box) are integrated on the spot
 //! ([`PreIntegrated::integrate`]). Built once per compiled scene, in O(n³) operations on n
-//! nodes, fewer where the opacity table is 0 or 1 over part of its range. The march that uses
-//! them is `integrate::preint`'s; the transfer functions themselves are `model`'s.
+//! nodes, fewer where the opacity table is 0 or 1 over part of its range. The slabs that use
+//! them are composited by `integrate::preint` (for its scalar march and for the packet march of
+//! `simd::preint`); the transfer functions themselves are `model`'s.
 
 use crate::data::or_unwind;
 use crate::error::ErrorCode;

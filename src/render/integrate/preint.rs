@@ -6,24 +6,358 @@
 //! the data bends within a slab that can have opacity (the value at its middle off the mean of
 //! its ends by more than [`REFINE_TOLERANCE`]), the slab is cut in two halves at its middle,
 //! each taken the same way, down to a quarter of the step: a surface is placed by the data, not
-//! by a straight line through two samples a step apart. The tables are `preint`'s; the lighting
-//! is `shade`'s, applied to each slab's mean colour where its light comes from.
+//! by a straight line through two samples a step apart.
+//!
+//! The slabs of a ray are composited by [`PreMarch`] and [`PreRay`], which both marches drive:
+//! this scalar one, sample by sample from the cursor, and the packet march of `simd::preint`,
+//! which finds each lane's samples and their values in SIMD lanes and hands them here. The
+//! tables are `preint`'s; the lighting is `shade`'s, applied to each slab's mean colour where
+//! its light comes from.
 
 use crate::model::program::clamp_field;
 use crate::render::preint::{PreIntegrated, REFINE_LEVELS, REFINE_TOLERANCE};
 use crate::render::*;
 
+/// What the slabs of one object's rays share: the scene, the object, its tables, its dataset,
+/// the zero test's bound z (the opacity table is 0 on [0, z]) and its lighting coefficients.
+///
+/// A ray's *positions* are its interval's start t0 (position 0), its samples (sample i at
+/// position i + 1, the cursor's midpoint i) and its interval's end t1 (position n + 1, n
+/// samples); its slabs run between consecutive positions, the first and the last being half
+/// segments. The pixel is the front-to-back composite of every slab one of whose two values is
+/// above z, and nothing else: a slab whose two values are at most z adds nothing. A march need
+/// not read every sample: [`PreMarch::take`] is given the samples it takes in order, each with
+/// its value, and where samples were passed over between two of them (a sample passed over has
+/// a value at most z: an empty block of the skip grid, a cell the cell mask clears, before the
+/// entry map's bound) it reads the passed-over neighbour of a taken sample whose value is above
+/// z, so the slabs composited are the same whichever samples a march passes over. The start t0
+/// counts as taken where the ray's first sample is not passed over before the march begins
+/// ([`PreMarch::ray`]), the end t1 always ([`PreMarch::finish`]).
+pub(in crate::render) struct PreMarch<'a> {
+    scene: &'a Compiled,
+    obj: &'a CObj,
+    pre: &'a PreIntegrated,
+    data: &'a Dataset,
+    z: f32,
+    k: [f64; 3],
+    e: Specular,
+    /// The dataset's 8-bit voxels where values are read from them, as the packet march
+    /// reads them ([`PreMarch::with_bytes`]); else the node values' trilinear interpolation.
+    bytes: Option<Bytes<'a>>,
+}
+
+/// A dataset's 8-bit voxels whose normalisation `raw·scale + offset` never clamps, read as
+/// the packet march reads them (`simd::nodes::Raw8`): the trilinear interpolation of the
+/// voxels (exact integers) in the lanes' f32 operations and order, then one fused
+/// normalisation, clamped to [0, 1]; 0 outside the dataset. The same bits as a lane's value
+/// (a relative 10⁻⁷ from the node values' interpolation), so that the packet march's values
+/// read in lanes and those read here (passed-over neighbours, slab middles, the interval's
+/// ends) are one function of the point.
+#[derive(Clone, Copy)]
+pub(in crate::render) struct Bytes<'a> {
+    pub(in crate::render) raw: &'a [u8],
+    pub(in crate::render) scale: f32,
+    pub(in crate::render) offset: f32,
+    /// n − 1 and n − 2 per axis, as f32; the strides of y and z.
+    pub(in crate::render) last: [f32; 3],
+    pub(in crate::render) top: [f32; 3],
+    pub(in crate::render) sy: usize,
+    pub(in crate::render) sz: usize,
+}
+
+impl Bytes<'_> {
+    /// The value at object point `p` of `data` (these voxels' dataset).
+    fn value(&self, data: &Dataset, p: [f32; 3]) -> f32 {
+        if !data.covers(p) {
+            return 0.0;
+        }
+        // `Packets::cells`: the continuous index clamped to the grid, its cell's first node
+        // at most n − 2, the weight the rest.
+        let mut f = [0f32; 3];
+        let mut c = [0usize; 3];
+        for a in 0..3 {
+            let l = self.last[a];
+            let ua = (p[a] * l).max(0.0).min(l);
+            let ci = ua.min(self.top[a]) as i32;
+            f[a] = ua - ci as f32;
+            c[a] = ci.max(0) as usize;
+        }
+        let base = c[0] + c[1] * self.sy + c[2] * self.sz;
+        let at = |o: usize| self.raw.get(base + o).map_or(0.0, |&v| v as f32);
+        let (sy, sz) = (self.sy, self.sz);
+        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+        // `trilinear_lanes`' seven lerps.
+        let c00 = lerp(at(0), at(1), f[0]);
+        let c10 = lerp(at(sy), at(sy + 1), f[0]);
+        let c01 = lerp(at(sz), at(sz + 1), f[0]);
+        let c11 = lerp(at(sy + sz), at(sy + sz + 1), f[0]);
+        let v = lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2]);
+        // (Finite: the voxels and the weights are.)
+        v.mul_add(self.scale, self.offset).clamp(0.0, 1.0)
+    }
+}
+
+/// One ray's state in a [`PreMarch`]: the composite so far, its lighting, the last position
+/// taken (number, ray parameter, value) and the ray (the eye and the world direction).
+pub(in crate::render) struct PreRay<'a> {
+    acc: Integral,
+    headlit: Option<Headlit<'a>>,
+    origin: DVec3,
+    dir: DVec3,
+    last: Option<(u64, f64, f32)>,
+}
+
+impl<'a> PreMarch<'a> {
+    pub(in crate::render) fn new(
+        scene: &'a Compiled,
+        obj: &'a CObj,
+        pre: &'a PreIntegrated,
+        data: &'a Dataset,
+        z: f32,
+    ) -> PreMarch<'a> {
+        let [ka, kd, ks, spec] = pre.shading.coefficients;
+        PreMarch {
+            scene,
+            obj,
+            pre,
+            data,
+            z,
+            k: [ka, kd, ks],
+            e: Specular::of_field(spec),
+            bytes: None,
+        }
+    }
+
+    /// This march with its values read from the dataset's 8-bit voxels `bytes`, as the
+    /// packet march reads them.
+    pub(in crate::render) fn with_bytes(self, bytes: Bytes<'a>) -> PreMarch<'a> {
+        PreMarch {
+            bytes: Some(bytes),
+            ..self
+        }
+    }
+
+    /// A ray of cursor `c` (before its first sample is taken) from `origin` along the world
+    /// direction `dir`: its start t0 taken where the cursor is at its first sample.
+    pub(in crate::render) fn ray(&self, c: &Cursor, origin: DVec3, dir: DVec3) -> PreRay<'a> {
+        PreRay {
+            acc: Integral::new(self.scene),
+            headlit: Headlit::new(self.scene, self.obj, dir, self.k, self.e),
+            origin,
+            dir,
+            last: (c.k == 0).then(|| (0, c.t0, self.value(c, c.t0))),
+        }
+    }
+
+    /// The dataset's value at ray parameter `t` of cursor `c`'s ray.
+    #[inline]
+    pub(in crate::render) fn value(&self, c: &Cursor, t: f64) -> f32 {
+        let p = ray_point(c.o, c.d, t);
+        match &self.bytes {
+            Some(b) => b.value(self.data, p),
+            None => clamp_field(self.data.trilinear(p)),
+        }
+    }
+
+    /// The ray parameter of position `p` of cursor `c`'s ray (see [`PreMarch`]).
+    #[inline]
+    fn at(c: &Cursor, p: u64) -> f64 {
+        if p == 0 {
+            c.t0
+        } else if p > c.n {
+            c.t1
+        } else {
+            c.mid(p - 1)
+        }
+    }
+
+    /// Takes sample `i` of cursor `c`'s ray (ray parameter `t`, value `v`), after those
+    /// taken before it: composites the slabs from the last position taken to it (see
+    /// [`PreMarch`]); whether the ray ends there (its transmittance below the termination
+    /// bound).
+    #[inline]
+    pub(in crate::render) fn take(
+        &self,
+        ray: &mut PreRay<'a>,
+        c: &Cursor,
+        i: u64,
+        t: f64,
+        v: f32,
+        cache: &mut CellGradients,
+    ) -> bool {
+        self.take_position(ray, c, i + 1, t, v, cache)
+    }
+
+    /// The end of the ray (its samples all taken or passed over, the ray not ended): the slabs
+    /// to its end t1; its colour and transmittance.
+    pub(in crate::render) fn finish(
+        &self,
+        ray: &mut PreRay<'a>,
+        c: &Cursor,
+        cache: &mut CellGradients,
+    ) -> (DVec3, f64) {
+        let v = self.value(c, c.t1);
+        self.take_position(ray, c, c.n + 1, c.t1, v, cache);
+        ray.acc.result()
+    }
+
+    /// [`PreMarch::take`] of position `p`.
+    #[inline]
+    fn take_position(
+        &self,
+        ray: &mut PreRay<'a>,
+        c: &Cursor,
+        p: u64,
+        t: f64,
+        v: f32,
+        cache: &mut CellGradients,
+    ) -> bool {
+        let z = self.z;
+        let ends = match ray.last {
+            // The slab from the position before.
+            Some((q, tq, vq)) if q + 1 == p => self.slab(ray, c, tq, vq, t, v, cache),
+            // Positions passed over between (values at most z): the slab after the last one
+            // taken where its value is above z, and the one before this one where this value
+            // is, each reading the value of the position passed over.
+            Some((q, tq, vq)) => {
+                (vq > z && {
+                    let t1 = Self::at(c, q + 1);
+                    self.slab(ray, c, tq, vq, t1, self.value(c, t1), cache)
+                }) || (v > z && {
+                    let tp = Self::at(c, p - 1);
+                    self.slab(ray, c, tp, self.value(c, tp), t, v, cache)
+                })
+            }
+            None => {
+                v > z && {
+                    let tp = Self::at(c, p - 1);
+                    self.slab(ray, c, tp, self.value(c, tp), t, v, cache)
+                }
+            }
+        };
+        ray.last = Some((p, t, v));
+        ends
+    }
+
+    /// Composites the slab from ray parameter ta (value va) to tb (value vb), halved where the
+    /// data is not linear along it: where its value can reach the opacity table's non-zero
+    /// part and the value at its middle is off the mean of its ends by more than the
+    /// tolerance, each half is taken in turn, front first, down to [`REFINE_LEVELS`] halvings.
+    /// Whether the ray ends there.
+    #[allow(clippy::too_many_arguments)]
+    fn slab(
+        &self,
+        ray: &mut PreRay<'a>,
+        c: &Cursor,
+        ta: f64,
+        va: f32,
+        tb: f64,
+        vb: f32,
+        cache: &mut CellGradients,
+    ) -> bool {
+        let z = self.z;
+        if va <= z && vb <= z {
+            return false;
+        }
+        // The halves still to take, the front one last: (ta, va, tb, vb, level).
+        let mut todo = [(0.0, 0.0, 0.0, 0.0, 0); REFINE_LEVELS as usize + 1];
+        todo[0] = (ta, va, tb, vb, 0u32);
+        let mut n = 1;
+        while n > 0 {
+            n -= 1;
+            let (a, x, b, y, level) = todo[n];
+            if level < REFINE_LEVELS && (x > z || y > z) {
+                let m = 0.5 * (a + b);
+                let vm = self.value(c, m);
+                if (vm - 0.5 * (x + y)).abs() > REFINE_TOLERANCE {
+                    todo[n] = (m, vm, b, y, level + 1);
+                    todo[n + 1] = (a, x, m, vm, level + 1);
+                    n += 2;
+                    continue;
+                }
+            }
+            if self.piece(ray, c, level, (a, x), (b, y), cache) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Composites the slab from ray parameter ta (value va) to tb (value vb), of level
+    /// `level` (1/2^level of the step, or another length); whether the ray ends there.
+    fn piece(
+        &self,
+        ray: &mut PreRay<'a>,
+        c: &Cursor,
+        level: u32,
+        (ta, va): (f64, f32),
+        (tb, vb): (f64, f32),
+        cache: &mut CellGradients,
+    ) -> bool {
+        let (obj, pre, z) = (self.obj, self.pre, self.z);
+        let shading = &pre.shading;
+        let len = tb - ta;
+        if len.is_nan() || len <= 0.0 || (va <= z && vb <= z) {
+            return false;
+        }
+        // The slab's α, mean colour and the fraction of its length where it is lit.
+        let (alpha, rgb, at) = if va == vb {
+            // A constant medium: the midpoint march's sample, bit for bit.
+            let (o, Some(rgb)) = shading.opacity_colour(va) else {
+                return false;
+            };
+            (obj.alpha(o as f64, len), rgb.map(|x| x as f64), 0.5)
+        } else {
+            // (Midpoints one step apart differ by the step to rounding: a relative 10⁻⁹ of κ
+            // changes α far below f32's resolution.)
+            let part = obj.step / (1u32 << level) as f64;
+            let [a, r, g, b, depth] = if (len - part).abs() <= part * 1e-9 {
+                pre.lookup(level, va, vb)
+            } else {
+                pre.integrate(va, vb, len * obj.inv_ref)
+            };
+            if a.is_nan() || a <= 0.0 {
+                return false;
+            }
+            // The slab's mean colour (its premultiplied colour over its α), in [0, 1] against
+            // rounding.
+            let a = a.min(1.0);
+            (
+                a as f64,
+                [r, g, b].map(|x| (x / a).clamp(0.0, 1.0) as f64),
+                (depth / a).clamp(0.0, 1.0) as f64,
+            )
+        };
+        let col = DVec3::from_array(rgb);
+        let tm = ta + at * len;
+        let (origin, dir) = (ray.origin, ray.dir);
+        let (p, w) = (ray_point(c.o, c.d, tm), origin + tm * dir);
+        let normal = || obj.gradient_normal(w, -dir, p, 9, cache);
+        let lit = match &ray.headlit {
+            Some(h) => h.colour(col, normal),
+            None => self
+                .scene
+                .illuminate_colour(obj, w, dir, col, self.k, self.e, normal),
+        };
+        ray.acc.add(alpha, lit)
+    }
+}
+
+impl PreRay<'_> {
+    /// The colour gathered and the transmittance left.
+    pub(in crate::render) fn result(&self) -> (DVec3, f64) {
+        self.acc.result()
+    }
+}
+
 impl Compiled {
     /// [`Compiled::march_one`] of a direct-shading program (see [`PreIntegrated`]) with its
     /// tables `pre`: the slabs between consecutive samples front to back, plus half a segment
     /// before the first sample and after the last (from and to the interval's ends, whose
-    /// values are read there too: one segment is two half slabs). A sample the skipping
-    /// passes over (an empty block, before the entry map's bound) has a value at most the
-    /// zero test's bound z: a slab between two of them, and any slab whose two values are at
-    /// most z, adds nothing (the opacity table is 0 on [0, z]) and is not cut; a slab between a sample taken
-    /// and one passed over reads the latter's value. A slab whose two values are equal is a
-    /// constant medium: [`CObj::alpha`] of the tables' values, exactly the midpoint march's
-    /// sample.
+    /// values are read there too: one segment is two half slabs), as [`PreMarch`] composites
+    /// them from the samples the cursor does not pass over. A slab whose two values are equal
+    /// is a constant medium: [`CObj::alpha`] of the tables' values, exactly the midpoint
+    /// march's sample.
     #[allow(clippy::too_many_arguments)]
     pub(in crate::render) fn march_preintegrated(
         &self,
@@ -36,134 +370,17 @@ impl Compiled {
         dir: DVec3,
     ) -> (DVec3, f64) {
         let grid = obj.skip.as_deref();
-        let shading = &pre.shading;
-        let [ka, kd, ks, spec] = shading.coefficients;
-        let (k, e) = ([ka, kd, ks], Specular::of_field(spec));
-        let headlit = Headlit::new(self, obj, dir, k, e);
+        let march = PreMarch::new(self, obj, pre, data, z);
+        let mut ray = march.ray(c, origin, dir);
         let mut cache = CellGradients::default();
-        let mut acc = Integral::new(self);
-        let (n, step) = (c.n, obj.step);
-        // The object-space ray (`Cursor::object_point` without borrowing the cursor).
-        let (ro, rd) = (c.o, c.d);
-        let point = |t: f64| ray_point(ro, rd, t);
-        let value = |t: f64| clamp_field(data.trilinear(point(t)));
-        // Composites the slab from ray parameter ta (value va) to tb (value vb), of level
-        // `level` (1/2^level of the step, or another length); whether the ray ends there.
-        let mut piece =
-            |acc: &mut Integral, level: u32, ta: f64, va: f32, tb: f64, vb: f32| -> bool {
-                let len = tb - ta;
-                if len.is_nan() || len <= 0.0 || (va <= z && vb <= z) {
-                    return false;
-                }
-                // The slab's α, mean colour and the fraction of its length where it is lit.
-                let (alpha, rgb, at) = if va == vb {
-                    // A constant medium: the midpoint march's sample, bit for bit.
-                    let (o, Some(rgb)) = shading.opacity_colour(va) else {
-                        return false;
-                    };
-                    (obj.alpha(o as f64, len), rgb.map(|x| x as f64), 0.5)
-                } else {
-                    // (Midpoints one step apart differ by the step to rounding: a relative 10⁻⁹
-                    // of κ changes α far below f32's resolution.)
-                    let part = step / (1u32 << level) as f64;
-                    let [a, r, g, b, depth] = if (len - part).abs() <= part * 1e-9 {
-                        pre.lookup(level, va, vb)
-                    } else {
-                        pre.integrate(va, vb, len * obj.inv_ref)
-                    };
-                    if a.is_nan() || a <= 0.0 {
-                        return false;
-                    }
-                    // The slab's mean colour (its premultiplied colour over its α), in [0, 1]
-                    // against rounding.
-                    let a = a.min(1.0);
-                    (
-                        a as f64,
-                        [r, g, b].map(|x| (x / a).clamp(0.0, 1.0) as f64),
-                        (depth / a).clamp(0.0, 1.0) as f64,
-                    )
-                };
-                let c = DVec3::from_array(rgb);
-                let tm = ta + at * len;
-                let (p, w) = (point(tm), origin + tm * dir);
-                let normal = || obj.gradient_normal(w, -dir, p, 9, &mut cache);
-                let lit = match &headlit {
-                    Some(h) => h.colour(c, normal),
-                    None => self.illuminate_colour(obj, w, dir, c, k, e, normal),
-                };
-                acc.add(alpha, lit)
-            };
-        // Composites the slab from ta (value va) to tb (value vb), halved where the data is not
-        // linear along it: where its value can reach the opacity table's non-zero part and the
-        // value at its middle is off the mean of its ends by more than the tolerance, each half
-        // is taken in turn, front first, down to REFINE_LEVELS halvings.
-        let mut slab = |acc: &mut Integral, ta: f64, va: f32, tb: f64, vb: f32| -> bool {
-            if va <= z && vb <= z {
-                return false;
-            }
-            // The halves still to take, the front one last: (ta, va, tb, vb, level).
-            let mut todo = [(0.0, 0.0, 0.0, 0.0, 0); REFINE_LEVELS as usize + 1];
-            todo[0] = (ta, va, tb, vb, 0u32);
-            let mut n = 1;
-            while n > 0 {
-                n -= 1;
-                let (a, x, b, y, level) = todo[n];
-                if level < REFINE_LEVELS && (x > z || y > z) {
-                    let m = 0.5 * (a + b);
-                    let vm = value(m);
-                    if (vm - 0.5 * (x + y)).abs() > REFINE_TOLERANCE {
-                        todo[n] = (m, vm, b, y, level + 1);
-                        todo[n + 1] = (a, x, m, vm, level + 1);
-                        n += 2;
-                        continue;
-                    }
-                }
-                if piece(acc, level, a, x, b, y) {
-                    return true;
-                }
-            }
-            false
-        };
-        // The last sample taken: its number, ray parameter and value.
-        let mut last: Option<(u64, f64, f32)> = None;
         while let Some(mid) = c.peek(grid) {
             let i = c.k;
             c.take();
-            let v = value(mid);
-            let ends = match last {
-                // The slab from the previous sample.
-                Some((j, tj, vj)) if j + 1 == i => slab(&mut acc, tj, vj, mid, v),
-                // Samples passed over between: the slab after the last one taken and the one
-                // before this one, reading the values of the samples passed over.
-                Some((j, tj, vj)) => {
-                    let t1 = c.mid(j + 1);
-                    let v1 = value(t1);
-                    let (tp, vp) = if j + 2 == i {
-                        (t1, v1)
-                    } else {
-                        let tp = c.mid(i - 1);
-                        (tp, value(tp))
-                    };
-                    slab(&mut acc, tj, vj, t1, v1) || slab(&mut acc, tp, vp, mid, v)
-                }
-                None if i > 0 => {
-                    let tp = c.mid(i - 1);
-                    slab(&mut acc, tp, value(tp), mid, v)
-                }
-                // The first segment's front half, from the interval's start.
-                None => slab(&mut acc, c.t0, value(c.t0), mid, v),
-            };
-            last = Some((i, mid, v));
-            if ends {
-                return acc.result();
+            let v = march.value(c, mid);
+            if march.take(&mut ray, c, i, mid, v, &mut cache) {
+                return ray.result();
             }
         }
-        // After the last sample taken: the slab to the next one (passed over), or the last
-        // segment's back half, to the interval's end.
-        if let Some((j, tj, vj)) = last {
-            let tb = if j + 1 < n { c.mid(j + 1) } else { c.t1 };
-            slab(&mut acc, tj, vj, tb, value(tb));
-        }
-        acc.result()
+        march.finish(&mut ray, c, &mut cache)
     }
 }

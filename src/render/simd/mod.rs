@@ -11,7 +11,10 @@
 //! scalar march, unchanged. Sixteen lanes also need 8-bit voxels read as voxels ([`Raw8`]),
 //! tables of at most seven rows ([`Segments`]) and the AVX-512 features of [`detected`]. On by
 //! default where it applies (`Optimise::packets` switches it off, `Optimise::wide_lanes` the
-//! sixteen lanes); `docs/performance.md` measures what it is worth.
+//! sixteen lanes); `docs/performance.md` measures what it is worth. A pre-integrated volume
+//! (`Optimise::preintegrate`, whatever its lighting) takes the same lanes for its samples and
+//! their values and composites its slabs by the scalar code ([`preint`],
+//! [`Packets::tile_pre`]).
 //!
 //! Each lane has its own ray, [`Cursor`] and state (transmittance, colour). The cursors are the
 //! scalar march's (the same segments, midpoints and lengths, the same start at the [`EntryMap`]
@@ -102,7 +105,8 @@
 //! Here: the march's preparation ([`Packets::new`]), the tile functions of both widths and the
 //! tile driver they share ([`Packets::march_tile`]), the lanes' state. Elsewhere: [`lanes`] (the
 //! tokens, their operations, loads and stores), [`starts`] (rays started four at a time),
-//! [`runs`] (which samples the lanes take), [`step`] (one sample a lane), [`nodes`] (node values
+//! [`runs`] (which samples the lanes take), [`step`] (one sample a lane), [`preint`] (the
+//! pre-integrated lanes), [`nodes`] (node values
 //! and voxels), [`tables`] (opacity and colour), [`shade`] (gradient, lighting, opacity
 //! correction); the unit tests in `tests.rs`.
 
@@ -115,6 +119,7 @@ use std::arch::x86_64::*;
 
 mod lanes;
 mod nodes;
+mod preint;
 mod runs;
 mod shade;
 mod starts;
@@ -220,6 +225,8 @@ pub(super) struct Packets<'a> {
     half_last: [f32; 3],
     /// Sixteen lanes a step ([`Avx512`]): the processor has AVX-512 and the scene fits it.
     wide: bool,
+    /// The slabs of a pre-integrated object ([`Packets::tile_pre`] traces its tiles).
+    pre: Option<PreMarch<'a>>,
     /// In the unit tests, the packets a step carries in either width where not 0 (1, 2 or
     /// 4; else [`PACKETS8`] and [`P`]): `packets_carry_rays_without_changing_them` sets it.
     #[cfg(test)]
@@ -246,12 +253,10 @@ impl<'a> Packets<'a> {
         if !(obj.seen_by(Ray::PRIMARY) && obj.render_type == RenderType::Dvr) {
             return None;
         }
-        // Pre-integration is the scalar march's (`integrate::preint`).
-        if obj.preint.is_some() {
-            return None;
-        }
         let lean = obj.lean.as_ref()?;
         let (data, z) = lean.value_head()?;
+        // A pre-integrated object's slabs are composited and lit by the scalar code
+        // (`Packets::tile_pre`).
         if !obj.normals.is_empty() {
             return None;
         }
@@ -267,6 +272,23 @@ impl<'a> Packets<'a> {
         // 8-bit voxels straight ([`Raw8`]), 16-bit voxels through their table of node values.
         let raw8 = Raw8::of(data);
         let raw8_fits = raw8.is_some();
+        // A pre-integrated object's slabs are composited and lit by the scalar code
+        // (`Packets::tile_pre`), its values read as the lanes read them.
+        let pre = obj.preint.as_ref().map(|pre| {
+            let march = PreMarch::new(scene, obj, pre, data, z);
+            match &raw8 {
+                Some(r8) => march.with_bytes(Bytes {
+                    raw: r8.raw,
+                    scale: r8.scale,
+                    offset: r8.offset,
+                    last: dims.map(|n| (n - 1) as f32),
+                    top: dims.map(|n| (n - 2) as f32),
+                    sy: strides[1],
+                    sz: strides[2],
+                }),
+                None => march,
+            }
+        });
         let values = match (&raw8, data.raw()) {
             (Some(_), _) => NodeValues::F32(&[]),
             (None, Voxels::U16(raw)) => NodeValues::U16(raw, data.table16()?),
@@ -274,6 +296,10 @@ impl<'a> Packets<'a> {
         };
         let [ka, kd, ks, spec] = tables.coefficients;
         let light = match scene.lanes[0].as_ref() {
+            // (Not read: the slabs are lit by the scalar code.)
+            _ if pre.is_some() => Light32::Unlit {
+                ka_ambient: [0.0; 3],
+            },
             Some(h) => {
                 // The gradient must be this very dataset's, trilinear (as the batched march's
                 // `same_cells`), in object space.
@@ -379,7 +405,11 @@ impl<'a> Packets<'a> {
             sy: strides[1] as i32,
             sz: strides[2] as i32,
             half_last: half_last.map(|x| x as f32),
-            wide: scene.settings.optimise.wide_lanes && raw8_fits && segments_fit && detected(),
+            wide: scene.settings.optimise.wide_lanes
+                && raw8_fits
+                && (segments_fit || pre.is_some())
+                && detected(),
+            pre,
             #[cfg(test)]
             packets: 0,
             #[cfg(test)]

@@ -72,7 +72,7 @@ impl Packets<'_> {
     /// ([`segments_lanes`]; tested, and as candidates the complement of those taken: never
     /// passed whole).
     #[inline(always)]
-    fn run16<S: Simd<N>, const N: usize>(
+    pub(super) fn run16<S: Simd<N>, const N: usize>(
         &self,
         s: S,
         c: &Cursor,

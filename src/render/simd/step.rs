@@ -84,13 +84,7 @@ impl Packets<'_> {
             }
             None => (s.value_nodes(self, base), None),
         };
-        let [fx, fy, fz] = f;
-        let [n000, n100, n010, n110, n001, n101, n011, n111] = nodes;
-        let c00 = lerp(s, n000, n100, fx);
-        let c10 = lerp(s, n010, n110, fx);
-        let c01 = lerp(s, n001, n101, fx);
-        let c11 = lerp(s, n011, n111, fx);
-        let v = lerp(s, lerp(s, c00, c10, fy), lerp(s, c01, c11, fy), fz);
+        let v = trilinear_lanes(s, &nodes, f);
         // (Raw voxels: the value normalised once, `raw·scale + offset`.)
         let v = match &self.raw8 {
             Some(r8) => s.fmadd(v, s.splat(r8.scale), s.splat(r8.offset)),
@@ -194,6 +188,22 @@ impl Packets<'_> {
         );
         (f, base, interior)
     }
+}
+
+/// The trilinear value of a cell's eight `nodes` (x fastest) at weights `f`: `trilinear_rows`'
+/// seven lerps, unfused, in its order.
+#[inline(always)]
+pub(super) fn trilinear_lanes<S: Simd<N>, const N: usize>(
+    s: S,
+    nodes: &[S::F; 8],
+    [fx, fy, fz]: [S::F; 3],
+) -> S::F {
+    let [n000, n100, n010, n110, n001, n101, n011, n111] = *nodes;
+    let c00 = lerp(s, n000, n100, fx);
+    let c10 = lerp(s, n010, n110, fx);
+    let c01 = lerp(s, n001, n101, fx);
+    let c11 = lerp(s, n011, n111, fx);
+    lerp(s, lerp(s, c00, c10, fy), lerp(s, c01, c11, fy), fz)
 }
 
 /// `a + (b − a)·t`, unfused (the scalar code's lerp).
