@@ -172,15 +172,28 @@ pub unsafe extern "C" fn vlRenderBuffer(
             }
         };
         let format = PixelFormat::from_raw(format)?;
-        if buf.is_null() {
-            return Err(null(NAME, "buf"));
-        }
         let side = |v: vlint| u32::try_from(v).ok().filter(|&v| v >= 1);
-        let (Some(w), Some(h)) = (side(width), side(height)) else {
-            return Err(Error::new(
+        let checked = match (buf.is_null(), side(width), side(height)) {
+            (true, _, _) => Err(null(NAME, "buf")),
+            (false, Some(w), Some(h)) => Ok((w, h)),
+            _ => Err(Error::new(
                 ErrorCode::BadValue,
                 format!("{NAME}: size {width}x{height}"),
-            ));
+            )),
+        };
+        let (w, h) = match checked {
+            Ok(size) => size,
+            Err(e) => {
+                // With a team, the other ranks wait in the render's first agreement: this
+                // rank takes part in it with a buffer that fails it, so every rank fails.
+                #[cfg(feature = "mpi")]
+                if lib.team().is_some() {
+                    let mark = crate::errors::mark();
+                    let _ = lib.render_into(1, 1, 1.0, format, &mut []);
+                    crate::mpi::share_errors(lib, mark);
+                }
+                return Err(e);
+            }
         };
         // Only the image's bytes are handed on (a `bytes` too small is the core's error).
         let bytes = usize::try_from(bytes).unwrap_or(usize::MAX);

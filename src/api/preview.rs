@@ -70,8 +70,10 @@ impl Library {
         let desc = self.open_scene("render_into")?;
         check_size("render_into", width, height, aspect)?;
         let needed = format.image_bytes(width, height);
-        let Some(bytes) = needed.filter(|&n| n <= buffer.len()) else {
-            return err(
+        // (With a team, checked with the compile below: a rank whose buffer is short fails
+        // every rank.)
+        let fits = needed.filter(|&n| n <= buffer.len()).ok_or_else(|| {
+            crate::error::Error::new(
                 ErrorCode::BadValue,
                 format!(
                     "render_into: a {width}x{height} image of {format:?} takes {} bytes, the \
@@ -79,18 +81,22 @@ impl Library {
                     needed.map_or("more than usize::MAX".into(), |n| n.to_string()),
                     buffer.len()
                 ),
-            );
-        };
-        let buffer = &mut buffer[..bytes];
+            )
+        });
+        if self.team.is_none() {
+            fits.clone()?;
+        }
         crate::pool::install(|| {
             let progress =
                 crate::control::Progress::new(&self.control, width as u64 * height as u64)
                     .with_team(self.team.as_ref());
             // (With a team, a rank that cannot compile the scene fails every rank.)
-            let scene = crate::team::agree(
-                progress.team(),
-                crate::error::catch("compiling the scene", || self.compile(&desc)),
-            )?;
+            let compiled = fits.and_then(|bytes| {
+                let scene = crate::error::catch("compiling the scene", || self.compile(&desc))?;
+                Ok((bytes, scene))
+            });
+            let (bytes, scene) = crate::team::agree(progress.team(), compiled)?;
+            let buffer = &mut buffer[..bytes];
             crate::render::render_into(&scene, (width, height, aspect), format, &progress, buffer)
         })
     }

@@ -150,7 +150,10 @@ fn image(compiled: &Compiled, req: &ImageRequest, progress: &Progress) -> Result
         &mut pixels,
     )?;
     let written = match file {
-        Some(file) => formats::encode_into(file, format, w, h, &pixels),
+        // (Caught: with a team, rank 0 alone encodes, and every rank agrees below.)
+        Some(file) => crate::error::catch("encoding the image", || {
+            formats::encode_into(file, format, w, h, &pixels)
+        }),
         None => Ok(()),
     };
     crate::team::agree(team, written)

@@ -120,6 +120,14 @@ where
     type Tile = ((u32, u32), Vec<Pixel>);
     let (top, bottom) = (rows.start, rows.end);
     let corners = tiles(width, rows, side);
+    // The strip's pixels before the step: with a team, a rank that cannot hold them fails
+    // the step on every rank (`Progress::hold`).
+    let len = width as usize * (bottom - top) as usize;
+    let pixels = progress.hold(crate::num::try_vec(
+        len,
+        [0.0f32; 4],
+        "a strip of the image",
+    ))?;
     let results: Vec<Tile> = progress
         .map(corners.len(), |i| {
             let (tx, ty) = corners[i];
@@ -136,8 +144,13 @@ where
     // The tiles come in row-major order: each band of `side` rows is a row of tiles, copied
     // into place in parallel, a tile row at a time.
     let per_row = width.div_ceil(side) as usize;
-    let len = width as usize * (bottom - top) as usize;
-    let mut pixels = crate::num::try_vec(len, [0.0f32; 4], "a strip of the image")?;
+    // (Held errors fail the step: the pixels are there.)
+    let Some(mut pixels) = pixels else {
+        return Err(crate::error::Error::new(
+            crate::error::ErrorCode::Internal,
+            "a strip's pixels were not allocated",
+        ));
+    };
     pixels
         .par_chunks_mut(width as usize * side as usize)
         .zip(results.par_chunks(per_row))

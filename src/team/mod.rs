@@ -406,7 +406,8 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 
 /// The error of rank `r` (code `code`, its message in `messages` at the place `counts` give)
 /// as every rank reports it: the rank's own error as it is on that rank, and with "(on rank
-/// r)" on the others.
+/// r)" on the others (where its message does not name a rank already: an error agreed in a
+/// step and agreed again at the output's end keeps the rank it first came from).
 fn rank_error(
     team: &Team,
     r: usize,
@@ -424,6 +425,10 @@ fn rank_error(
     let text = String::from_utf8_lossy(&messages[at..at + counts[r]]);
     // (Sent as `code as i32 as u64`: the truncation gives the i32 back.)
     let code = ErrorCode::from_raw(code as i32).unwrap_or(ErrorCode::Internal);
+    // (An error agreed before, passed on to another agreement, names its rank already.)
+    if text.contains(" (on rank ") {
+        return Error::new(code, text.into_owned());
+    }
     Error::new(code, format!("{text} (on rank {r})"))
 }
 

@@ -364,10 +364,40 @@ fn a_rank_whose_progress_function_panics_fails_a_voxelization_and_writes_nothing
             1,
         )
         .unwrap();
-        vl.end().map(|_| ()).map_err(|e| e.code)
+        vl.end().map(|_| ()).map_err(|e| (e.code, e.message))
     });
-    assert_eq!(results, vec![Err(ErrorCode::Internal); 2]);
+    // (The step's agreed error is agreed again at the voxelization's end; it keeps naming
+    // the rank it came from.)
+    for r in &results {
+        let (code, message) = r.as_ref().unwrap_err();
+        assert_eq!(*code, ErrorCode::Internal);
+        assert!(message.ends_with("failed (on rank 1)"), "{message}");
+    }
     let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
     std::fs::remove_dir_all(&dir).unwrap();
     assert!(left.is_empty(), "files left: {left:?}");
+}
+
+#[test]
+fn a_rank_whose_buffer_is_short_fails_render_into_on_every_rank() {
+    // `render_into` checks the caller's buffer on each rank; rank 1's is one byte short. Its
+    // check is agreed with the compiled scene, so both ranks fail with `BadValue` (rank 0's
+    // message naming rank 1) instead of rank 0 waiting for a rank that has left; the next
+    // render goes through on both.
+    let results = on_ranks_within(2, |team| {
+        let rank = team.rank();
+        let vl = constant_medium(team, usize::MAX);
+        let format = crate::PixelFormat::Rgb8;
+        let need = format.image_bytes(8, 8).unwrap();
+        let mut buffer = vec![0u8; if rank == 1 { need - 1 } else { need }];
+        let failed = vl.render_into(8, 8, 1.0, format, &mut buffer);
+        let mut whole = vec![0u8; need];
+        let next = vl.render_into(8, 8, 1.0, format, &mut whole);
+        (
+            failed.map_err(|e| (e.code, e.message.ends_with("(on rank 1)"))),
+            next.is_ok(),
+        )
+    });
+    assert_eq!(results[0], (Err((ErrorCode::BadValue, true)), true));
+    assert_eq!(results[1], (Err((ErrorCode::BadValue, false)), true));
 }
