@@ -52,12 +52,7 @@ fn scene_of(step: f32, preintegrate: bool, packets: bool, voxel: impl Fn(usize) 
     vl.add_dataset(DatasetId(1), data).unwrap();
     vl.mapping(MappingId(1), MappingType::Ramp, 2, 1, &O_ROWS)
         .unwrap();
-    let mut c = vec![0.25f32];
-    c.extend(C0);
-    c.push(1.0);
-    c.extend(C1);
-    vl.mapping(MappingId(2), MappingType::Ramp, 2, 3, &c)
-        .unwrap();
+    colour_ramp(&mut vl, 0.25, 1.0);
     vl.scene().unwrap();
     vl.set_optimise(Optimise {
         preintegrate,
@@ -78,14 +73,30 @@ fn scene_of(step: f32, preintegrate: bool, packets: bool, voxel: impl Fn(usize) 
     vl.object().unwrap();
     vl.translate(-0.5, -0.5, 0.0).unwrap();
     vl.scale(400.0, 400.0, DEPTH as f32).unwrap();
+    direct_shading(&mut vl);
+    vl.set(Fields::KA, 1.0).unwrap();
+    vl.end().unwrap();
+    vl
+}
+
+/// Colour table 2: a ramp from `C0` at F = `lo` to `C1` at F = `hi`.
+fn colour_ramp(vl: &mut Library, lo: f32, hi: f32) {
+    let mut c = vec![lo];
+    c.extend(C0);
+    c.push(hi);
+    c.extend(C1);
+    vl.mapping(MappingId(2), MappingType::Ramp, 2, 3, &c)
+        .unwrap();
+}
+
+/// The open object's direct-shading program: F from dataset 1, O through table 1, R, G and B
+/// through table 2 (the form pre-integration applies to).
+fn direct_shading(vl: &mut Library) {
     vl.dataset(Fields::F, DatasetId(1)).unwrap();
     vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
     vl.map(Fields::R, Fields::F, MappingId(2), 1).unwrap();
     vl.map(Fields::G, Fields::F, MappingId(2), 2).unwrap();
     vl.map(Fields::B, Fields::F, MappingId(2), 3).unwrap();
-    vl.set(Fields::KA, 1.0).unwrap();
-    vl.end().unwrap();
-    vl
 }
 
 /// The emission–absorption integral along a ray through the slab of path length `len` (the
@@ -253,12 +264,7 @@ fn balls_on(skip_empty: bool, step: f32, threads: usize, packets: bool) -> Vec<u
         &[0.3, 0.0, 0.45, 1.0],
     )
     .unwrap();
-    let mut c = vec![0.3f32];
-    c.extend(C0);
-    c.push(0.8);
-    c.extend(C1);
-    vl.mapping(MappingId(2), MappingType::Ramp, 2, 3, &c)
-        .unwrap();
+    colour_ramp(&mut vl, 0.3, 0.8);
     vl.scene().unwrap();
     vl.set_optimise(Optimise {
         preintegrate: true,
@@ -280,11 +286,7 @@ fn balls_on(skip_empty: bool, step: f32, threads: usize, packets: bool) -> Vec<u
     vl.step_size(step, 0.05).unwrap();
     vl.object().unwrap();
     vl.translate(-0.5, -0.5, -0.5).unwrap();
-    vl.dataset(Fields::F, DatasetId(1)).unwrap();
-    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
-    vl.map(Fields::R, Fields::F, MappingId(2), 1).unwrap();
-    vl.map(Fields::G, Fields::F, MappingId(2), 2).unwrap();
-    vl.map(Fields::B, Fields::F, MappingId(2), 3).unwrap();
+    direct_shading(&mut vl);
     vl.set(Fields::KA, 0.3).unwrap();
     vl.set(Fields::KD, 0.7).unwrap();
     vl.end().unwrap();
