@@ -315,6 +315,23 @@ struct Row {
     pareto: bool,
 }
 
+impl Row {
+    /// The row of a render `r` with error `err`: no error against the control's own finest
+    /// value, no extra cells, not (yet) on the Pareto front.
+    fn of(label: String, short: String, r: &Timed, err: Err) -> Row {
+        Row {
+            label,
+            short,
+            secs: r.secs,
+            warm: r.warm,
+            err,
+            own: None,
+            extra: Vec::new(),
+            pareto: false,
+        }
+    }
+}
+
 /// A sweep of one control on one scene.
 #[derive(Clone, Debug)]
 struct Series {
@@ -761,16 +778,7 @@ fn sweep(
                 r.secs, r.runs, err.rms, err.max
             ),
         );
-        rows.push(Row {
-            label: label.clone(),
-            short: short.clone(),
-            secs: r.secs,
-            warm: r.warm,
-            err,
-            own: None,
-            extra: Vec::new(),
-            pareto: false,
-        });
+        rows.push(Row::of(label.clone(), short.clone(), &r, err));
         images.push(r.img);
     }
     if let Some(own) = own {
@@ -1323,14 +1331,13 @@ fn hyper_study(p: &Params, cache: &mut Cache, start: Instant) -> Res<(Study, Vox
     std::fs::create_dir_all(&dir)?;
     let direct = cache.scene("hyper").render(&make, base, size)?;
     let mut rows = vec![Row {
-        label: "direct evaluation".into(),
-        short: "direct".into(),
-        secs: direct.secs,
-        warm: direct.warm,
-        err: error(&direct.img, &reference),
-        own: None,
         extra: vec!["—".into()],
-        pareto: false,
+        ..Row::of(
+            "direct evaluation".into(),
+            "direct".into(),
+            &direct,
+            error(&direct.img, &reference),
+        )
     }];
     let mut filter = None;
     let filter_n = 64;
@@ -1346,14 +1353,8 @@ fn hyper_study(p: &Params, cache: &mut Cache, start: Instant) -> Res<(Study, Vox
             ),
         );
         rows.push(Row {
-            label: format!("voxelized {n}³"),
-            short: format!("{n}³"),
-            secs: r.secs,
-            warm: r.warm,
-            err,
-            own: None,
             extra: vec![format!("{vox_secs:.2}")],
-            pareto: false,
+            ..Row::of(format!("voxelized {n}³"), format!("{n}³"), &r, err)
         });
         if n == filter_n {
             let filters = [

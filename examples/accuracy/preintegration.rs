@@ -81,16 +81,8 @@ pub(crate) fn study(p: &Params, brain: &Brain, start: Instant) -> Res<Preint> {
                     err.max
                 ),
             );
-            rows.push(Row {
-                label: format!("{step} voxel, {}", if pre { "on" } else { "off" }),
-                short: format!("{step}"),
-                secs: r.secs,
-                warm: r.warm,
-                err,
-                own: None,
-                extra: Vec::new(),
-                pareto: false,
-            });
+            let label = format!("{step} voxel, {}", if pre { "on" } else { "off" });
+            rows.push(Row::of(label, format!("{step}"), &r, err));
         }
         series.push(Series {
             scene: format!(
