@@ -4,7 +4,7 @@
 //! ```text
 //! cargo run --release --example accuracy             # docs/accuracy.md, docs/accuracy-*.png
 //! cargo run --release --example accuracy -- --quick  # a fast smoke run into out/accuracy/
-//! cargo run --release --example accuracy -- --preintegration-only  # that section, printed
+//! cargo run --release --example accuracy -- --preintegration-only  # that section, printed (plot in out/accuracy/)
 //! ```
 //!
 //! Controls: the step size, the super-sampling rate, the interpolation filter (datasets), the
@@ -1466,14 +1466,20 @@ fn convergence_order(rows: &[Row], steps: &[f32]) -> Option<f64> {
 
 fn main() -> Res<()> {
     let quick = std::env::args().any(|a| a == "--quick");
-    let p = Params::new(quick);
+    let only_preint = std::env::args().any(|a| a == "--preintegration-only");
+    let mut p = Params::new(quick);
+    if only_preint {
+        // (Its plot goes beside the quick run's: docs/ holds the full run's alone.)
+        p.out_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("out/accuracy");
+    }
     std::fs::create_dir_all(&p.out_dir)?;
     let start = Instant::now();
     let load_start = load_average();
     let threads = rayon::current_num_threads();
 
-    if std::env::args().any(|a| a == "--preintegration-only") {
-        // The pre-integration section alone, printed (for its development; nothing written).
+    if only_preint {
+        // The pre-integration section alone, printed (for its development; only its plot is
+        // written, into out/accuracy).
         let path = mni_dataset()?;
         let data = Dataset::load(&path)?;
         data.precompute(vlib::Filter::Trilinear)?;
