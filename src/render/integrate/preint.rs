@@ -220,12 +220,19 @@ impl<'a> PreMarch<'a> {
             // taken where its value is above z, and the one before this one where this value
             // is, each reading the value of the position passed over.
             Some((q, tq, vq)) => {
+                // (One position passed over is both neighbours: its value is read once.)
+                let mut after = None;
                 (vq > z && {
                     let t1 = Self::at(c, q + 1);
-                    self.slab(ray, c, tq, vq, t1, self.value(c, t1), cache)
+                    let v1 = *after.insert(self.value(c, t1));
+                    self.slab(ray, c, tq, vq, t1, v1, cache)
                 }) || (v > z && {
                     let tp = Self::at(c, p - 1);
-                    self.slab(ray, c, tp, self.value(c, tp), t, v, cache)
+                    let vp = match after {
+                        Some(v1) if q + 2 == p => v1,
+                        _ => self.value(c, tp),
+                    };
+                    self.slab(ray, c, tp, vp, t, v, cache)
                 })
             }
             None => {
