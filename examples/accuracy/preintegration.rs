@@ -138,9 +138,9 @@ fn document(
          (`Optimise::preintegrate`, off by default) each slab between two samples takes the \
          opacity and colour of the value varying linearly from one sample to the next, cut \
          in halves down to a quarter of the step where the data bends along it (128 × 128 \
-         tables per object for the step, its half and its quarter, built with the scene: \
-         their build is inside every time below); without it, each segment is its midpoint \
-         sample. Both are traced by the packet march where the processor has AVX2 (for \
+         tables per object for the step, its half and its quarter, built by a scene's \
+         first frame, the untimed warm-up, and kept for the frames timed below); without \
+         it, each segment is its midpoint sample. Both are traced by the packet march where the processor has AVX2 (for \
          pre-integrated images, the samples and values in lanes and the slabs by scalar \
          code). A ★ marks the Pareto front of both sweeps together.\n",
         RAMP.0,

@@ -14,7 +14,7 @@
 //! The module owns these acceleration structures, not their use: the renderer asks a [`Walk`]
 //! whether a sample lies in an empty block and where to resume, and an [`EntryMap`] where each
 //! primary ray may start; nothing here depends on the renderer. Nothing here caches either:
-//! the renderer's `Grids`, which the state machine keeps per open scene, holds each object's
+//! the renderer's `Caches`, which the state machine keeps per open scene, holds each object's
 //! grid.
 //!
 //! - `grid`: [`SkipGrid`], the blocks of one object, their opacity intervals, the chessboard

@@ -78,8 +78,9 @@ pub(super) struct OpenScene {
     pub(super) objects: Vec<ObjectDesc>,
     /// Objects being specified (nested ones after their parents).
     pub(super) open: Vec<ObjectDesc>,
-    /// The empty-space grids of `objects`, shared by every render of the scene.
-    pub(super) grids: crate::render::Grids,
+    /// The empty-space grids and pre-integration tables of `objects`, shared by every render
+    /// of the scene.
+    pub(super) caches: crate::render::Caches,
 }
 
 /// One session of the API (`vlInit` … `vlEnd`).
@@ -219,7 +220,7 @@ impl Library {
                 crate::pool::install(|| {
                     crate::output::render_outputs(
                         &desc,
-                        &s.grids,
+                        &s.caches,
                         &self.control,
                         self.team.as_ref(),
                     )
@@ -246,7 +247,7 @@ impl Library {
             volumes: Vec::new(),
             objects: Vec::new(),
             open: Vec::new(),
-            grids: Default::default(),
+            caches: Default::default(),
         });
         Ok(())
     }

@@ -108,10 +108,11 @@ impl Library {
         self.compile(&self.open_scene("compiled")?)
     }
 
-    /// `desc`, the open scene, compiled with the scene's empty-space grids.
+    /// `desc`, the open scene, compiled with the scene's caches (empty-space grids,
+    /// pre-integration tables).
     fn compile(&self, desc: &SceneDesc) -> Result<crate::render::Compiled> {
-        let grids = &self.scene.as_ref().expect("scene scope").grids;
-        crate::render::Compiled::build(desc, grids)
+        let caches = &self.scene.as_ref().expect("scene scope").caches;
+        crate::render::Compiled::build(desc, caches)
     }
 
     /// The open scene (at scene scope) as it would render now, without its outputs.

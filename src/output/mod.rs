@@ -16,7 +16,7 @@
 use crate::control::{Progress, RenderControl};
 use crate::error::{Error, ErrorCode, Result};
 use crate::model::scene::{ImageRequest, SceneDesc};
-use crate::render::{render_into, Compiled, Grids};
+use crate::render::{render_into, Caches, Compiled};
 use crate::team::Team;
 
 mod files;
@@ -61,7 +61,7 @@ impl crate::data::Dataset {
 /// its ranks (collective: every rank calls it with the same scene).
 pub fn render_outputs(
     desc: &SceneDesc,
-    grids: &Grids,
+    caches: &Caches,
     control: &RenderControl,
     team: Option<&Team>,
 ) -> Result<()> {
@@ -84,7 +84,7 @@ pub fn render_outputs(
         // (With a team, a rank that cannot compile the scene fails every rank.)
         let compiled = crate::team::agree(
             team,
-            crate::error::catch("compiling the scene", || Compiled::build(desc, grids)),
+            crate::error::catch("compiling the scene", || Compiled::build(desc, caches)),
         )?;
         let images = desc
             .images

@@ -3,11 +3,13 @@
 //! (its matrices, box, step, opacity exponent, program prefixes, empty-space grid and cell
 //! mask, toggles), with the object-level queries on it that do not shade: the ray's interval in
 //! its box ([`CObj::clip`]) and its fields and opacity at a point. It also decides the scene's
-//! [`Plan`], and it holds the cache of the scene's empty-space grids ([`Grids`]: each built by
-//! `accel` the first time a compilation needs it). It does not trace, shade or composite
+//! [`Plan`], and it holds what later compilations of a scene share ([`Caches`]: each root
+//! object's empty-space grid, built by `accel` the first time a compilation needs it, and its
+//! pre-integration tables, built by `preint`). It does not trace, shade or composite
 //! (`integrate`, `shade`).
 
 use super::*;
+use crate::render::preint::PreIntegrated;
 
 /// One object of a scene compiled for tracing: immutable, read by every ray that meets it.
 pub(super) struct CObj {
@@ -38,7 +40,7 @@ pub(super) struct CObj {
     /// Where the lean program has direct shading and a value head, the object is rendered by
     /// DVR without normal functions and `Optimise::preintegrate` is on: its pre-integration
     /// table for slabs of its step (`preint`).
-    pub(super) preint: Option<crate::render::preint::PreIntegrated>,
+    pub(super) preint: Option<Arc<PreIntegrated>>,
     pub(super) env: SampleEnv,
     /// Blocks where opacity is provably 0.
     pub(super) skip: Option<Arc<SkipGrid>>,
@@ -105,7 +107,7 @@ impl CObj {
         o: &ObjectDesc,
         datasets: &Arc<crate::model::program::Datasets>,
         optimise: crate::model::scene::Optimise,
-        grid: &GridCell,
+        cache: &ObjectCache,
     ) -> CObj {
         let to_world = o.matrix();
         let b = crate::model::scene::v3(o.boundary);
@@ -161,7 +163,7 @@ impl CObj {
                     && kappa.is_finite()
                     && kappa > 0.0
             })
-            .map(|s| crate::render::preint::PreIntegrated::new(s, kappa));
+            .map(|s| cache.preintegrated(kappa, || PreIntegrated::new(s, kappa)));
         let prefixes: [usize; FIELD_COUNT] =
             std::array::from_fn(|i| prefix_for(&o.program, Fields::from_index(i)));
         let constants =
@@ -183,7 +185,8 @@ impl CObj {
             refract: r.toggle(Feature::Refract),
             reflect_background: r.toggle(Feature::ReflectBackground),
             recursion: r.recursion,
-            skip: grid
+            skip: cache
+                .grid
                 .get_or_init(|| {
                     SkipGrid::build(&o.program[..o_prefix], box_min, box_max).map(Arc::new)
                 })
@@ -345,19 +348,48 @@ fn compile_children(
         .collect()
 }
 
-/// One root object's empty-space grid, built once (`None`: the object has no grid).
-type GridCell = Arc<std::sync::OnceLock<Option<Arc<SkipGrid>>>>;
-
-/// The empty-space grids of a scene's root objects, by their index in the scene, each built by
-/// the first compilation that needs it and shared by later ones. The state machine keeps one
-/// for each open scene (a closed root object does not change, and objects are
-/// only appended), so scene data holds no cache; a fresh `Grids` builds every grid anew.
+/// What later compilations of a scene share of one root object: its empty-space grid, built
+/// once (`None`: the object has no grid), and its pre-integration tables with the κ (slab
+/// length in reference lengths, as bits) they were built for. A closed root object does not
+/// change, so its tables depend on κ alone: they are rebuilt only where κ changes.
 #[derive(Default)]
-pub(crate) struct Grids(std::sync::Mutex<Vec<GridCell>>);
+pub(super) struct ObjectCache {
+    grid: std::sync::OnceLock<Option<Arc<SkipGrid>>>,
+    preint: std::sync::Mutex<Option<(u64, Arc<PreIntegrated>)>>,
+}
 
-impl Grids {
-    /// The cell of root object `i`.
-    fn cell(&self, i: usize) -> GridCell {
+impl ObjectCache {
+    /// The tables for slabs `kappa` reference lengths long: those kept where they were built for
+    /// `kappa`, else `build`'s, kept in their place. (Built outside the lock, which a
+    /// compilation on another thread may want meanwhile: two may then build the same tables,
+    /// and either is kept.)
+    fn preintegrated(
+        &self,
+        kappa: f64,
+        build: impl FnOnce() -> PreIntegrated,
+    ) -> Arc<PreIntegrated> {
+        let slot = || self.preint.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((k, t)) = &*slot() {
+            if *k == kappa.to_bits() {
+                return t.clone();
+            }
+        }
+        let tables = Arc::new(build());
+        *slot() = Some((kappa.to_bits(), tables.clone()));
+        tables
+    }
+}
+
+/// The [`ObjectCache`]s of a scene's root objects, by their index in the scene, each filled by
+/// the first compilation that needs it and shared by later ones. The state machine keeps one
+/// for each open scene (a closed root object does not change, and objects are only
+/// appended), so scene data holds no cache; a fresh `Caches` builds everything anew.
+#[derive(Default)]
+pub(crate) struct Caches(std::sync::Mutex<Vec<Arc<ObjectCache>>>);
+
+impl Caches {
+    /// The cache of root object `i`.
+    fn cell(&self, i: usize) -> Arc<ObjectCache> {
         let mut cells = self.0.lock().unwrap_or_else(|e| e.into_inner());
         if cells.len() <= i {
             cells.resize_with(i + 1, Default::default);
@@ -368,9 +400,9 @@ impl Grids {
 
 /// A cache is not part of the state a refused call must leave unchanged (`Library::fingerprint`
 /// prints the state with `Debug`), so it prints nothing of its contents.
-impl std::fmt::Debug for Grids {
+impl std::fmt::Debug for Caches {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("Grids")
+        f.write_str("Caches")
     }
 }
 
@@ -408,19 +440,20 @@ impl Compiled {
     /// [`Compiled::new`], with an error where the compilation cannot complete: `NoMemory` for
     /// a dataset cache or an empty-space grid that cannot be allocated, `Internal` for a panic
     /// (in a field function a grid evaluates, say).
-    pub fn build(desc: &SceneDesc, grids: &Grids) -> Result<Compiled> {
-        crate::error::catch("compiling the scene", || Ok(Compiled::new(desc, grids)))
+    pub fn build(desc: &SceneDesc, caches: &Caches) -> Result<Compiled> {
+        crate::error::catch("compiling the scene", || Ok(Compiled::new(desc, caches)))
     }
 
-    /// Compiles a scene description; its root objects' empty-space grids come from `grids`
+    /// Compiles a scene description; its root objects' empty-space grids and pre-integration
+    /// tables come from `caches`
     /// (built there by the first compilation that needs them). Unwinds where a cache cannot be
     /// allocated ([`Compiled::build`] returns that as an error).
-    pub fn new(desc: &SceneDesc, grids: &Grids) -> Compiled {
+    pub fn new(desc: &SceneDesc, caches: &Caches) -> Compiled {
         let objects: Vec<CObj> = desc
             .objects
             .iter()
             .enumerate()
-            .map(|(i, o)| CObj::new(o, &desc.datasets, desc.settings.optimise, &grids.cell(i)))
+            .map(|(i, o)| CObj::new(o, &desc.datasets, desc.settings.optimise, &caches.cell(i)))
             .collect();
         let plan = Plan {
             shadows: !desc.lights.is_empty()

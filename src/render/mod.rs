@@ -58,7 +58,7 @@ mod preint;
 mod shade;
 mod tiles;
 
-pub(crate) use compile::Grids;
+pub(crate) use compile::Caches;
 pub use compile::{Compiled, Plan};
 pub(crate) use image::render_into;
 pub use image::{Backdrop, Image, PixelFormat};

@@ -20,9 +20,10 @@
 //! of a quarter of it (the halves `integrate::preint` cuts where the data bends within a slab)
 //! for `TABLE_NODES`² (front, back) value pairs, read with bilinear interpolation; slabs of
 //! another length (the ends of a ray's interval in the box) are integrated on the spot
-//! ([`PreIntegrated::integrate`]). Built once per compiled scene, in O(n³) operations on n
-//! nodes, fewer where the opacity table is 0 or 1 over part of its range. The slabs that use
-//! them are composited by `integrate::preint` (for its scalar march and for the packet march of
+//! ([`PreIntegrated::integrate`]). Built in O(n³) operations on n nodes, fewer where the
+//! opacity table is 0 or 1 over part of its range, by the first compilation of a scene that
+//! needs them, and kept for later ones (`compile::Caches`). The slabs that use them are
+//! composited by `integrate::preint` (for its scalar march and for the packet march of
 //! `simd::preint`); the transfer functions themselves are `model`'s.
 
 use crate::data::or_unwind;

@@ -139,7 +139,7 @@ fn lit_scene(lights: Vec<Light>, shadows: bool) -> Compiled {
             objects: vec![ObjectDesc::new(state)],
             datasets: Default::default(),
         },
-        &Grids::default(),
+        &Caches::default(),
     )
 }
 
@@ -1693,7 +1693,7 @@ fn snell_and_total_internal_reflection() {
 }
 
 /// The empty-space grid of a closed object is built once per scene and shared by every later
-/// compilation of that scene (the state machine's `Grids`); a fresh `Grids` builds its own.
+/// compilation of that scene (the state machine's `Caches`); a fresh `Caches` builds its own.
 #[test]
 fn skip_grids_are_built_once_per_scene() {
     let vl = sphere_library();
@@ -1701,11 +1701,72 @@ fn skip_grids_are_built_once_per_scene() {
     let grid = |c: &Compiled| c.objects[0].skip.clone().expect("a skip grid");
     assert!(Arc::ptr_eq(&grid(&a), &grid(&b)), "one grid for the scene");
     let desc = vl.open_scene("test").unwrap();
-    let fresh = Compiled::new(&desc, &Grids::default());
+    let fresh = Compiled::new(&desc, &Caches::default());
     assert!(
         !Arc::ptr_eq(&grid(&a), &grid(&fresh)),
         "a fresh cache builds its own"
     );
+}
+
+/// A pre-integrated object's tables are built by the first compilation of its scene and shared
+/// by later ones, as its empty-space grid; a fresh `Caches` builds its own, with the same
+/// entries (the tables depend on the closed object and its step alone).
+#[test]
+fn preintegration_tables_are_built_once_per_scene() {
+    use crate::types::MappingType;
+    let n = 8usize;
+    let voxels: Vec<u8> = (0..n * n * n).map(|i| (i % n * 36) as u8).collect();
+    let data = Dataset::new([n; 3], crate::data::Voxels::U8(voxels), 0.0, 255.0).unwrap();
+    let mut vl = crate::Library::new();
+    vl.add_dataset(DatasetId(1), data).unwrap();
+    vl.mapping(MappingId(1), MappingType::Ramp, 2, 1, &[0.2, 0.0, 0.8, 0.9])
+        .unwrap();
+    let colours = [0.0, 1.0, 0.5, 0.0, 1.0, 0.0, 0.5, 1.0];
+    vl.mapping(MappingId(2), MappingType::Ramp, 2, 3, &colours)
+        .unwrap();
+    vl.scene().unwrap();
+    vl.set_optimise(crate::model::scene::Optimise {
+        preintegrate: true,
+        ..Default::default()
+    })
+    .unwrap();
+    vl.step_size(0.7, 1.0).unwrap();
+    vl.object().unwrap();
+    vl.scale(7.0, 7.0, 7.0).unwrap();
+    vl.dataset(Fields::F, DatasetId(1)).unwrap();
+    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
+    for (k, f) in [Fields::R, Fields::G, Fields::B].into_iter().enumerate() {
+        vl.map(f, Fields::F, MappingId(2), k as i32 + 1).unwrap();
+    }
+    vl.end().unwrap();
+    let (a, b) = (vl.compiled().unwrap(), vl.compiled().unwrap());
+    let tables = |c: &Compiled| c.objects[0].preint.clone().expect("pre-integrated");
+    assert!(
+        Arc::ptr_eq(&tables(&a), &tables(&b)),
+        "one set of tables for the scene"
+    );
+    let desc = vl.open_scene("test").unwrap();
+    let fresh = Compiled::new(&desc, &Caches::default());
+    assert!(
+        !Arc::ptr_eq(&tables(&a), &tables(&fresh)),
+        "a fresh cache builds its own"
+    );
+    for level in 0..=crate::render::preint::REFINE_LEVELS {
+        for (vf, vb) in [(0.0, 1.0), (0.3, 0.7), (0.9, 0.25), (0.5, 0.5)] {
+            let (x, y) = (
+                tables(&a).lookup(level, vf, vb),
+                tables(&fresh).lookup(level, vf, vb),
+            );
+            assert_eq!(
+                x.map(f32::to_bits),
+                y.map(f32::to_bits),
+                "level {level}, {vf} to {vb}"
+            );
+        }
+    }
+    // Pre-integration off: no tables, none kept.
+    vl.set_optimise(Default::default()).unwrap();
+    assert!(vl.compiled().unwrap().objects[0].preint.is_none());
 }
 
 /// The image of `scene` at `size`, rendered in strips of `step` rows; with the strips' first
