@@ -15,7 +15,7 @@
 //! Not here: which samples the lanes take ([`runs`]), the reads of nodes and voxels
 //! ([`nodes`]), the slabs (`integrate::preint`), the tables (`render::preint`).
 
-use super::step::trilinear_lanes;
+use super::step::Sampled;
 use super::*;
 
 impl<'a> Packets<'a> {
@@ -277,9 +277,8 @@ impl<'a> Packets<'a> {
     }
 
     /// The dataset's values at the samples of the `active` lanes (at `st.mid`) into `out`:
-    /// [`Packets::step`]'s object points, cells, nodes and trilinear value, clamped to [0, 1]
-    /// as `clamp_field`; 0 outside the dataset (as `Dataset::trilinear` gives). Other lanes'
-    /// values are 0.
+    /// [`Packets::sample`]'s, as [`Packets::step`] reads them; 0 outside the dataset (as
+    /// `Dataset::trilinear` gives). Other lanes' values are 0.
     #[inline(always)]
     fn values<S: Simd<N>, const N: usize>(
         &self,
@@ -288,37 +287,13 @@ impl<'a> Packets<'a> {
         active: u32,
         out: &mut [f32; N],
     ) {
-        let zero = s.zero();
-        let one = s.splat(1.0);
-        let mut p = [zero; 3];
-        for (axis, pa) in p.iter_mut().enumerate() {
-            let (o, d) = (&st.ro[axis], &st.rd[axis]);
-            let lo = s.add_d(s.ld_d(o, 0), s.mul_d(s.ld_d(&st.mid, 0), s.ld_d(d, 0)));
-            let hi = s.add_d(s.ld_d(o, 1), s.mul_d(s.ld_d(&st.mid, 1), s.ld_d(d, 1)));
-            *pa = s.narrow(lo, hi);
-        }
-        let (f, base, _) = self.cells(s, &p);
-        let mut pass = active;
-        if self.clip {
-            let (lo, hi) = (s.splat(-FACE_TOLERANCE), s.splat(1.0 + FACE_TOLERANCE));
-            for pa in p {
-                pass &= s.bits(s.and_m(s.ge(pa, lo), s.le(pa, hi)));
+        *out = match self.sample(s, st, active) {
+            Some(Sampled { pass, v, .. }) => {
+                let mut vals = [0f32; N];
+                s.st(&mut vals, s.keep(s.of_bits(pass), v));
+                vals
             }
-        }
-        // (Lanes without a sample, or outside the dataset, read node 0 instead.)
-        let base = s.keep_i(pass, base);
-        let nodes = match &self.raw8 {
-            Some(r8) => r8
-                .central_rows(s, base, pass, self.sy, self.sz)
-                .cell_nodes(s),
-            None => s.value_nodes(self, base),
+            None => [0f32; N],
         };
-        let v = trilinear_lanes(s, &nodes, f);
-        let v = match &self.raw8 {
-            Some(r8) => s.fmadd(v, s.splat(r8.scale), s.splat(r8.offset)),
-            None => v,
-        };
-        let v = s.min(s.max(v, zero), one);
-        s.st(out, s.keep(s.of_bits(pass), v));
     }
 }

@@ -52,45 +52,20 @@ impl Packets<'_> {
         if live == 0 {
             return 0;
         }
-        // Object points (f64, then rounded to f32 as `ray_point`).
-        let mut p = [zero; 3];
-        for (axis, pa) in p.iter_mut().enumerate() {
-            let (o, d) = (&st.ro[axis], &st.rd[axis]);
-            let lo = s.add_d(s.ld_d(o, 0), s.mul_d(s.ld_d(&st.mid, 0), s.ld_d(d, 0)));
-            let hi = s.add_d(s.ld_d(o, 1), s.mul_d(s.ld_d(&st.mid, 1), s.ld_d(d, 1)));
-            *pa = s.narrow(lo, hi);
-        }
         // The cells (every sample here lies in one that may reach the bound: `to_take`).
-        let (f, base, interior) = self.cells(s, &p);
-        let mut pass = live;
-        if self.clip {
-            // Outside the dataset its value is 0, which fails the zero test (z ≥ 0): those
-            // lanes drop out here (`Dataset::covers`; NaN fails both comparisons).
-            let (lo, hi) = (s.splat(-FACE_TOLERANCE), s.splat(1.0 + FACE_TOLERANCE));
-            for pa in p {
-                pass &= s.bits(s.and_m(s.ge(pa, lo), s.le(pa, hi)));
-            }
-            if pass == 0 {
-                return 0;
-            }
-        }
-        // The eight nodes and the trilinear value (`trilinear_rows`' lerps).
-        // (Lanes without a sample read node 0 instead: no memory traffic for them.)
-        let base = s.keep_i(pass, base);
-        let (nodes, rows) = match &self.raw8 {
-            Some(r8) => {
-                let rows = r8.central_rows(s, base, pass, self.sy, self.sz);
-                (rows.cell_nodes(s), Some(rows))
-            }
-            None => (s.value_nodes(self, base), None),
+        let Some(Sampled {
+            p,
+            f,
+            base,
+            interior,
+            mut pass,
+            nodes,
+            rows,
+            v,
+        }) = self.sample(s, st, live)
+        else {
+            return 0;
         };
-        let v = trilinear_lanes(s, &nodes, f);
-        // (Raw voxels: the value normalised once, `raw·scale + offset`.)
-        let v = match &self.raw8 {
-            Some(r8) => s.fmadd(v, s.splat(r8.scale), s.splat(r8.offset)),
-            None => v,
-        };
-        let v = s.min(s.max(v, zero), one);
         // The zero test.
         pass &= s.bits(s.gt(v, s.splat(self.z)));
         if pass == 0 {
@@ -155,6 +130,69 @@ impl Packets<'_> {
         shown & s.bits(s.lt(t, s.splat(self.stop)))
     }
 
+    /// The samples of the lanes in `live` (at `st.mid`): their object points (f64, then
+    /// rounded to f32 as `ray_point`), cells ([`Packets::cells`]), the lanes among them
+    /// inside the dataset (`Dataset::covers`; NaN is outside), their eight nodes (and the
+    /// central rows of voxels where the voxels are read) and trilinear values, normalised
+    /// and clamped to [0, 1] as `clamp_field`. `None` where no lane is inside the dataset.
+    /// What [`Packets::step`] and the pre-integrated march's `Packets::values` read alike.
+    #[inline(always)]
+    pub(super) fn sample<S: Simd<N>, const N: usize>(
+        &self,
+        s: S,
+        st: &LaneState<N>,
+        live: u32,
+    ) -> Option<Sampled<S, N>> {
+        let zero = s.zero();
+        let mut p = [zero; 3];
+        for (axis, pa) in p.iter_mut().enumerate() {
+            let (o, d) = (&st.ro[axis], &st.rd[axis]);
+            let lo = s.add_d(s.ld_d(o, 0), s.mul_d(s.ld_d(&st.mid, 0), s.ld_d(d, 0)));
+            let hi = s.add_d(s.ld_d(o, 1), s.mul_d(s.ld_d(&st.mid, 1), s.ld_d(d, 1)));
+            *pa = s.narrow(lo, hi);
+        }
+        let (f, base, interior) = self.cells(s, &p);
+        let mut pass = live;
+        if self.clip {
+            // Outside the dataset its value is 0, which fails the zero test (z ≥ 0): those
+            // lanes drop out here.
+            let (lo, hi) = (s.splat(-FACE_TOLERANCE), s.splat(1.0 + FACE_TOLERANCE));
+            for pa in p {
+                pass &= s.bits(s.and_m(s.ge(pa, lo), s.le(pa, hi)));
+            }
+            if pass == 0 {
+                return None;
+            }
+        }
+        // The eight nodes and the trilinear value (`trilinear_rows`' lerps).
+        // (Lanes without a sample read node 0 instead: no memory traffic for them.)
+        let base = s.keep_i(pass, base);
+        let (nodes, rows) = match &self.raw8 {
+            Some(r8) => {
+                let rows = r8.central_rows(s, base, pass, self.sy, self.sz);
+                (rows.cell_nodes(s), Some(rows))
+            }
+            None => (s.value_nodes(self, base), None),
+        };
+        let v = trilinear_lanes(s, &nodes, f);
+        // (Raw voxels: the value normalised once, `raw·scale + offset`.)
+        let v = match &self.raw8 {
+            Some(r8) => s.fmadd(v, s.splat(r8.scale), s.splat(r8.offset)),
+            None => v,
+        };
+        let v = s.min(s.max(v, zero), s.splat(1.0));
+        Some(Sampled {
+            p,
+            f,
+            base,
+            interior,
+            pass,
+            nodes,
+            rows,
+            v,
+        })
+    }
+
     /// The cells of object points `p`, as `Dataset::trilinear8` finds them: the weights
     /// within the cell, the cell's first node's index and the lanes whose cell's 4³
     /// neighbourhood lies inside the grid (`Dataset::interior8`).
@@ -188,6 +226,21 @@ impl Packets<'_> {
         );
         (f, base, interior)
     }
+}
+
+/// A packet's samples as [`Packets::sample`] reads them: object points, weights within their
+/// cells, the cells' first nodes (node 0 for lanes not in `pass`), the interior lanes, the
+/// lanes inside the dataset, the cell nodes, the voxels' central rows (where read) and the
+/// values.
+pub(super) struct Sampled<S: Simd<N>, const N: usize> {
+    pub(super) p: [S::F; 3],
+    pub(super) f: [S::F; 3],
+    pub(super) base: S::I,
+    pub(super) interior: S::M,
+    pub(super) pass: u32,
+    pub(super) nodes: [S::F; 8],
+    pub(super) rows: Option<Rows<S::I>>,
+    pub(super) v: S::F,
 }
 
 /// The trilinear value of a cell's eight `nodes` (x fastest) at weights `f`: `trilinear_rows`'
