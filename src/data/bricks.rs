@@ -14,15 +14,26 @@ pub const BRICK: usize = 4;
 /// The range of node values that any point of each brick can read under a filter: brick
 /// (i, j, k) covers object coordinates of node indices [4i, 4i + 4] × …, and its range is taken
 /// over every node the filter can reach from there, including from points a rounding error
-/// outside it.
+/// outside it. Kept as the raw voxels' extremes (two bytes a brick for 8-bit voxels, four for
+/// 16-bit) and normalised when read: the normalisation is monotone, so the normalised raw
+/// extremes are the node values' extremes, the same f32 numbers.
 #[derive(Clone, Debug)]
 pub struct Bricks {
     /// Brick counts per axis.
     pub dims: [usize; 3],
-    /// Smallest value per brick, x fastest.
-    pub min: Vec<f32>,
-    /// Largest value per brick.
-    pub max: Vec<f32>,
+    /// Smallest and largest raw voxel per brick, x fastest.
+    raw: RawRanges,
+    /// The dataset's normalisation `(v − a)/(b − a)`, clamped to [0, 1].
+    a: f32,
+    b: f32,
+}
+
+/// The raw extremes of [`Bricks`], in the voxels' own type; 8-bit ones with the normalisation
+/// of every byte (1 KiB).
+#[derive(Clone, Debug)]
+enum RawRanges {
+    U8(Vec<u8>, Vec<u8>, Box<[f32; 256]>),
+    U16(Vec<u16>, Vec<u16>),
 }
 
 impl Bricks {
@@ -31,7 +42,19 @@ impl Bricks {
     pub fn get(&self, i: usize, j: usize, k: usize) -> (f32, f32) {
         let d = self.dims;
         let idx = i.min(d[0] - 1) + d[0] * (j.min(d[1] - 1) + d[1] * k.min(d[2] - 1));
-        (self.min[idx], self.max[idx])
+        let (lo, hi) = match &self.raw {
+            RawRanges::U8(lo, hi, norm) => (norm[lo[idx] as usize], norm[hi[idx] as usize]),
+            RawRanges::U16(lo, hi) => {
+                let norm = normaliser(self.a, self.b);
+                (norm(lo[idx] as f64), norm(hi[idx] as f64))
+            }
+        };
+        // (A decreasing normalisation, b < a, swaps the ends.)
+        if self.b > self.a {
+            (lo, hi)
+        } else {
+            (hi, lo)
+        }
     }
 }
 
@@ -77,42 +100,24 @@ impl Dataset {
 
     fn compute_bricks(&self, reach: usize) -> crate::error::Result<Bricks> {
         // Over the raw voxels (a quarter or half of the node values' memory, compared a byte
-        // or two at a time), then normalised: `normaliser` is monotone, so the normalised
-        // raw extremes are the extremes of the node values, the same numbers.
-        let (min, max) = match &self.raw {
-            Voxels::U8(v) => self.normalised(self.raw_brick_extremes(v, reach)?)?,
-            Voxels::U16(v) => self.normalised(self.raw_brick_extremes(v, reach)?)?,
+        // or two at a time), normalised when read ([`Bricks::get`]).
+        let raw = match &self.raw {
+            Voxels::U8(v) => {
+                let (lo, hi) = self.raw_brick_extremes(v, reach)?;
+                let norm = normaliser(self.a, self.b);
+                RawRanges::U8(lo, hi, Box::new(std::array::from_fn(|v| norm(v as f64))))
+            }
+            Voxels::U16(v) => {
+                let (lo, hi) = self.raw_brick_extremes(v, reach)?;
+                RawRanges::U16(lo, hi)
+            }
         };
         Ok(Bricks {
             dims: self.brick_counts(),
-            min,
-            max,
+            raw,
+            a: self.a,
+            b: self.b,
         })
-    }
-
-    /// The node-value ranges of raw ranges `(lo, hi)`: each end normalised, the two swapped
-    /// where the normalisation decreases (b < a).
-    fn normalised<T: Copy + Into<f64> + Sync>(
-        &self,
-        (lo, hi): (Vec<T>, Vec<T>),
-    ) -> crate::error::Result<(Vec<f32>, Vec<f32>)> {
-        use rayon::prelude::*;
-        let norm = normaliser(self.a, self.b);
-        let up = self.b > self.a;
-        let what = "a dataset's brick ranges";
-        let mut min = crate::num::try_vec(lo.len(), 0f32, what)?;
-        let mut max = crate::num::try_vec(lo.len(), 0f32, what)?;
-        // (In parallel: a brick's normalisation is two divisions, and a scan has some 10⁵
-        // bricks.)
-        min.par_iter_mut()
-            .zip(max.par_iter_mut())
-            .zip(lo.par_iter().zip(&hi))
-            .with_min_len(1 << 12)
-            .for_each(|((mn, mx), (&l, &h))| {
-                let (l, h) = (norm(l.into()), norm(h.into()));
-                (*mn, *mx) = if up { (l, h) } else { (h, l) };
-            });
-        Ok((min, max))
     }
 
     /// Bricks per axis.
