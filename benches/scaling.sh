@@ -3,8 +3,9 @@
 # scene (../shared/bench/README.md) on the template repeated 2× and 3× per axis, resampled 2× and
 # 4× per axis (8- and 16-bit) and a 512³ 16-bit CT-like phantom (benches/scaling/volumes.rs).
 # Each volume is the template at (ny − 1)/232 voxels per mm: the camera 360 mm away, opacity per
-# mm, sample distance 0.5 voxel, 512², shaded (benches/scaling/render.c, examples/mni.rs --fit,
-# benches/scaling/vtk_scaled.py). Per volume it runs, each as a process of its own under
+# mm, sample distance 0.5 voxel, 512², shaded with the paper's node gradients (as the peer
+# scene: benches/scaling/render.c, examples/mni.rs --fit --gradient=nodes, whose images are then
+# the same bytes; benches/scaling/vtk_scaled.py). Per volume it runs, each as a process of its own under
 # /usr/bin/time (peak resident memory, wall time):
 #   - the Rust path, examples/mni (load, first image, then three steady frames);
 #   - the C path, benches/scaling/render.c through libvlib.so (vlLoad, one image: a whole run);
@@ -53,7 +54,7 @@ for n in $names; do
   cat "$v" >/dev/null
   echo "== $n: Rust path"
   /usr/bin/time -f "%e %M" -o "$work/out/$n.rust.time" target/release/examples/mni "$v" \
-    "$work/out/$n.rust.png" 0.5 --fit --frames=3 >"$work/out/$n.rust.txt"
+    "$work/out/$n.rust.png" 0.5 --fit --gradient=nodes --frames=3 >"$work/out/$n.rust.txt"
   echo "== $n: C path"
   /usr/bin/time -f "%e %M" -o "$work/out/$n.c.time" "$work/render" "$v" "$work/out/$n.c.png" 512 0.5
   cmp -s "$work/out/$n.rust.png" "$work/out/$n.c.png" || echo "   (the two paths' images differ)"

@@ -53,31 +53,57 @@ pub(super) fn pack_flags(flags: &[u8]) -> u64 {
 #[derive(Debug)]
 pub(crate) struct CellMask {
     pub(super) bits: Vec<u64>,
-    /// The bits as 32-bit words (word w holds bits 32w … 32w + 31), for the packet march's
-    /// gathers: made on first use, then shared by every image that uses the mask.
-    pub(super) words32: std::sync::OnceLock<Vec<u32>>,
+    /// The bits as 32-bit words where the machine is big-endian (see [`CellMask::words32`]):
+    /// made on first use, then shared by every image that uses the mask.
+    #[cfg(target_endian = "big")]
+    words32: std::sync::OnceLock<Vec<u32>>,
 }
 
 /// The cell masks of a dataset, each with the bits of its bound.
 pub(super) type CellMasks = Vec<(u32, std::sync::Arc<CellMask>)>;
 
 impl CellMask {
+    /// The mask of `bits` (bit c of word c >> 6 for the cell with first node c).
+    pub(super) fn new(bits: Vec<u64>) -> CellMask {
+        CellMask {
+            bits,
+            #[cfg(target_endian = "big")]
+            words32: Default::default(),
+        }
+    }
+
     /// The mask's bits as 32-bit words: bit `c & 31` of word `c >> 5` for the cell with first
-    /// node `c` (a cell past their end may reach the bound). For the packet march
-    /// (`render::simd`), made once per mask.
-    /// Where they cannot be allocated this unwinds ([`super::or_unwind`]).
+    /// node `c` (a cell past their end may reach the bound), for the packet march's gathers
+    /// (`render::simd`). On a little-endian machine these are the 64-bit words' own bytes (no
+    /// copy: word 2k is the low half of 64-bit word k); on a big-endian one a copy, made once
+    /// per mask. Where that cannot be allocated this unwinds ([`super::or_unwind`]).
     pub(crate) fn words32(&self) -> &[u32] {
         super::or_unwind(self.try_words32())
     }
 
-    /// [`CellMask::words32`], or `NoMemory` where they cannot be allocated (nothing is kept).
+    /// [`CellMask::words32`], or `NoMemory` where the big-endian copy cannot be allocated
+    /// (nothing is kept).
     pub(crate) fn try_words32(&self) -> crate::error::Result<&[u32]> {
-        super::get_or_try_init(&self.words32, || {
-            let mut w = crate::num::try_with_capacity(2 * self.bits.len(), "a cell mask's words")?;
-            w.extend(self.bits.iter().flat_map(|&w| [w as u32, (w >> 32) as u32]));
-            Ok(w)
-        })
-        .map(|w| w.as_slice())
+        #[cfg(target_endian = "little")]
+        {
+            // SAFETY: the pointer is the u64 words', valid for their 8·len bytes and aligned
+            // for u32 (u64's alignment is a multiple of it), so 2·len u32 lie inside them; u32
+            // has no invalid bit patterns, and the slice borrows `self.bits`, which nothing
+            // mutates while `self` is shared.
+            Ok(unsafe {
+                std::slice::from_raw_parts(self.bits.as_ptr().cast::<u32>(), 2 * self.bits.len())
+            })
+        }
+        #[cfg(target_endian = "big")]
+        {
+            super::get_or_try_init(&self.words32, || {
+                let mut w =
+                    crate::num::try_with_capacity(2 * self.bits.len(), "a cell mask's words")?;
+                w.extend(self.bits.iter().flat_map(|&w| [w as u32, (w >> 32) as u32]));
+                Ok(w)
+            })
+            .map(|w| w.as_slice())
+        }
     }
 
     /// Whether the cell with first node `c` may reach the bound.
@@ -149,10 +175,7 @@ impl Dataset {
             (Voxels::U16(v), true) => self.raw_cell_bits::<_, true>(v, lo),
             (Voxels::U16(v), false) => self.raw_cell_bits::<_, false>(v, lo),
         }?;
-        Ok(CellMask {
-            bits,
-            words32: Default::default(),
-        })
+        Ok(CellMask::new(bits))
     }
 
     /// The bits of [`CellMask`] for bound `lo` (a cell's bit is set where its largest node

@@ -203,3 +203,30 @@ fn cell_masks_drop_only_samples_at_most_their_bound() {
         }
     }
 }
+
+/// The 32-bit words of a mask (the packet march's view) hold bit c of the cell with first node
+/// c at bit `c & 31` of word `c >> 5`, for masks of every length, whatever the machine's byte
+/// order (on little-endian machines they are the 64-bit words' own bytes).
+#[test]
+fn a_masks_32_bit_words_hold_its_bits() {
+    let mut rng = Lcg(41);
+    for words in [0usize, 1, 2, 3, 17] {
+        let bits: Vec<u64> = (0..words)
+            .map(|_| {
+                (rng.next() * 2f64.powi(32)) as u64 | ((rng.next() * 2f64.powi(32)) as u64) << 32
+            })
+            .collect();
+        let mask = CellMask::new(bits.clone());
+        let w = mask.words32();
+        assert_eq!(w.len(), 2 * words);
+        for c in 0..64 * words {
+            let want = bits[c >> 6] >> (c & 63) & 1;
+            assert_eq!(
+                (w[c >> 5] >> (c & 31) & 1) as u64,
+                want,
+                "{words} words, cell {c}"
+            );
+            assert_eq!(mask.may_reach(c), want == 1);
+        }
+    }
+}

@@ -265,10 +265,7 @@ fn trilinear8_is_trilinear(d: &Dataset, rng: &mut Lcg, specials: &[f32]) {
         let count = batch % 9;
         let got = values8(d, &by_axis, count, None);
         // A mask of no bits lets every cell through, as no mask does.
-        let empty = CellMask {
-            bits: Vec::new(),
-            words32: Default::default(),
-        };
+        let empty = CellMask::new(Vec::new());
         let unmasked = values8(d, &by_axis, count, Some(&empty));
         for (i, (p, got)) in ps.iter().zip(got).enumerate() {
             let want = if i < count { d.trilinear(*p) } else { 0.0 };
