@@ -138,7 +138,7 @@ impl EntryMarks {
     /// than [`ENTRY_BOXES_PER_PIXEL`] allows.
     pub(crate) fn of_boxes(boxes: &Boxes, to_world: DMat4, camera: &Pinhole) -> Option<EntryMarks> {
         let pixels = (camera.width as usize).saturating_mul(camera.height as usize);
-        if boxes.corners.len() > pixels.saturating_mul(ENTRY_BOXES_PER_PIXEL) {
+        if boxes.len() > pixels.saturating_mul(ENTRY_BOXES_PER_PIXEL) {
             return None;
         }
         let budget = pixels.saturating_mul(ENTRY_BUDGET);
@@ -153,7 +153,7 @@ impl EntryMarks {
         budget: usize,
     ) -> Option<EntryMarks> {
         let (w, h) = (camera.width as usize, camera.height as usize);
-        if w == 0 || h == 0 || boxes.corners.is_empty() {
+        if w == 0 || h == 0 || boxes.len() == 0 {
             return None;
         }
         let margin = boxes.unit * 0.125;
@@ -256,9 +256,8 @@ impl EntryMarks {
             }))
         };
         let marks: Vec<Mark> = boxes
-            .corners
-            .par_iter()
-            .filter_map(|b| match project(b) {
+            .par_corners()
+            .filter_map(|b| match project(&b) {
                 None => Some(None), // give up
                 Some(None) => None, // off the image
                 Some(mark) => Some(mark),

@@ -36,9 +36,105 @@ pub(crate) struct SkipGrid {
 /// Object-space boxes an [`super::EntryMap`] projects, and the size per axis of the blocks or
 /// cells they are made of (the map grows each box by an eighth of it).
 pub(crate) struct Boxes {
-    /// Each box's lowest and highest corner.
-    pub(super) corners: Vec<(DVec3, DVec3)>,
+    list: BoxList,
     pub(super) unit: DVec3,
+}
+
+/// The boxes of [`Boxes`]: their corners, or the passing cells' groups they are computed from
+/// when read (eight bytes a box instead of 48: a volume has a box for each of up to one in
+/// eight of its 4³-cell groups).
+enum BoxList {
+    /// Boxes by their corners (the tests' own).
+    #[cfg(test)]
+    Corners(Vec<(DVec3, DVec3)>),
+    /// Blocks of a grid of `dims` blocks of size `cell` from `origin`, by linear index.
+    Blocks {
+        index: Vec<usize>,
+        dims: [usize; 3],
+        origin: DVec3,
+        cell: DVec3,
+    },
+    Groups(super::passing::Groups),
+}
+
+impl Boxes {
+    /// The boxes of `corners` (lowest and highest corner each), of blocks or cells `unit` in
+    /// size.
+    #[cfg(test)]
+    pub(super) fn of_corners(corners: Vec<(DVec3, DVec3)>, unit: DVec3) -> Boxes {
+        Boxes {
+            list: BoxList::Corners(corners),
+            unit,
+        }
+    }
+
+    /// The blocks `index` (linear indices) of a grid of `dims` blocks of size `cell` from
+    /// `origin`.
+    pub(super) fn of_blocks(
+        index: Vec<usize>,
+        dims: [usize; 3],
+        origin: DVec3,
+        cell: DVec3,
+    ) -> Boxes {
+        Boxes {
+            list: BoxList::Blocks {
+                index,
+                dims,
+                origin,
+                cell,
+            },
+            unit: cell,
+        }
+    }
+
+    /// The boxes of passing groups, of cells `unit` in size.
+    pub(super) fn of_groups(groups: super::passing::Groups, unit: DVec3) -> Boxes {
+        Boxes {
+            list: BoxList::Groups(groups),
+            unit,
+        }
+    }
+
+    /// How many boxes.
+    pub(super) fn len(&self) -> usize {
+        match &self.list {
+            #[cfg(test)]
+            BoxList::Corners(c) => c.len(),
+            BoxList::Blocks { index, .. } => index.len(),
+            BoxList::Groups(g) => g.len(),
+        }
+    }
+
+    /// Box `i` (below [`Boxes::len`]): its lowest and highest corner.
+    pub(super) fn corners(&self, i: usize) -> (DVec3, DVec3) {
+        match &self.list {
+            #[cfg(test)]
+            BoxList::Corners(c) => c[i],
+            BoxList::Blocks {
+                index,
+                dims,
+                origin,
+                cell,
+            } => block_box(*dims, *origin, *cell, index[i]),
+            BoxList::Groups(g) => g.corners(i),
+        }
+    }
+
+    /// Every box's corners, in order, in parallel.
+    pub(super) fn par_corners(&self) -> impl IndexedParallelIterator<Item = (DVec3, DVec3)> + '_ {
+        (0..self.len()).into_par_iter().map(|i| self.corners(i))
+    }
+}
+
+/// Block `index` (linear, x fastest) of a grid of `dims` blocks of size `cell` from `origin`, as
+/// an object-space box.
+fn block_box(dims: [usize; 3], origin: DVec3, cell: DVec3, index: usize) -> (DVec3, DVec3) {
+    let c = DVec3::new(
+        (index % dims[0]) as f64,
+        (index / dims[0] % dims[1]) as f64,
+        (index / (dims[0] * dims[1])) as f64,
+    );
+    (origin + c * cell, origin + (c + 1.0) * cell)
 }
 
 /// The largest leap, in blocks.
@@ -482,34 +578,22 @@ impl SkipGrid {
     /// The grid of `dims` blocks of size `cell` from `origin`, with distance map `dist`.
     pub(super) fn new(dims: [usize; 3], origin: DVec3, cell: DVec3, dist: Vec<u8>) -> SkipGrid {
         let shell = shell(&dist, dims);
-        let mut grid = SkipGrid {
+        SkipGrid {
             dims,
             origin,
             cell,
             inv_cell: cell.recip(),
             last: DVec3::from_array(dims.map(|n| (n - 1) as f64)),
             dist,
-            shell: Boxes {
-                corners: Vec::new(),
-                unit: cell,
-            },
+            shell: Boxes::of_blocks(shell, dims, origin, cell),
             passing: Default::default(),
-        };
-        grid.shell.corners = shell.into_iter().map(|i| grid.block_box(i)).collect();
-        grid
+        }
     }
 
     /// The block with linear index `index` as an object-space box.
+    #[cfg(test)]
     pub(super) fn block_box(&self, index: usize) -> (DVec3, DVec3) {
-        let c = DVec3::new(
-            (index % self.dims[0]) as f64,
-            (index / self.dims[0] % self.dims[1]) as f64,
-            (index / (self.dims[0] * self.dims[1])) as f64,
-        );
-        (
-            self.origin + c * self.cell,
-            self.origin + (c + 1.0) * self.cell,
-        )
+        block_box(self.dims, self.origin, self.cell, index)
     }
 
     /// The distance-map entry of block `c` (inside the grid).

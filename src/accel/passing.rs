@@ -167,43 +167,79 @@ pub(super) fn passing_boxes(
         out
     };
     let enclosed = erode(&erode(&erode(&full, 1, gx), gx, gy), gx * gy, gz);
-    // The boxes in group order (x fastest), in parallel over layers of groups.
-    let corners: Vec<(DVec3, DVec3)> = (0..gz)
+    // The boxes' groups in group order (x fastest), in parallel over layers of groups.
+    let boxes: Vec<(u32, GroupCode)> = (0..gz)
         .into_par_iter()
         .flat_map_iter(|gk| {
             let layer = &layers[gk];
             let enclosed = &enclosed[gk * gx * gy..(gk + 1) * gx * gy];
-            (0..gy)
-                .flat_map(move |gj| (0..gx).map(move |gi| (gi, gj)))
-                .filter_map(move |(gi, gj)| {
-                    let at = gi + gx * gj;
-                    if enclosed[at] || layer[at] == GroupCode::NONE {
-                        return None;
-                    }
-                    let lo_cell = [gi * BRICK, gj * BRICK, gk * BRICK];
-                    let (first, last, _) = layer[at].get(lo_cell)?;
-                    // At a face of the dataset, out to where it still covers points.
-                    let reach = crate::data::FACE_TOLERANCE as f64;
-                    let lo = DVec3::from_array(std::array::from_fn(|a| {
-                        if first[a] == 0 {
-                            box_min[a].max(-reach).min(0.0)
-                        } else {
-                            first[a] as f64 / cells[a] as f64
-                        }
-                    }));
-                    let hi = DVec3::from_array(std::array::from_fn(|a| {
-                        if last[a] + 1 == cells[a] {
-                            box_max[a].min(1.0 + reach).max(1.0)
-                        } else {
-                            (last[a] + 1) as f64 / cells[a] as f64
-                        }
-                    }));
-                    Some((lo, hi))
-                })
+            (0..gx * gy)
+                .filter(move |&at| !enclosed[at] && layer[at] != GroupCode::NONE)
+                // (Below 2³²: a dataset has at most 2³² nodes, and a group holds 64 cells.)
+                .map(move |at| ((at + gk * gx * gy) as u32, layer[at]))
         })
         .collect();
     let unit = DVec3::from_array(cells.map(|c| 1.0 / c as f64));
-    Some(Boxes { corners, unit })
+    // Per axis, the object coordinate of each node plane k = 0 … cells: k / cells, and at the
+    // dataset's faces out to where it still covers points (a box's low side at plane 0, its
+    // high side at the last plane).
+    let reach = crate::data::FACE_TOLERANCE as f64;
+    let planes = |a: usize, face: f64, at: usize| -> Vec<f64> {
+        (0..=cells[a])
+            .map(|k| {
+                if k == at {
+                    face
+                } else {
+                    k as f64 / cells[a] as f64
+                }
+            })
+            .collect()
+    };
+    let low = std::array::from_fn(|a| planes(a, box_min[a].max(-reach).min(0.0), 0));
+    let high = std::array::from_fn(|a| planes(a, box_max[a].min(1.0 + reach).max(1.0), cells[a]));
+    let groups = Groups {
+        boxes,
+        groups,
+        low,
+        high,
+    };
+    Some(Boxes::of_groups(groups, unit))
+}
+
+/// The passing boxes of [`SkipGrid::passing_boxes`] as their groups: per box its group's index
+/// (x fastest) and [`GroupCode`] (eight bytes), with what its corners are read from
+/// ([`Groups::corners`]).
+pub(super) struct Groups {
+    boxes: Vec<(u32, GroupCode)>,
+    /// Groups per axis.
+    groups: [usize; 3],
+    /// Per axis, the object coordinate of a box's low side at node plane k (k / cells, out to
+    /// the object box at plane 0) and of its high side (k / cells, out at the last plane).
+    low: [Vec<f64>; 3],
+    high: [Vec<f64>; 3],
+}
+
+impl Groups {
+    /// How many boxes.
+    pub(super) fn len(&self) -> usize {
+        self.boxes.len()
+    }
+
+    /// Box `i`'s lowest and highest corner: the node planes that bound its group's passing
+    /// cells.
+    pub(super) fn corners(&self, i: usize) -> (DVec3, DVec3) {
+        let (at, code) = self.boxes[i];
+        let at = at as usize;
+        let [gx, gy, _] = self.groups;
+        let lo_cell = [at % gx, at / gx % gy, at / (gx * gy)].map(|c| c * BRICK);
+        // (Always there: only groups with passing cells are kept; none would be an empty box
+        // at the group's first cell.)
+        let (first, last, _) = code.get(lo_cell).unwrap_or((lo_cell, lo_cell, false));
+        (
+            DVec3::from_array(std::array::from_fn(|a| self.low[a][first[a]])),
+            DVec3::from_array(std::array::from_fn(|a| self.high[a][last[a] + 1])),
+        )
+    }
 }
 
 impl SkipGrid {

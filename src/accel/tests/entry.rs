@@ -98,12 +98,9 @@ fn entry_map_refuses_what_it_cannot_prove() {
         height: 2,
         ..camera_at(to_world, DVec3::new(1.0, 0.3, 0.2), 100.0, 16)
     };
-    assert!(g.shell.corners.len() > 4);
+    assert!(g.shell.len() > 4);
     assert!(EntryMap::of_boxes(&g.shell, to_world, &tiny).is_none());
-    let few = Boxes {
-        corners: g.shell.corners[..4].to_vec(),
-        unit: g.shell.unit,
-    };
+    let few = Boxes::of_corners((0..4).map(|i| g.shell.corners(i)).collect(), g.shell.unit);
     assert!(EntryMap::of_boxes(&few, to_world, &tiny).is_some());
     // Nothing occupied: nothing to project.
     let empty = grid_of(g.dims, &vec![false; g.dist.len()]);
@@ -120,7 +117,7 @@ fn build_within_reference(
     budget: usize,
 ) -> Option<EntryMap> {
     let (w, h) = (camera.width as usize, camera.height as usize);
-    if w == 0 || h == 0 || boxes.corners.is_empty() {
+    if w == 0 || h == 0 || boxes.len() == 0 {
         return None;
     }
     let margin = boxes.unit * 0.125;
@@ -179,10 +176,9 @@ fn build_within_reference(
             near: near - 1e-9 * near.abs(),
         }))
     };
-    let marks: Vec<Mark> = boxes
-        .corners
-        .iter()
-        .filter_map(|b| match project(b) {
+    let marks: Vec<Mark> = (0..boxes.len())
+        .map(|i| boxes.corners(i))
+        .filter_map(|b| match project(&b) {
             None => Some(None), // give up
             Some(None) => None, // off the image
             Some(mark) => Some(mark),

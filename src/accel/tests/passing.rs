@@ -247,5 +247,5 @@ fn passing_boxes_bound_every_ray() {
     let raw = vec![255u8; 17 * 17 * 17];
     let full = Dataset::new([17; 3], crate::data::Voxels::U8(raw), 0.0, 255.0).unwrap();
     let boxes = passing_boxes(&full, &full.cells_above(0.5), DVec3::ZERO, DVec3::ONE).expect("3D");
-    assert_eq!(boxes.corners.len(), 4 * 4 * 4 - 2 * 2 * 2);
+    assert_eq!(boxes.len(), 4 * 4 * 4 - 2 * 2 * 2);
 }
