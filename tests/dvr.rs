@@ -2,6 +2,10 @@
 //! transmittance through constant media for any step, the illumination model, attenuation,
 //! and thread-count independence of the output.
 
+#[path = "common/slab.rs"]
+mod slab;
+
+use slab::{head_on, slab_object};
 use vlib::{Attenuation, Camera, Fields, Image, Library};
 
 /// A scene with a constant slab [-w/2, w/2]² × [0, depth] in world space, seen head-on from
@@ -9,19 +13,11 @@ use vlib::{Attenuation, Camera, Fields, Image, Library};
 fn slab_scene(opacity: f32, depth: f32, step: f32, reference: f32) -> Library {
     let mut vl = Library::new();
     vl.scene().unwrap();
-    vl.camera(&Camera {
-        eye: [0.0, 0.0, -100.0],
-        at: [0.0, 0.0, 0.0],
-        up: [0.0, 1.0, 0.0],
-        fov: 20.0,
-    })
-    .unwrap();
+    head_on(&mut vl);
     vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
     vl.background(0.0, 0.0, 0.0).unwrap();
     vl.step_size(step, reference).unwrap();
-    vl.object().unwrap();
-    vl.translate(-0.5, -0.5, 0.0).unwrap();
-    vl.scale(400.0, 400.0, depth).unwrap();
+    slab_object(&mut vl, depth);
     vl.set(Fields::O, opacity).unwrap();
     vl.set(Fields::COLORS | Fields::KA, 1.0).unwrap();
     vl.end().unwrap();
@@ -108,21 +104,13 @@ fn lit_slab(
 ) -> [f32; 3] {
     let mut vl = Library::new();
     vl.scene().unwrap();
-    vl.camera(&Camera {
-        eye: [0.0, 0.0, -100.0],
-        at: [0.0, 0.0, 0.0],
-        up: [0.0, 1.0, 0.0],
-        fov: 20.0,
-    })
-    .unwrap();
+    head_on(&mut vl);
     vl.ambient(1.0, 1.0, 1.0, 0.5).unwrap();
     vl.step_size(1.0, 1.0).unwrap();
     // Offsets reach outside the slab from the first sample (0.5 deep), so ∇F is along z.
     vl.neighborhood(1.0, 1.0, 1.0).unwrap();
     light(&mut vl);
-    vl.object().unwrap();
-    vl.translate(-0.5, -0.5, 0.0).unwrap();
-    vl.scale(400.0, 400.0, 10.0).unwrap();
+    slab_object(&mut vl, 10.0);
     vl.set(Fields::O | Fields::F, 1.0).unwrap();
     vl.set(Fields::R, 0.8).unwrap();
     vl.set(Fields::G, 0.6).unwrap();

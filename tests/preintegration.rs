@@ -5,6 +5,10 @@
 //! check runs both marches: the packet march (`Optimise::packets`, where the processor has
 //! AVX2 and FMA: the samples and values in SIMD lanes) and the scalar one.
 
+#[path = "common/slab.rs"]
+mod slab;
+
+use slab::{head_on, slab_object};
 use vlib::{Camera, Dataset, Fields, Library, MappingType, Optimise, Voxels};
 use vlib::{DatasetId, MappingId};
 
@@ -60,19 +64,11 @@ fn scene_of(step: f32, preintegrate: bool, packets: bool, voxel: impl Fn(usize) 
         ..Optimise::default()
     })
     .unwrap();
-    vl.camera(&Camera {
-        eye: [0.0, 0.0, -100.0],
-        at: [0.0, 0.0, 0.0],
-        up: [0.0, 1.0, 0.0],
-        fov: 20.0,
-    })
-    .unwrap();
+    head_on(&mut vl);
     vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
     vl.background(0.0, 0.0, 0.0).unwrap();
     vl.step_size(step, REFERENCE).unwrap();
-    vl.object().unwrap();
-    vl.translate(-0.5, -0.5, 0.0).unwrap();
-    vl.scale(400.0, 400.0, DEPTH as f32).unwrap();
+    slab_object(&mut vl, DEPTH as f32);
     direct_shading(&mut vl);
     vl.set(Fields::KA, 1.0).unwrap();
     vl.end().unwrap();
