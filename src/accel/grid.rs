@@ -40,9 +40,8 @@ pub(crate) struct Boxes {
     pub(super) unit: DVec3,
 }
 
-/// The boxes of [`Boxes`]: their corners, or the passing cells' groups they are computed from
-/// when read (eight bytes a box instead of 48: a volume has a box for each of up to one in
-/// eight of its 4³-cell groups).
+/// The boxes of [`Boxes`]: the grid's blocks or the passing cells' groups, their corners
+/// computed when read (eight bytes a box, not the 48 of its two corners).
 enum BoxList {
     /// Boxes by their corners (the tests' own).
     #[cfg(test)]

@@ -234,6 +234,7 @@ impl Groups {
         let lo_cell = [at % gx, at / gx % gy, at / (gx * gy)].map(|c| c * BRICK);
         // (Always there: only groups with passing cells are kept; none would be an empty box
         // at the group's first cell.)
+        debug_assert!(code != GroupCode::NONE);
         let (first, last, _) = code.get(lo_cell).unwrap_or((lo_cell, lo_cell, false));
         (
             DVec3::from_array(std::array::from_fn(|a| self.low[a][first[a]])),
