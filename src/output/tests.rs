@@ -94,9 +94,9 @@ fn names(dir: &Path) -> Vec<String> {
     v
 }
 
-/// A link planted at any name the temporary file could take is never written through: the
-/// names of earlier versions (`.<name>.<pid>.<n>.tmp`) are not used, and a link at the chosen
-/// name makes the exclusive creation try another.
+/// A link planted at any name the temporary file could take is never written through: names a
+/// planter could predict from the file's name and the process (`.<name>.<pid>.<n>.tmp`) are not
+/// used, and a link at the chosen name makes the exclusive creation try another.
 #[test]
 fn planted_links_are_never_followed() {
     use std::os::unix::fs::symlink;
