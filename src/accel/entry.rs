@@ -51,34 +51,57 @@ impl Pinhole {
 /// ray crossed before, which is then empty (shell again). An eye inside such a block is
 /// enclosed by shell blocks, some of whose corners are then not in front of it: no map.
 ///
-/// The map is made in two parts, so that an image rendered in strips holds the bounds of one
-/// strip at a time: [`EntryMarks`], the projection of the boxes (once per image), and its
-/// [`EntryMarks::rows`], the bounds of a range of rows.
+/// The map is made in two parts, so that the image's bounds are never held whole:
+/// [`EntryMarks`], the projection of the boxes (once per image), and its
+/// [`EntryMarks::tile`], the bounds of one tile of pixels, made by the tile's task (in
+/// parallel, and with a team of processes only on the rank that renders the tile).
 pub(crate) struct EntryMap {
+    /// Pixels per row of the map.
     pub(super) width: usize,
     /// The image row of the map's first row.
     pub(super) first_row: usize,
+    /// The image column of the map's first column.
+    pub(super) first_col: usize,
     pub(super) bound: Vec<f64>,
 }
 
-/// An image's projected boxes, by bands of [`ENTRY_BAND`] rows: what [`EntryMap`]s of any of
-/// its rows are filled from.
+/// An image's projected boxes, by bins of [`ENTRY_BIN`] × [`ENTRY_BIN`] pixels: what the
+/// [`EntryMap`] of any rectangle of its pixels is filled from.
 pub(crate) struct EntryMarks {
     width: usize,
     height: usize,
     marks: Vec<Mark>,
-    /// Per band of rows, the marks that meet it.
-    in_band: Vec<Vec<u32>>,
+    /// Bins per row of bins.
+    bins_x: usize,
+    /// Per bin (row-major), where its marks start in `in_bin`; one more, the total, last.
+    start: Vec<usize>,
+    /// The numbers of the marks that meet each bin, bin after bin, each bin's in the order of
+    /// `marks` (four bytes an entry: a mark meets about one to four bins).
+    in_bin: Vec<u32>,
 }
 
-/// Rows per parallel task filling an entry map.
-pub(super) const ENTRY_BAND: usize = 16;
+/// Side in pixels of the square bins an [`EntryMarks`] files its marks by: the side of the
+/// packet march's tiles, which each read one bin's marks (the scalar march's tiles, half as
+/// wide, read their bin's and pass over those outside them).
+pub(super) const ENTRY_BIN: usize = 32;
 
 /// A shell block's pixel rectangle (inclusive) and its smallest depth.
 pub(super) struct Mark {
     pub(super) x: (usize, usize),
     pub(super) y: (usize, usize),
     pub(super) near: f64,
+}
+
+/// Calls `f` with the index of each bin (of [`ENTRY_BIN`]² pixels, `bins_x` to a row of
+/// bins) that mark `m` meets, row by row.
+#[inline(always)]
+fn for_each_bin(m: &Mark, bins_x: usize, mut f: impl FnMut(usize)) {
+    let (x0, x1) = (m.x.0 / ENTRY_BIN, m.x.1 / ENTRY_BIN);
+    for by in m.y.0 / ENTRY_BIN..=m.y.1 / ENTRY_BIN {
+        for b in by * bins_x + x0..=by * bins_x + x1 {
+            f(b);
+        }
+    }
 }
 
 /// Rectangle pixels an entry map may mark, per image pixel, before it gives up (a camera
@@ -115,10 +138,10 @@ impl EntryMap {
         EntryMarks::build_within(boxes, to_world, camera, budget)?.all_rows()
     }
 
-    /// The bound of pixel (x, y) (a row the map holds).
+    /// The bound of pixel (x, y) (a pixel the map holds).
     #[inline]
     pub(crate) fn bound(&self, x: u32, y: u32) -> f64 {
-        self.bound[(y as usize - self.first_row) * self.width + x as usize]
+        self.bound[(y as usize - self.first_row) * self.width + (x as usize - self.first_col)]
     }
 }
 
@@ -269,62 +292,80 @@ impl EntryMarks {
         if area > budget {
             return None;
         }
-        let mut in_band: Vec<Vec<u32>> = vec![Vec::new(); h.div_ceil(ENTRY_BAND)];
+        // The marks filed by the bins they meet (counted, then placed); `None` where that
+        // memory cannot be had (the rays then walk from the object's box).
+        let bins_x = w.div_ceil(ENTRY_BIN);
+        let bins = bins_x.checked_mul(h.div_ceil(ENTRY_BIN))?;
+        let mut start = crate::num::try_vec(bins + 1, 0usize, "").ok()?;
+        for m in &marks {
+            for_each_bin(m, bins_x, |b| start[b + 1] += 1);
+        }
+        for b in 0..bins {
+            start[b + 1] += start[b];
+        }
+        let mut next = crate::num::try_vec(bins, 0usize, "").ok()?;
+        next.copy_from_slice(&start[..bins]);
+        let mut in_bin = crate::num::try_vec(start[bins], 0u32, "").ok()?;
         for (i, m) in marks.iter().enumerate() {
-            for band in &mut in_band[m.y.0 / ENTRY_BAND..=m.y.1 / ENTRY_BAND] {
-                band.push(i as u32);
-            }
+            for_each_bin(m, bins_x, |b| {
+                in_bin[next[b]] = i as u32;
+                next[b] += 1;
+            });
         }
         Some(EntryMarks {
             width: w,
             height: h,
             marks,
-            in_band,
+            bins_x,
+            start,
+            in_bin,
         })
     }
 
-    /// The map of the image's rows `rows` (within its height): the rectangles' minimum, in
-    /// parallel over bands of rows (the same numbers in any order), each band going through
-    /// the rectangles that meet it. `None` where its memory cannot be had.
-    pub(crate) fn rows(&self, rows: std::ops::Range<usize>) -> Option<EntryMap> {
-        let w = self.width;
-        let (first, last) = (rows.start, rows.end.min(self.height));
-        let len = last.saturating_sub(first) * w;
-        let mut bound: Vec<f64> = Vec::new();
-        bound.try_reserve_exact(len).ok()?;
-        bound.resize(len, f64::INFINITY);
-        // The strip's pieces of bands: the first from `first` to its band's end, then whole
-        // bands.
-        let mut pieces = Vec::new();
-        let mut rest = bound.as_mut_slice();
-        let mut y = first;
-        while y < last {
-            let end = ((y / ENTRY_BAND + 1) * ENTRY_BAND).min(last);
-            let (piece, tail) = rest.split_at_mut((end - y) * w);
-            pieces.push((y, piece));
-            rest = tail;
-            y = end;
-        }
-        pieces.into_par_iter().for_each(|(top, rows)| {
-            let bottom = top + rows.len() / w - 1;
-            let band = &self.in_band[top / ENTRY_BAND];
-            for m in band.iter().map(|&i| &self.marks[i as usize]) {
-                let (y0, y1) = (m.y.0.max(top), m.y.1.min(bottom));
-                if y0 <= y1 {
-                    lower_rect(rows, w, m.x.0..=m.x.1, y0 - top..=y1 - top, m.near);
+    /// The map of the image's pixels `xs` × `ys` (clipped to the image): each bin the
+    /// rectangle meets lowered by the marks filed in it, clipped to the bin, so that a pixel
+    /// meets each mark once. The same numbers for any rectangle (a minimum is exact). A tile's
+    /// map: it is allocated as it is, whatever its size.
+    pub(crate) fn tile(&self, xs: std::ops::Range<usize>, ys: std::ops::Range<usize>) -> EntryMap {
+        let (x0, x1) = (xs.start.min(self.width), xs.end.min(self.width));
+        let (y0, y1) = (ys.start.min(self.height), ys.end.min(self.height));
+        let tw = x1.saturating_sub(x0);
+        let mut bound = vec![f64::INFINITY; tw * y1.saturating_sub(y0)];
+        if x0 < x1 && y0 < y1 {
+            for by in y0 / ENTRY_BIN..=(y1 - 1) / ENTRY_BIN {
+                // The bin's rows within the rectangle, and likewise its columns below.
+                let (r0, r1) = ((by * ENTRY_BIN).max(y0), ((by + 1) * ENTRY_BIN).min(y1) - 1);
+                for bx in x0 / ENTRY_BIN..=(x1 - 1) / ENTRY_BIN {
+                    let (c0, c1) = ((bx * ENTRY_BIN).max(x0), ((bx + 1) * ENTRY_BIN).min(x1) - 1);
+                    let b = by * self.bins_x + bx;
+                    for &i in &self.in_bin[self.start[b]..self.start[b + 1]] {
+                        let m = &self.marks[i as usize];
+                        let (mx0, mx1) = (m.x.0.max(c0), m.x.1.min(c1));
+                        let (my0, my1) = (m.y.0.max(r0), m.y.1.min(r1));
+                        if mx0 <= mx1 && my0 <= my1 {
+                            lower_rect(
+                                &mut bound,
+                                tw,
+                                mx0 - x0..=mx1 - x0,
+                                my0 - y0..=my1 - y0,
+                                m.near,
+                            );
+                        }
+                    }
                 }
             }
-        });
-        Some(EntryMap {
-            width: w,
-            first_row: first,
+        }
+        EntryMap {
+            width: tw,
+            first_row: y0,
+            first_col: x0,
             bound,
-        })
+        }
     }
 
-    /// The map of every row.
+    /// The map of every pixel.
     #[cfg(test)]
-    fn all_rows(&self) -> Option<EntryMap> {
-        self.rows(0..self.height)
+    pub(crate) fn all_rows(&self) -> Option<EntryMap> {
+        Some(self.tile(0..self.width, 0..self.height))
     }
 }

@@ -52,3 +52,15 @@ fn impossible_allocations_are_no_memory() {
     assert_eq!(try_vec(3, 7u16, "small").unwrap(), vec![7u16; 3]);
     assert_eq!(try_with_capacity::<u8>(5, "small").unwrap().capacity(), 5);
 }
+
+/// A vector long enough to be filled in parallel holds the value everywhere, in the room
+/// reserved for it (no reallocation beyond `len`).
+#[test]
+fn long_vectors_are_filled_whole() {
+    for len in [PARALLEL_FILL - 1, PARALLEL_FILL, 3 * PARALLEL_FILL + 7] {
+        let v = try_vec(len, [1.5f32, -2.0], "a test buffer").unwrap();
+        assert_eq!(v.len(), len);
+        assert_eq!(v.capacity(), len);
+        assert!(v.iter().all(|&p| p == [1.5, -2.0]));
+    }
+}

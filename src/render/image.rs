@@ -7,6 +7,7 @@
 
 use super::{render_strips, Compiled, Progress};
 use crate::error::Result;
+use rayon::prelude::*;
 
 /// Renders the compiled scene ([`render_strips`]) against the backdrop of `format` into
 /// `buffer`, exactly the image's bytes long, a strip of rows at a time as they are finished.
@@ -24,9 +25,15 @@ pub(crate) fn render_into(
     render_strips(scene, size, backdrop, progress, |y, rows| {
         let at = y as usize * row;
         let out = &mut buffer[at..at + rows.len() * n];
-        for (p, dst) in rows.iter().zip(out.chunks_exact_mut(n)) {
-            format.put([p[0], p[1], p[2]], p[3], backdrop, dst);
-        }
+        // In parallel, a run of pixels a task.
+        const RUN: usize = 4096;
+        rows.par_chunks(RUN)
+            .zip(out.par_chunks_mut(RUN * n))
+            .for_each(|(rows, out)| {
+                for (p, dst) in rows.iter().zip(out.chunks_exact_mut(n)) {
+                    format.put([p[0], p[1], p[2]], p[3], backdrop, dst);
+                }
+            });
         Ok(())
     })
 }

@@ -125,8 +125,10 @@ pub fn render_image(
         backdrop,
         progress,
         |_, rows| {
-            pixels.extend(rows.iter().map(|p| [p[0], p[1], p[2]]));
-            transmittance.extend(rows.iter().map(|p| p[3]));
+            // (In parallel into the room reserved above: a large image's fresh pages cost
+            // more than the copy.)
+            pixels.par_extend(rows.par_iter().map(|p| [p[0], p[1], p[2]]));
+            transmittance.par_extend(rows.par_iter().map(|p| p[3]));
             Ok(())
         },
     )?;
@@ -198,22 +200,27 @@ fn render_in_strips(
         #[cfg(target_arch = "x86_64")]
         let packet_side = packet_side(width, height, progress);
         let n = scene.settings.super_sample.max(1) as u32;
-        // The first pass of rows `rows`, with an entry map that holds them.
-        let first_pass = |rows: std::ops::Range<u32>, entry: Option<&EntryMap>| {
+        // The entry map of a tile, made by the tile's task.
+        let entry_of = |(tx, ty, tw, th): (u32, u32, u32, u32)| -> Option<EntryMap> {
+            let (tx, ty) = (tx as usize, ty as usize);
+            let m = marks.as_ref()?;
+            Some(m.tile(tx..tx + tw as usize, ty..ty + th as usize))
+        };
+        // The first pass of rows `rows`.
+        let first_pass = |rows: std::ops::Range<u32>| {
             #[cfg(target_arch = "x86_64")]
             if let Some(p) = &packets {
                 if p.preintegrated() {
                     return per_tile(width, rows, packet_side, progress, |tile| {
-                        p.tile_pre(&view, entry, &image, unbounded, tile)
+                        p.tile_pre(&view, entry_of(tile).as_ref(), &image, unbounded, tile)
                     });
                 }
                 return per_tile(width, rows, packet_side, progress, |tile| {
-                    p.tile(&view, entry, &image, unbounded, tile)
+                    p.tile(&view, entry_of(tile).as_ref(), &image, unbounded, tile)
                 });
             }
-            let from = |x: u32, y: u32| entry.map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
-            per_pixel(width, rows, progress, |x, y| {
-                let bound = from(x, y);
+            per_pixel(width, rows, progress, entry_of, |entry, x, y| {
+                let bound = entry.as_ref().map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
                 if let (Some(c), true) = (unbounded, bound == f64::INFINITY) {
                     return c;
                 }
@@ -236,16 +243,6 @@ fn render_in_strips(
             };
             // (Here and below, an error of this rank alone is held for the next step with a
             // team, `Progress::hold`, and the rank takes no work in it.)
-            let entry = match &marks {
-                Some(m) => {
-                    let rows = need_lo as usize..need_hi as usize;
-                    let bytes = rows.len() * row * size_of::<f64>();
-                    progress.hold(m.rows(rows).ok_or_else(|| {
-                        crate::num::no_memory("a strip of the entry map", Some(bytes))
-                    }))?
-                }
-                None => None,
-            };
             // Keep the rows of the last strip's pass this one needs, then trace the rest.
             let keep = need_lo.clamp(lo, hi);
             first.drain(..(keep - lo) as usize * row);
@@ -254,7 +251,7 @@ fn render_in_strips(
                 lo = need_lo;
                 hi = need_lo;
             }
-            let fresh = first_pass(hi..need_hi, entry.as_ref())?;
+            let fresh = first_pass(hi..need_hi)?;
             if n == 1 {
                 // One ray a pixel: the first pass is the strip, handed on as it is.
                 if !progress.holds() {
@@ -270,8 +267,6 @@ fn render_in_strips(
                 drop(fresh);
                 hi = need_hi;
                 let at = |x: u32, y: u32| first[(y - lo) as usize * row + x as usize];
-                let from =
-                    |x: u32, y: u32| entry.as_ref().map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
                 // The channels compared: colour, and against a transparent backdrop the
                 // transmittance (alpha) too.
                 let channels = match backdrop {
@@ -293,17 +288,22 @@ fn render_in_strips(
                         }
                     })
                 };
-                let refined = per_pixel(width, y0..y1, progress, |x, y| {
+                // The tile's entry map, made at its first pixel to refine.
+                let lazy = |tile| (tile, std::cell::OnceCell::new());
+                let refined = per_pixel(width, y0..y1, progress, lazy, |(tile, entry), x, y| {
                     if !differs(x, y) {
                         return at(x, y);
                     }
+                    let bound = entry
+                        .get_or_init(|| entry_of(*tile))
+                        .as_ref()
+                        .map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
                     let (mut sum, mut t_sum) = (DVec3::ZERO, 0.0);
                     for j in 0..n {
                         for i in 0..n {
                             let sx = x as f64 + (i as f64 + 0.5) / n as f64;
                             let sy = y as f64 + (j as f64 + 0.5) / n as f64;
-                            let (c, t) =
-                                scene.trace(view.eye, &image, view.ray(sx, sy), from(x, y));
+                            let (c, t) = scene.trace(view.eye, &image, view.ray(sx, sy), bound);
                             let p = pixel(c, t);
                             sum += crate::model::scene::v3([p[0], p[1], p[2]]);
                             t_sum += p[3] as f64;

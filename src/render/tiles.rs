@@ -77,17 +77,23 @@ pub(super) fn tiles(width: u32, rows: std::ops::Range<u32>, side: u32) -> Vec<(u
 }
 
 /// Evaluates `f` for every pixel of rows `rows`, in parallel over tiles, deterministically;
-/// `VL_CANCELLED` once `progress` is cancelled (no pixel is started after that).
-pub(super) fn per_pixel<F>(
+/// `VL_CANCELLED` once `progress` is cancelled (no pixel is started after that). `f` is given
+/// what `context` made for the pixel's tile (x, y, width, height), made once a tile by the
+/// tile's task.
+pub(super) fn per_pixel<C, M, F>(
     width: u32,
     rows: std::ops::Range<u32>,
     progress: &Progress,
+    context: M,
     f: F,
 ) -> Result<Vec<Pixel>>
 where
-    F: Fn(u32, u32) -> Pixel + Sync,
+    M: Fn((u32, u32, u32, u32)) -> C + Sync,
+    F: Fn(&C, u32, u32) -> Pixel + Sync,
 {
-    per_tile(width, rows, TILE, progress, |(tx, ty, tw, th)| {
+    per_tile(width, rows, TILE, progress, |tile| {
+        let (tx, ty, tw, th) = tile;
+        let here = context(tile);
         let mut out = Vec::with_capacity((tw * th) as usize);
         for y in ty..ty + th {
             for x in tx..tx + tw {
@@ -95,7 +101,7 @@ where
                 out.push(if progress.cancelled() {
                     [0.0; 4]
                 } else {
-                    f(x, y)
+                    f(&here, x, y)
                 });
             }
         }

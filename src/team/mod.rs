@@ -56,7 +56,7 @@ pub(crate) trait Link: Send + Sync {
 /// Every rank's `mine` by `gather` ([`Link::gather_f32`] or [`Link::gather_u8`]), `counts` by
 /// rank, into a buffer this allocates: where any rank cannot allocate its buffer, every rank
 /// fails with `NoMemory` before any data moves (collective).
-fn exchange<T: Copy + Default>(
+fn exchange<T: Copy + Default + Send + Sync>(
     link: &dyn Link,
     mine: &[T],
     counts: &[usize],
@@ -248,7 +248,7 @@ where
         if let Some(e) = held {
             return Err(e);
         }
-        return Ok((0..n).into_par_iter().map(f).collect());
+        return Ok((0..n).into_par_iter().with_max_len(1).map(f).collect());
     };
     let link = &*team.0.link;
     let base = team.state().base;

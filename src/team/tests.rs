@@ -204,11 +204,11 @@ fn a_condition_holds_for_the_team_only_where_it_holds_on_every_rank() {
 
 #[test]
 fn an_error_one_rank_holds_fails_the_step_on_every_rank() {
-    // Rank 1 met an error between steps (it could not allocate a strip of the entry map, say):
+    // Rank 1 met an error between steps (it could not allocate a strip of the image, say):
     // it takes no item, and every rank's step fails with its error; the next step is whole.
     let results = on_ranks(3, |team| {
         let held =
-            (team.rank() == 1).then(|| Error::new(ErrorCode::NoMemory, "a strip of the entry map"));
+            (team.rank() == 1).then(|| Error::new(ErrorCode::NoMemory, "a strip of the image"));
         let failed = map(Some(&team), 300, &|| false, held, item);
         let next = map(Some(&team), 30, &|| false, None, item);
         (
@@ -219,8 +219,8 @@ fn an_error_one_rank_holds_fails_the_step_on_every_rank() {
     let expected: Vec<Vec<[f32; 2]>> = (0..30).map(item).collect();
     for (rank, (failed, next)) in results.into_iter().enumerate() {
         let message = match rank {
-            1 => "a strip of the entry map".to_string(),
-            _ => "a strip of the entry map (on rank 1)".to_string(),
+            1 => "a strip of the image".to_string(),
+            _ => "a strip of the image (on rank 1)".to_string(),
         };
         assert_eq!(failed, Err((ErrorCode::NoMemory, message)));
         assert_eq!(next, expected);

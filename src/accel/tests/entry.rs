@@ -190,29 +190,19 @@ fn build_within_reference(
     if area > budget {
         return None;
     }
-    // The rectangles' minimum, in parallel over bands of rows (the same numbers in any
-    // order).
+    // The rectangles' minimum, mark after mark over the whole image.
     let mut bound = vec![f64::INFINITY; w * h];
-    bound
-        .chunks_mut(ENTRY_BAND * w)
-        .enumerate()
-        .for_each(|(band, rows)| {
-            let first = band * ENTRY_BAND;
-            let last = first + rows.len() / w - 1;
-            for m in &marks {
-                let (y0, y1) = (m.y.0.max(first), m.y.1.min(last));
-                for y in y0..=y1 {
-                    let row = &mut rows[(y - first) * w..(y - first + 1) * w];
-                    for b in &mut row[m.x.0..=m.x.1] {
-                        // (Neither is NaN: a comparison in lanes, not `f64::min`.)
-                        *b = if m.near < *b { m.near } else { *b };
-                    }
-                }
+    for m in &marks {
+        for y in m.y.0..=m.y.1 {
+            for b in &mut bound[y * w + m.x.0..=y * w + m.x.1] {
+                *b = b.min(m.near);
             }
-        });
+        }
+    }
     Some(EntryMap {
         width: w,
         first_row: 0,
+        first_col: 0,
         bound,
     })
 }
@@ -268,4 +258,49 @@ fn entry_map_is_the_nan_aware_projection() {
         maps > 20 && refusals > 10,
         "{maps} maps, {refusals} refusals"
     );
+}
+
+/// A tile's map holds the bits the whole image's map holds at its pixels, for tiles of any
+/// size and place (aligned with the bins or not, across bins, clipped at the image's edges),
+/// and an empty or off-image rectangle holds nothing: each pixel is lowered by every mark
+/// that covers it, once.
+#[test]
+fn a_tiles_map_is_the_images_map_there() {
+    let mut rng = Rng(0x5eed_0011);
+    let mut tiles = 0;
+    for case in 0..12 {
+        let g = random_grid(&mut rng, [0.1, 0.3][case % 2]);
+        let to_world = random_placement(&mut rng);
+        let from = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
+        let size = [40, 53, 19][case % 3];
+        let camera = camera_at(to_world, from, 90.0 + 60.0 * rng.next(), size);
+        let Some(marks) = EntryMarks::build(&g, to_world, &camera) else {
+            continue;
+        };
+        let whole = marks.all_rows().expect("a map of every pixel");
+        let (w, h) = (camera.width as usize, camera.height as usize);
+        for side in [ENTRY_BIN, 2 * ENTRY_BIN, 7, 50] {
+            for ty in (0..h + side).step_by(side / 2 + 1) {
+                for tx in (0..w + side).step_by(side / 3 + 1) {
+                    let map = marks.tile(tx..tx + side, ty..ty + side);
+                    let (tw, th) = (
+                        (tx + side).min(w).saturating_sub(tx),
+                        (ty + side).min(h).saturating_sub(ty),
+                    );
+                    assert_eq!(map.bound.len(), tw * th, "case {case} tile at ({tx}, {ty})");
+                    for y in ty..ty + th {
+                        for x in tx..tx + tw {
+                            let (a, b) = (
+                                map.bound(x as u32, y as u32),
+                                whole.bound(x as u32, y as u32),
+                            );
+                            assert_eq!(a.to_bits(), b.to_bits(), "case {case} pixel ({x}, {y})");
+                        }
+                    }
+                    tiles += 1;
+                }
+            }
+        }
+    }
+    assert!(tiles > 1000, "only {tiles} tiles checked");
 }

@@ -9,7 +9,7 @@ mod passing;
 mod rect;
 mod walk;
 
-use super::entry::{EntryMap, Mark, Pinhole, ENTRY_BAND};
+use super::entry::{EntryMap, EntryMarks, Mark, Pinhole, ENTRY_BIN};
 use super::grid::{chessboard, Boxes, SkipGrid, MAX_LEAP};
 use super::passing::{passing_boxes, passing_groups_row, GroupCode};
 use super::rect::lower_rect;

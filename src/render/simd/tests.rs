@@ -91,9 +91,7 @@ fn bits<const C: usize>(image: &[[f32; C]]) -> Vec<u32> {
 fn march(vl: &crate::Library, (width, height): (u32, u32), packets: usize) -> (Vec<u32>, u64) {
     let scene = vl.compiled().unwrap();
     let view = view(&scene.settings, width, height, 1.2);
-    let entry = scene
-        .entry_marks(&view)
-        .map(|m| m.rows(0..height as usize).unwrap());
+    let entry = scene.entry_marks(&view).map(|m| m.all_rows().unwrap());
     let image = scene.image_rays(view.eye, Backdrop::Background);
     let unbounded = scene.unbounded_colour(&image).map(|c| pixel(c, 1.0));
     let mut p = Packets::new(&scene).expect("the packet march applies");
