@@ -81,8 +81,10 @@ pub(crate) struct EntryMarks {
 }
 
 /// Side in pixels of the square bins an [`EntryMarks`] files its marks by: the side of the
-/// packet march's tiles, which each read one bin's marks (the scalar march's tiles, half as
-/// wide, read their bin's and pass over those outside them).
+/// packet march's tiles, which read one bin's marks where their rows start at a multiple of
+/// it (two bins' where they do not: with super-sampling, a strip's first pass starts a row
+/// after the last strip's); the scalar march's tiles, half as wide, read their bin's and pass
+/// over the marks outside them.
 pub(super) const ENTRY_BIN: usize = 32;
 
 /// A shell block's pixel rectangle (inclusive) and its smallest depth.
@@ -115,19 +117,19 @@ const ENTRY_BUDGET: usize = 64;
 const ENTRY_BOXES_PER_PIXEL: usize = 1;
 
 impl EntryMap {
-    /// The map of every row of the image ([`EntryMarks::build`] and its rows).
+    /// The map of every pixel of the image ([`EntryMarks::build`], then [`EntryMarks::all_rows`]).
     #[cfg(test)]
     pub(crate) fn build(grid: &SkipGrid, to_world: DMat4, camera: &Pinhole) -> Option<EntryMap> {
         EntryMarks::build(grid, to_world, camera)?.all_rows()
     }
 
-    /// The map of every row of the image ([`EntryMarks::of_boxes`] and its rows).
+    /// The map of every pixel of the image ([`EntryMarks::of_boxes`], then [`EntryMarks::all_rows`]).
     #[cfg(test)]
     pub(crate) fn of_boxes(boxes: &Boxes, to_world: DMat4, camera: &Pinhole) -> Option<EntryMap> {
         EntryMarks::of_boxes(boxes, to_world, camera)?.all_rows()
     }
 
-    /// The map of every row of the image ([`EntryMarks::build_within`] and its rows).
+    /// The map of every pixel of the image ([`EntryMarks::build_within`], then [`EntryMarks::all_rows`]).
     #[cfg(test)]
     pub(super) fn build_within(
         boxes: &Boxes,

@@ -279,6 +279,20 @@ fn a_tiles_map_is_the_images_map_there() {
         };
         let whole = marks.all_rows().expect("a map of every pixel");
         let (w, h) = (camera.width as usize, camera.height as usize);
+        // The whole map over several bins against the reference (all marks over the whole
+        // image), as in `entry_map_is_the_nan_aware_projection`.
+        let want = build_within_reference(&g.shell, to_world, &camera, usize::MAX)
+            .expect("the reference maps what the map maps");
+        assert_eq!(whole.bound.len(), want.bound.len());
+        for (a, b) in whole.bound.iter().zip(&want.bound) {
+            assert_eq!(a.is_finite(), b.is_finite(), "case {case}: {a} {b}");
+            if b.is_finite() {
+                assert!(
+                    (a - b).abs() <= 1e-12 * b.abs(),
+                    "case {case}: {a} against {b}"
+                );
+            }
+        }
         for side in [ENTRY_BIN, 2 * ENTRY_BIN, 7, 50] {
             for ty in (0..h + side).step_by(side / 2 + 1) {
                 for tx in (0..w + side).step_by(side / 3 + 1) {
