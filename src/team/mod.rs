@@ -99,6 +99,47 @@ struct Inner {
 struct State {
     base: u64,
     stats: Vec<RankStats>,
+    /// The buffers of the steps' exchanges, kept from one step to the next ([`Buffers`]).
+    buffers: Buffers,
+}
+
+/// What a rank sends in a step's exchange (its items' values) and what it receives (every
+/// rank's), kept from one step to the next so that a render's steps, frame after frame, reuse
+/// memory whose pages are already there (fresh pages cost more than the copy). Each holds the
+/// largest exchange of the team's steps so far: at most a strip of the image (about 2²⁰
+/// pixels of four f32) or a slab of voxelized nodes, released with the team.
+#[derive(Default)]
+struct Buffers {
+    send: Vec<f32>,
+    recv: Vec<f32>,
+}
+
+/// `v` with `len` elements (its first `len`; zeros where it grows), without failing where its
+/// memory cannot be had: `None` then, and `v` is dropped.
+fn sized(mut v: Vec<f32>, len: usize) -> Option<Vec<f32>> {
+    if len > v.len() && v.try_reserve_exact(len - v.len()).is_err() {
+        return None;
+    }
+    v.resize(len, 0.0);
+    Some(v)
+}
+
+/// The buffers of a step's values made from those the team kept (`kept`): `send` `floats`
+/// long (this rank's values), `recv` the sum of `counts` (every rank's, by rank). Where any
+/// rank cannot hold its two, every rank fails with `NoMemory` before any data moves, and the
+/// memory kept is released (collective).
+fn buffers_for(link: &dyn Link, kept: Buffers, floats: usize, counts: &[usize]) -> Result<Buffers> {
+    let total = counts.iter().try_fold(0usize, |a, &c| a.checked_add(c));
+    let send = sized(kept.send, floats);
+    let recv = total.and_then(|t| sized(kept.recv, t));
+    let ok = link.gather_u64(&[(send.is_some() && recv.is_some()) as u64])?;
+    match (send, recv, ok.iter().position(|&v| v != 1)) {
+        (Some(send), Some(recv), None) => Ok(Buffers { send, recv }),
+        (_, _, r) => Err(crate::num::no_memory(
+            &format!("a team's exchange (on rank {})", r.unwrap_or(link.rank())),
+            total.and_then(|t| t.checked_mul(size_of::<f32>())),
+        )),
+    }
 }
 
 /// What one rank of a [`Team`] has done since the team was made: the sum over its threads of
@@ -133,7 +174,11 @@ impl Team {
         Ok(Team(Arc::new(Inner {
             link,
             threads,
-            state: Mutex::new(State { base: 0, stats }),
+            state: Mutex::new(State {
+                base: 0,
+                stats,
+                buffers: Buffers::default(),
+            }),
         })))
     }
 
@@ -199,14 +244,15 @@ impl Team {
 pub(crate) trait Floats: Copy + Send + Sync {
     /// Its `f32`s.
     const N: usize;
-    fn put(&self, out: &mut Vec<f32>);
+    /// Writes its `f32`s to `out`, [`Floats::N`] long.
+    fn put(&self, out: &mut [f32]);
     fn get(from: &[f32]) -> Self;
 }
 
 impl<const K: usize> Floats for [f32; K] {
     const N: usize = K;
-    fn put(&self, out: &mut Vec<f32>) {
-        out.extend_from_slice(self);
+    fn put(&self, out: &mut [f32]) {
+        out.copy_from_slice(self);
     }
     fn get(from: &[f32]) -> Self {
         let mut v = [0.0; K];
@@ -317,33 +363,26 @@ where
     // The step's exchange: each rank's status, additions to the counter, busy time, items,
     // values and error; then, where a rank failed, the errors' messages, else the items'
     // numbers and lengths, then their values.
-    let mut index = Vec::with_capacity(mine.len() * 2);
-    let mut values = Vec::new();
-    if failure.is_none() {
-        for (i, v) in &mine {
-            index.extend([*i as u64, v.len() as u64]);
-            v.iter().for_each(|x| x.put(&mut values));
-        }
-    }
+    let floats: usize = mine.iter().map(|(_, v)| v.len() * T::N).sum();
     let heads = link.gather_u64(&[
         status,
         added.into_inner(),
         busy.into_inner(),
         mine.len() as u64,
-        values.len() as u64,
+        floats as u64,
         code,
         message.len() as u64,
     ])?;
-    drop(mine);
     let heads: Vec<&[u64]> = heads.chunks(7).collect();
-    {
+    let buffers = {
         let mut state = team.state();
         state.base = base + heads.iter().map(|h| h[1]).sum::<u64>();
         for (s, h) in state.stats.iter_mut().zip(&heads) {
             s.busy += Duration::from_nanos(h[2]);
             s.items += h[3];
         }
-    }
+        std::mem::take(&mut state.buffers)
+    };
     if let Some(r) = heads.iter().position(|h| h[0] == FAILED) {
         let counts: Vec<usize> = heads.iter().map(|h| h[6] as usize).collect();
         let messages = exchange(link, message, &counts, |m, c, o| link.gather_u8(m, c, o))?;
@@ -361,26 +400,48 @@ where
     }
     let index_counts: Vec<usize> = heads.iter().map(|h| h[3] as usize * 2).collect();
     let value_counts: Vec<usize> = heads.iter().map(|h| h[4] as usize).collect();
+    let index: Vec<u64> = mine
+        .iter()
+        .flat_map(|(i, v)| [*i as u64, v.len() as u64])
+        .collect();
     let all_index = gather_index(link, &index, &index_counts)?;
-    let all_values = exchange(link, &values, &value_counts, |m, c, o| {
-        link.gather_f32(m, c, o)
-    })?;
-    drop(values);
-    // Every item once, in order, whichever rank made it.
-    out.resize_with(n, || None);
+    // The values, through the buffers the team keeps: this rank's items' in `send`, every
+    // rank's into `recv`.
+    let Buffers { mut send, mut recv } = buffers_for(link, buffers, floats, &value_counts)?;
     let mut at = 0;
-    for pair in all_index.chunks_exact(2) {
-        let (i, len) = (pair[0] as usize, pair[1] as usize);
-        let floats = len * T::N;
-        let v = all_values[at..at + floats]
-            .chunks_exact(T::N)
-            .map(T::get)
-            .collect();
-        at += floats;
-        if let Some(slot) = out.get_mut(i) {
-            *slot = Some(v);
+    for (_, v) in &mine {
+        for x in v {
+            x.put(&mut send[at..at + T::N]);
+            at += T::N;
         }
     }
+    link.gather_f32(&send, &value_counts, &mut recv)?;
+    // Every item once, in order, whichever rank made it: this rank's as they were made, the
+    // others' from what came.
+    let me = team.rank();
+    let mut mine = mine.into_iter();
+    out.resize_with(n, || None);
+    let (mut pairs, mut at) = (all_index.chunks_exact(2), 0);
+    for (r, &count) in index_counts.iter().enumerate() {
+        for pair in pairs.by_ref().take(count / 2) {
+            let (i, len) = (pair[0] as usize, pair[1] as usize);
+            let floats = len * T::N;
+            let v = if r == me {
+                mine.next().map(|(_, v)| v).unwrap_or_default()
+            } else {
+                recv[at..at + floats]
+                    .chunks_exact(T::N)
+                    .map(T::get)
+                    .collect()
+            };
+            at += floats;
+            if let Some(slot) = out.get_mut(i) {
+                *slot = Some(v);
+            }
+        }
+    }
+    // (Their contents are spent: only their memory is kept.)
+    team.state().buffers = Buffers { send, recv };
     out.into_iter()
         .enumerate()
         .map(|(i, v)| {

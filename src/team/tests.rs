@@ -108,13 +108,16 @@ fn every_rank_gets_every_item_in_order_and_the_work_is_shared() {
         // Two steps: the second starts where the first's counter ended.
         let a = map(Some(&team), n, &|| false, None, item).unwrap();
         let b = map(Some(&team), n, &|| false, None, item).unwrap();
+        // A smaller step after them, through the buffers they left.
+        let c = map(Some(&team), 7, &|| false, None, item).unwrap();
+        assert_eq!(c, (0..7).map(item).collect::<Vec<_>>());
         (a, b, team.stats(), team.threads())
     });
     for (a, b, stats, threads) in &results {
         assert_eq!(a, &expected);
         assert_eq!(b, &expected);
         // Each item was done by exactly one rank in each step.
-        assert_eq!(stats.iter().map(|s| s.items).sum::<u64>(), 2 * n as u64);
+        assert_eq!(stats.iter().map(|s| s.items).sum::<u64>(), 2 * n as u64 + 7);
         assert_eq!(*threads, 6, "three ranks of two threads");
     }
     // Every rank holds the same statistics.
@@ -264,6 +267,40 @@ fn a_rank_that_cannot_hold_an_exchange_fails_it_on_every_rank() {
     for (failed, next) in results {
         assert_eq!(failed, Err(ErrorCode::NoMemory));
         assert_eq!(next, vec![0, 0, 1, 1]);
+    }
+}
+
+#[test]
+fn a_steps_buffers_are_kept_and_a_rank_that_cannot_hold_them_fails_every_rank() {
+    let results = on_ranks(2, |team| {
+        let link = &*team.0.link;
+        // Rank 0 sends 3 values, rank 1 sends 5: 8 received.
+        let floats = 3 + 2 * team.rank();
+        let first = buffers_for(link, Buffers::default(), floats, &[3, 5]).unwrap();
+        let (send, recv) = (first.send.as_ptr(), first.recv.as_ptr());
+        assert_eq!((first.send.len(), first.recv.len()), (floats, 8));
+        // The next step of the same size or smaller takes the same memory.
+        let again = buffers_for(link, first, floats, &[3, 5]).unwrap();
+        assert_eq!((again.send.as_ptr(), again.recv.as_ptr()), (send, recv));
+        let smaller = buffers_for(link, again, 1, &[1, 1]).unwrap();
+        assert_eq!((smaller.send.len(), smaller.recv.len()), (1, 2));
+        assert_eq!(smaller.recv.as_ptr(), recv);
+        // Rank 1 is told of more values than an address space holds: both fail before any
+        // data moves, naming rank 1, and the next step goes through.
+        let counts = match team.rank() {
+            0 => vec![1, 1],
+            _ => vec![1, usize::MAX / 8],
+        };
+        let failed = buffers_for(link, smaller, 1, &counts)
+            .map(|_| ())
+            .unwrap_err();
+        let next = buffers_for(link, Buffers::default(), 1, &[1, 1]).unwrap();
+        (failed.code, failed.message, next.recv.len())
+    });
+    for (code, message, next) in results {
+        assert_eq!(code, ErrorCode::NoMemory);
+        assert!(message.contains("(on rank 1)"), "{message}");
+        assert_eq!(next, 2);
     }
 }
 
