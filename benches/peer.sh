@@ -7,9 +7,12 @@
 #                                   # and the table written to docs/performance.md
 #   PEER_SWEEP_ROUNDS=5 bash benches/peer.sh --sweep   # more sweep rounds (default 3)
 #
-# Installs vtk + nibabel with pip if missing. Runs `cargo bench --bench mni` (criterion) and
-# `python3 ../shared/bench/vtk_dvr.py` (VTK's median frame of the same scene), then prints each
-# vlib time and its ratio to VTK's. Absolute times drift between machines and runs: only the
+# Installs vtk + nibabel with pip if missing. Runs `cargo bench --bench mni` (criterion),
+# `python3 ../shared/bench/vtk_dvr.py` (VTK's median frame of the same scene) and the
+# physical-limit kernel of ../shared/bench/limit (`simd_cd_oracle` shaded, `simd_noshade_oracle`
+# unshaded, on every core: the cost of the frame's essential samples alone; built here with
+# its sample distance set to each of the sweep's), then prints each vlib time and its ratios
+# to VTK's and to the limit's. Absolute times drift between machines and runs: only the
 # ratios of one run mean anything. The images: target/bench-work/out/vtk_mni*.png and
 # target/bench-work/out/vlib_mni*.png, and both main frames side by side (VTK left, vlib right)
 # in docs/performance-mni.png.
@@ -33,6 +36,36 @@ else
   configs="main"
   filter="mni_512_sd0.5"
 fi
+# The physical-limit kernel, built once per sample distance (its `SD` constant; the shared
+# source stays as it is, a copy is patched under target/) for this processor.
+limit_bin() { # $1: sample distance in voxels; sets limit_exe[$1]
+  local sd=$1 src="$root/target/limit-src/sd$1"
+  mkdir -p "$src"
+  cp -r "$shared/limit/Cargo.toml" "$shared/limit/Cargo.lock" "$shared/limit/src" "$src/"
+  # (A package of its own, not of vlib's workspace, which holds target/.)
+  printf '\n[workspace]\n' >> "$src/Cargo.toml"
+  grep -q '^const SD: f64 = 0.5;' "$src/src/main.rs" ||
+    { echo "the limit kernel's sample distance is not where peer.sh expects it" >&2; exit 1; }
+  sed -i "s/^const SD: f64 = 0.5;/const SD: f64 = $sd;/" "$src/src/main.rs"
+  RUSTFLAGS="-C target-cpu=native" CARGO_TARGET_DIR="$root/target/limit-sd$sd" \
+    cargo build --release --quiet --manifest-path "$src/Cargo.toml"
+  limit_exe[$sd]="$root/target/limit-sd$sd/release/dvr_limit"
+}
+limit_sds="2.0 1.0 0.5 0.25 0.125"
+declare -A limit_exe
+# shellcheck disable=SC2046
+for sd in $([ $sweep = 1 ] && echo "$limit_sds" || echo 0.5); do limit_bin "$sd"; done
+limit_run() { # $1: sample distance; $2: variants (comma-separated); prints "variant median_ms" lines
+  "${limit_exe[$1]}" --runs 9 --threads "$(nproc)" --only "$2" --out "$work/out/limit.ppm" 2>/dev/null |
+    awk '$2 ~ /^[0-9]+$/ && $3 ~ /^[0-9.]+$/ {print $1, $3 * 1000}'
+}
+limit_sweep() { # $1: where the round's limits go (json: shade_sd2 … noshade_sd0.125 → ms)
+  for sd in $limit_sds; do
+    limit_run "$sd" simd_cd_oracle,simd_noshade_oracle |
+      awk -v sd="$sd" '{n = ($1 == "simd_cd_oracle") ? "shade" : "noshade"; printf "%s_sd%g %s\n", n, sd, $2}'
+  done | python3 -c 'import json, sys; json.dump({k: float(v) for k, v in (l.split() for l in sys.stdin)}, open(sys.argv[1], "w"))' "$1"
+}
+
 echo "== VTK (vtkFixedPointVolumeRayCastMapper), $(nproc) threads"
 # shellcheck disable=SC2086
 python3 "$shared/vtk_dvr.py" --only $configs | tail -n $(( $(echo $configs | wc -w) + 1 ))
@@ -44,8 +77,8 @@ cargo bench --bench mni -- "$filter" 2>&1 | tee "$work/out/vlib_bench.txt" | gre
 # the first round being the two runs above, and the table gives each distance's median ratio
 # over the rounds with its range.
 sweep_configs="shade_sd2.0 shade_sd1.0 main shade_sd0.25 shade_sd0.125 noshade_sd2.0 noshade_sd1.0 noshade_sd0.5 noshade_sd0.25 noshade_sd0.125"
-collect_sweep() { # $1: VTK's json of the round; $2: where the round goes
-  python3 - "$1" "$root/target/criterion/mni_sweep" "$2" <<'PY'
+collect_sweep() { # $1: VTK's json of the round; $2: where the round goes; $3: the limit's json
+  python3 - "$1" "$root/target/criterion/mni_sweep" "$2" "$3" <<'PY'
 import json, os, sys
 vtk = {r["name"]: r["median_s"] * 1e3 for r in json.load(open(sys.argv[1]))["results"]}
 vlib = {}
@@ -53,26 +86,30 @@ for name in os.listdir(sys.argv[2]):
     p = os.path.join(sys.argv[2], name, "new", "estimates.json")
     if os.path.exists(p):
         vlib[name] = json.load(open(p))["median"]["point_estimate"] / 1e6
-json.dump({"vtk": vtk, "vlib": vlib}, open(sys.argv[3], "w"))
+limit = json.load(open(sys.argv[4]))
+json.dump({"vtk": vtk, "vlib": vlib, "limit": limit}, open(sys.argv[3], "w"))
 PY
 }
 sweep_rounds=${PEER_SWEEP_ROUNDS:-3}
 rm -f "$work"/out/sweep_round*.json
 if [ $sweep = 1 ]; then
-  collect_sweep "$work/out/vtk_results.json" "$work/out/sweep_round1.json"
+  echo "== the physical-limit kernel at every sample distance"
+  limit_sweep "$work/out/limit_sweep_round.json"
+  collect_sweep "$work/out/vtk_results.json" "$work/out/sweep_round1.json" "$work/out/limit_sweep_round.json"
   for r in $(seq 2 "$sweep_rounds"); do
-    echo "== sweep round $r of $sweep_rounds: VTK, then vlib"
+    echo "== sweep round $r of $sweep_rounds: VTK, then vlib, then the limit"
     rm -f "$work/out/vtk_sweep_round.json"
     # shellcheck disable=SC2086
     python3 "$shared/vtk_dvr.py" --only $sweep_configs --json "$work/out/vtk_sweep_round.json" >/dev/null
     cargo bench --bench mni -- 'mni_sweep' > "$work/out/vlib_sweep_round.txt" 2>&1
-    collect_sweep "$work/out/vtk_sweep_round.json" "$work/out/sweep_round$r.json"
+    limit_sweep "$work/out/limit_sweep_round.json"
+    collect_sweep "$work/out/vtk_sweep_round.json" "$work/out/sweep_round$r.json" "$work/out/limit_sweep_round.json"
   done
 fi
 # The machine's speed drifts between minutes (a shared host): the main comparison is repeated
 # in interleaved rounds, VTK then vlib, and the ratio of each round is reported.
 rounds=${PEER_ROUNDS:-3}
-echo "== $rounds interleaved rounds: VTK main, then vlib shaded (sd 0.5)"
+echo "== $rounds interleaved rounds: VTK main, then vlib shaded (sd 0.5), then the limit kernel"
 : > "$work/out/rounds.txt"
 est="$root/target/criterion/mni_512_sd0.5/shaded/new/estimates.json"
 cp "$est" "$work/out/shaded_estimates.json" # the tables report the full run above
@@ -80,8 +117,9 @@ for r in $(seq "$rounds"); do
   vt=$(python3 "$shared/vtk_dvr.py" --only main --json "$work/out/vtk_round.json" | awk '$1 == "main" {print $7}')
   cargo bench --bench mni -- 'mni_512_sd0.5/shaded$' > "$work/out/vlib_round.txt" 2>&1
   vl=$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["median"]["point_estimate"] / 1e9)' "$est")
-  echo "$vt $vl" >> "$work/out/rounds.txt"
-  echo "round $r: VTK ${vt} s, vlib ${vl} s"
+  li=$(limit_run 0.5 simd_cd_oracle | awk '{print $2 / 1000}')
+  echo "$vt $vl $li" >> "$work/out/rounds.txt"
+  echo "round $r: VTK ${vt} s, vlib ${vl} s, limit ${li} s"
 done
 cp "$work/out/shaded_estimates.json" "$est"
 
@@ -183,15 +221,22 @@ for name, label in labels.items():
         print(f"{name:34} {ms:10.1f} {ms/main:9.2f}")
         first = f" (first frame {vlib_first:.0f} ms, the median of five fresh loads)" if name == "shaded" and vlib_first else ""
         main_rows.append(f"| {label} | {ms:.0f} ms{first} | {ms/main:.2f} |")
-round_ratios = [v / t for t, v in rounds]
+round_ratios = [v / t for t, v, _ in rounds]
+limit_ratios = [v / li for _, v, li in rounds]
 if round_ratios:
     print("vlib/VTK in the interleaved rounds: "
           + ", ".join(f"{r:.2f}" for r in round_ratios)
           + f" (median {statistics.median(round_ratios):.2f})")
+    print("vlib/limit in the interleaved rounds: "
+          + ", ".join(f"{r:.2f}" for r in limit_ratios)
+          + f" (median {statistics.median(limit_ratios):.2f})")
 rounds_line = (
-    f"Interleaved rounds (VTK main, then vlib shaded, {len(rounds)} times): "
-    + "; ".join(f"{t * 1e3:.0f} ms against {v * 1e3:.0f} ms, {v / t:.2f}" for t, v in rounds)
-    + f". Median vlib / VTK: {statistics.median(round_ratios):.2f}."
+    f"Interleaved rounds (VTK main, then vlib shaded, then the physical-limit kernel, "
+    f"{len(rounds)} times): "
+    + "; ".join(f"{t * 1e3:.0f} ms, {v * 1e3:.1f} ms and {li * 1e3:.1f} ms "
+                f"(vlib / VTK {v / t:.2f}, vlib / limit {v / li:.2f})" for t, v, li in rounds)
+    + f". Median vlib / VTK: {statistics.median(round_ratios):.2f}; median vlib / limit: "
+    f"{statistics.median(limit_ratios):.2f} (the target: at most 1.5)."
     if rounds else ""
 )
 text = open(doc).read() if os.path.exists(doc) else ""
@@ -201,6 +246,9 @@ main_table = "\n".join([
     "| renderer, MNI brain, 512², shaded, sample distance 0.5 | median frame | vlib / VTK |",
     "|---|---|---|",
     *main_rows,
+    *([f"| physical-limit kernel (`../shared/bench/limit`, `simd_cd_oracle`: perfect free "
+       f"empty-space skipping, sixteen lanes, stops at transmittance 0.01), the rounds' median "
+       f"| {statistics.median(li for _, _, li in rounds) * 1e3:.1f} ms | — |"] if rounds else []),
     "",
     *([rounds_line, ""] if rounds_line else []),
     "RMS difference of each main image from a converged vlib reference (step 0.125 voxel, "
@@ -230,15 +278,19 @@ for shade in ["shade", "noshade"]:
         v = statistics.median(p[1] for p in pairs)
         ratios = [a / b for a, b in pairs]
         worst.append(min(ratios))
-        # The physical limit of ../shared/bench/README.md is given for sample distance 0.5.
-        limit = {"shade": 11.0, "noshade": 7.0}[shade] if sd == "0.5" else None
-        lim = f"{v/limit:.1f}" if limit else "—"
+        # vlib over the physical-limit kernel at the same distance, round by round.
+        limits = [(r["vlib"][name], r["limit"][name]) for r in sweep_rounds
+                  if name in r["vlib"] and r.get("limit", {}).get(name, 0) > 0]
+        lim_ms = f"{statistics.median(li for _, li in limits):.1f}" if limits else "—"
+        lim = (f"{statistics.median(a / b for a, b in limits):.2f}" if limits else "—")
         rows.append(f"| {sd} | {'on' if shade == 'shade' else 'off'} | {t:.1f} | {v:.1f} "
-                    f"| {statistics.median(ratios):.2f} | {min(ratios):.2f}–{max(ratios):.2f} | {lim} |")
+                    f"| {statistics.median(ratios):.2f} | {min(ratios):.2f}–{max(ratios):.2f} "
+                    f"| {lim_ms} | {lim} |")
 table = "\n".join([
     "| sample distance (voxels) | shading | VTK median (ms) | vlib median (ms) "
-    "| speed-up (VTK / vlib), median of the rounds | its range over the rounds | vlib / physical limit |",
-    "|---|---|---|---|---|---|---|",
+    "| speed-up (VTK / vlib), median of the rounds | its range over the rounds "
+    "| limit kernel median (ms) | vlib / limit, median of the rounds |",
+    "|---|---|---|---|---|---|---|---|",
     *rows,
 ])
 n = len(sweep_rounds)
