@@ -294,7 +294,7 @@ table = "\n".join([
     *rows,
 ])
 n = len(sweep_rounds)
-summary = (f"{n} rounds (VTK's sweep, then vlib's); each time the median over the rounds of each "
+summary = (f"{n} rounds (VTK's sweep, then vlib's, then the limit kernel's); each time the median over the rounds of each "
            f"renderer's median frame, each speed-up the median of the {n} rounds' ratios. "
            f"The lowest ratio of any round at any distance: {min(worst):.2f}." if worst else "")
 print("\n" + table + "\n" + summary)
