@@ -74,7 +74,7 @@ pub(crate) fn try_with_capacity<T>(len: usize, what: &str) -> crate::error::Resu
 }
 
 /// Elements from which [`try_vec`] fills its vector in parallel.
-const PARALLEL_FILL: usize = 1 << 16;
+pub(crate) const PARALLEL_FILL: usize = 1 << 16;
 
 /// `vec![value; len]`, or `NoMemory` where it cannot be allocated ([`try_with_capacity`]).
 /// A long vector is filled in parallel (rayon): its first touch of fresh pages, about 2 µs a

@@ -381,16 +381,20 @@ impl ObjectCache {
 }
 
 /// The [`ObjectCache`]s of a scene's root objects, by their index in the scene, each filled by
-/// the first compilation that needs it and shared by later ones. The state machine keeps one
-/// for each open scene (a closed root object does not change, and objects are only
-/// appended), so scene data holds no cache; a fresh `Caches` builds everything anew.
+/// the first compilation that needs it and shared by later ones, and the pixel buffers its
+/// renders give back for the next ([`Recycled`]). The state machine keeps one for each open
+/// scene (a closed root object does not change, and objects are only appended), so scene data
+/// holds no cache; a fresh `Caches` builds everything anew.
 #[derive(Default)]
-pub(crate) struct Caches(std::sync::Mutex<Vec<Arc<ObjectCache>>>);
+pub(crate) struct Caches {
+    objects: std::sync::Mutex<Vec<Arc<ObjectCache>>>,
+    pixels: Arc<Recycled>,
+}
 
 impl Caches {
     /// The cache of root object `i`.
     fn cell(&self, i: usize) -> Arc<ObjectCache> {
-        let mut cells = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        let mut cells = self.objects.lock().unwrap_or_else(|e| e.into_inner());
         if cells.len() <= i {
             cells.resize_with(i + 1, Default::default);
         }
@@ -434,6 +438,8 @@ pub struct Compiled {
     pub(super) lanes: Vec<Option<HeadlitLanes>>,
     pub(super) settings: Settings,
     pub(super) plan: Plan,
+    /// The pixel buffers of the scene's renders, kept between frames (the caches').
+    pub(super) recycled: Arc<Recycled>,
 }
 
 impl Compiled {
@@ -487,6 +493,7 @@ impl Compiled {
             ambient: crate::model::scene::v3(desc.settings.ambient),
             settings: desc.settings.clone(),
             plan,
+            recycled: caches.pixels.clone(),
         };
         scene.lanes = scene
             .objects

@@ -55,6 +55,7 @@ mod integrate;
 mod kernel;
 mod lanes;
 mod preint;
+mod recycle;
 mod shade;
 mod tiles;
 
@@ -70,6 +71,7 @@ use compile::*;
 use cursor::*;
 use integrate::*;
 use lanes::*;
+use recycle::Recycled;
 use shade::*;
 use tiles::*;
 
@@ -207,19 +209,20 @@ fn render_in_strips(
             Some(m.tile(tx..tx + tw as usize, ty..ty + th as usize))
         };
         // The first pass of rows `rows`.
+        let recycled = &*scene.recycled;
         let first_pass = |rows: std::ops::Range<u32>| {
             #[cfg(target_arch = "x86_64")]
             if let Some(p) = &packets {
                 if p.preintegrated() {
-                    return per_tile(width, rows, packet_side, progress, |tile| {
-                        p.tile_pre(&view, entry_of(tile).as_ref(), &image, unbounded, tile)
+                    return per_tile(width, rows, packet_side, progress, recycled, |tile, out| {
+                        p.tile_pre(&view, entry_of(tile).as_ref(), &image, unbounded, tile, out)
                     });
                 }
-                return per_tile(width, rows, packet_side, progress, |tile| {
-                    p.tile(&view, entry_of(tile).as_ref(), &image, unbounded, tile)
+                return per_tile(width, rows, packet_side, progress, recycled, |tile, out| {
+                    p.tile(&view, entry_of(tile).as_ref(), &image, unbounded, tile, out)
                 });
             }
-            per_pixel(width, rows, progress, entry_of, |entry, x, y| {
+            per_pixel(width, rows, progress, recycled, entry_of, |entry, x, y| {
                 let bound = entry.as_ref().map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
                 if let (Some(c), true) = (unbounded, bound == f64::INFINITY) {
                     return c;
@@ -257,6 +260,7 @@ fn render_in_strips(
                 if !progress.holds() {
                     progress.hold(crate::error::catch("rendering", || sink(y0, &fresh)))?;
                 }
+                recycled.give(fresh);
             } else {
                 progress.hold(first.try_reserve(fresh.len()).map_err(|_| {
                     crate::num::no_memory("a strip of the image", Some(fresh.len() * 16))
@@ -264,7 +268,7 @@ fn render_in_strips(
                 if !progress.holds() {
                     first.extend_from_slice(&fresh);
                 }
-                drop(fresh);
+                recycled.give(fresh);
                 hi = need_hi;
                 let at = |x: u32, y: u32| first[(y - lo) as usize * row + x as usize];
                 // The channels compared: colour, and against a transparent backdrop the
@@ -290,31 +294,39 @@ fn render_in_strips(
                 };
                 // The tile's entry map, made at its first pixel to refine.
                 let lazy = |tile| (tile, std::cell::OnceCell::new());
-                let refined = per_pixel(width, y0..y1, progress, lazy, |(tile, entry), x, y| {
-                    if !differs(x, y) {
-                        return at(x, y);
-                    }
-                    let bound = entry
-                        .get_or_init(|| entry_of(*tile))
-                        .as_ref()
-                        .map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
-                    let (mut sum, mut t_sum) = (DVec3::ZERO, 0.0);
-                    for j in 0..n {
-                        for i in 0..n {
-                            let sx = x as f64 + (i as f64 + 0.5) / n as f64;
-                            let sy = y as f64 + (j as f64 + 0.5) / n as f64;
-                            let (c, t) = scene.trace(view.eye, &image, view.ray(sx, sy), bound);
-                            let p = pixel(c, t);
-                            sum += crate::model::scene::v3([p[0], p[1], p[2]]);
-                            t_sum += p[3] as f64;
+                let refined = per_pixel(
+                    width,
+                    y0..y1,
+                    progress,
+                    recycled,
+                    lazy,
+                    |(tile, entry), x, y| {
+                        if !differs(x, y) {
+                            return at(x, y);
                         }
-                    }
-                    let samples = (n * n) as f64;
-                    pixel(sum / samples, t_sum / samples)
-                })?;
+                        let bound = entry
+                            .get_or_init(|| entry_of(*tile))
+                            .as_ref()
+                            .map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
+                        let (mut sum, mut t_sum) = (DVec3::ZERO, 0.0);
+                        for j in 0..n {
+                            for i in 0..n {
+                                let sx = x as f64 + (i as f64 + 0.5) / n as f64;
+                                let sy = y as f64 + (j as f64 + 0.5) / n as f64;
+                                let (c, t) = scene.trace(view.eye, &image, view.ray(sx, sy), bound);
+                                let p = pixel(c, t);
+                                sum += crate::model::scene::v3([p[0], p[1], p[2]]);
+                                t_sum += p[3] as f64;
+                            }
+                        }
+                        let samples = (n * n) as f64;
+                        pixel(sum / samples, t_sum / samples)
+                    },
+                )?;
                 if !progress.holds() {
                     progress.hold(crate::error::catch("rendering", || sink(y0, &refined)))?;
                 }
+                recycled.give(refined);
             }
             let units = (y1 - y0) as u64 * width as u64;
             progress.hold(crate::error::catch("the progress function", || {

@@ -1708,6 +1708,41 @@ fn skip_grids_are_built_once_per_scene() {
     );
 }
 
+/// The pixel buffers a render gives back (the scene's `Caches`, [`Recycled`]) are handed to
+/// the scene's next render, which gives the same pixels as a render from fresh buffers: again
+/// at the same size, at a smaller size after a larger one (the buffers hold zeros again), and
+/// super-sampled; what is kept stays within its bound.
+#[test]
+fn pixel_buffers_kept_between_renders_change_no_pixel() {
+    let same = |a: &crate::Image, b: &crate::Image| {
+        a.pixels == b.pixels && a.transmittance == b.transmittance
+    };
+    for ss in [1, 2] {
+        let mut vl = sphere_library_with(true);
+        vl.super_sample(ss).unwrap();
+        let first = vl.render_preview(64, 48, 1.0).unwrap();
+        let kept = vl.compiled().unwrap().recycled.kept();
+        assert!(
+            kept >= 64 * 48,
+            "the strip's and the tiles' buffers are kept: {kept}"
+        );
+        assert!(kept <= 1 << 22);
+        let again = vl.render_preview(64, 48, 1.0).unwrap();
+        assert!(
+            same(&first, &again),
+            "super-sampling {ss}: a second frame differs"
+        );
+        let small = vl.render_preview(20, 10, 1.0).unwrap();
+        let mut fresh = sphere_library_with(true);
+        fresh.super_sample(ss).unwrap();
+        let fresh = fresh.render_preview(20, 10, 1.0).unwrap();
+        assert!(
+            same(&small, &fresh),
+            "super-sampling {ss}: kept buffers changed a pixel"
+        );
+    }
+}
+
 /// A pre-integrated object's tables are built by the first compilation of its scene and shared
 /// by later ones, as its empty-space grid; a fresh `Caches` builds its own, with the same
 /// entries (the tables depend on the closed object and its step alone).

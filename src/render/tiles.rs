@@ -79,11 +79,12 @@ pub(super) fn tiles(width: u32, rows: std::ops::Range<u32>, side: u32) -> Vec<(u
 /// Evaluates `f` for every pixel of rows `rows`, in parallel over tiles, deterministically;
 /// `VL_CANCELLED` once `progress` is cancelled (no pixel is started after that). `f` is given
 /// what `context` made for the pixel's tile (x, y, width, height), made once a tile by the
-/// tile's task.
+/// tile's task. The buffers are `recycled`'s ([`per_tile`]).
 pub(super) fn per_pixel<C, M, F>(
     width: u32,
     rows: std::ops::Range<u32>,
     progress: &Progress,
+    recycled: &Recycled,
     context: M,
     f: F,
 ) -> Result<Vec<Pixel>>
@@ -91,18 +92,14 @@ where
     M: Fn((u32, u32, u32, u32)) -> C + Sync,
     F: Fn(&C, u32, u32) -> Pixel + Sync,
 {
-    per_tile(width, rows, TILE, progress, |tile| {
+    per_tile(width, rows, TILE, progress, recycled, |tile, mut out| {
         let (tx, ty, tw, th) = tile;
         let here = context(tile);
-        let mut out = Vec::with_capacity((tw * th) as usize);
-        for y in ty..ty + th {
-            for x in tx..tx + tw {
-                // A cancelled render stops within a pixel's work (the rest is discarded).
-                out.push(if progress.cancelled() {
-                    [0.0; 4]
-                } else {
-                    f(&here, x, y)
-                });
+        let pixels = (ty..ty + th).flat_map(|y| (tx..tx + tw).map(move |x| (x, y)));
+        for (o, (x, y)) in out.iter_mut().zip(pixels) {
+            // A cancelled render stops within a pixel's work (the rest is discarded).
+            if !progress.cancelled() {
+                *o = f(&here, x, y);
             }
         }
         out
@@ -110,18 +107,21 @@ where
 }
 
 /// Evaluates `f` for every tile (x, y, width, height) of `side × side` pixels (fewer at the
-/// right and bottom edges) of rows `rows`, which gives its pixels row by row, in parallel over
-/// tiles, deterministically; the pixels of the rows. A tile not yet started when `progress`
-/// is cancelled is skipped, and the call fails with `VL_CANCELLED`.
+/// right and bottom edges) of rows `rows`, which gives its pixels row by row into the buffer
+/// of the tile's pixels it is handed (zeros, from `recycled`), in parallel over tiles,
+/// deterministically; the pixels of the rows, in a buffer of `recycled`'s (the tiles' are
+/// given back to it). A tile not yet started when `progress` is cancelled is skipped, and the
+/// call fails with `VL_CANCELLED`.
 pub(super) fn per_tile<F>(
     width: u32,
     rows: std::ops::Range<u32>,
     side: u32,
     progress: &Progress,
+    recycled: &Recycled,
     f: F,
 ) -> Result<Vec<Pixel>>
 where
-    F: Fn((u32, u32, u32, u32)) -> Vec<Pixel> + Sync,
+    F: Fn((u32, u32, u32, u32), Vec<Pixel>) -> Vec<Pixel> + Sync,
 {
     type Tile = ((u32, u32), Vec<Pixel>);
     let (top, bottom) = (rows.start, rows.end);
@@ -129,11 +129,10 @@ where
     // The strip's pixels before the step: with a team, a rank that cannot hold them fails
     // the step on every rank (`Progress::hold`).
     let len = width as usize * (bottom - top) as usize;
-    let pixels = progress.hold(crate::num::try_vec(
-        len,
-        [0.0f32; 4],
-        "a strip of the image",
-    ))?;
+    let pixels = progress.hold(recycled.take(len, "a strip of the image"))?;
+    // The tiles' buffers this rank took: as many go back (a team's other ranks' tiles come
+    // as buffers of their own, which are freed).
+    let taken = std::sync::atomic::AtomicUsize::new(0);
     let results: Vec<Tile> = progress
         .map(corners.len(), |i| {
             let (tx, ty) = corners[i];
@@ -141,7 +140,12 @@ where
                 return Vec::new();
             }
             let (tw, th) = ((tx + side).min(width) - tx, (ty + side).min(bottom) - ty);
-            f((tx, ty, tw, th))
+            // (A tile's buffer is small: a failure is raised to the step's catch.)
+            taken.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let out = recycled
+                .take((tw * th) as usize, "a tile's pixels")
+                .unwrap_or_else(|e| crate::error::raise(e));
+            f((tx, ty, tw, th), out)
         })?
         .into_iter()
         .zip(&corners)
@@ -169,6 +173,9 @@ where
                 }
             }
         });
+    for (_, out) in results.into_iter().take(taken.into_inner()) {
+        recycled.give(out);
+    }
     Ok(pixels)
 }
 

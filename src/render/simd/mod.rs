@@ -418,7 +418,8 @@ impl<'a> Packets<'a> {
     }
 
     /// The pixels of the tile of `width × height` pixels at (tx, ty), row by row, as
-    /// [`render_image`]'s per-pixel loop gives them for one ray per pixel.
+    /// [`render_image`]'s per-pixel loop gives them for one ray per pixel, written into `out`
+    /// (the tile's `width × height` pixels, zeros).
     pub(super) fn tile(
         &self,
         view: &Pinhole,
@@ -426,6 +427,7 @@ impl<'a> Packets<'a> {
         image: &ImageRays,
         unbounded: Option<Pixel>,
         (tx, ty, tw, th): (u32, u32, u32, u32),
+        out: Vec<Pixel>,
     ) -> Vec<Pixel> {
         let tile = TileRays {
             view,
@@ -438,10 +440,10 @@ impl<'a> Packets<'a> {
         if self.wide {
             // SAFETY: `Packets::new` set `wide` only where `detected` found every
             // feature `tile_avx512` enables (and AVX2 and FMA before it).
-            return unsafe { self.tile_avx512(&tile) };
+            return unsafe { self.tile_avx512(&tile, out) };
         }
         // SAFETY: `Packets::new` (the only way to make `self`) found AVX2 and FMA.
-        unsafe { self.tile_avx2(&tile) }
+        unsafe { self.tile_avx2(&tile, out) }
     }
 
     /// The packets a step carries where the unit tests set it (`Packets::packets`), else 0:
@@ -464,16 +466,17 @@ impl<'a> Packets<'a> {
 
     /// [`Packets::tile`] in [`PACKETS8`] packets of eight lanes.
     #[target_feature(enable = "avx2,fma")]
-    fn tile_avx2(&self, tile: &TileRays<'_>) -> Vec<Pixel> {
+    fn tile_avx2(&self, tile: &TileRays<'_>, out: Vec<Pixel>) -> Vec<Pixel> {
         let segments = |keeps: &mut _, runs: &_, st: &mut _| next_segments(keeps, runs, st);
         let step = |st: &mut _, active, cache: &mut _| self.step8(st, active, cache);
         let taken = |c: &mut _, run: &mut _, trusted: &mut _| self.next_taken8(c, run, trusted);
         // SAFETY: this function has the AVX2 and FMA `march_tile` asks for.
         unsafe {
             match self.packets() {
-                1 => self.march_tile::<W, 1, W>(tile, segments, step, taken),
-                4 => self.march_tile::<W, 4, { 4 * W }>(tile, segments, step, taken),
-                _ => self.march_tile::<W, PACKETS8, { PACKETS8 * W }>(tile, segments, step, taken),
+                1 => self.march_tile::<W, 1, W>(tile, out, segments, step, taken),
+                4 => self.march_tile::<W, 4, { 4 * W }>(tile, out, segments, step, taken),
+                _ => self
+                    .march_tile::<W, PACKETS8, { PACKETS8 * W }>(tile, out, segments, step, taken),
             }
         }
     }
@@ -481,16 +484,16 @@ impl<'a> Packets<'a> {
     /// [`Packets::tile`] in [`P`] packets of sixteen lanes: lane `i` is lane `i % 16` of
     /// packet `i / 16`, and a step steps every packet.
     #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
-    fn tile_avx512(&self, tile: &TileRays<'_>) -> Vec<Pixel> {
+    fn tile_avx512(&self, tile: &TileRays<'_>, out: Vec<Pixel>) -> Vec<Pixel> {
         let segments = |keeps: &mut _, runs: &_, st: &mut _| next_segments16(keeps, runs, st);
         let step = |st: &mut _, active, cache: &mut _| self.step16(st, active, cache);
         let taken = |c: &mut _, run: &mut _, trusted: &mut _| self.next_taken16(c, run, trusted);
         // SAFETY: this function has AVX2 and FMA, which `march_tile` asks for.
         unsafe {
             match self.packets() {
-                1 => self.march_tile::<V, 1, V>(tile, segments, step, taken),
-                4 => self.march_tile::<V, 4, { 4 * V }>(tile, segments, step, taken),
-                _ => self.march_tile::<V, P, { P * V }>(tile, segments, step, taken),
+                1 => self.march_tile::<V, 1, V>(tile, out, segments, step, taken),
+                4 => self.march_tile::<V, 4, { 4 * V }>(tile, out, segments, step, taken),
+                _ => self.march_tile::<V, P, { P * V }>(tile, out, segments, step, taken),
             }
         }
     }
@@ -517,6 +520,7 @@ impl<'a> Packets<'a> {
     unsafe fn march_tile<const N: usize, const P: usize, const L: usize>(
         &self,
         tile: &TileRays<'_>,
+        mut out: Vec<Pixel>,
         next_segments: impl Fn(&mut [u32; N], &[Run16; N], &mut LaneState<N>) -> u32,
         mut step: impl FnMut(&mut LaneState<N>, u32, &mut CellGradients) -> u32,
         next_taken: impl Fn(&mut Cursor, &mut Run16, &mut u32) -> u32,
@@ -529,7 +533,7 @@ impl<'a> Packets<'a> {
         let lanes_of = u64::MAX >> (64 - N);
         let background = tile.image.background;
         let (tw, th) = tile.size;
-        let mut out = vec![[0f32; 4]; (tw * th) as usize];
+        debug_assert_eq!(out.len(), (tw * th) as usize);
         let mut starts = Starts::default();
         let mut lanes: [Option<LaneRay>; L] = std::array::from_fn(|_| None);
         // Per lane: its run's segments, and those still to take by bit (`to_take`; 0 for a

@@ -26,8 +26,8 @@ impl<'a> Packets<'a> {
     }
 
     /// The pixels of the tile of `width × height` pixels at (tx, ty), row by row, as
-    /// [`Packets::tile`] gives them, for a pre-integrated object (`Packets::pre`, which is
-    /// set).
+    /// [`Packets::tile`] gives them into `out`, for a pre-integrated object (`Packets::pre`,
+    /// which is set).
     pub(in crate::render) fn tile_pre(
         &self,
         view: &Pinhole,
@@ -35,6 +35,7 @@ impl<'a> Packets<'a> {
         image: &ImageRays,
         unbounded: Option<Pixel>,
         (tx, ty, tw, th): (u32, u32, u32, u32),
+        out: Vec<Pixel>,
     ) -> Vec<Pixel> {
         let tile = TileRays {
             view,
@@ -48,38 +49,48 @@ impl<'a> Packets<'a> {
         if self.wide {
             // SAFETY: `Packets::new` set `wide` only where `detected` found every
             // feature `tile_pre_avx512` enables (and AVX2 and FMA before it).
-            return unsafe { self.tile_pre_avx512(pre, &tile) };
+            return unsafe { self.tile_pre_avx512(pre, &tile, out) };
         }
         // SAFETY: `Packets::new` (the only way to make `self`) found AVX2 and FMA.
-        unsafe { self.tile_pre_avx2(pre, &tile) }
+        unsafe { self.tile_pre_avx2(pre, &tile, out) }
     }
 
     /// [`Packets::tile_pre`] in [`PACKETS8`] packets of eight lanes.
     #[target_feature(enable = "avx2,fma")]
-    fn tile_pre_avx2(&self, pre: &PreMarch<'a>, tile: &TileRays<'_>) -> Vec<Pixel> {
+    fn tile_pre_avx2(
+        &self,
+        pre: &PreMarch<'a>,
+        tile: &TileRays<'_>,
+        out: Vec<Pixel>,
+    ) -> Vec<Pixel> {
         let values = |st: &_, active, out: &mut _| self.values8(st, active, out);
         let taken = |c: &mut _, run: &mut _, trusted: &mut _| self.next_taken_at8(c, run, trusted);
         // SAFETY: this function has the AVX2 and FMA `march_pre` asks for.
         unsafe {
             match self.packets() {
-                1 => self.march_pre::<W, 1, W>(pre, tile, values, taken),
-                4 => self.march_pre::<W, 4, { 4 * W }>(pre, tile, values, taken),
-                _ => self.march_pre::<W, PACKETS8, { PACKETS8 * W }>(pre, tile, values, taken),
+                1 => self.march_pre::<W, 1, W>(pre, tile, out, values, taken),
+                4 => self.march_pre::<W, 4, { 4 * W }>(pre, tile, out, values, taken),
+                _ => self.march_pre::<W, PACKETS8, { PACKETS8 * W }>(pre, tile, out, values, taken),
             }
         }
     }
 
     /// [`Packets::tile_pre`] in [`P`] packets of sixteen lanes.
     #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
-    fn tile_pre_avx512(&self, pre: &PreMarch<'a>, tile: &TileRays<'_>) -> Vec<Pixel> {
+    fn tile_pre_avx512(
+        &self,
+        pre: &PreMarch<'a>,
+        tile: &TileRays<'_>,
+        out: Vec<Pixel>,
+    ) -> Vec<Pixel> {
         let values = |st: &_, active, out: &mut _| self.values16(st, active, out);
         let taken = |c: &mut _, run: &mut _, trusted: &mut _| self.next_taken_at16(c, run, trusted);
         // SAFETY: this function has AVX2 and FMA, which `march_pre` asks for.
         unsafe {
             match self.packets() {
-                1 => self.march_pre::<V, 1, V>(pre, tile, values, taken),
-                4 => self.march_pre::<V, 4, { 4 * V }>(pre, tile, values, taken),
-                _ => self.march_pre::<V, P, { P * V }>(pre, tile, values, taken),
+                1 => self.march_pre::<V, 1, V>(pre, tile, out, values, taken),
+                4 => self.march_pre::<V, 4, { 4 * V }>(pre, tile, out, values, taken),
+                _ => self.march_pre::<V, P, { P * V }>(pre, tile, out, values, taken),
             }
         }
     }
@@ -102,6 +113,7 @@ impl<'a> Packets<'a> {
         &self,
         pre: &PreMarch<'a>,
         tile: &TileRays<'_>,
+        mut out: Vec<Pixel>,
         mut values: impl FnMut(&LaneState<N>, u32, &mut [f32; N]),
         next_taken: impl Fn(&mut Cursor, &mut Run16, &mut u32) -> (u32, u64),
     ) -> Vec<Pixel> {
@@ -110,7 +122,7 @@ impl<'a> Packets<'a> {
         let lanes_of = u64::MAX >> (64 - N);
         let background = tile.image.background;
         let (tw, th) = tile.size;
-        let mut out = vec![[0f32; 4]; (tw * th) as usize];
+        debug_assert_eq!(out.len(), (tw * th) as usize);
         let mut starts = Starts::default();
         let mut lanes: [Option<LaneRay>; L] = std::array::from_fn(|_| None);
         let mut rays: [Option<PreRay<'a>>; L] = std::array::from_fn(|_| None);

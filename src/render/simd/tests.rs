@@ -98,8 +98,9 @@ fn march(vl: &crate::Library, (width, height): (u32, u32), packets: usize) -> (V
     p.packets = packets;
     let progress = crate::control::Progress::none();
     let side = packet_tile(width, height);
-    let pixels = per_tile(width, 0..height, side, &progress, |tile| {
-        p.tile(&view, entry.as_ref(), &image, unbounded, tile)
+    let recycled = Recycled::default();
+    let pixels = per_tile(width, 0..height, side, &progress, &recycled, |tile, out| {
+        p.tile(&view, entry.as_ref(), &image, unbounded, tile, out)
     })
     .unwrap();
     let untested = p.untested.load(std::sync::atomic::Ordering::Relaxed);
