@@ -1710,8 +1710,8 @@ fn skip_grids_are_built_once_per_scene() {
 
 /// The pixel buffers a render gives back (the scene's `Caches`, [`Recycled`]) are handed to
 /// the scene's next render, which gives the same pixels as a render from fresh buffers: again
-/// at the same size, at a smaller size after a larger one (the buffers hold zeros again), and
-/// super-sampled; what is kept stays within its bound.
+/// at the same size, at a smaller size after a larger one, and super-sampled. (That they are
+/// handed out as zeros: `recycle::tests`.)
 #[test]
 fn pixel_buffers_kept_between_renders_change_no_pixel() {
     let same = |a: &crate::Image, b: &crate::Image| {
@@ -1726,7 +1726,6 @@ fn pixel_buffers_kept_between_renders_change_no_pixel() {
             kept >= 64 * 48,
             "the strip's and the tiles' buffers are kept: {kept}"
         );
-        assert!(kept <= 1 << 22);
         let again = vl.render_preview(64, 48, 1.0).unwrap();
         assert!(
             same(&first, &again),

@@ -107,7 +107,8 @@ struct State {
 /// rank's), kept from one step to the next so that a render's steps, frame after frame, reuse
 /// memory whose pages are already there (fresh pages cost more than the copy). Each holds the
 /// largest exchange of the team's steps so far: at most a strip of the image (about 2²⁰
-/// pixels of four f32) or a slab of voxelized nodes, released with the team.
+/// pixels of four f32, 16 MiB; a rank may send all of it) or a slab of voxelized nodes,
+/// released with the team.
 #[derive(Default)]
 struct Buffers {
     send: Vec<f32>,

@@ -271,6 +271,36 @@ fn a_rank_that_cannot_hold_an_exchange_fails_it_on_every_rank() {
 }
 
 #[test]
+fn a_step_keeps_its_exchange_buffers_for_the_next() {
+    let results = on_ranks(2, |team| {
+        let n = 60;
+        let expected: Vec<Vec<[f32; 2]>> = (0..n).map(item).collect();
+        assert_eq!(
+            map(Some(&team), n, &|| false, None, item).unwrap(),
+            expected
+        );
+        let kept = |team: &Team| {
+            let s = team.state();
+            (s.buffers.recv.as_ptr(), s.buffers.recv.len())
+        };
+        let first = kept(&team);
+        // Every item's two floats, (i % 5 + 1) values an item, from both ranks.
+        let floats: usize = (0..n).map(|i| (i % 5 + 1) * 2).sum();
+        assert_eq!(first.1, floats);
+        assert_eq!(
+            map(Some(&team), n, &|| false, None, item).unwrap(),
+            expected
+        );
+        kept(&team) == first
+    });
+    assert_eq!(
+        results,
+        vec![true; 2],
+        "the second step reused the first's buffer"
+    );
+}
+
+#[test]
 fn a_steps_buffers_are_kept_and_a_rank_that_cannot_hold_them_fails_every_rank() {
     let results = on_ranks(2, |team| {
         let link = &*team.0.link;
