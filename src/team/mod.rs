@@ -66,19 +66,29 @@ fn exchange<T: Copy + Default + Send + Sync>(
         .iter()
         .try_fold(0usize, |a, &c| a.checked_add(c))
         .unwrap_or(usize::MAX);
-    let out = crate::num::try_vec(total, T::default(), "a team's exchange");
-    let ok = link.gather_u64(&[out.is_ok() as u64])?;
-    if let Some(r) = ok.iter().position(|&v| v != 1) {
-        return Err(out.err().unwrap_or_else(|| {
-            crate::num::no_memory(
-                &format!("a team's exchange (on rank {r})"),
-                total.checked_mul(size_of::<T>()),
-            )
-        }));
-    }
-    let mut out = out?;
+    let (out, own) = match crate::num::try_vec(total, T::default(), "a team's exchange") {
+        Ok(v) => (Some(v), None),
+        Err(e) => (None, Some(e)),
+    };
+    // (This rank's own error where it is one that failed.)
+    let mut out =
+        all_hold(link, out, total.checked_mul(size_of::<T>())).map_err(|e| own.unwrap_or(e))?;
     gather(mine, counts, &mut out)?;
     Ok(out)
+}
+
+/// `here` (this rank's memory for an exchange, `None` where it could not be had) where every
+/// rank holds its own, else `NoMemory` on every rank, naming the first rank that does not and
+/// the exchange's `bytes` (collective: before any data moves).
+fn all_hold<T>(link: &dyn Link, here: Option<T>, bytes: Option<usize>) -> Result<T> {
+    let ok = link.gather_u64(&[here.is_some() as u64])?;
+    match (here, ok.iter().position(|&v| v != 1)) {
+        (Some(v), None) => Ok(v),
+        (_, r) => Err(crate::num::no_memory(
+            &format!("a team's exchange (on rank {})", r.unwrap_or(link.rank())),
+            bytes,
+        )),
+    }
 }
 
 /// The ranks of a job that render together: every scene a `Library` with a team
@@ -133,14 +143,9 @@ fn buffers_for(link: &dyn Link, kept: Buffers, floats: usize, counts: &[usize]) 
     let total = counts.iter().try_fold(0usize, |a, &c| a.checked_add(c));
     let send = sized(kept.send, floats);
     let recv = total.and_then(|t| sized(kept.recv, t));
-    let ok = link.gather_u64(&[(send.is_some() && recv.is_some()) as u64])?;
-    match (send, recv, ok.iter().position(|&v| v != 1)) {
-        (Some(send), Some(recv), None) => Ok(Buffers { send, recv }),
-        (_, _, r) => Err(crate::num::no_memory(
-            &format!("a team's exchange (on rank {})", r.unwrap_or(link.rank())),
-            total.and_then(|t| t.checked_mul(size_of::<f32>())),
-        )),
-    }
+    let bytes = total.and_then(|t| t.checked_mul(size_of::<f32>()));
+    let (send, recv) = all_hold(link, send.zip(recv), bytes)?;
+    Ok(Buffers { send, recv })
 }
 
 /// What one rank of a [`Team`] has done since the team was made: the sum over its threads of

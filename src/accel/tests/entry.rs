@@ -235,15 +235,7 @@ fn entry_map_is_the_nan_aware_projection() {
                 (None, None) => refusals += 1,
                 (Some(got), Some(want)) => {
                     assert_eq!(got.width, want.width);
-                    for (a, b) in got.bound.iter().zip(&want.bound) {
-                        assert_eq!(a.is_finite(), b.is_finite(), "case {case}: {a} {b}");
-                        if b.is_finite() {
-                            assert!(
-                                (a - b).abs() <= 1e-12 * b.abs(),
-                                "case {case}: {a} against {b}"
-                            );
-                        }
-                    }
+                    assert_same_bounds(case, &got.bound, &want.bound);
                     maps += 1;
                 }
                 (got, want) => panic!(
@@ -258,6 +250,20 @@ fn entry_map_is_the_nan_aware_projection() {
         maps > 20 && refusals > 10,
         "{maps} maps, {refusals} refusals"
     );
+}
+
+/// Asserts that each bound of `got` is finite where `want`'s is and equal to it within a
+/// relative 10⁻¹² (the projection's rounding against the reference's), in case `case`.
+fn assert_same_bounds(case: usize, got: &[f64], want: &[f64]) {
+    for (a, b) in got.iter().zip(want) {
+        assert_eq!(a.is_finite(), b.is_finite(), "case {case}: {a} {b}");
+        if b.is_finite() {
+            assert!(
+                (a - b).abs() <= 1e-12 * b.abs(),
+                "case {case}: {a} against {b}"
+            );
+        }
+    }
 }
 
 /// A tile's map holds the bits the whole image's map holds at its pixels, for tiles of any
@@ -284,15 +290,7 @@ fn a_tiles_map_is_the_images_map_there() {
         let want = build_within_reference(&g.shell, to_world, &camera, usize::MAX)
             .expect("the reference maps what the map maps");
         assert_eq!(whole.bound.len(), want.bound.len());
-        for (a, b) in whole.bound.iter().zip(&want.bound) {
-            assert_eq!(a.is_finite(), b.is_finite(), "case {case}: {a} {b}");
-            if b.is_finite() {
-                assert!(
-                    (a - b).abs() <= 1e-12 * b.abs(),
-                    "case {case}: {a} against {b}"
-                );
-            }
-        }
+        assert_same_bounds(case, &whole.bound, &want.bound);
         for side in [ENTRY_BIN, 2 * ENTRY_BIN, 7, 50] {
             for ty in (0..h + side).step_by(side / 2 + 1) {
                 for tx in (0..w + side).step_by(side / 3 + 1) {
