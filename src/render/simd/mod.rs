@@ -87,8 +87,9 @@
 //! widths do the same operations lane for lane, so their images are the same bit for bit.
 //! Rare cases go lane by lane through the scalar code: a value whose table bucket has no
 //! segment pair (`DirectShading::opacity_colour_general`), a gradient in a cell whose 4³
-//! neighbourhood is not inside the grid (`Dataset::gradient_cached`), a segment whose
-//! opacity-correction exponent is not the step's common one (`transmit_at_most_one`).
+//! neighbourhood is not inside the grid (`Dataset::gradient_cached`). A segment whose
+//! opacity-correction exponent is not the step's common one takes its power in f64 lanes,
+//! which give `transmit_at_most_one`'s f32 bit for bit ([`power`]).
 //!
 //! **Safety.** The crate's `unsafe` code is here and in the entry map's rasterisation
 //! (`crate::accel`): the gathers, the per-lane loads of nodes, the loads and stores of fixed-size
@@ -119,6 +120,7 @@ use std::arch::x86_64::*;
 
 mod lanes;
 mod nodes;
+mod power;
 mod preint;
 mod runs;
 mod shade;
@@ -130,6 +132,7 @@ mod tests;
 
 use lanes::*;
 use nodes::*;
+use power::*;
 use runs::*;
 use shade::*;
 use starts::*;

@@ -1,8 +1,9 @@
 //! The lighting of a packet's samples, in either width: the object-space gradient (the
 //! trilinear interpolation of central differences, [`Packets::gradient`]), the headlight's
 //! Phong terms ([`Packets::lit`]), the opacity correction's common powers ([`transmit_lanes`]) and
-//! the colour's finiteness test ([`finite`]), written once over [`Simd`]; and the lane-by-lane
-//! scalar fallbacks for the rare samples they do not take. Not here: the reads of the
+//! the colour's finiteness test ([`finite`]), written once over [`Simd`]; the lane-by-lane
+//! scalar fallbacks for the rare samples they do not take; and the hand-over of the other
+//! powers to [`power`]. Not here: the reads of the
 //! differences' nodes and voxels ([`nodes`]).
 
 use super::*;
@@ -178,21 +179,19 @@ impl Packets<'_> {
         finite(s, col)
     }
 
-    /// The opacity correction lane by lane where a sample's exponent is not the step's common
-    /// one (the lanes of `odd`, eight or sixteen of them): `1 − t` of opacities `o` over
-    /// lengths `len`, by the scalar `transmit_at_most_one`, into `t`.
-    pub(super) fn transmit_one_by_one<const N: usize>(
+    /// The opacity correction where a sample's exponent is not the step's common one (the
+    /// lanes of `odd`, eight or sixteen of them): `1 − t` of opacities `o` over lengths `len`,
+    /// as the scalar `transmit_at_most_one` gives it, into `t` ([`transmit_any`]).
+    #[inline(always)]
+    pub(super) fn transmit_odd<const N: usize>(
         &self,
         o: &[f32; N],
         len: &[f64; N],
         odd: u32,
         t: &mut [f32; N],
     ) {
-        for i in 0..N {
-            if odd >> i & 1 != 0 {
-                t[i] = transmit_at_most_one(o[i] as f64, len[i] * self.inv_ref) as f32;
-            }
-        }
+        let e = len.map(|l| l * self.inv_ref);
+        transmit_any(o, &e, odd, t);
     }
 
     /// The gradients lane by lane where a cell's 4³ neighbourhood is not inside the grid (the

@@ -89,7 +89,7 @@ impl Packets<'_> {
             let mut ta = [0f32; N];
             s.st(&mut oa, o);
             s.st(&mut ta, tr);
-            self.transmit_one_by_one(&oa, &st.len, odd, &mut ta);
+            self.transmit_odd(&oa, &st.len, odd, &mut ta);
             tr = s.ld(&ta);
         }
         let alpha = s.keep(s.of_bits(shown), s.sub(one, tr));
