@@ -125,7 +125,7 @@ pub(super) unsafe trait Simd<const N: usize>: Copy {
     /// gather reads each lane's index unchecked.
     unsafe fn gather_words(self, mask: &[u32], at: Self::I) -> Self::I;
     /// The eight nodes (a + 2b + 4c) of the cells whose first nodes are `base`, from the
-    /// node values of `p` (only in eight lanes: the sixteen-lane march reads voxels).
+    /// node values of `p` (or its 16-bit voxels through their table).
     fn value_nodes(self, p: &Packets<'_>, base: Self::I) -> [Self::F; 8];
     /// [`Packets::differences`]: the central differences from node values (only in eight
     /// lanes).
@@ -438,18 +438,38 @@ unsafe impl Simd<16> for Avx512 {
         bits as u16
     }
 
-    fn value_nodes(self, _: &Packets<'_>, _: __m512i) -> [__m512; 8] {
-        unreachable!("the sixteen-lane march reads voxels (`Packets::new`)")
+    /// Eight lanes at a time: each half by [`Avx2`]'s per-lane loads, joined.
+    #[inline(always)]
+    fn value_nodes(self, p: &Packets<'_>, base: __m512i) -> [__m512; 8] {
+        // SAFETY: `self` shows the processor has AVX-512 (F, DQ) with AVX2 and FMA, all these
+        // functions enable.
+        unsafe {
+            let a = Avx2::new();
+            let (lo, hi) = halves_i(base);
+            let (lo, hi) = (a.value_nodes(p, lo), a.value_nodes(p, hi));
+            std::array::from_fn(|k| join(lo[k], hi[k]))
+        }
     }
 
+    /// Eight lanes at a time, as [`Avx512::value_nodes`].
+    #[inline(always)]
     fn value_differences(
         self,
-        _: &Packets<'_>,
-        _: __m512i,
-        _: u32,
-        _: &[__m512; 8],
+        p: &Packets<'_>,
+        base: __m512i,
+        inner: u32,
+        nodes: &[__m512; 8],
     ) -> [[__m512; 3]; 8] {
-        unreachable!("the sixteen-lane march reads voxels (`Packets::new`)")
+        // SAFETY: as in `value_nodes`.
+        unsafe {
+            let a = Avx2::new();
+            let (lo, hi) = halves_i(base);
+            let lo_nodes = nodes.map(|n| halves(n).0);
+            let hi_nodes = nodes.map(|n| halves(n).1);
+            let lo = a.value_differences(p, lo, inner & 0xff, &lo_nodes);
+            let hi = a.value_differences(p, hi, inner >> 8 & 0xff, &hi_nodes);
+            std::array::from_fn(|k| std::array::from_fn(|axis| join(lo[k][axis], hi[k][axis])))
+        }
     }
 
     fn pairs_eval(self, _: &Packets<'_>, _: __m512, _: u32) -> (__m512, [__m512; 3]) {
@@ -571,4 +591,25 @@ pub(super) fn ld16i(a: &[i32; V]) -> __m512i {
 pub(super) fn st16i(a: &mut [i32; V], v: __m512i) {
     // SAFETY: `a` is 16 i32, 64 writable bytes; the store has no alignment requirement.
     unsafe { _mm512_storeu_si512(a.as_mut_ptr() as *mut _, v) }
+}
+
+/// Lanes 0–7 and 8–15 of `a`.
+#[inline]
+#[target_feature(enable = "avx512f,avx512dq,avx2")]
+fn halves(a: __m512) -> (__m256, __m256) {
+    (_mm512_castps512_ps256(a), _mm512_extractf32x8_ps::<1>(a))
+}
+
+/// Lanes 0–7 and 8–15 of `a`.
+#[inline]
+#[target_feature(enable = "avx512f,avx2")]
+fn halves_i(a: __m512i) -> (__m256i, __m256i) {
+    (_mm512_castsi512_si256(a), _mm512_extracti64x4_epi64::<1>(a))
+}
+
+/// The sixteen lanes of `lo` (0–7) and `hi` (8–15).
+#[inline]
+#[target_feature(enable = "avx512f,avx512dq,avx2")]
+fn join(lo: __m256, hi: __m256) -> __m512 {
+    _mm512_insertf32x8::<1>(_mm512_castps256_ps512(lo), hi)
 }

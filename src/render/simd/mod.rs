@@ -8,8 +8,9 @@
 //! r, g and b, constant coefficients) with no normal functions, lit as [`HeadlitLanes`] lights
 //! it (one directional light, an integer specular exponent, no shadows) or not lit at all
 //! (kd and ks 0: the unshaded scene), one ray per pixel. Everything else is traced by the
-//! scalar march, unchanged. Sixteen lanes also need 8-bit voxels read as voxels ([`Raw8`]),
-//! tables of at most seven rows ([`Segments`]) and the AVX-512 features of [`detected`]. On by
+//! scalar march, unchanged. Sixteen lanes also need tables of at most seven rows ([`Segments`])
+//! and the AVX-512 features of [`detected`]; they read 8-bit voxels as voxels ([`Raw8`]), node
+//! values and 16-bit voxels by eight lanes' loads on each half of their registers. On by
 //! default where it applies (`Optimise::packets` switches it off, `Optimise::wide_lanes` the
 //! sixteen lanes); `docs/performance.md` measures what it is worth. A pre-integrated volume
 //! (`Optimise::preintegrate`, whatever its lighting) takes the same lanes for its samples and
@@ -274,7 +275,6 @@ impl<'a> Packets<'a> {
         // The node values only where the voxels are not read instead (made on first use):
         // 8-bit voxels straight ([`Raw8`]), 16-bit voxels through their table of node values.
         let raw8 = Raw8::of(data);
-        let raw8_fits = raw8.is_some();
         // A pre-integrated object's slabs are composited and lit by the scalar code
         // (`Packets::tile_pre`), its values read as the lanes read them.
         let pre = obj.preint.as_ref().map(|pre| {
@@ -409,7 +409,6 @@ impl<'a> Packets<'a> {
             sz: strides[2] as i32,
             half_last: half_last.map(|x| x as f32),
             wide: scene.settings.optimise.wide_lanes
-                && raw8_fits
                 && (segments_fit || pre.is_some())
                 && detected(),
             pre,
