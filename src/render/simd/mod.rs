@@ -90,7 +90,7 @@
 //! segment pair (`DirectShading::opacity_colour_general`), a gradient in a cell whose 4³
 //! neighbourhood is not inside the grid (`Dataset::gradient_cached`). A segment whose
 //! opacity-correction exponent is not the step's common one takes its power in f64 lanes,
-//! which give `transmit_at_most_one`'s f32 bit for bit ([`power`]).
+//! which give `transmit_at_most_one`'s f32 bit for bit ([`power`](mod@power)).
 //!
 //! **Safety.** The crate's `unsafe` code is here and in the entry map's rasterisation
 //! (`crate::accel`): the gathers, the per-lane loads of nodes, the loads and stores of fixed-size

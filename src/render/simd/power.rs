@@ -1,9 +1,9 @@
 //! The opacity correction `(1 − o)^e` of the packet march's samples whose exponent e (the
 //! sample's length over the reference length) is not one of the step's common ones
-//! ([`transmit_lanes`]): every sample, where the step is no power-of-two fraction or multiple
-//! of the reference length, as for a scan whose voxel size is not one (`--fit` in
-//! `examples/mni`, the scaling table's volumes), and the segments of another length at a
-//! ray's ends. [`transmit_any`] gives each lane the f32 that the scalar
+//! ([`transmit_lanes`](super::transmit_lanes)): every sample, where the step is no
+//! power-of-two fraction or multiple of the reference length, as for a scan whose voxel size
+//! is not one (`--fit` in `examples/mni`, the scaling table's volumes), and the segments of
+//! another length at a ray's ends. [`transmit_any`] gives each lane the f32 that the scalar
 //! `transmit_at_most_one(o, e) as f32` gives, bit for bit, in about a third of the time of
 //! calling `pow` lane by lane (eight AVX2 lanes): `exp(e·ln(1 − o))` in f64 arithmetic over
 //! the lanes (plain loops that the compiler vectorises inside the march's target features),
@@ -13,15 +13,15 @@
 //! `pow` is within one unit in the last place) rounds to the same f32, so that the exact
 //! power and `pow`'s round to it too; the others (a lane in about 3·10⁴, and every lane
 //! outside the domain: 1 − o outside (0, 1], e negative or not finite) go through the scalar
-//! code. Not here: the common exponents' square roots ([`transmit_lanes`]), which lanes need
-//! this (`Packets::step`).
+//! code. Not here: the common exponents' square roots, which lanes need this
+//! (`Packets::step`).
 
 use crate::render::integrate::transmit_at_most_one;
 
 /// The relative half-width of the interval around a lane's power that must round to one f32
 /// for the lane to take it (see the module documentation): at least ten times the powers'
 /// own relative error (7·10⁻¹⁴ for the largest exponents whose power is not 0 in f32, see
-/// [`power`]) plus `pow`'s (2.2·10⁻¹⁶).
+/// [`power()`]) plus `pow`'s (2.2·10⁻¹⁶).
 pub(super) const GUARD: f64 = 1e-12;
 
 /// `ln 2` in two parts: the high one's last 21 bits are 0, so that its product with an

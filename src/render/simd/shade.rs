@@ -3,7 +3,7 @@
 //! Phong terms ([`Packets::lit`]), the opacity correction's common powers ([`transmit_lanes`]) and
 //! the colour's finiteness test ([`finite`]), written once over [`Simd`]; the lane-by-lane
 //! scalar fallbacks for the rare samples they do not take; and the hand-over of the other
-//! powers to [`power`]. Not here: the reads of the
+//! powers to [`power`](mod@super::power). Not here: the reads of the
 //! differences' nodes and voxels ([`nodes`]).
 
 use super::*;
