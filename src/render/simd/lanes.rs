@@ -127,8 +127,7 @@ pub(super) unsafe trait Simd<const N: usize>: Copy {
     /// The eight nodes (a + 2b + 4c) of the cells whose first nodes are `base`, from the
     /// node values of `p` (or its 16-bit voxels through their table).
     fn value_nodes(self, p: &Packets<'_>, base: Self::I) -> [Self::F; 8];
-    /// [`Packets::differences`]: the central differences from node values (only in eight
-    /// lanes).
+    /// [`Packets::differences`]: the central differences from node values (or 16-bit voxels).
     fn value_differences(
         self,
         p: &Packets<'_>,
@@ -438,11 +437,12 @@ unsafe impl Simd<16> for Avx512 {
         bits as u16
     }
 
-    /// Eight lanes at a time: each half by [`Avx2`]'s per-lane loads, joined.
+    /// Eight lanes at a time: each half by [`Avx2`]'s reads, joined.
     #[inline(always)]
     fn value_nodes(self, p: &Packets<'_>, base: __m512i) -> [__m512; 8] {
-        // SAFETY: `self` shows the processor has AVX-512 (F, DQ) with AVX2 and FMA, all these
-        // functions enable.
+        // SAFETY: `self` exists only where the processor has every feature `Avx512::new`'s
+        // contract names, AVX2 and FMA among them: `Avx2::new`'s contract, and every feature
+        // `halves_i` and `join` enable (AVX-512 F and DQ, AVX2).
         unsafe {
             let a = Avx2::new();
             let (lo, hi) = halves_i(base);
@@ -460,7 +460,7 @@ unsafe impl Simd<16> for Avx512 {
         inner: u32,
         nodes: &[__m512; 8],
     ) -> [[__m512; 3]; 8] {
-        // SAFETY: as in `value_nodes`.
+        // SAFETY: as in `value_nodes` (`halves` enables AVX-512 F and DQ, AVX2).
         unsafe {
             let a = Avx2::new();
             let (lo, hi) = halves_i(base);

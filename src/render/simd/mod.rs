@@ -8,8 +8,8 @@
 //! r, g and b, constant coefficients) with no normal functions, lit as [`HeadlitLanes`] lights
 //! it (one directional light, an integer specular exponent, no shadows) or not lit at all
 //! (kd and ks 0: the unshaded scene), one ray per pixel. Everything else is traced by the
-//! scalar march, unchanged. Sixteen lanes also need tables of at most seven rows ([`Segments`])
-//! and the AVX-512 features of [`detected`]; they read 8-bit voxels as voxels ([`Raw8`]), node
+//! scalar march, unchanged. Sixteen lanes also need tables of at most seven rows ([`Segments`]; any
+//! tables for a pre-integrated object) and the AVX-512 features of [`detected`]; they read 8-bit voxels as voxels ([`Raw8`]), node
 //! values and 16-bit voxels by eight lanes' loads on each half of their registers. On by
 //! default where it applies (`Optimise::packets` switches it off, `Optimise::wide_lanes` the
 //! sixteen lanes); `docs/performance.md` measures what it is worth. A pre-integrated volume
@@ -70,13 +70,14 @@
 //! - the entry points: a few lines each that make the width's token under its
 //!   `#[target_feature]` attribute, which a generic function cannot carry (every instantiation
 //!   would get the attribute's features, not its width's);
-//! - eight lanes only: node values by per-lane loads ([`Nodes`]; for 16-bit voxels, the voxels
-//!   through the dataset's table of their node values, [`NodeValues`], the same f32 without
-//!   the node values' memory) and tables of more than seven
-//!   rows by their segment pairs ([`Packets::pairs_eval`]), [`Simd`] hooks the sixteen-lane
-//!   implementation never reaches, as [`Packets::new`] gives sixteen lanes only to scenes with
-//!   8-bit voxels and tables in registers; and the ray starts ([`starts`]), four rays in f64
-//!   lanes for both widths.
+//! - eight lanes' code, which sixteen lanes run on each half of their registers: node values
+//!   by per-lane loads ([`Nodes`]; for 16-bit voxels, the voxels through the dataset's table
+//!   of their node values, [`NodeValues`], the same f32 without the node values' memory);
+//! - eight lanes only: tables of more than seven rows by their segment pairs
+//!   ([`Packets::pairs_eval`]), a [`Simd`] hook the sixteen-lane implementation never
+//!   reaches, as [`Packets::new`] gives sixteen lanes only to tables in registers (or to a
+//!   pre-integrated object, whose tables the lanes do not read); and the ray starts
+//!   ([`starts`]), four rays in f64 lanes for both widths.
 //!
 //! **Arithmetic.** From node values, the trilinear value and the gradient's sums are the scalar
 //! code's f32 operations in the same order, without fused multiply-adds, so the same bits; from

@@ -280,7 +280,7 @@ impl<'a> Packets<'a> {
         self.values(s, st, active, out)
     }
 
-    /// [`Packets::values`] in sixteen lanes (voxels: [`Packets::new`]).
+    /// [`Packets::values`] in sixteen lanes ([`Packets::new`]).
     #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
     fn values16(&self, st: &LaneState<V>, active: u32, out: &mut [f32; V]) {
         // SAFETY: this function has every feature `Avx512` stands for.

@@ -21,7 +21,7 @@ impl Packets<'_> {
         self.step(s, st, active, cache)
     }
 
-    /// [`Packets::step`] in sixteen lanes (voxels, tables in registers: [`Packets::new`]).
+    /// [`Packets::step`] in sixteen lanes (tables in registers: [`Packets::new`]).
     #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
     pub(super) fn step16(
         &self,
