@@ -653,8 +653,8 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
 /// level, and a halving decided the other way at the tolerance's edge changes the slab by
 /// the table's resolution (about 10⁻⁴). A termination one slab apart adds at most the bound
 /// (1/512) times a colour. So the packet tolerance, 1/255 per channel. The packet march's
-/// images are the same bits for one and two threads, eight and sixteen lanes, runs on trust
-/// or tested, and with skipping on and off (the slabs composited do not depend on which
+/// images are the same bits for one and two threads, eight and sixteen lanes (of the volume
+/// as 8- and as 16-bit voxels), runs on trust or tested, and with skipping on and off (the slabs composited do not depend on which
 /// samples are passed over).
 #[test]
 #[cfg(target_arch = "x86_64")]
@@ -705,6 +705,11 @@ fn preintegrated_packets_are_the_scalar_march() {
             &packets,
             &render(&narrow, true, 1),
             &format!("case {n}: lanes"),
+        );
+        same(
+            &render_made_as(&case, true, 1, true).0,
+            &render_made_as(&narrow, true, 1, true).0,
+            &format!("case {n}: lanes, 16-bit voxels"),
         );
         let tested = with(&|o| o.trust_whole_runs = false);
         same(
