@@ -234,7 +234,8 @@ pub struct Optimise {
     /// Off, every ray takes the scalar march, whose images are the same on every processor.
     pub packets: bool,
     /// Where the processor has AVX-512 and the scene fits (opacity and colour tables of at
-    /// most seven rows, or any tables where the object is pre-integrated), the packet march takes sixteen rays a step instead of eight:
+    /// most seven rows, or any tables where the object is pre-integrated), the packet march
+    /// takes sixteen rays a step instead of eight:
     /// the same samples and arithmetic lane for lane, so the same image bit for bit, faster
     /// on processors with two 512-bit units. On by default; off for comparison.
     pub wide_lanes: bool,

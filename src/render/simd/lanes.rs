@@ -464,10 +464,9 @@ unsafe impl Simd<16> for Avx512 {
         unsafe {
             let a = Avx2::new();
             let (lo, hi) = halves_i(base);
-            let lo_nodes = nodes.map(|n| halves(n).0);
-            let hi_nodes = nodes.map(|n| halves(n).1);
-            let lo = a.value_differences(p, lo, inner & 0xff, &lo_nodes);
-            let hi = a.value_differences(p, hi, inner >> 8 & 0xff, &hi_nodes);
+            let split = nodes.map(|n| halves(n));
+            let lo = a.value_differences(p, lo, inner & 0xff, &split.map(|h| h.0));
+            let hi = a.value_differences(p, hi, inner >> 8 & 0xff, &split.map(|h| h.1));
             std::array::from_fn(|k| std::array::from_fn(|axis| join(lo[k][axis], hi[k][axis])))
         }
     }

@@ -8,9 +8,10 @@
 //! r, g and b, constant coefficients) with no normal functions, lit as [`HeadlitLanes`] lights
 //! it (one directional light, an integer specular exponent, no shadows) or not lit at all
 //! (kd and ks 0: the unshaded scene), one ray per pixel. Everything else is traced by the
-//! scalar march, unchanged. Sixteen lanes also need tables of at most seven rows ([`Segments`]; any
-//! tables for a pre-integrated object) and the AVX-512 features of [`detected`]; they read 8-bit voxels as voxels ([`Raw8`]), node
-//! values and 16-bit voxels by eight lanes' loads on each half of their registers. On by
+//! scalar march, unchanged. Sixteen lanes also need tables of at most seven rows
+//! ([`Segments`]; any tables for a pre-integrated object) and the AVX-512 features of
+//! [`detected`]; they read 8-bit voxels as voxels ([`Raw8`]), and node values and 16-bit
+//! voxels by the eight lanes' reads on each half of their registers. On by
 //! default where it applies (`Optimise::packets` switches it off, `Optimise::wide_lanes` the
 //! sixteen lanes); `docs/performance.md` measures what it is worth. A pre-integrated volume
 //! (`Optimise::preintegrate`, whatever its lighting) takes the same lanes for its samples and

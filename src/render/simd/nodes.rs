@@ -1,7 +1,7 @@
 //! What a sample reads: the cell's nodes and the neighbours its gradient needs, either from
 //! the dataset's f32 node values by per-lane loads clamped into the values ([`Nodes`], eight
-//! lanes, or each half of sixteen) or from its 8-bit voxels by gathers of four bytes ([`Raw8`], generic over [`Simd`]),
-//! and the clamped gathers of tables ([`gather`]). Not here: what is done with the values
+//! lanes, or each half of sixteen) or from its 8-bit voxels by gathers of four bytes
+//! ([`Raw8`], generic over [`Simd`]), and the clamped gathers of tables ([`gather`]). Not here: what is done with the values
 //! ([`step`], [`shade`]).
 
 use super::*;
@@ -280,9 +280,10 @@ pub(super) struct Nodes<'a> {
     pub(super) span: i32,
 }
 
-/// Where the eight-lane march (and each half of the sixteen-lane one) reads node values: the dataset's f32 node values, or its 16-bit
-/// voxels through the table of their normalised values (`Dataset::table16`, entry v the node
-/// value of voxel v: the same f32, without the node values' four bytes a voxel).
+/// Where the eight-lane march (and each half of the sixteen-lane one) reads node values: the
+/// dataset's f32 node values, or its 16-bit voxels through the table of their normalised
+/// values (`Dataset::table16`, entry v the node value of voxel v: the same f32, without the
+/// node values' four bytes a voxel).
 #[derive(Clone, Copy)]
 pub(super) enum NodeValues<'a> {
     F32(&'a [f32]),
