@@ -4,8 +4,9 @@
 //! the rectangles' rasterisation is `rect`'s, the boxes are `grid`'s and `passing`'s.
 
 use super::grid::{Boxes, SkipGrid};
+use super::project::Projection;
 use super::rect::lower_rect;
-use glam::{DMat3, DMat4, DVec3};
+use glam::{DMat4, DVec3};
 use rayon::prelude::*;
 
 /// A pinhole camera as the image's primary rays see it: the ray through image position
@@ -66,17 +67,24 @@ pub(crate) struct EntryMap {
 }
 
 /// An image's projected boxes, by bins of [`ENTRY_BIN`] × [`ENTRY_BIN`] pixels: what the
-/// [`EntryMap`] of any rectangle of its pixels is filled from.
+/// [`EntryMap`] of any rectangle of its pixels is filled from. Made in runs of consecutive
+/// boxes, each projected and filed by bins on its own (in parallel: nothing of the map is
+/// made by one thread alone); a bin's marks are those its runs file there.
 pub(crate) struct EntryMarks {
     width: usize,
     height: usize,
-    marks: Vec<Mark>,
     /// Bins per row of bins.
     bins_x: usize,
+    runs: Vec<Run>,
+}
+
+/// The marks of a run of boxes, filed by the bins they meet.
+struct Run {
+    marks: Vec<Mark>,
     /// Per bin (row-major), where its marks start in `in_bin`; one more, the total, last.
-    start: Vec<usize>,
-    /// The numbers of the marks that meet each bin, bin after bin, each bin's in the order of
-    /// `marks` (four bytes an entry: a mark meets about one to four bins).
+    start: Vec<u32>,
+    /// The numbers (in `marks`) of the marks that meet each bin, bin after bin (four bytes
+    /// an entry: a mark meets about one to four bins).
     in_bin: Vec<u32>,
 }
 
@@ -105,6 +113,18 @@ fn for_each_bin(m: &Mark, bins_x: usize, mut f: impl FnMut(usize)) {
         }
     }
 }
+
+/// The fewest boxes a run of the entry map takes ([`EntryMarks`]): a task of a few tens of
+/// microseconds.
+const RUN_BOXES: usize = 1024;
+
+/// The most bins' starts the runs of an entry map hold together, where it is made in more
+/// than one run: runs are fewer where the image has many bins (one where a run's own starts
+/// are more), so that the starts stay a small part of the map.
+const RUN_STARTS: usize = 1 << 16;
+
+/// The most runs of an entry map.
+const MAX_RUNS: usize = 64;
 
 /// Rectangle pixels an entry map may mark, per image pixel, before it gives up (a camera
 /// close to a finely divided volume): a marked pixel costs a comparison, a ray thousands of
@@ -181,146 +201,36 @@ impl EntryMarks {
         if w == 0 || h == 0 || boxes.len() == 0 {
             return None;
         }
-        let margin = boxes.unit * 0.125;
-        // Coefficients (depth, right, up) of an eye-relative vector: the rays' own basis.
-        let basis = DMat3::from_cols(camera.forward, camera.right, camera.up);
-        let det = basis.determinant().abs();
-        if det.is_nan() || det <= 1e-12 {
-            return None;
-        }
-        let to_view = basis.inverse();
-        let unit_forward = camera.forward.normalize_or_zero();
-        let (wf, hf) = (w as f64, h as f64);
-        // A box's corners are lo + (a·e.x, b·e.y, c·e.z) for a, b, c in {0, 1} (e = hi − lo),
-        // and their eye-relative vectors q, view coefficients v = to_view·q and depths
-        // q·forward are affine in the object point: each corner's numbers are the lowest
-        // corner's plus the terms of its axes, so a box costs the products of one corner and
-        // three edges, not of eight corners. (Rounding differs from transforming each corner
-        // by a few units in the last place, far inside the eighth of a block each box is
-        // grown by.)
-        let axes = [
-            to_world.x_axis.truncate(),
-            to_world.y_axis.truncate(),
-            to_world.z_axis.truncate(),
-        ];
-        let origin_q = to_world.w_axis.truncate() - camera.eye;
-        let view_axes = axes.map(|a| to_view * a);
-        let origin_v = to_view * origin_q;
-        let depth_axes = axes.map(|a| a.dot(unit_forward));
-        let origin_depth = origin_q.dot(unit_forward);
-        // Each box's pixel rectangle and depth, in parallel; `None` gives up.
-        let project = |&(lo, hi): &(DVec3, DVec3)| -> Option<Option<Mark>> {
-            let (lo, hi) = (lo - margin, hi + margin);
-            let e = hi - lo;
-            let (mut x0, mut x1) = (f64::INFINITY, f64::NEG_INFINITY);
-            let (mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY);
-            let mut near = f64::INFINITY;
-            let q0 = origin_q + axes[0] * lo.x + axes[1] * lo.y + axes[2] * lo.z;
-            let v0 = origin_v + view_axes[0] * lo.x + view_axes[1] * lo.y + view_axes[2] * lo.z;
-            let n0 =
-                origin_depth + depth_axes[0] * lo.x + depth_axes[1] * lo.y + depth_axes[2] * lo.z;
-            let dq = [axes[0] * e.x, axes[1] * e.y, axes[2] * e.z];
-            let dv = [view_axes[0] * e.x, view_axes[1] * e.y, view_axes[2] * e.z];
-            let dn = [
-                depth_axes[0] * e.x,
-                depth_axes[1] * e.y,
-                depth_axes[2] * e.z,
-            ];
-            for k in 0..8 {
-                let (mut q, mut v, mut n) = (q0, v0, n0);
-                for (a, ((dq, dv), dn)) in dq.iter().zip(&dv).zip(&dn).enumerate() {
-                    if k >> a & 1 != 0 {
-                        q += *dq;
-                        v += *dv;
-                        n += dn;
-                    }
-                }
-                // Clearly in front (a corner at or behind the eye's plane breaks the hull
-                // argument): v.x > 10⁻⁹·|q|, squared (v.x positive first); NaN fails too.
-                if !(v.x > 0.0 && v.x * v.x > 1e-18 * q.length_squared()) {
-                    return None;
-                }
-                let (x, y) = ((v.y / v.x + 1.0) * 0.5 * wf, (1.0 - v.z / v.x) * 0.5 * hf);
-                if !(x.is_finite() && y.is_finite()) {
-                    return None;
-                }
-                // `x0.min(x)` and the like, by comparisons: neither side is NaN (x and y are
-                // finite here; the bounds start at ±∞ and only take them), where the NaN-aware
-                // forms cost 7 instructions each (four a corner); and they agree on ties, as
-                // neither x nor y can be −0: `r + 1` and `1 − r` round to +0, never −0, and
-                // when not 0 are at least 2⁻⁵³ in magnitude, which halving and the image size
-                // (≥ 1) cannot take to 0.
-                if x < x0 {
-                    x0 = x;
-                }
-                if x > x1 {
-                    x1 = x;
-                }
-                if y < y0 {
-                    y0 = y;
-                }
-                if y > y1 {
-                    y1 = y;
-                }
-                near = near.min(n);
-            }
-            // Pixel squares [px, px + 1) meeting [x0 − ε, x1 + ε] (and likewise in y). (The
-            // floor inline, bit for bit the library's, which is a call on the SSE2 baseline.)
-            const EPS: f64 = 0.01;
-            let floor = crate::num::floor;
-            let (px0, px1) = (floor(x0 - EPS).max(0.0), floor(x1 + EPS).min(wf - 1.0));
-            let (py0, py1) = (floor(y0 - EPS).max(0.0), floor(y1 + EPS).min(hf - 1.0));
-            if px0 > px1 || py0 > py1 {
-                return Some(None); // off the image
-            }
-            Some(Some(Mark {
-                x: (px0 as usize, px1 as usize),
-                y: (py0 as usize, py1 as usize),
-                // Rounding of the depth itself: a relative slack far below the margin's.
-                near: near - 1e-9 * near.abs(),
-            }))
-        };
-        let marks: Vec<Mark> = boxes
-            .par_corners()
-            .filter_map(|b| match project(&b) {
-                None => Some(None), // give up
-                Some(None) => None, // off the image
-                Some(mark) => Some(mark),
-            })
-            .collect::<Option<Vec<Mark>>>()?;
-        let area = marks.iter().fold(0usize, |sum, m| {
-            sum.saturating_add((m.x.1 - m.x.0 + 1) * (m.y.1 - m.y.0 + 1))
-        });
-        if area > budget {
-            return None;
-        }
-        // The marks filed by the bins they meet (counted, then placed); `None` where that
-        // memory cannot be had (the rays then walk from the object's box).
+        let projection = Projection::new(to_world, camera, boxes.unit * 0.125)?;
         let bins_x = w.div_ceil(ENTRY_BIN);
         let bins = bins_x.checked_mul(h.div_ceil(ENTRY_BIN))?;
-        let mut start = crate::num::try_vec(bins + 1, 0usize, "").ok()?;
-        for m in &marks {
-            for_each_bin(m, bins_x, |b| start[b + 1] += 1);
-        }
-        for b in 0..bins {
-            start[b + 1] += start[b];
-        }
-        let mut next = crate::num::try_vec(bins, 0usize, "").ok()?;
-        next.copy_from_slice(&start[..bins]);
-        let mut in_bin = crate::num::try_vec(start[bins], 0u32, "").ok()?;
-        for (i, m) in marks.iter().enumerate() {
-            for_each_bin(m, bins_x, |b| {
-                in_bin[next[b]] = i as u32;
-                next[b] += 1;
-            });
+        // Runs of at least `RUN_BOXES` boxes, at most `MAX_RUNS` of them and fewer where the
+        // image has many bins.
+        let most = (RUN_STARTS / (bins + 1)).clamp(1, MAX_RUNS);
+        let per_run = RUN_BOXES.max(boxes.len().div_ceil(most));
+        let filed = Filing {
+            bins_x,
+            bins,
+            budget,
+        };
+        let runs = (0..boxes.len().div_ceil(per_run))
+            .into_par_iter()
+            .map(|r| {
+                let range = r * per_run..((r + 1) * per_run).min(boxes.len());
+                filed.run(&projection, boxes, range)
+            })
+            .collect::<Option<Vec<Run>>>()?;
+        let area = runs
+            .iter()
+            .fold(0usize, |sum, r| sum.saturating_add(r.area()));
+        if area > budget {
+            return None;
         }
         Some(EntryMarks {
             width: w,
             height: h,
-            marks,
             bins_x,
-            start,
-            in_bin,
+            runs,
         })
     }
 
@@ -340,18 +250,21 @@ impl EntryMarks {
                 for bx in x0 / ENTRY_BIN..=(x1 - 1) / ENTRY_BIN {
                     let (c0, c1) = ((bx * ENTRY_BIN).max(x0), ((bx + 1) * ENTRY_BIN).min(x1) - 1);
                     let b = by * self.bins_x + bx;
-                    for &i in &self.in_bin[self.start[b]..self.start[b + 1]] {
-                        let m = &self.marks[i as usize];
-                        let (mx0, mx1) = (m.x.0.max(c0), m.x.1.min(c1));
-                        let (my0, my1) = (m.y.0.max(r0), m.y.1.min(r1));
-                        if mx0 <= mx1 && my0 <= my1 {
-                            lower_rect(
-                                &mut bound,
-                                tw,
-                                mx0 - x0..=mx1 - x0,
-                                my0 - y0..=my1 - y0,
-                                m.near,
-                            );
+                    for run in &self.runs {
+                        let filed = run.start[b] as usize..run.start[b + 1] as usize;
+                        for &i in &run.in_bin[filed] {
+                            let m = &run.marks[i as usize];
+                            let (mx0, mx1) = (m.x.0.max(c0), m.x.1.min(c1));
+                            let (my0, my1) = (m.y.0.max(r0), m.y.1.min(r1));
+                            if mx0 <= mx1 && my0 <= my1 {
+                                lower_rect(
+                                    &mut bound,
+                                    tw,
+                                    mx0 - x0..=mx1 - x0,
+                                    my0 - y0..=my1 - y0,
+                                    m.near,
+                                );
+                            }
                         }
                     }
                 }
@@ -369,5 +282,83 @@ impl EntryMarks {
     #[cfg(test)]
     pub(crate) fn all_rows(&self) -> Option<EntryMap> {
         Some(self.tile(0..self.width, 0..self.height))
+    }
+
+    /// How many runs the marks were made in.
+    #[cfg(test)]
+    pub(super) fn runs(&self) -> usize {
+        self.runs.len()
+    }
+
+    /// The pixels all marks cover (counted with multiplicity), and the most one run's cover.
+    #[cfg(test)]
+    pub(super) fn areas(&self) -> (usize, usize) {
+        let areas = self.runs.iter().map(Run::area);
+        (areas.clone().sum(), areas.max().unwrap_or(0))
+    }
+}
+
+/// What filing a run's marks needs: the image's bins and the budget of marked pixels.
+struct Filing {
+    bins_x: usize,
+    bins: usize,
+    budget: usize,
+}
+
+impl Filing {
+    /// The run of boxes `range`, projected and filed by bins; `None` to give up (a box that
+    /// cannot be projected, more marked pixels than the budget, memory that cannot be had: the
+    /// rays then walk from the object's box).
+    fn run(
+        &self,
+        projection: &Projection,
+        boxes: &Boxes,
+        range: std::ops::Range<usize>,
+    ) -> Option<Run> {
+        let mut marks = Vec::new();
+        marks.try_reserve_exact(range.len()).ok()?;
+        if !projection.marks(boxes, range, &mut marks) {
+            return None;
+        }
+        let mut run = Run {
+            marks,
+            start: Vec::new(),
+            in_bin: Vec::new(),
+        };
+        // (Checked before filing, whose work grows with the area.)
+        if run.area() > self.budget {
+            return None;
+        }
+        // Counted, then placed.
+        let mut start = crate::num::try_vec(self.bins + 1, 0u32, "").ok()?;
+        for m in &run.marks {
+            for_each_bin(m, self.bins_x, |b| start[b + 1] += 1);
+        }
+        let mut total = 0u32;
+        for s in &mut start[1..] {
+            total = total.checked_add(*s)?;
+            *s = total;
+        }
+        let mut next = crate::num::try_vec(self.bins, 0u32, "").ok()?;
+        next.copy_from_slice(&start[..self.bins]);
+        let mut in_bin = crate::num::try_vec(total as usize, 0u32, "").ok()?;
+        for (i, m) in run.marks.iter().enumerate() {
+            for_each_bin(m, self.bins_x, |b| {
+                in_bin[next[b] as usize] = i as u32;
+                next[b] += 1;
+            });
+        }
+        run.start = start;
+        run.in_bin = in_bin;
+        Some(run)
+    }
+}
+
+impl Run {
+    /// The pixels its marks cover, counted with multiplicity (saturating).
+    fn area(&self) -> usize {
+        self.marks.iter().fold(0usize, |sum, m| {
+            sum.saturating_add((m.x.1 - m.x.0 + 1) * (m.y.1 - m.y.0 + 1))
+        })
     }
 }

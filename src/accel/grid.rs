@@ -118,11 +118,6 @@ impl Boxes {
             BoxList::Groups(g) => g.corners(i),
         }
     }
-
-    /// Every box's corners, in order, in parallel.
-    pub(super) fn par_corners(&self) -> impl IndexedParallelIterator<Item = (DVec3, DVec3)> + '_ {
-        (0..self.len()).into_par_iter().map(|i| self.corners(i))
-    }
 }
 
 /// Block `index` (linear, x fastest) of a grid of `dims` blocks of size `cell` from `origin`, as

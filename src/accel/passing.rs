@@ -227,11 +227,21 @@ impl Groups {
 
     /// Box `i`'s lowest and highest corner: the node planes that bound its group's passing
     /// cells.
+    #[inline]
     pub(super) fn corners(&self, i: usize) -> (DVec3, DVec3) {
         let (at, code) = self.boxes[i];
-        let at = at as usize;
         let [gx, gy, _] = self.groups;
-        let lo_cell = [at % gx, at / gx % gy, at / (gx * gy)].map(|c| c * BRICK);
+        // (In 32 bits where a layer of groups fits them, as it does wherever the index of its
+        // last group does: a 32-bit division takes a fraction of a 64-bit one's time on many
+        // processors.)
+        let group = match (u32::try_from(gx), u32::try_from(gy), u32::try_from(gx * gy)) {
+            (Ok(gx), Ok(gy), Ok(layer)) => [at % gx, at / gx % gy, at / layer].map(|c| c as usize),
+            _ => {
+                let at = at as usize;
+                [at % gx, at / gx % gy, at / (gx * gy)]
+            }
+        };
+        let lo_cell = group.map(|c| c * BRICK);
         // (Always there: only groups with passing cells are kept; none would be an empty box
         // at the group's first cell.)
         debug_assert!(code != GroupCode::NONE);

@@ -316,3 +316,139 @@ fn a_tiles_map_is_the_images_map_there() {
     }
     assert!(tiles > 1000, "only {tiles} tiles checked");
 }
+
+/// `count` random boxes in the unit cube, each up to a fifth of it on a side.
+fn random_boxes(rng: &mut Rng, count: usize) -> Boxes {
+    let corners = (0..count)
+        .map(|_| {
+            let lo = DVec3::new(rng.next(), rng.next(), rng.next()) * 0.9;
+            let size = DVec3::new(rng.next(), rng.next(), rng.next()) * 0.2;
+            (lo, (lo + size).min(DVec3::ONE))
+        })
+        .collect();
+    Boxes::of_corners(corners, DVec3::splat(0.05))
+}
+
+/// Made in several runs of boxes (each filed by bins on its own), the map is still the
+/// reference's, every tile's map is the whole map's there, and the budget holds for the
+/// runs together: a map of exactly the budget is made, one pixel less refuses it even though
+/// every run alone is within it.
+#[test]
+fn a_map_made_in_runs_is_the_reference() {
+    let mut rng = Rng(0x5eed_0012);
+    for case in 0..4 {
+        let boxes = random_boxes(&mut rng, [5000, 3001, 2049, 7777][case]);
+        let to_world = random_placement(&mut rng);
+        let from = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
+        let camera = camera_at(
+            to_world,
+            from,
+            90.0 + 60.0 * rng.next(),
+            [96, 70, 41, 130][case],
+        );
+        let marks = EntryMarks::build_within(&boxes, to_world, &camera, usize::MAX)
+            .expect("a camera with the boxes in front gets a map");
+        assert!(marks.runs() > 1, "case {case}: one run");
+        let whole = marks.all_rows().expect("a map of every pixel");
+        let want = build_within_reference(&boxes, to_world, &camera, usize::MAX)
+            .expect("the reference maps what the map maps");
+        assert_same_bounds(case, &whole.bound, &want.bound);
+        let (w, h) = (camera.width as usize, camera.height as usize);
+        for (tx, ty) in [(0, 0), (ENTRY_BIN, 0), (17, 40), (w - 5, h - 9)] {
+            let map = marks.tile(tx..tx + ENTRY_BIN, ty..ty + ENTRY_BIN);
+            for y in ty..(ty + ENTRY_BIN).min(h) {
+                for x in tx..(tx + ENTRY_BIN).min(w) {
+                    let (a, b) = (
+                        map.bound(x as u32, y as u32),
+                        whole.bound(x as u32, y as u32),
+                    );
+                    assert_eq!(a.to_bits(), b.to_bits(), "case {case} pixel ({x}, {y})");
+                }
+            }
+        }
+        let (area, largest) = marks.areas();
+        assert!(
+            largest < area - 1,
+            "case {case}: a run of {largest} of {area}"
+        );
+        assert!(EntryMarks::build_within(&boxes, to_world, &camera, area).is_some());
+        assert!(EntryMarks::build_within(&boxes, to_world, &camera, area - 1).is_none());
+    }
+}
+
+/// The projection's lanes (eight boxes at a time, in AVX2 registers where the processor has
+/// them, and in the baseline's) give the marks of one box at a time bit for bit, and give up
+/// where one box at a time does: runs of every length from 0 to 40 (full and partial
+/// lanes), boxes in front of the eye, across its plane and behind it, off the image, and
+/// degenerate (flat, a point, NaN corners).
+#[test]
+fn projection_lanes_are_one_box_at_a_time() {
+    let mut rng = Rng(0x5eed_0013);
+    let (mut made, mut refused) = (0, 0);
+    for case in 0..120 {
+        let to_world = random_placement(&mut rng);
+        let from = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
+        let distance = [150.0 * rng.next() + 20.0, 30.0 * rng.next(), 1e4][case % 3];
+        let camera = camera_at(to_world, from, distance, 20 + (rng.next() * 60.0) as u32);
+        let margin = DVec3::splat([0.0, 0.01, 0.3][case % 3]);
+        let Some(projection) = Projection::new(to_world, &camera, margin) else {
+            panic!("case {case}: a regular camera");
+        };
+        let count = case % 41;
+        let mut corners: Vec<(DVec3, DVec3)> = (0..count)
+            .map(|_| {
+                let lo = DVec3::new(rng.next(), rng.next(), rng.next()) * 2.0 - 0.5;
+                (
+                    lo,
+                    lo + DVec3::new(rng.next(), rng.next(), rng.next()) * 0.3,
+                )
+            })
+            .collect();
+        // Degenerate boxes now and then: flat, a point, a NaN corner.
+        if count > 3 && case % 4 == 0 {
+            corners[1].1.z = corners[1].0.z;
+            corners[2].1 = corners[2].0;
+        }
+        if count > 5 && case % 10 == 5 {
+            corners[count - 2].0.y = f64::NAN;
+        }
+        let boxes = Boxes::of_corners(corners.clone(), DVec3::splat(0.05));
+        let mut want = Vec::new();
+        let mut gives_up = false;
+        for &(lo, hi) in &corners {
+            match projection.mark(lo, hi) {
+                None => gives_up = true,
+                Some(None) => {}
+                Some(Some(m)) => want.push(m),
+            }
+        }
+        let bits = |m: &Mark| (m.x, m.y, m.near.to_bits());
+        for (name, f) in [
+            (
+                "dispatched",
+                Projection::marks as fn(&_, &_, _, &mut _) -> bool,
+            ),
+            ("baseline", Projection::marks_generic),
+        ] {
+            let mut got = Vec::new();
+            let ok = f(&projection, &boxes, 0..count, &mut got);
+            assert_eq!(ok, !gives_up, "case {case} {name}");
+            if ok {
+                let (got, want): (Vec<_>, Vec<_>) = (
+                    got.iter().map(bits).collect(),
+                    want.iter().map(bits).collect(),
+                );
+                assert_eq!(got, want, "case {case} {name}");
+            }
+        }
+        if gives_up {
+            refused += 1;
+        } else if !want.is_empty() {
+            made += 1;
+        }
+    }
+    assert!(
+        made > 40 && refused > 20,
+        "{made} runs marked, {refused} refused"
+    );
+}

@@ -12,6 +12,7 @@ mod walk;
 use super::entry::{EntryMap, EntryMarks, Mark, Pinhole, ENTRY_BIN};
 use super::grid::{chessboard, Boxes, SkipGrid, MAX_LEAP};
 use super::passing::{passing_boxes, passing_groups_row, GroupCode};
+use super::project::Projection;
 use super::rect::lower_rect;
 use super::walk::{block_index, outside, Walk};
 use crate::data::{CellMask, Dataset, BRICK};
