@@ -34,8 +34,14 @@ use vlib::{vlaux, Attenuation, Camera, Feature, Fields, Library, MappingType, Re
 /// Image size of the scene benchmarks.
 const SIDE: u32 = 256;
 
-/// Interleaved timed repeats per thread count for the printed speed-ups.
+/// Interleaved timed repeats per thread count for the printed speed-ups: at least this many,
+/// and more for a short frame ([`SECONDS`]).
 const REPEATS: usize = 9;
+
+/// Seconds of 1-thread frames a scene's speed-up is timed over at least: a frame of a few
+/// milliseconds needs hundreds of repeats before a burst of load elsewhere on a shared host
+/// moves its median by less than the speed-up's last digit.
+const SECONDS: f64 = 2.0;
 
 fn render(vl: &Library) -> vlib::Image {
     vl.render_preview(SIDE, SIDE, 1.0).unwrap()
@@ -215,14 +221,19 @@ fn thread_scaling(c: &mut Criterion) {
         return;
     }
     println!(
-        "thread scaling at {SIDE}x{SIDE} (median of {REPEATS} interleaved frames each; load \
-         average {}):",
+        "thread scaling at {SIDE}x{SIDE} (median of at least {REPEATS} interleaved frames each, \
+         {SECONDS} s of 1-thread frames; load average {}):",
         load_average()
     );
     for (name, vl) in &scenes {
         let mut times: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
         let mut cpu = [0.0f64; 2];
-        for _ in 0..REPEATS {
+        // Repeats from one 1-thread frame's time.
+        let once = common::seconds(|| {
+            pools[0].1.install(|| render(vl));
+        });
+        let repeats = REPEATS.max((SECONDS / once.max(1e-6)).ceil().min(1e4) as usize);
+        for _ in 0..repeats {
             for (i, (_, pool)) in pools.iter().enumerate() {
                 let c0 = cpu_seconds();
                 times[i].push(common::seconds(|| {
@@ -231,13 +242,14 @@ fn thread_scaling(c: &mut Criterion) {
                 cpu[i] += cpu_seconds().zip(c0).map_or(f64::NAN, |(a, b)| a - b);
             }
         }
-        // How many cores the 2-thread frames actually had: CPU time over wall time. Below 2
-        // (well below: the rest of the machine was busy) the speed-up says little.
-        let busy = cpu[1] / times[1].iter().sum::<f64>();
+        // How many cores the frames actually had: CPU time over wall time. Below 1 for the
+        // 1-thread frames, or well below 2 for the 2-thread ones, the rest of the machine was
+        // busy and the speed-up says little.
+        let [busy1, busy2] = [0, 1].map(|i| cpu[i] / times[i].iter().sum::<f64>());
         let [t1, t2] = times.map(common::median);
         println!(
             "  {name:<13} 1 thread {:8.1} ms   2 threads {:8.1} ms   speed-up {:.2}   \
-             (2 threads kept {busy:.2} cores busy)",
+             (cores busy: {busy1:.2} and {busy2:.2}; {repeats} repeats)",
             1e3 * t1,
             1e3 * t2,
             t1 / t2
