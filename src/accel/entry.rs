@@ -1,7 +1,9 @@
 //! The per-image entry map: for each pixel, a lower bound on where a primary ray through it
 //! meets a block of one object that may hold opacity, by projecting boxes (the grid's shell,
-//! or the passing boxes) through a [`Pinhole`] camera. Owns the projection and its refusals;
-//! the rectangles' rasterisation is `rect`'s, the boxes are `grid`'s and `passing`'s.
+//! or the passing boxes) through a [`Pinhole`] camera. Owns the refusals that depend on the
+//! whole image, the runs of boxes and the filing of their marks by bins; the arithmetic of a
+//! box is `project`'s, the rectangles' rasterisation `rect`'s, the boxes `grid`'s and
+//! `passing`'s.
 
 use super::grid::{Boxes, SkipGrid};
 use super::project::Projection;
@@ -68,8 +70,8 @@ pub(crate) struct EntryMap {
 
 /// An image's projected boxes, by bins of [`ENTRY_BIN`] × [`ENTRY_BIN`] pixels: what the
 /// [`EntryMap`] of any rectangle of its pixels is filled from. Made in runs of consecutive
-/// boxes, each projected and filed by bins on its own (in parallel: nothing of the map is
-/// made by one thread alone); a bin's marks are those its runs file there.
+/// boxes, each projected and filed by bins on its own, the runs in parallel (no part of the
+/// map waits for the whole of another); a bin's marks are those its runs file there.
 pub(crate) struct EntryMarks {
     width: usize,
     height: usize,
@@ -114,16 +116,12 @@ fn for_each_bin(m: &Mark, bins_x: usize, mut f: impl FnMut(usize)) {
     }
 }
 
-/// The fewest boxes a run of the entry map takes ([`EntryMarks`]): a task of a few tens of
-/// microseconds.
+/// The fewest boxes a run of the entry map takes ([`EntryMarks`]): a task of about a tenth of a
+/// millisecond.
 const RUN_BOXES: usize = 1024;
 
-/// The most bins' starts the runs of an entry map hold together, where it is made in more
-/// than one run: runs are fewer where the image has many bins (one where a run's own starts
-/// are more), so that the starts stay a small part of the map.
-const RUN_STARTS: usize = 1 << 16;
-
-/// The most runs of an entry map.
+/// The most runs of an entry map: each holds four bytes a bin for its starts (1/256 of a byte
+/// a pixel), and as much again while it files its marks.
 const MAX_RUNS: usize = 64;
 
 /// Rectangle pixels an entry map may mark, per image pixel, before it gives up (a camera
@@ -204,14 +202,13 @@ impl EntryMarks {
         let projection = Projection::new(to_world, camera, boxes.unit * 0.125)?;
         let bins_x = w.div_ceil(ENTRY_BIN);
         let bins = bins_x.checked_mul(h.div_ceil(ENTRY_BIN))?;
-        // Runs of at least `RUN_BOXES` boxes, at most `MAX_RUNS` of them and fewer where the
-        // image has many bins.
-        let most = (RUN_STARTS / (bins + 1)).clamp(1, MAX_RUNS);
-        let per_run = RUN_BOXES.max(boxes.len().div_ceil(most));
+        // Runs of at least `RUN_BOXES` boxes, at most `MAX_RUNS` of them.
+        let per_run = RUN_BOXES.max(boxes.len().div_ceil(MAX_RUNS));
         let filed = Filing {
             bins_x,
             bins,
             budget,
+            area: std::sync::atomic::AtomicUsize::new(0),
         };
         let runs = (0..boxes.len().div_ceil(per_run))
             .into_par_iter()
@@ -220,12 +217,6 @@ impl EntryMarks {
                 filed.run(&projection, boxes, range)
             })
             .collect::<Option<Vec<Run>>>()?;
-        let area = runs
-            .iter()
-            .fold(0usize, |sum, r| sum.saturating_add(r.area()));
-        if area > budget {
-            return None;
-        }
         Some(EntryMarks {
             width: w,
             height: h,
@@ -298,11 +289,13 @@ impl EntryMarks {
     }
 }
 
-/// What filing a run's marks needs: the image's bins and the budget of marked pixels.
+/// What filing a run's marks needs: the image's bins, the budget of marked pixels and what
+/// the runs filed so far have marked.
 struct Filing {
     bins_x: usize,
     bins: usize,
     budget: usize,
+    area: std::sync::atomic::AtomicUsize,
 }
 
 impl Filing {
@@ -325,8 +318,16 @@ impl Filing {
             start: Vec::new(),
             in_bin: Vec::new(),
         };
-        // (Checked before filing, whose work grows with the area.)
-        if run.area() > self.budget {
+        // The runs' areas together within the budget (checked before filing, whose work grows
+        // with the area, so that all runs together file no more than the budget allows).
+        let area = run.area();
+        let relaxed = std::sync::atomic::Ordering::Relaxed;
+        let add = |sum: usize| Some(sum.saturating_add(area));
+        let before = self
+            .area
+            .fetch_update(relaxed, relaxed, add)
+            .unwrap_or(usize::MAX);
+        if before.saturating_add(area) > self.budget {
             return None;
         }
         // Counted, then placed.

@@ -24,7 +24,7 @@
 //! - `walk`: [`Walk`], the block walk (a 3D DDA with leaps) along one ray.
 //! - `entry`: [`Pinhole`] and [`EntryMap`], the per-image lower bound on where each primary ray
 //!   meets a block that may hold opacity.
-//! - `project`: the entry map's projection of boxes, eight corners in f64 lanes.
+//! - `project`: the entry map's projection of boxes, eight boxes to the f64 lanes.
 //! - `rect`: the entry map's rasterisation (lowering a rectangle of the map).
 //! - `tests`: every unit test of the module and the brute-force references they check against.
 

@@ -231,9 +231,8 @@ impl Groups {
     pub(super) fn corners(&self, i: usize) -> (DVec3, DVec3) {
         let (at, code) = self.boxes[i];
         let [gx, gy, _] = self.groups;
-        // (In 32 bits where a layer of groups fits them, as it does wherever the index of its
-        // last group does: a 32-bit division takes a fraction of a 64-bit one's time on many
-        // processors.)
+        // (In 32 bits where the groups of a row and of a layer fit them: a 32-bit division
+        // takes a fraction of a 64-bit one's time on many processors.)
         let group = match (u32::try_from(gx), u32::try_from(gy), u32::try_from(gx * gy)) {
             (Ok(gx), Ok(gy), Ok(layer)) => [at % gx, at / gx % gy, at / layer].map(|c| c as usize),
             _ => {

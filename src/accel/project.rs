@@ -107,7 +107,8 @@ impl Projection {
     /// time, one to a lane of plain arrays that the compiler vectorises, each box by the
     /// operations of `Projection::mark` (one box at a time, the tests' reference) in its
     /// order (no operation fused or reordered), so every instruction set gives the same
-    /// numbers as `mark`.
+    /// numbers as `mark` (but for the sign of a zero depth, which `f64::min` leaves open and
+    /// which compares equal).
     #[inline(always)]
     pub(super) fn marks_generic(
         &self,
@@ -134,8 +135,9 @@ impl Projection {
     }
 
     /// `Projection::mark` of eight boxes, one to a lane: `None` where any of them gives up.
-    /// (Plain loops over the lanes, no closures or `array::map`: those were called, not
-    /// inlined, into the caller's target features, their arrays spilled around each call.)
+    /// (Plain loops over the lanes, no closures or `array::map`: the compiler calls those
+    /// instead of inlining them into the caller's target features, its arrays spilled around
+    /// each call.)
     #[inline(always)]
     fn lanes(&self, boxes: &[(DVec3, DVec3); LANES]) -> Option<[Option<Mark>; LANES]> {
         // Each box's lowest corner and edges, grown by the margin.
