@@ -300,8 +300,8 @@ struct Filing {
 
 impl Filing {
     /// The run of boxes `range`, projected and filed by bins; `None` to give up (a box that
-    /// cannot be projected, more marked pixels than the budget, memory that cannot be had: the
-    /// rays then walk from the object's box).
+    /// cannot be projected, the runs' marked pixels together past the budget, memory that
+    /// cannot be had: the rays then walk from the object's box).
     fn run(
         &self,
         projection: &Projection,
