@@ -284,7 +284,7 @@ impl EntryMarks {
     /// The pixels all marks cover (counted with multiplicity), and the most one run's cover.
     #[cfg(test)]
     pub(super) fn areas(&self) -> (usize, usize) {
-        let areas = self.runs.iter().map(Run::area);
+        let areas = self.runs.iter().map(|r| area(&r.marks));
         (areas.clone().sum(), areas.max().unwrap_or(0))
     }
 }
@@ -313,14 +313,9 @@ impl Filing {
         if !projection.marks(boxes, range, &mut marks) {
             return None;
         }
-        let mut run = Run {
-            marks,
-            start: Vec::new(),
-            in_bin: Vec::new(),
-        };
         // The runs' areas together within the budget (checked before filing, whose work grows
         // with the area, so that all runs together file no more than the budget allows).
-        let area = run.area();
+        let area = area(&marks);
         let relaxed = std::sync::atomic::Ordering::Relaxed;
         let add = |sum: usize| Some(sum.saturating_add(area));
         let before = self
@@ -332,7 +327,7 @@ impl Filing {
         }
         // Counted, then placed.
         let mut start = crate::num::try_vec(self.bins + 1, 0u32, "").ok()?;
-        for m in &run.marks {
+        for m in &marks {
             for_each_bin(m, self.bins_x, |b| start[b + 1] += 1);
         }
         let mut total = 0u32;
@@ -343,23 +338,23 @@ impl Filing {
         let mut next = crate::num::try_vec(self.bins, 0u32, "").ok()?;
         next.copy_from_slice(&start[..self.bins]);
         let mut in_bin = crate::num::try_vec(total as usize, 0u32, "").ok()?;
-        for (i, m) in run.marks.iter().enumerate() {
+        for (i, m) in marks.iter().enumerate() {
             for_each_bin(m, self.bins_x, |b| {
                 in_bin[next[b] as usize] = i as u32;
                 next[b] += 1;
             });
         }
-        run.start = start;
-        run.in_bin = in_bin;
-        Some(run)
+        Some(Run {
+            marks,
+            start,
+            in_bin,
+        })
     }
 }
 
-impl Run {
-    /// The pixels its marks cover, counted with multiplicity (saturating).
-    fn area(&self) -> usize {
-        self.marks.iter().fold(0usize, |sum, m| {
-            sum.saturating_add((m.x.1 - m.x.0 + 1) * (m.y.1 - m.y.0 + 1))
-        })
-    }
+/// The pixels `marks` cover, counted with multiplicity (saturating).
+fn area(marks: &[Mark]) -> usize {
+    marks.iter().fold(0usize, |sum, m| {
+        sum.saturating_add((m.x.1 - m.x.0 + 1) * (m.y.1 - m.y.0 + 1))
+    })
 }
