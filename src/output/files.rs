@@ -56,8 +56,8 @@ pub(super) fn temporary_name() -> String {
 const TEMPORARY_TRIES: usize = 16;
 
 /// Creates a new temporary file in `dir`, exclusively: `O_CREAT | O_EXCL`, so an existing file
-/// or link at the name (even a dangling one) is never opened or followed; another name is
-/// tried instead.
+/// or link at the name (even a dangling one) is never opened or followed; such a name is
+/// passed over for the next one.
 pub(super) fn create_temporary(
     dir: &Path,
     name: impl Fn() -> String,
