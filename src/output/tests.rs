@@ -110,7 +110,7 @@ fn planted_links_are_never_followed() {
     write_atomic(&dir.join("out.ppm"), b"new").unwrap();
     assert_eq!(fs::read(&victim).unwrap(), b"precious");
     assert_eq!(fs::read(dir.join("out.ppm")).unwrap(), b"new");
-    // The exclusive creation itself: a link at the first name tried is left alone.
+    // The exclusive creation itself: a link at the first name it takes is left alone.
     let first = std::cell::Cell::new(true);
     let name = || {
         if first.replace(false) {
