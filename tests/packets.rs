@@ -424,6 +424,37 @@ fn packets_of_bytes_leave_the_node_values_unmade() {
     assert!(shown >= 10, "{shown}");
 }
 
+/// The pre-integrated packet march of 8-bit voxels reads them for its values (the lanes' and
+/// the slabs' own reads) and for its normals (the trilinear gradient through the table of the
+/// voxels' normalisation), and leaves the node values unmade, in every case of
+/// `packets_are_the_scalar_march` with skipping on.
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn preintegrated_packets_of_bytes_leave_the_node_values_unmade() {
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        return;
+    }
+    let shows = |pixels: &[[f32; 3]]| {
+        pixels
+            .iter()
+            .any(|p| (p[0] - 0.1).abs() + (p[1] - 0.2).abs() + (p[2] - 0.3).abs() > 0.01)
+    };
+    let mut shown = 0;
+    for case in cases().iter().filter(|c| c.optimise.skip_empty) {
+        let case = Case {
+            optimise: Optimise {
+                preintegrate: true,
+                ..case.optimise
+            },
+            ..*case
+        };
+        let (pixels, made) = render_made(&case, true, 2);
+        assert!(!made, "{:?}", case.dims);
+        shown += shows(&pixels) as usize;
+    }
+    assert!(shown >= 10, "{shown}");
+}
+
 /// The packet march of 16-bit voxels reads them through their table of node values and leaves
 /// the node values unmade, in every case of `packets_are_the_scalar_march` with skipping on
 /// (its volumes as 16-bit voxels), within one 8-bit level of the scalar march, which makes them

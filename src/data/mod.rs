@@ -111,13 +111,17 @@ pub struct Dataset {
     raw: Voxels,
     /// Normalised node values, x fastest: computed on first use ([`Dataset::values`]). A
     /// render that reads only the raw voxels (the packet march of 8-bit voxels, the brick
-    /// ranges, the cell masks) never makes them: for a scan, four times its voxels' memory,
+    /// ranges, the cell masks, the trilinear gradient through `table8` or
+    /// [`Dataset::table16`]) never makes them: for a scan, four times its voxels' memory,
     /// and a large part of its first image's time.
     values: std::sync::OnceLock<Vec<f32>>,
     /// For 16-bit voxels, the node value of every voxel value (entry v is the normalisation of
     /// v, the same f32 as a node's): made on first use ([`Dataset::table16`]), 256 KiB, so that
     /// the packet march reads 16-bit voxels without the node values' four bytes a voxel.
     table16: std::sync::OnceLock<Box<[f32; 1 << 16]>>,
+    /// The node value of every 8-bit voxel value (entry v is the normalisation of v, the same
+    /// f32 as a node's), 1 KiB: the trilinear gradient reads 8-bit voxels through it.
+    table8: Box<[f32; 256]>,
     /// Brick ranges, computed on first use: for reach 1 (nearest, trilinear) and 2 (cubic).
     bricks: [std::sync::OnceLock<Bricks>; 2],
     /// Cell masks built so far, by the bits of their bound (see [`Dataset::cells_above`]).
@@ -235,6 +239,7 @@ impl Dataset {
             splats: Default::default(),
             values: std::sync::OnceLock::new(),
             table16: std::sync::OnceLock::new(),
+            table8: Box::new(std::array::from_fn(|v| normaliser(a, b)(v as f64))),
             raw,
         }
         .with_splats())
@@ -340,12 +345,11 @@ impl Dataset {
         let mut values = crate::num::try_vec(self.raw.len(), 0f32, "a dataset's node values")?;
         let threads = rayon::current_num_threads().clamp(1, 64);
         let chunk = self.raw.len().div_ceil(threads).max(1 << 16);
-        let lut: [f32; 256] = std::array::from_fn(|x| norm(x as f64));
+        let lut = &*self.table8;
         std::thread::scope(|scope| {
             for (k, out) in values.chunks_mut(chunk).enumerate() {
                 let from = k * chunk;
                 let raw = &self.raw;
-                let lut = &lut;
                 scope.spawn(move || match raw {
                     Voxels::U8(v) => {
                         for (o, &x) in out.iter_mut().zip(&v[from..]) {

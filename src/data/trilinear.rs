@@ -3,12 +3,14 @@
 //! This file owns finding a point's trilinear cell in f32 index arithmetic (in SSE lanes where
 //! the grid allows, else axis by axis), the cell's value from its nodes read as x-rows
 //! ([`Dataset::trilinear`]), and the interior trilinear gradient read from the cell's 4×4×4
-//! neighbourhood, with the [`CellGradients`] cache that consecutive samples of a ray share.
+//! neighbourhood (the node values where they are made, else the voxels through the table of
+//! their normalisation, the same bits), with the [`CellGradients`] cache that consecutive
+//! samples of a ray share.
 //! Every path gives the numbers of the code it specialises bit for bit (the tests hold the
 //! plain versions). Not here: the filters' definitions and the generic paths these fall back
 //! to (the `filter` module), and eight points at once (the `lanes` module).
 
-use super::{CellMask, Dataset};
+use super::{CellMask, Dataset, Voxels};
 
 /// The central differences (per grid step) at the eight nodes of the cell a trilinear
 /// gradient last read, per corner (x fastest) and axis (x, y, z), for
@@ -232,7 +234,7 @@ impl Dataset {
             // a stride of more than one node spans at most half of them): given as such, no
             // sum below overflows, and the compiler derives every row's bounds check from one
             // test, that the neighbourhood's last row (3, 3), not itself read, lies inside the
-            // values (the rows grow with j and k). An interior cell's does: its neighbourhood
+            // voxels (the rows grow with j and k). An interior cell's does: its neighbourhood
             // lies inside the grid.
             debug_assert!(self.strides.iter().all(|&s| s <= u32::MAX as usize));
             let (sy, sz) = (
@@ -240,39 +242,31 @@ impl Dataset {
                 self.strides[2] as u32 as usize,
             );
             let lo = u32::try_from(lo).ok()? as usize;
-            let v = self.values();
-            if lo + 3 * sy + 3 * sz + 4 > v.len() {
+            if lo + 3 * sy + 3 * sz + 4 > self.raw.len() {
                 return None;
             }
-            let row = |j: usize, k: usize| -> Option<[f32; 4]> {
-                let o = lo + j * sy + k * sz;
-                v.get(o..o + 4)?.try_into().ok()
-            };
-            let (r10, r20) = (row(1, 0)?, row(2, 0)?);
-            let (r01, r11, r21, r31) = (row(0, 1)?, row(1, 1)?, row(2, 1)?, row(3, 1)?);
-            let (r02, r12, r22, r32) = (row(0, 2)?, row(1, 2)?, row(2, 2)?, row(3, 2)?);
-            let (r13, r23) = (row(1, 3)?, row(2, 3)?);
-            // Per corner row (j, k) of the cell (j, k in {1, 2}, y fastest): its row, the rows
-            // below and above it in y, and the rows below and above it in z. Each gives two
-            // corners (x nodes 1 and 2 of the row) their central differences (per grid
-            // step) along x, y and z.
-            let corners = [
-                (r11, r01, r21, r10, r12),
-                (r21, r11, r31, r20, r22),
-                (r12, r02, r22, r11, r13),
-                (r22, r12, r32, r21, r23),
-            ];
-            // Row by row in lanes: the row differences in y and z (lanes 1 and 2: the row's
-            // two corners, x nodes 1 and 2), and x nodes 2, 3 minus nodes 0, 1 (lanes 0 and
-            // 1); each corner's three differences then gathered into one register, in the
-            // cache's order (y, z, x) (lane 3 is not read).
-            use wide::f32x4;
-            for (c, (r, ym, yp, zm, zp)) in corners.into_iter().enumerate() {
-                let dy = (f32x4::new(yp) - f32x4::new(ym)).to_array();
-                let dz = (f32x4::new(zp) - f32x4::new(zm)).to_array();
-                let dx = (f32x4::new([r[2], r[3], r[2], r[3]]) - f32x4::new(r)).to_array();
-                cache.diffs[2 * c] = [dy[1], dz[1], dx[0], dx[0]];
-                cache.diffs[2 * c + 1] = [dy[2], dz[2], dx[1], dx[1]];
+            // Where the node values are made they are read; else a row's four node values are
+            // its voxels' entries in the table of the normalisation (the node values' own, bit
+            // for bit), so that a gradient does not make them (four bytes a voxel) and reads a
+            // quarter (8-bit) or half (16-bit) of their bytes.
+            match (self.values.get(), &self.raw) {
+                (Some(v), _) => {
+                    differences(cache, lo, (sy, sz), |o| v.get(o..o + 4)?.try_into().ok())?
+                }
+                (None, Voxels::U8(raw)) => {
+                    let table = &*self.table8;
+                    differences(cache, lo, (sy, sz), |o| {
+                        let r: &[u8; 4] = raw.get(o..o + 4)?.try_into().ok()?;
+                        Some(r.map(|x| table[x as usize]))
+                    })?
+                }
+                (None, Voxels::U16(raw)) => {
+                    let table = self.table16()?;
+                    differences(cache, lo, (sy, sz), |o| {
+                        let r: &[u16; 4] = raw.get(o..o + 4)?.try_into().ok()?;
+                        Some(r.map(|x| table[x as usize]))
+                    })?
+                }
             }
             cache.lo = lo;
         }
@@ -317,4 +311,46 @@ impl Dataset {
         // is at least 1 along every axis, so no step wraps.
         self.node_index(cell) - self.lo_offset
     }
+}
+
+/// Fills `cache` with the central differences (per grid step) at the eight nodes of the cell
+/// whose 4×4×4 neighbourhood starts at node `lo` (strides `sy`, `sz`; see
+/// [`Dataset::trilinear_gradient_at`]), reading each x-row of four node values that it needs
+/// by `row(first node)`; `None` where a row is not there (never, for an interior cell).
+#[inline(always)]
+fn differences(
+    cache: &mut CellGradients,
+    lo: usize,
+    (sy, sz): (usize, usize),
+    row: impl Fn(usize) -> Option<[f32; 4]>,
+) -> Option<()> {
+    // Row (j, k) holds nodes x0 − 1 … x0 + 2 at y0 − 1 + j, z0 − 1 + k; the corner rows of
+    // the neighbourhood are never read.
+    let row = |j: usize, k: usize| row(lo + j * sy + k * sz);
+    let (r10, r20) = (row(1, 0)?, row(2, 0)?);
+    let (r01, r11, r21, r31) = (row(0, 1)?, row(1, 1)?, row(2, 1)?, row(3, 1)?);
+    let (r02, r12, r22, r32) = (row(0, 2)?, row(1, 2)?, row(2, 2)?, row(3, 2)?);
+    let (r13, r23) = (row(1, 3)?, row(2, 3)?);
+    // Per corner row (j, k) of the cell (j, k in {1, 2}, y fastest): its row, the rows below
+    // and above it in y, and the rows below and above it in z. Each gives two corners (x
+    // nodes 1 and 2 of the row) their central differences (per grid step) along x, y and z.
+    let corners = [
+        (r11, r01, r21, r10, r12),
+        (r21, r11, r31, r20, r22),
+        (r12, r02, r22, r11, r13),
+        (r22, r12, r32, r21, r23),
+    ];
+    // Row by row in lanes: the row differences in y and z (lanes 1 and 2: the row's two
+    // corners, x nodes 1 and 2), and x nodes 2, 3 minus nodes 0, 1 (lanes 0 and 1); each
+    // corner's three differences then gathered into one register, in the cache's order (y, z,
+    // x) (lane 3 is not read).
+    use wide::f32x4;
+    for (c, (r, ym, yp, zm, zp)) in corners.into_iter().enumerate() {
+        let dy = (f32x4::new(yp) - f32x4::new(ym)).to_array();
+        let dz = (f32x4::new(zp) - f32x4::new(zm)).to_array();
+        let dx = (f32x4::new([r[2], r[3], r[2], r[3]]) - f32x4::new(r)).to_array();
+        cache.diffs[2 * c] = [dy[1], dz[1], dx[0], dx[0]];
+        cache.diffs[2 * c + 1] = [dy[2], dz[2], dx[1], dx[1]];
+    }
+    Some(())
 }

@@ -169,6 +169,65 @@ fn gradient_rows_are_the_row_by_row_read() {
     }
 }
 
+/// A gradient read before the node values are made reads the voxels through the table of
+/// their normalisation and does not make the node values; it is the gradient read from the
+/// node values, bit for bit: at every neighbourhood start of grids of 8- and 16-bit voxels
+/// (every voxel value of either width among them), under normalisations that increase,
+/// decrease and clamp, through a cache that hits and misses.
+#[test]
+fn gradients_read_from_the_voxels_are_those_of_the_node_values() {
+    let rng = crate::testing::Xorshift::new(0x6a0d_b17e);
+    for (dims, wide, (a, b)) in [
+        ([4, 4, 4], false, (10.0, 240.0)),
+        ([5, 7, 6], false, (255.0, 0.0)),
+        ([6, 5, 4], false, (-3.5, 100.25)),
+        ([4, 6, 5], true, (0.0, 65535.0)),
+        ([7, 4, 5], true, (40000.0, 1000.0)),
+        ([5, 5, 9], true, (-100.0, 30000.0)),
+    ] {
+        let n: usize = dims.iter().product();
+        let voxels = if wide {
+            // Every 16-bit value's neighbourhood is not possible in so few voxels: both ends,
+            // and the rest at random.
+            Voxels::U16(
+                (0..n)
+                    .map(|i| match i % 11 {
+                        0 => 0,
+                        1 => u16::MAX,
+                        _ => rng.bits() as u16,
+                    })
+                    .collect(),
+            )
+        } else {
+            Voxels::U8(
+                (0..n)
+                    .map(|i| (i * 7 + rng.bits() as usize % 5) as u8)
+                    .collect(),
+            )
+        };
+        let raw = Dataset::new(dims, voxels, a, b).unwrap();
+        let made = raw.clone();
+        made.values();
+        let (mut cache, mut made_cache) = (CellGradients::default(), CellGradients::default());
+        for lo in 0..n + 3 {
+            for _ in 0..3 {
+                let f = [rng.next() as f32, rng.next() as f32, rng.next() as f32];
+                let got = raw.trilinear_gradient_at::<true>(lo, f, &mut cache);
+                let want = made.trilinear_gradient_at::<true>(lo, f, &mut made_cache);
+                assert_eq!(
+                    got.map(|g| g.map(f64::to_bits)),
+                    want.map(|g| g.map(f64::to_bits)),
+                    "{dims:?} lo {lo} {f:?}"
+                );
+            }
+        }
+        assert!(
+            !raw.values_made(),
+            "{dims:?}: the gradients made the node values"
+        );
+    }
+}
+
 /// The interior trilinear gradient the plain way, for bit-for-bit comparisons: the cell
 /// axis by axis, each corner's central differences read node by node, the weights as
 /// products, each axis summed corner by corner in f32, then 0.5·g·(n − 1) in f64.
