@@ -111,7 +111,7 @@ pub struct Dataset {
     raw: Voxels,
     /// Normalised node values, x fastest: computed on first use ([`Dataset::values`]). A
     /// render that reads only the raw voxels (the packet march of 8-bit voxels, the brick
-    /// ranges, the cell masks, the trilinear gradient through `table8` or
+    /// ranges, the cell masks, trilinear values and gradients through `table8` or
     /// [`Dataset::table16`]) never makes them: for a scan, four times its voxels' memory,
     /// and a large part of its first image's time.
     values: std::sync::OnceLock<Vec<f32>>,
@@ -120,7 +120,8 @@ pub struct Dataset {
     /// the packet march reads 16-bit voxels without the node values' four bytes a voxel.
     table16: std::sync::OnceLock<Box<[f32; 1 << 16]>>,
     /// The node value of every 8-bit voxel value (entry v is the normalisation of v, the same
-    /// f32 as a node's), 1 KiB: the trilinear gradient reads 8-bit voxels through it.
+    /// f32 as a node's), 1 KiB: the node values are made from it, and the trilinear values and
+    /// gradients read 8-bit voxels through it while they are not made.
     table8: Box<[f32; 256]>,
     /// Brick ranges, computed on first use: for reach 1 (nearest, trilinear) and 2 (cubic).
     bricks: [std::sync::OnceLock<Bricks>; 2],

@@ -3,9 +3,9 @@
 //! This file owns finding a point's trilinear cell in f32 index arithmetic (in SSE lanes where
 //! the grid allows, else axis by axis), the cell's value from its nodes read as x-rows
 //! ([`Dataset::trilinear`]), and the interior trilinear gradient read from the cell's 4×4×4
-//! neighbourhood (the node values where they are made, else the voxels through the table of
-//! their normalisation, the same bits), with the [`CellGradients`] cache that consecutive
-//! samples of a ray share.
+//! neighbourhood, with the [`CellGradients`] cache that consecutive samples of a ray share.
+//! Both read the node values where they are made, else the voxels through the table of their
+//! normalisation (the same bits), so that they never make the node values.
 //! Every path gives the numbers of the code it specialises bit for bit (the tests hold the
 //! plain versions). Not here: the filters' definitions and the generic paths these fall back
 //! to (the `filter` module), and eight points at once (the `lanes` module).
@@ -157,9 +157,9 @@ impl Dataset {
     /// The trilinear value in the cell whose first node has index `base`, at weights `f` of
     /// its second nodes (the callers test the cell mask first). `unit_x`: whether the x-stride
     /// is 1 (else 0, an axis of one node), given by the caller so that a loop over cells tests
-    /// it once. `None` where the cell's nodes are not all in the values, which never happens
-    /// (the cell lies inside the grid): the caller keeps its 0 then, so no 0 is made in a
-    /// register for that path on every cell.
+    /// it once. `None` where the cell's nodes are not all in the node values or voxels, which
+    /// never happens (the cell lies inside the grid): the caller keeps its 0 then, so no 0 is
+    /// made in a register for that path on every cell.
     #[inline(always)]
     pub(super) fn trilinear_cell(
         &self,
@@ -168,38 +168,19 @@ impl Dataset {
         f: [f32; 3],
         unit_x: bool,
     ) -> Option<f32> {
-        let v = self.values();
-        if unit_x {
-            // Four rows of two nodes along x, in the span [base, base + sz + sy + 2): the
-            // first and last two nodes of its first sy + 2 and of its last sy + 2. Where base
-            // and the strides are below 2³² (given as such) no sum overflows, and the span's
-            // bounds check is the only one the compiler keeps.
-            let rows = v.get(base..base + sz + sy + 2).and_then(|w| {
-                let (lower, upper) = (w.get(..sy + 2)?, w.get(sz..)?);
-                Some([
-                    lower.first_chunk::<2>()?,
-                    lower.last_chunk::<2>()?,
-                    upper.first_chunk::<2>()?,
-                    upper.last_chunk::<2>()?,
-                ])
-            });
-            // (Always there: the cell lies inside the grid. The rows by reference: copied
-            // out as arrays, they would be loaded through integer registers.)
-            let [r00, r10, r01, r11] = rows?;
-            let z0 = [r00[0], r00[1], r01[0], r01[1]];
-            Some(trilinear_rows(z0, [r10[0], r10[1], r11[0], r11[1]], f))
-        } else {
-            // (sx = 0: an axis of one node.)
-            let w = v.get(base..=base + sy + sz)?; // (always there, as above)
-            let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
-            let [fx, fy, fz] = f;
-            let (c00, c10, c01, c11) = (
-                lerp(w[0], w[0], fx),
-                lerp(w[sy], w[sy], fx),
-                lerp(w[sz], w[sz], fx),
-                lerp(w[sz + sy], w[sz + sy], fx),
-            );
-            Some(lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz).clamp(0.0, 1.0))
+        // Where the node values are made they are read; else the cell's voxels, each through
+        // the table of the normalisation (the node values' own, bit for bit), so that a
+        // value does not make the node values (four bytes a voxel).
+        match (self.values.get(), &self.raw) {
+            (Some(v), _) => cell_of(v, base, (sy, sz), f, unit_x, |&x| x),
+            (None, Voxels::U8(raw)) => {
+                let table = &*self.table8;
+                cell_of(raw, base, (sy, sz), f, unit_x, |&x| table[x as usize])
+            }
+            (None, Voxels::U16(raw)) => {
+                let table = self.table16()?;
+                cell_of(raw, base, (sy, sz), f, unit_x, |&x| table[x as usize])
+            }
         }
     }
 
@@ -227,33 +208,35 @@ impl Dataset {
         [fx, fy, fz]: [f32; 3],
         cache: &mut CellGradients,
     ) -> Option<[f64; 3]> {
-        // Row (j, k) holds nodes x0 − 1 … x0 + 2 at y0 − 1 + j, z0 − 1 + k; the corner rows of
-        // the neighbourhood are never read.
         if cache.lo != lo {
-            // The node indices and strides are below 2³² (a dataset has at most 2³² nodes, and
-            // a stride of more than one node spans at most half of them): given as such, no
-            // sum below overflows, and the compiler derives every row's bounds check from one
-            // test, that the neighbourhood's last row (3, 3), not itself read, lies inside the
-            // voxels (the rows grow with j and k). An interior cell's does: its neighbourhood
-            // lies inside the grid.
             debug_assert!(self.strides.iter().all(|&s| s <= u32::MAX as usize));
             let (sy, sz) = (
                 self.strides[1] as u32 as usize,
                 self.strides[2] as u32 as usize,
             );
             let lo = u32::try_from(lo).ok()? as usize;
-            if lo + 3 * sy + 3 * sz + 4 > self.raw.len() {
-                return None;
-            }
+            // Whether the neighbourhood's last row (3, 3), not itself read, lies inside `len`
+            // nodes: the node indices and strides are below 2³² (a dataset has at most 2³²
+            // nodes, and a stride of more than one node spans at most half of them), given as
+            // such, so no sum overflows, and the compiler derives every row's bounds check
+            // from this one test (the rows grow with j and k). An interior cell's
+            // neighbourhood lies inside the grid.
+            let inside = |len: usize| lo + 3 * sy + 3 * sz + 4 <= len;
             // Where the node values are made they are read; else a row's four node values are
             // its voxels' entries in the table of the normalisation (the node values' own, bit
             // for bit), so that a gradient does not make them (four bytes a voxel) and reads a
             // quarter (8-bit) or half (16-bit) of their bytes.
             match (self.values.get(), &self.raw) {
                 (Some(v), _) => {
+                    if !inside(v.len()) {
+                        return None;
+                    }
                     differences(cache, lo, (sy, sz), |o| v.get(o..o + 4)?.try_into().ok())?
                 }
                 (None, Voxels::U8(raw)) => {
+                    if !inside(raw.len()) {
+                        return None;
+                    }
                     let table = &*self.table8;
                     differences(cache, lo, (sy, sz), |o| {
                         let r: &[u8; 4] = raw.get(o..o + 4)?.try_into().ok()?;
@@ -261,6 +244,9 @@ impl Dataset {
                     })?
                 }
                 (None, Voxels::U16(raw)) => {
+                    if !inside(raw.len()) {
+                        return None;
+                    }
                     let table = self.table16()?;
                     differences(cache, lo, (sy, sz), |o| {
                         let r: &[u16; 4] = raw.get(o..o + 4)?.try_into().ok()?;
@@ -324,8 +310,8 @@ fn differences(
     (sy, sz): (usize, usize),
     row: impl Fn(usize) -> Option<[f32; 4]>,
 ) -> Option<()> {
-    // Row (j, k) holds nodes x0 − 1 … x0 + 2 at y0 − 1 + j, z0 − 1 + k; the corner rows of
-    // the neighbourhood are never read.
+    // Row (j, k) holds nodes x0 − 1 … x0 + 2 at y0 − 1 + j, z0 − 1 + k; the corner rows of the
+    // neighbourhood are never read.
     let row = |j: usize, k: usize| row(lo + j * sy + k * sz);
     let (r10, r20) = (row(1, 0)?, row(2, 0)?);
     let (r01, r11, r21, r31) = (row(0, 1)?, row(1, 1)?, row(2, 1)?, row(3, 1)?);
@@ -353,4 +339,66 @@ fn differences(
         cache.diffs[2 * c + 1] = [dy[2], dz[2], dx[1], dx[1]];
     }
     Some(())
+}
+
+/// [`Dataset::trilinear_cell`] of the nodes `v`, whose node values are `value(node)` (the node
+/// values themselves, or voxels through their table).
+#[inline(always)]
+fn cell_of<T>(
+    v: &[T],
+    base: usize,
+    (sy, sz): (usize, usize),
+    f: [f32; 3],
+    unit_x: bool,
+    value: impl Fn(&T) -> f32,
+) -> Option<f32> {
+    if unit_x {
+        // Four rows of two nodes along x, in the span [base, base + sz + sy + 2): the first
+        // and last two nodes of its first sy + 2 and of its last sy + 2. Where base and the
+        // strides are below 2³² (given as such) no sum overflows, and the span's bounds check
+        // is the only one the compiler keeps.
+        let rows = v.get(base..base + sz + sy + 2).and_then(|w| {
+            let (lower, upper) = (w.get(..sy + 2)?, w.get(sz..)?);
+            Some([
+                lower.first_chunk::<2>()?,
+                lower.last_chunk::<2>()?,
+                upper.first_chunk::<2>()?,
+                upper.last_chunk::<2>()?,
+            ])
+        });
+        // (Always there: the cell lies inside the grid. The rows by reference: copied out as
+        // arrays, they would be loaded through integer registers.)
+        let [r00, r10, r01, r11] = rows?;
+        let z0 = [
+            value(&r00[0]),
+            value(&r00[1]),
+            value(&r01[0]),
+            value(&r01[1]),
+        ];
+        let z1 = [
+            value(&r10[0]),
+            value(&r10[1]),
+            value(&r11[0]),
+            value(&r11[1]),
+        ];
+        Some(trilinear_rows(z0, z1, f))
+    } else {
+        // (sx = 0: an axis of one node.)
+        let w = v.get(base..=base + sy + sz)?; // (always there, as above)
+        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+        let [fx, fy, fz] = f;
+        let (w0, wy, wz, wyz) = (
+            value(&w[0]),
+            value(&w[sy]),
+            value(&w[sz]),
+            value(&w[sz + sy]),
+        );
+        let (c00, c10, c01, c11) = (
+            lerp(w0, w0, fx),
+            lerp(wy, wy, fx),
+            lerp(wz, wz, fx),
+            lerp(wyz, wyz, fx),
+        );
+        Some(lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz).clamp(0.0, 1.0))
+    }
 }

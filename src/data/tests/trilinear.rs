@@ -169,11 +169,51 @@ fn gradient_rows_are_the_row_by_row_read() {
     }
 }
 
+/// A trilinear value read before the node values are made reads the cell's voxels through the
+/// table of their normalisation and does not make the node values; it is the value read from
+/// the node values, bit for bit: at points inside, on and outside grids of 8- and 16-bit
+/// voxels (one of them a single node across x, whose x-stride is 0), under normalisations
+/// that increase, decrease and clamp.
+#[test]
+fn values_read_from_the_voxels_are_those_of_the_node_values() {
+    let rng = crate::testing::Xorshift::new(0x7a1e_5eed);
+    for (dims, wide, (a, b)) in [
+        ([4, 4, 4], false, (10.0, 240.0)),
+        ([5, 7, 6], false, (255.0, 0.0)),
+        ([1, 5, 4], false, (-3.5, 100.25)),
+        ([4, 6, 5], true, (0.0, 65535.0)),
+        ([7, 4, 5], true, (40000.0, 1000.0)),
+        ([1, 4, 6], true, (-100.0, 30000.0)),
+    ] {
+        let n: usize = dims.iter().product();
+        let voxels = if wide {
+            Voxels::U16((0..n).map(|_| rng.bits() as u16).collect())
+        } else {
+            Voxels::U8((0..n).map(|_| rng.bits() as u8).collect())
+        };
+        let raw = Dataset::new(dims, voxels, a, b).unwrap();
+        let made = raw.clone();
+        made.values();
+        for k in 0..2000 {
+            let p: [f32; 3] = std::array::from_fn(|_| match k % 7 {
+                0 => (rng.bits() % 5) as f32 / 4.0,
+                _ => rng.next() as f32 * 1.2 - 0.1,
+            });
+            let (got, want) = (raw.trilinear(p), made.trilinear(p));
+            assert_eq!(got.to_bits(), want.to_bits(), "{dims:?} {p:?}");
+        }
+        assert!(
+            !raw.values_made(),
+            "{dims:?}: the values made the node values"
+        );
+    }
+}
+
 /// A gradient read before the node values are made reads the voxels through the table of
 /// their normalisation and does not make the node values; it is the gradient read from the
 /// node values, bit for bit: at every neighbourhood start of grids of 8- and 16-bit voxels
-/// (every voxel value of either width among them), under normalisations that increase,
-/// decrease and clamp, through a cache that hits and misses.
+/// (both ends of the 16-bit range among them), under normalisations that increase, decrease
+/// and clamp, through a cache that hits and misses.
 #[test]
 fn gradients_read_from_the_voxels_are_those_of_the_node_values() {
     let rng = crate::testing::Xorshift::new(0x6a0d_b17e);
