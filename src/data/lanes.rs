@@ -197,8 +197,8 @@ impl Dataset {
     /// for the sign of a zero component (see [`Dataset::trilinear_gradient_at`]'s
     /// `SIGNED_ZEROS`): for the lighting lanes, where that sign cannot change a colour. The
     /// point is lane `i` of `ps` (by axis, as `trilinear8` takes them), read only where the
-    /// cell's rows are not all inside the values (never, for an interior cell): so the caller
-    /// need not gather it.
+    /// cell's rows are not all inside the node values or voxels (never, for an interior cell):
+    /// so the caller need not gather it.
     #[inline]
     pub(crate) fn trilinear_gradient_in(
         &self,

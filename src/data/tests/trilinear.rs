@@ -171,9 +171,9 @@ fn gradient_rows_are_the_row_by_row_read() {
 
 /// A trilinear value read before the node values are made reads the cell's voxels through the
 /// table of their normalisation and does not make the node values; it is the value read from
-/// the node values, bit for bit: at points inside, on and outside grids of 8- and 16-bit
-/// voxels (one of them a single node across x, whose x-stride is 0), under normalisations
-/// that increase, decrease and clamp.
+/// the node values, bit for bit, one point at a time and eight in lanes (`trilinear8`): at
+/// points inside, on and outside grids of 8- and 16-bit voxels (one of them a single node
+/// across x, whose x-stride is 0), under normalisations that increase, decrease and clamp.
 #[test]
 fn values_read_from_the_voxels_are_those_of_the_node_values() {
     let rng = crate::testing::Xorshift::new(0x7a1e_5eed);
@@ -194,13 +194,29 @@ fn values_read_from_the_voxels_are_those_of_the_node_values() {
         let raw = Dataset::new(dims, voxels, a, b).unwrap();
         let made = raw.clone();
         made.values();
-        for k in 0..2000 {
-            let p: [f32; 3] = std::array::from_fn(|_| match k % 7 {
+        let point = |k: usize| -> [f32; 3] {
+            std::array::from_fn(|_| match k % 7 {
                 0 => (rng.bits() % 5) as f32 / 4.0,
                 _ => rng.next() as f32 * 1.2 - 0.1,
-            });
+            })
+        };
+        for k in 0..2000 {
+            let p = point(k);
             let (got, want) = (raw.trilinear(p), made.trilinear(p));
             assert_eq!(got.to_bits(), want.to_bits(), "{dims:?} {p:?}");
+        }
+        let mut cells = crate::data::Cells8::default();
+        for k in 0..250 {
+            let ps: [[f32; 3]; 8] = std::array::from_fn(|i| point(8 * k + i));
+            let by_axis: [[f32; 8]; 3] = std::array::from_fn(|a| ps.map(|p| p[a]));
+            let (mut got, mut want) = ([0f32; 8], [0f32; 8]);
+            raw.trilinear8(&by_axis, 8, None, &mut got, &mut cells);
+            made.trilinear8(&by_axis, 8, None, &mut want, &mut cells);
+            assert_eq!(
+                got.map(f32::to_bits),
+                want.map(f32::to_bits),
+                "{dims:?} {ps:?}"
+            );
         }
         assert!(
             !raw.values_made(),
