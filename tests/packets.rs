@@ -251,6 +251,12 @@ fn render_made_as(
     (pixels, vl.dataset_of(DatasetId(1)).unwrap().values_made())
 }
 
+/// Whether pixel `p` shows the volume: it differs from the backdrop (0.1, 0.2, 0.3) of
+/// [`render_made_as`]'s scenes.
+fn shows_volume(p: &[f32; 3]) -> bool {
+    (p[0] - 0.1).abs() + (p[1] - 0.2).abs() + (p[2] - 0.3).abs() > 0.01
+}
+
 fn cases() -> Vec<Case> {
     let mut rng = Lcg(7);
     let mut cases = Vec::new();
@@ -368,10 +374,7 @@ fn packets_are_the_scalar_march() {
         if bits(&packets) != bits(&scalar) {
             differ += 1;
         }
-        let shown = scalar
-            .iter()
-            .filter(|p| (p[0] - 0.1).abs() + (p[1] - 0.2).abs() + (p[2] - 0.3).abs() > 0.01)
-            .count();
+        let shown = scalar.iter().filter(|p| shows_volume(p)).count();
         eprintln!(
             "case {n}: {shown} of {} pixels show the volume",
             scalar.len()
@@ -408,17 +411,12 @@ fn packets_of_bytes_leave_the_node_values_unmade() {
     if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
         return;
     }
-    let shows = |pixels: &[[f32; 3]]| {
-        pixels
-            .iter()
-            .any(|p| (p[0] - 0.1).abs() + (p[1] - 0.2).abs() + (p[2] - 0.3).abs() > 0.01)
-    };
     let mut shown = 0;
     for case in cases().iter().filter(|c| c.optimise.skip_empty) {
         let (pixels, made) = render_made(case, true, 2);
         assert!(!made, "{:?}", case.dims);
         assert!(!render_made(case, false, 2).1, "{:?}", case.dims);
-        shown += shows(&pixels) as usize;
+        shown += pixels.iter().any(shows_volume) as usize;
     }
     assert!(shown >= 10, "{shown}");
 }
@@ -433,11 +431,6 @@ fn preintegrated_packets_of_bytes_leave_the_node_values_unmade() {
     if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
         return;
     }
-    let shows = |pixels: &[[f32; 3]]| {
-        pixels
-            .iter()
-            .any(|p| (p[0] - 0.1).abs() + (p[1] - 0.2).abs() + (p[2] - 0.3).abs() > 0.01)
-    };
     let mut shown = 0;
     for case in cases().iter().filter(|c| c.optimise.skip_empty) {
         let case = Case {
@@ -449,7 +442,7 @@ fn preintegrated_packets_of_bytes_leave_the_node_values_unmade() {
         };
         let (pixels, made) = render_made(&case, true, 2);
         assert!(!made, "{:?}", case.dims);
-        shown += shows(&pixels) as usize;
+        shown += pixels.iter().any(shows_volume) as usize;
     }
     assert!(shown >= 10, "{shown}");
 }
@@ -486,10 +479,7 @@ fn packets_of_16_bit_voxels_leave_the_node_values_unmade() {
             }
         }
         assert!(!scalar_made, "{:?}", case.dims);
-        shown += scalar
-            .iter()
-            .any(|p| (p[0] - 0.1).abs() + (p[1] - 0.2).abs() + (p[2] - 0.3).abs() > 0.01)
-            as usize;
+        shown += scalar.iter().any(shows_volume) as usize;
     }
     assert!(shown >= 10, "{shown}");
 }
@@ -759,10 +749,7 @@ fn preintegrated_packets_are_the_scalar_march() {
         if bits(&packets) != bits(&scalar) {
             differ += 1;
         }
-        if scalar
-            .iter()
-            .any(|p| (p[0] - 0.1).abs() + (p[1] - 0.2).abs() + (p[2] - 0.3).abs() > 0.01)
-        {
+        if scalar.iter().any(shows_volume) {
             shown_cases += 1;
         }
         for (p, s) in packets.iter().zip(&scalar) {
