@@ -97,19 +97,65 @@ struct Run {
 /// over the marks outside them.
 pub(super) const ENTRY_BIN: usize = 32;
 
-/// A shell block's pixel rectangle (inclusive) and its smallest depth.
+/// The widest and tallest image an [`EntryMarks`] is made for (larger ones have no map: their
+/// rays walk from the object's box), so that a [`Mark`]'s pixel columns and rows fit 16 bits.
+pub(super) const MAX_MAP_SIDE: usize = 1 << 16;
+
+/// A box's pixel rectangle (inclusive) and its smallest depth, in twelve bytes (an image of a
+/// large dataset has a mark for each of hundreds of thousands of boxes): columns and rows in
+/// 16 bits (images up to [`MAX_MAP_SIDE`]), the depth as the largest f32 at most it.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Mark {
-    pub(super) x: (usize, usize),
-    pub(super) y: (usize, usize),
-    pub(super) near: f64,
+    x: [u16; 2],
+    y: [u16; 2],
+    near: f32,
+}
+
+impl Mark {
+    /// The mark of columns `x` and rows `y` (inclusive, each below [`MAX_MAP_SIDE`]) and
+    /// depth at least `near` (rounded down to an f32: a lower bound stays one).
+    #[inline(always)]
+    pub(super) fn new(x: (usize, usize), y: (usize, usize), near: f64) -> Mark {
+        debug_assert!(x.1 < MAX_MAP_SIDE && y.1 < MAX_MAP_SIDE);
+        let n = near as f32;
+        Mark {
+            x: [x.0 as u16, x.1 as u16],
+            y: [y.0 as u16, y.1 as u16],
+            near: if f64::from(n) > near {
+                n.next_down()
+            } else {
+                n
+            },
+        }
+    }
+
+    /// Its first and last column.
+    #[inline(always)]
+    pub(super) fn x(&self) -> (usize, usize) {
+        (self.x[0] as usize, self.x[1] as usize)
+    }
+
+    /// Its first and last row.
+    #[inline(always)]
+    pub(super) fn y(&self) -> (usize, usize) {
+        (self.y[0] as usize, self.y[1] as usize)
+    }
+
+    /// Its depth: a lower bound on the parameter of any ray through its pixels that meets
+    /// its box.
+    #[inline(always)]
+    pub(super) fn near(&self) -> f64 {
+        f64::from(self.near)
+    }
 }
 
 /// Calls `f` with the index of each bin (of [`ENTRY_BIN`]² pixels, `bins_x` to a row of
 /// bins) that mark `m` meets, row by row.
 #[inline(always)]
 fn for_each_bin(m: &Mark, bins_x: usize, mut f: impl FnMut(usize)) {
-    let (x0, x1) = (m.x.0 / ENTRY_BIN, m.x.1 / ENTRY_BIN);
-    for by in m.y.0 / ENTRY_BIN..=m.y.1 / ENTRY_BIN {
+    let ((x0, x1), (y0, y1)) = (m.x(), m.y());
+    let (x0, x1) = (x0 / ENTRY_BIN, x1 / ENTRY_BIN);
+    for by in y0 / ENTRY_BIN..=y1 / ENTRY_BIN {
         for b in by * bins_x + x0..=by * bins_x + x1 {
             f(b);
         }
@@ -196,7 +242,7 @@ impl EntryMarks {
         budget: usize,
     ) -> Option<EntryMarks> {
         let (w, h) = (camera.width as usize, camera.height as usize);
-        if w == 0 || h == 0 || boxes.len() == 0 {
+        if w == 0 || h == 0 || w > MAX_MAP_SIDE || h > MAX_MAP_SIDE || boxes.len() == 0 {
             return None;
         }
         let projection = Projection::new(to_world, camera, boxes.unit * 0.125)?;
@@ -245,15 +291,16 @@ impl EntryMarks {
                         let filed = run.start[b] as usize..run.start[b + 1] as usize;
                         for &i in &run.in_bin[filed] {
                             let m = &run.marks[i as usize];
-                            let (mx0, mx1) = (m.x.0.max(c0), m.x.1.min(c1));
-                            let (my0, my1) = (m.y.0.max(r0), m.y.1.min(r1));
+                            let ((x_0, x_1), (y_0, y_1)) = (m.x(), m.y());
+                            let (mx0, mx1) = (x_0.max(c0), x_1.min(c1));
+                            let (my0, my1) = (y_0.max(r0), y_1.min(r1));
                             if mx0 <= mx1 && my0 <= my1 {
                                 lower_rect(
                                     &mut bound,
                                     tw,
                                     mx0 - x0..=mx1 - x0,
                                     my0 - y0..=my1 - y0,
-                                    m.near,
+                                    m.near(),
                                 );
                             }
                         }
@@ -355,6 +402,7 @@ impl Filing {
 /// The pixels `marks` cover, counted with multiplicity (saturating).
 fn area(marks: &[Mark]) -> usize {
     marks.iter().fold(0usize, |sum, m| {
-        sum.saturating_add((m.x.1 - m.x.0 + 1) * (m.y.1 - m.y.0 + 1))
+        let ((x0, x1), (y0, y1)) = (m.x(), m.y());
+        sum.saturating_add((x1 - x0 + 1) * (y1 - y0 + 1))
     })
 }

@@ -48,7 +48,7 @@ enum BoxList {
     Corners(Vec<(DVec3, DVec3)>),
     /// Blocks of a grid of `dims` blocks of size `cell` from `origin`, by linear index.
     Blocks {
-        index: Vec<usize>,
+        index: Vec<u32>,
         dims: [usize; 3],
         origin: DVec3,
         cell: DVec3,
@@ -70,7 +70,7 @@ impl Boxes {
     /// The blocks `index` (linear indices) of a grid of `dims` blocks of size `cell` from
     /// `origin`.
     pub(super) fn of_blocks(
-        index: Vec<usize>,
+        index: Vec<u32>,
         dims: [usize; 3],
         origin: DVec3,
         cell: DVec3,
@@ -94,6 +94,15 @@ impl Boxes {
         }
     }
 
+    /// The passing groups' list ([`super::passing::Groups::list`]), where these are theirs.
+    #[cfg(test)]
+    pub(super) fn groups(&self) -> Option<&[(u32, super::passing::GroupCode)]> {
+        match &self.list {
+            BoxList::Groups(g) => Some(g.list()),
+            _ => None,
+        }
+    }
+
     /// How many boxes.
     pub(super) fn len(&self) -> usize {
         match &self.list {
@@ -114,7 +123,7 @@ impl Boxes {
                 dims,
                 origin,
                 cell,
-            } => block_box(*dims, *origin, *cell, index[i]),
+            } => block_box(*dims, *origin, *cell, index[i] as usize),
             BoxList::Groups(g) => g.corners(i),
         }
     }
@@ -196,8 +205,9 @@ pub(super) fn chessboard(dist: &mut [u8], dims: [usize; 3]) {
 }
 
 /// The occupied blocks (distance 0) of a distance map with a block of distance > 0 or the
-/// outside of the grid among their 26 neighbours, by index, in order.
-fn shell(dist: &[u8], dims: [usize; 3]) -> Vec<usize> {
+/// outside of the grid among their 26 neighbours, by index (below [`MAX_BLOCKS`], so in 32
+/// bits), in order.
+fn shell(dist: &[u8], dims: [usize; 3]) -> Vec<u32> {
     let at = |i: usize, j: usize, k: usize| dist[i + dims[0] * (j + dims[1] * k)];
     // In parallel over planes, in order.
     (0..dims[2])
@@ -217,7 +227,7 @@ fn shell(dist: &[u8], dims: [usize; 3]) -> Vec<usize> {
                         || (k - 1..=k + 1).any(|kk| {
                             (j - 1..=j + 1).any(|jj| (i - 1..=i + 1).any(|ii| at(ii, jj, kk) != 0))
                         });
-                    open.then_some(i + dims[0] * (j + dims[1] * k))
+                    open.then_some((i + dims[0] * (j + dims[1] * k)) as u32)
                 })
         })
         .collect()
@@ -264,6 +274,8 @@ impl std::hash::Hasher for MemoHasher {
 
 /// The most blocks a grid may have.
 const MAX_BLOCKS: usize = 1 << 24;
+// (A block's index fits 32 bits: the shell's are kept so.)
+const _: () = assert!(MAX_BLOCKS <= u32::MAX as usize);
 
 /// Where a block lies along one axis against the datasets' cube [0, 1] (a dataset is 0
 /// outside it, `Dataset::covers`), in the order of their ranges' widening: every sample it
@@ -569,7 +581,8 @@ impl SkipGrid {
         Some(SkipGrid::new(dims, origin, cell, dist))
     }
 
-    /// The grid of `dims` blocks of size `cell` from `origin`, with distance map `dist`.
+    /// The grid of `dims` blocks (at most [`MAX_BLOCKS`]) of size `cell` from `origin`, with
+    /// distance map `dist`.
     pub(super) fn new(dims: [usize; 3], origin: DVec3, cell: DVec3, dist: Vec<u8>) -> SkipGrid {
         let shell = shell(&dist, dims);
         SkipGrid {

@@ -111,6 +111,52 @@ impl GroupCode {
             self.0 >> 12 & 1 != 0,
         ))
     }
+
+    /// A flag [`passing_boxes`] sets on a group whose eight neighbours in its layer of groups
+    /// (along x and y) and itself all pass, the group not on the layer's edge. Outside the
+    /// bits of [`GroupCode::of_offsets`], and no flagged code is [`GroupCode::NONE`] (bits 14
+    /// and 15 stay clear).
+    const PLANE_FULL: u16 = 1 << 13;
+
+    /// Whether the group is flagged [`GroupCode::PLANE_FULL`].
+    fn plane_full(self) -> bool {
+        self != GroupCode::NONE && self.0 & GroupCode::PLANE_FULL != 0
+    }
+
+    /// The code without the flag [`GroupCode::PLANE_FULL`].
+    fn without_flag(self) -> GroupCode {
+        if self == GroupCode::NONE {
+            self
+        } else {
+            GroupCode(self.0 & !GroupCode::PLANE_FULL)
+        }
+    }
+}
+
+/// Flags ([`GroupCode::PLANE_FULL`]) the groups of one layer (`gx` × `gy` codes, x fastest)
+/// that pass with their eight neighbours in it: the AND of [`GroupCode::all`] over the 3×3
+/// square, along x into a row of scratch flags, then along y.
+fn flag_plane_full(codes: &mut [GroupCode], gx: usize, gy: usize) {
+    if gx < 3 || gy < 3 {
+        return;
+    }
+    // Per group, whether it and its x-neighbours all pass (false on the row's ends).
+    let along_x: Vec<bool> = codes
+        .chunks_exact(gx)
+        .flat_map(|row| {
+            (0..gx).map(move |i| {
+                i > 0 && i + 1 < gx && row[i - 1].all() && row[i].all() && row[i + 1].all()
+            })
+        })
+        .collect();
+    for j in 1..gy - 1 {
+        for i in 1..gx - 1 {
+            let at = j * gx + i;
+            if along_x[at - gx] && along_x[at] && along_x[at + gx] {
+                codes[at].0 |= GroupCode::PLANE_FULL;
+            }
+        }
+    }
 }
 
 /// See [`SkipGrid::passing_boxes`].
@@ -128,57 +174,53 @@ pub(super) fn passing_boxes(
     let groups = cells.map(|c| c.div_ceil(BRICK));
     // Per group: the lowest and highest passing cell per axis, and whether all pass
     // ([`GroupCode`]: two bytes a group; the decoded form takes 56, and filling that much fresh
-    // memory costs more than reading the cells' bits); in parallel over layers of groups.
-    let layers: Vec<Vec<GroupCode>> = (0..groups[2])
-        .into_par_iter()
-        .map(|gk| {
-            let mut layer = vec![GroupCode::NONE; groups[0] * groups[1]];
-            for (gj, row) in layer.chunks_exact_mut(groups[0]).enumerate() {
+    // memory costs more than reading the cells' bits), one layer of groups a task; then, in
+    // the same task, which groups of the layer pass with their eight neighbours in the layer
+    // ([`GroupCode::PLANE_FULL`]). Nothing else is kept per group: a group whose whole 3×3×3
+    // neighbourhood passes is one flagged between two flagged ones along z.
+    let [gx, gy, gz] = groups;
+    let layer = gx * gy;
+    let mut codes = crate::num::try_vec(layer * gz, GroupCode::NONE, "").ok()?;
+    codes
+        .par_chunks_mut(layer)
+        .enumerate()
+        .for_each(|(gk, codes)| {
+            for (gj, row) in codes.chunks_exact_mut(gx).enumerate() {
                 passing_groups_row(data, mask, cells, (gj, gk), row);
             }
-            layer
-        })
-        .collect();
-    // Whether each group and its 26 neighbours all pass (outside the groups: not): the AND
-    // over the 3×3×3 cube, one axis at a time (the cube is the product of three intervals).
-    let [gx, gy, gz] = groups;
-    let full: Vec<bool> = layers.iter().flatten().map(|c| c.all()).collect();
-    // One axis: along it, of `n` groups `stride` apart (runs of `stride` consecutive groups
-    // in blocks of n·stride).
-    let erode = |v: &[bool], stride: usize, n: usize| -> Vec<bool> {
-        let mut out = vec![false; v.len()];
-        for (block, o) in v.chunks(n * stride).zip(out.chunks_mut(n * stride)) {
-            for c in 1..n.saturating_sub(1) {
-                let (before, at, after) = (
-                    &block[(c - 1) * stride..c * stride],
-                    &block[c * stride..(c + 1) * stride],
-                    &block[(c + 1) * stride..(c + 2) * stride],
-                );
-                for (((o, &a), &b), &d) in o[c * stride..(c + 1) * stride]
-                    .iter_mut()
-                    .zip(before)
-                    .zip(at)
-                    .zip(after)
-                {
-                    *o = a && b && d;
-                }
-            }
-        }
-        out
+            flag_plane_full(codes, gx, gy);
+        });
+    let codes = &codes;
+    // Group `at` of layer `gk`, unless its 26 neighbours and itself all pass (along z the
+    // layers on either side; groups on the grid's faces are never enclosed).
+    let kept = move |gk: usize, at: usize| -> Option<(u32, GroupCode)> {
+        let code = codes[gk * layer + at];
+        let flagged = |k: usize| codes[k * layer + at].plane_full();
+        let enclosed = gk > 0 && gk + 1 < gz && flagged(gk - 1) && flagged(gk) && flagged(gk + 1);
+        // (Below 2³²: a dataset has at most 2³² nodes, and a group holds 64 cells.)
+        (code != GroupCode::NONE && !enclosed)
+            .then(|| ((at + gk * layer) as u32, code.without_flag()))
     };
-    let enclosed = erode(&erode(&erode(&full, 1, gx), gx, gy), gx * gy, gz);
-    // The boxes' groups in group order (x fastest), in parallel over layers of groups.
-    let boxes: Vec<(u32, GroupCode)> = (0..gz)
+    // The boxes' groups in group order (x fastest), in parallel over layers of groups: counted,
+    // then filled into a vector of exactly their number.
+    let counts: Vec<usize> = (0..gz)
         .into_par_iter()
-        .flat_map_iter(|gk| {
-            let layer = &layers[gk];
-            let enclosed = &enclosed[gk * gx * gy..(gk + 1) * gx * gy];
-            (0..gx * gy)
-                .filter(move |&at| !enclosed[at] && layer[at] != GroupCode::NONE)
-                // (Below 2³²: a dataset has at most 2³² nodes, and a group holds 64 cells.)
-                .map(move |at| ((at + gk * gx * gy) as u32, layer[at]))
-        })
+        .map(|gk| (0..layer).filter(|&at| kept(gk, at).is_some()).count())
         .collect();
+    let mut boxes = crate::num::try_vec(counts.iter().sum(), (0, GroupCode::NONE), "").ok()?;
+    let mut rest = boxes.as_mut_slice();
+    let mut parts = Vec::with_capacity(gz);
+    for &n in &counts {
+        let (part, tail) = rest.split_at_mut(n);
+        parts.push(part);
+        rest = tail;
+    }
+    parts.into_par_iter().enumerate().for_each(|(gk, part)| {
+        let found = (0..layer).filter_map(|at| kept(gk, at));
+        for (slot, b) in part.iter_mut().zip(found) {
+            *slot = b;
+        }
+    });
     let unit = DVec3::from_array(cells.map(|c| 1.0 / c as f64));
     // Per axis, the object coordinate of each node plane k = 0 … cells: k / cells, and at the
     // dataset's faces out to where it still covers points (a box's low side at plane 0, its
@@ -220,6 +262,12 @@ pub(super) struct Groups {
 }
 
 impl Groups {
+    /// The boxes' groups: index (x fastest) and code.
+    #[cfg(test)]
+    pub(super) fn list(&self) -> &[(u32, GroupCode)] {
+        &self.boxes
+    }
+
     /// How many boxes.
     pub(super) fn len(&self) -> usize {
         self.boxes.len()

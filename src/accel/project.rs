@@ -291,12 +291,12 @@ impl Projection {
         if px0 > px1 || py0 > py1 {
             return None;
         }
-        Some(Mark {
-            x: (px0 as usize, px1 as usize),
-            y: (py0 as usize, py1 as usize),
+        Some(Mark::new(
+            (px0 as usize, px1 as usize),
+            (py0 as usize, py1 as usize),
             // Rounding of the depth itself: a relative slack far below the margin's.
-            near: near - 1e-9 * near.abs(),
-        })
+            near - 1e-9 * near.abs(),
+        ))
     }
 }
 

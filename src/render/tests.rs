@@ -1742,6 +1742,31 @@ fn pixel_buffers_kept_between_renders_change_no_pixel() {
     }
 }
 
+/// Without a team, a tile's pixels go into the strip as the tile ends and its buffer back at
+/// once: after a render of 256 tiles the buffers kept are the strip's and at most one tile's
+/// a thread (with every tile's buffer held until the strip is assembled, 256 would be), and
+/// the image is that of one thread.
+#[test]
+fn tiles_buffers_go_back_as_each_tile_ends() {
+    let vl = sphere_library_with(true);
+    let (w, h) = (512u32, 512u32);
+    let image = vl.render_preview(w, h, 1.0).unwrap();
+    let tile = (PACKET_TILE * PACKET_TILE) as usize;
+    let threads = rayon::current_num_threads();
+    let kept = vl.compiled().unwrap().recycled.kept();
+    let strip = (w * h) as usize;
+    assert!(
+        kept >= strip && kept <= strip + threads * tile,
+        "kept {kept} pixels: the strip's {strip} and at most {threads} tiles' of {tile}"
+    );
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let alone = one.install(|| sphere_library_with(true).render_preview(w, h, 1.0).unwrap());
+    assert!(image.pixels == alone.pixels && image.transmittance == alone.transmittance);
+}
+
 /// A pre-integrated object's tables are built by the first compilation of its scene and shared
 /// by later ones, as its empty-space grid; a fresh `Caches` builds its own, with the same
 /// entries (the tables depend on the closed object and its step alone).

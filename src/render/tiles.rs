@@ -129,31 +129,61 @@ where
     // The strip's pixels before the step: with a team, a rank that cannot hold them fails
     // the step on every rank (`Progress::hold`).
     let len = width as usize * (bottom - top) as usize;
-    let pixels = progress.hold(recycled.take(len, "a strip of the image"))?;
-    // The tiles' buffers this rank took: as many go back (a team's other ranks' tiles come
-    // as buffers of their own, which are freed).
-    let taken = std::sync::atomic::AtomicUsize::new(0);
-    let results: Vec<Tile> = progress
-        .map(corners.len(), |i| {
-            let (tx, ty) = corners[i];
-            if progress.cancelled() {
-                return Vec::new();
-            }
-            let (tw, th) = ((tx + side).min(width) - tx, (ty + side).min(bottom) - ty);
-            // (A tile's buffer is small: a failure is raised to the step's catch.)
-            taken.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            let out = recycled
-                .take((tw * th) as usize, "a tile's pixels")
-                .unwrap_or_else(|e| crate::error::raise(e));
-            f((tx, ty, tw, th), out)
-        })?
-        .into_iter()
-        .zip(&corners)
-        .map(|(out, &corner)| (corner, out))
-        .collect();
-    // The tiles come in row-major order: each band of `side` rows is a row of tiles, copied
-    // into place in parallel, a tile row at a time.
+    let mut pixels = progress.hold(recycled.take(len, "a strip of the image"))?;
+    let row = width as usize;
     let per_row = width.div_ceil(side) as usize;
+    // Tile `out` at column `tx` into `band`, the rows of its row of tiles.
+    let place = |band: &mut [Pixel], tx: u32, out: &[Pixel]| {
+        let tw = ((tx + side).min(width) - tx) as usize;
+        for (y, src) in out.chunks(tw).enumerate() {
+            let at = y * row + tx as usize;
+            band[at..at + tw].copy_from_slice(src);
+        }
+    };
+    // The tiles' buffers this rank took and a team's step returns: as many go back (the other
+    // ranks' tiles come as buffers of their own, which are freed).
+    let taken = std::sync::atomic::AtomicUsize::new(0);
+    let results: Vec<Tile> = {
+        // Without a team each tile goes into the strip as it ends, its row of tiles locked
+        // while it is copied, and its buffer back to `recycled` at once: about one tile's
+        // buffer a thread is in use. With a team every tile comes back as a result of the step
+        // (every rank gets every tile), copied into place below.
+        let bands: Option<Vec<std::sync::Mutex<&mut [Pixel]>>> = match &mut pixels {
+            Some(p) if progress.team().is_none() => {
+                Some(p.chunks_mut(row * side as usize).map(Into::into).collect())
+            }
+            _ => None,
+        };
+        progress
+            .map(corners.len(), |i| {
+                let (tx, ty) = corners[i];
+                if progress.cancelled() {
+                    return Vec::new();
+                }
+                let (tw, th) = ((tx + side).min(width) - tx, (ty + side).min(bottom) - ty);
+                // (A tile's buffer is small: a failure is raised to the step's catch.)
+                let out = recycled
+                    .take((tw * th) as usize, "a tile's pixels")
+                    .unwrap_or_else(|e| crate::error::raise(e));
+                let out = f((tx, ty, tw, th), out);
+                let Some(bands) = &bands else {
+                    taken.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    return out;
+                };
+                let band = &bands[((ty - top) / side) as usize];
+                place(
+                    &mut band.lock().unwrap_or_else(|e| e.into_inner()),
+                    tx,
+                    &out,
+                );
+                recycled.give(out);
+                Vec::new()
+            })?
+            .into_iter()
+            .zip(&corners)
+            .map(|(out, &corner)| (corner, out))
+            .collect()
+    };
     // (Held errors fail the step: the pixels are there.)
     let Some(mut pixels) = pixels else {
         return Err(crate::error::Error::new(
@@ -161,20 +191,20 @@ where
             "a strip's pixels were not allocated",
         ));
     };
-    pixels
-        .par_chunks_mut(width as usize * side as usize)
-        .zip(results.par_chunks(per_row))
-        .for_each(|(band, row)| {
-            for ((tx, _), out) in row {
-                let tw = ((tx + side).min(width) - tx) as usize;
-                for (y, src) in out.chunks(tw).enumerate() {
-                    let at = y * width as usize + *tx as usize;
-                    band[at..at + tw].copy_from_slice(src);
+    // The tiles of a team's step come in row-major order: each band of `side` rows is a row
+    // of tiles, copied into place in parallel, a tile row at a time.
+    if progress.team().is_some() {
+        pixels
+            .par_chunks_mut(row * side as usize)
+            .zip(results.par_chunks(per_row))
+            .for_each(|(band, tiles)| {
+                for ((tx, _), out) in tiles {
+                    place(band, *tx, out);
                 }
-            }
-        });
-    for (_, out) in results.into_iter().take(taken.into_inner()) {
-        recycled.give(out);
+            });
+        for (_, out) in results.into_iter().take(taken.into_inner()) {
+            recycled.give(out);
+        }
     }
     Ok(pixels)
 }

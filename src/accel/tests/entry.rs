@@ -105,6 +105,42 @@ fn entry_map_refuses_what_it_cannot_prove() {
     // Nothing occupied: nothing to project.
     let empty = grid_of(g.dims, &vec![false; g.dist.len()]);
     assert!(EntryMap::build(&empty, to_world, &outside).is_none());
+    // Images up to MAX_MAP_SIDE pixels a side, one row tall (a mark's columns fit 16 bits).
+    let few = Boxes::of_corners((0..4).map(|i| g.shell.corners(i)).collect(), g.shell.unit);
+    for (width, height, map) in [(MAX_MAP_SIDE, 1, true), (MAX_MAP_SIDE + 1, 1, false)] {
+        let wide = Pinhole {
+            width: width as u32,
+            height,
+            ..outside
+        };
+        let got = EntryMap::of_boxes(&few, to_world, &wide).is_some();
+        assert_eq!(got, map, "{width} × {height}");
+    }
+}
+
+/// A mark keeps its rectangle and the largest f32 at most its depth (a lower bound stays
+/// one), in twelve bytes.
+#[test]
+fn marks_round_their_depth_down_to_an_f32() {
+    assert_eq!(std::mem::size_of::<Mark>(), 12);
+    let mut rng = Rng(0x5eed_0041);
+    let mut rounded = 0;
+    for i in 0..10_000 {
+        let near = match i % 4 {
+            0 => (rng.next() - 0.5) * 1e3,
+            1 => rng.next() * 1e-30,
+            2 => f64::from(rng.next() as f32), // exact in f32
+            _ => (rng.next() + 0.5) * 1e40,    // past f32's range
+        };
+        let (x, y) = ((i % 7, MAX_MAP_SIDE - 1), (0, i % 300));
+        let m = Mark::new(x, y, near);
+        assert_eq!((m.x(), m.y()), (x, y));
+        let got = m.near();
+        let next = (got as f32).next_up();
+        assert!(got <= near && f64::from(next) > near, "{near}: {got}");
+        rounded += usize::from(got < near);
+    }
+    assert!(rounded > 5000, "{rounded}");
 }
 
 /// [`EntryMarks::build_within`] with `f64::min` / `f64::max` for the rectangles and each
@@ -169,12 +205,12 @@ fn build_within_reference(
         if px0 > px1 || py0 > py1 {
             return Some(None); // off the image
         }
-        Some(Some(Mark {
-            x: (px0 as usize, px1 as usize),
-            y: (py0 as usize, py1 as usize),
+        Some(Some(Mark::new(
+            (px0 as usize, px1 as usize),
+            (py0 as usize, py1 as usize),
             // Rounding of the depth itself: a relative slack far below the margin's.
-            near: near - 1e-9 * near.abs(),
-        }))
+            near - 1e-9 * near.abs(),
+        )))
     };
     let marks: Vec<Mark> = (0..boxes.len())
         .map(|i| boxes.corners(i))
@@ -185,7 +221,8 @@ fn build_within_reference(
         })
         .collect::<Option<Vec<Mark>>>()?;
     let area = marks.iter().fold(0usize, |sum, m| {
-        sum.saturating_add((m.x.1 - m.x.0 + 1) * (m.y.1 - m.y.0 + 1))
+        let ((x0, x1), (y0, y1)) = (m.x(), m.y());
+        sum.saturating_add((x1 - x0 + 1) * (y1 - y0 + 1))
     });
     if area > budget {
         return None;
@@ -193,9 +230,10 @@ fn build_within_reference(
     // The rectangles' minimum, mark after mark over the whole image.
     let mut bound = vec![f64::INFINITY; w * h];
     for m in &marks {
-        for y in m.y.0..=m.y.1 {
-            for b in &mut bound[y * w + m.x.0..=y * w + m.x.1] {
-                *b = b.min(m.near);
+        let ((x0, x1), (y0, y1)) = (m.x(), m.y());
+        for y in y0..=y1 {
+            for b in &mut bound[y * w + x0..=y * w + x1] {
+                *b = b.min(m.near());
             }
         }
     }
@@ -422,7 +460,7 @@ fn projection_lanes_are_one_box_at_a_time() {
                 Some(Some(m)) => want.push(m),
             }
         }
-        let bits = |m: &Mark| (m.x, m.y, m.near.to_bits());
+        let bits = |m: &Mark| (m.x(), m.y(), m.near().to_bits());
         for (name, f) in [
             (
                 "dispatched",

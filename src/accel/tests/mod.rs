@@ -9,7 +9,7 @@ mod passing;
 mod rect;
 mod walk;
 
-use super::entry::{EntryMap, EntryMarks, Mark, Pinhole, ENTRY_BIN};
+use super::entry::{EntryMap, EntryMarks, Mark, Pinhole, ENTRY_BIN, MAX_MAP_SIDE};
 use super::grid::{chessboard, Boxes, SkipGrid, MAX_LEAP};
 use super::passing::{passing_boxes, passing_groups_row, GroupCode};
 use super::project::Projection;

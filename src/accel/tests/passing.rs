@@ -164,6 +164,74 @@ fn rows_of_groups_are_their_groups() {
     );
 }
 
+/// The passing boxes are the groups with passing cells (their codes as `passing_in` finds
+/// them, in group order) less those enclosed: the group and its 26 neighbours all pass,
+/// every one inside the grid. Volumes with many full groups (large spheres, a full cube
+/// with a hollow, shapes of 2 and 3 groups along an axis), at several bounds.
+#[test]
+fn passing_boxes_are_the_groups_not_enclosed() {
+    let mut rng = Rng(0x5eed_0032);
+    let mut volumes: Vec<Dataset> = [[30, 27, 33], [41, 20, 26], [13, 30, 30], [6, 30, 30]]
+        .into_iter()
+        .map(|dims| spheres(&mut rng, dims, 6))
+        .collect();
+    // A full cube with a hollow in one group, and a full slab two groups thick.
+    for (dims, hollow) in [([29, 29, 29], Some([14, 14, 14])), ([25, 25, 9], None)] {
+        let mut raw = vec![255u8; dims.iter().product()];
+        // (Zero nodes 3 a side: the two cells within them pass no bound.)
+        if let Some([i, j, k]) = hollow {
+            for n in 0..27 {
+                let (a, b, c) = (i + n % 3, j + n / 3 % 3, k + n / 9);
+                raw[a + dims[0] * (b + dims[1] * c)] = 0;
+            }
+        }
+        volumes.push(Dataset::new(dims, crate::data::Voxels::U8(raw), 0.0, 255.0).unwrap());
+    }
+    let (mut kept, mut enclosed) = (0, 0);
+    for data in &volumes {
+        for z in [0.05, 0.5] {
+            let mask = data.cells_above(z);
+            let cells = data.dims().map(|n| n - 1);
+            let groups = cells.map(|c| c.div_ceil(BRICK));
+            let code = |g: [usize; 3]| {
+                let lo = g.map(|g| g * BRICK);
+                let hi = std::array::from_fn(|a| (lo[a] + BRICK).min(cells[a]));
+                GroupCode::new(lo, passing_in(data, &mask, lo, hi))
+            };
+            let mut want = Vec::new();
+            for gk in 0..groups[2] {
+                for gj in 0..groups[1] {
+                    for gi in 0..groups[0] {
+                        let c = code([gi, gj, gk]);
+                        if c == GroupCode::NONE {
+                            continue;
+                        }
+                        let g = [gi, gj, gk].map(|g| g as i64);
+                        let full_around = (0..27).all(|n| {
+                            let at: [i64; 3] =
+                                std::array::from_fn(|a| g[a] + (n / 3i64.pow(a as u32)) % 3 - 1);
+                            let inside = (0..3).all(|a| at[a] >= 0 && at[a] < groups[a] as i64);
+                            inside && code(at.map(|c| c as usize)).all()
+                        });
+                        if full_around {
+                            enclosed += 1;
+                        } else {
+                            want.push(((gi + groups[0] * (gj + groups[1] * gk)) as u32, c));
+                        }
+                    }
+                }
+            }
+            kept += want.len();
+            let boxes = passing_boxes(data, &mask, DVec3::ZERO, DVec3::ONE).expect("3D");
+            assert_eq!(boxes.groups(), Some(&want[..]), "{:?} z {z}", data.dims());
+        }
+    }
+    assert!(
+        kept > 100 && enclosed > 10,
+        "kept {kept}, enclosed {enclosed}"
+    );
+}
+
 /// A group's code gives back every passing-cells triple a group can have (each axis's
 /// lowest and highest passing cell within `BRICK` of its first cell, all or not), and
 /// none where none passes; codes of different triples differ.
