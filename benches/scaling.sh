@@ -105,8 +105,8 @@ for n in order:
 MB = 1 << 20
 def mb(x):
     return f"{x / MB:.0f}"
-lines = ["| volume | nodes | bytes | dataset MB | load (MB/s) | vlib steady frame | VTK median frame "
-         "| vlib / VTK | vlib C run | vlib peak RSS MB, C / Rust | RSS / dataset, C | target 1.25× + image | VTK peak RSS MB |",
+lines = ["| volume | nodes | bytes | dataset MiB | load (MiB/s) | vlib steady frame | VTK median frame "
+         "| vlib / VTK | vlib C run | vlib peak RSS MiB, C / Rust | RSS / dataset, C | target 1.25× + image, MiB | VTK peak RSS MiB |",
          "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
 def opt(x, f):
     return f.format(x) if x else "—"

@@ -97,9 +97,11 @@ struct Run {
 /// over the marks outside them.
 pub(super) const ENTRY_BIN: usize = 32;
 
-/// The widest and tallest image an [`EntryMarks`] is made for (larger ones have no map: their
-/// rays walk from the object's box), so that a [`Mark`]'s pixel columns and rows fit 16 bits.
-pub(super) const MAX_MAP_SIDE: usize = 1 << 16;
+/// The widest and tallest image an [`EntryMarks`] is made for, so that a [`Mark`]'s pixel
+/// columns and rows fit 16 bits: above every image side the API accepts (its
+/// `MAX_IMAGE_SIDE` asserts it); a larger one would get no map, its rays walking from the
+/// object's box.
+pub(crate) const MAX_MAP_SIDE: usize = 1 << 16;
 
 /// A box's pixel rectangle (inclusive) and its smallest depth, in twelve bytes (an image of a
 /// large dataset has a mark for each of hundreds of thousands of boxes): columns and rows in

@@ -584,6 +584,7 @@ impl SkipGrid {
     /// The grid of `dims` blocks (at most [`MAX_BLOCKS`]) of size `cell` from `origin`, with
     /// distance map `dist`.
     pub(super) fn new(dims: [usize; 3], origin: DVec3, cell: DVec3, dist: Vec<u8>) -> SkipGrid {
+        debug_assert!(dist.len() <= MAX_BLOCKS);
         let shell = shell(&dist, dims);
         SkipGrid {
             dims,

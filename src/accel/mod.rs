@@ -37,6 +37,6 @@ mod rect;
 mod tests;
 mod walk;
 
-pub(crate) use entry::{EntryMap, EntryMarks, Pinhole};
+pub(crate) use entry::{EntryMap, EntryMarks, Pinhole, MAX_MAP_SIDE};
 pub(crate) use grid::SkipGrid;
 pub(crate) use walk::Walk;

@@ -134,25 +134,17 @@ impl GroupCode {
 }
 
 /// Flags ([`GroupCode::PLANE_FULL`]) the groups of one layer (`gx` × `gy` codes, x fastest)
-/// that pass with their eight neighbours in it: the AND of [`GroupCode::all`] over the 3×3
-/// square, along x into a row of scratch flags, then along y.
+/// that pass with their eight neighbours in it, read in place (the flag leaves
+/// [`GroupCode::all`] as it is): no scratch per group.
 fn flag_plane_full(codes: &mut [GroupCode], gx: usize, gy: usize) {
-    if gx < 3 || gy < 3 {
-        return;
-    }
-    // Per group, whether it and its x-neighbours all pass (false on the row's ends).
-    let along_x: Vec<bool> = codes
-        .chunks_exact(gx)
-        .flat_map(|row| {
-            (0..gx).map(move |i| {
-                i > 0 && i + 1 < gx && row[i - 1].all() && row[i].all() && row[i + 1].all()
-            })
-        })
-        .collect();
-    for j in 1..gy - 1 {
-        for i in 1..gx - 1 {
+    for j in 1..gy.saturating_sub(1) {
+        for i in 1..gx.saturating_sub(1) {
             let at = j * gx + i;
-            if along_x[at - gx] && along_x[at] && along_x[at + gx] {
+            let square = [at - gx, at, at + gx];
+            if square
+                .iter()
+                .all(|&c| codes[c - 1..=c + 1].iter().all(|g| g.all()))
+            {
                 codes[at].0 |= GroupCode::PLANE_FULL;
             }
         }
@@ -188,7 +180,10 @@ pub(super) fn passing_boxes(
             for (gj, row) in codes.chunks_exact_mut(gx).enumerate() {
                 passing_groups_row(data, mask, cells, (gj, gk), row);
             }
-            flag_plane_full(codes, gx, gy);
+            // (Along z a group between two layers: none is enclosed with fewer than three.)
+            if gz >= 3 {
+                flag_plane_full(codes, gx, gy);
+            }
         });
     let codes = &codes;
     // Group `at` of layer `gk`, unless its 26 neighbours and itself all pass (along z the
@@ -201,23 +196,30 @@ pub(super) fn passing_boxes(
         (code != GroupCode::NONE && !enclosed)
             .then(|| ((at + gk * layer) as u32, code.without_flag()))
     };
-    // The boxes' groups in group order (x fastest), in parallel over layers of groups: counted,
-    // then filled into a vector of exactly their number.
-    let counts: Vec<usize> = (0..gz)
+    // The boxes' groups in group order (x fastest), in parallel over runs of layers (at most
+    // `MAX_RUNS` of them, whatever the grid's shape): counted, then filled into a vector of
+    // exactly their number.
+    const MAX_RUNS: usize = 4096;
+    let per_run = gz.div_ceil(MAX_RUNS).max(1);
+    let found = move |run: usize| {
+        let layers = run * per_run..((run + 1) * per_run).min(gz);
+        layers.flat_map(move |gk| (0..layer).filter_map(move |at| kept(gk, at)))
+    };
+    let runs = gz.div_ceil(per_run);
+    let counts: Vec<usize> = (0..runs)
         .into_par_iter()
-        .map(|gk| (0..layer).filter(|&at| kept(gk, at).is_some()).count())
+        .map(|run| found(run).count())
         .collect();
     let mut boxes = crate::num::try_vec(counts.iter().sum(), (0, GroupCode::NONE), "").ok()?;
     let mut rest = boxes.as_mut_slice();
-    let mut parts = Vec::with_capacity(gz);
+    let mut parts = Vec::with_capacity(runs);
     for &n in &counts {
         let (part, tail) = rest.split_at_mut(n);
         parts.push(part);
         rest = tail;
     }
-    parts.into_par_iter().enumerate().for_each(|(gk, part)| {
-        let found = (0..layer).filter_map(|at| kept(gk, at));
-        for (slot, b) in part.iter_mut().zip(found) {
+    parts.into_par_iter().enumerate().for_each(|(run, part)| {
+        for (slot, b) in part.iter_mut().zip(found(run)) {
             *slot = b;
         }
     });
@@ -314,7 +316,8 @@ impl SkipGrid {
     /// groups whose cells all pass, with all 26 neighbouring groups the same: a ray that meets
     /// opacity first in one has crossed a neighbour's box before (or starts in a region of them,
     /// enclosed by boxes some of which are then behind the eye: no map). `None` for a
-    /// dataset with an axis of one node.
+    /// dataset with an axis of one node, and where the groups' codes or the boxes cannot be
+    /// allocated (kept: the rays then walk from the grid's shell).
     pub(crate) fn passing_boxes(
         &self,
         data: &Dataset,

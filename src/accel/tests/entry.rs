@@ -107,10 +107,16 @@ fn entry_map_refuses_what_it_cannot_prove() {
     assert!(EntryMap::build(&empty, to_world, &outside).is_none());
     // Images up to MAX_MAP_SIDE pixels a side, one row tall (a mark's columns fit 16 bits).
     let few = Boxes::of_corners((0..4).map(|i| g.shell.corners(i)).collect(), g.shell.unit);
-    for (width, height, map) in [(MAX_MAP_SIDE, 1, true), (MAX_MAP_SIDE + 1, 1, false)] {
+    let sides = [
+        (MAX_MAP_SIDE, 1, true),
+        (MAX_MAP_SIDE + 1, 1, false),
+        (1, MAX_MAP_SIDE, true),
+        (1, MAX_MAP_SIDE + 1, false),
+    ];
+    for (width, height, map) in sides {
         let wide = Pinhole {
             width: width as u32,
-            height,
+            height: height as u32,
             ..outside
         };
         let got = EntryMap::of_boxes(&few, to_world, &wide).is_some();
@@ -125,12 +131,17 @@ fn marks_round_their_depth_down_to_an_f32() {
     assert_eq!(std::mem::size_of::<Mark>(), 12);
     let mut rng = Rng(0x5eed_0041);
     let mut rounded = 0;
-    for i in 0..10_000 {
-        let near = match i % 4 {
-            0 => (rng.next() - 0.5) * 1e3,
-            1 => rng.next() * 1e-30,
-            2 => f64::from(rng.next() as f32), // exact in f32
-            _ => (rng.next() + 0.5) * 1e40,    // past f32's range
+    // Zeros, f32's subnormals and beyond its range on either side, then random depths.
+    let special = [
+        0.0, -0.0, 1e-45, -1e-45, 3e-39, -3e-39, 1e-50, -1e-50, 1e40, -1e40,
+    ];
+    for i in 0..10_000 + special.len() {
+        let near = match (special.get(i.wrapping_sub(10_000)), i % 4) {
+            (Some(&x), _) => x,
+            (None, 0) => (rng.next() - 0.5) * 1e3,
+            (None, 1) => rng.next() * 1e-30,
+            (None, 2) => f64::from(rng.next() as f32), // exact in f32
+            (None, _) => (rng.next() + 0.5) * 1e40,    // past f32's range
         };
         let (x, y) = ((i % 7, MAX_MAP_SIDE - 1), (0, i % 300));
         let m = Mark::new(x, y, near);
@@ -138,6 +149,10 @@ fn marks_round_their_depth_down_to_an_f32() {
         let got = m.near();
         let next = (got as f32).next_up();
         assert!(got <= near && f64::from(next) > near, "{near}: {got}");
+        assert!(
+            got.is_finite() || near < -f64::from(f32::MAX),
+            "{near}: {got}"
+        );
         rounded += usize::from(got < near);
     }
     assert!(rounded > 5000, "{rounded}");

@@ -175,8 +175,14 @@ fn passing_boxes_are_the_groups_not_enclosed() {
         .into_iter()
         .map(|dims| spheres(&mut rng, dims, 6))
         .collect();
-    // A full cube with a hollow in one group, and a full slab two groups thick.
-    for (dims, hollow) in [([29, 29, 29], Some([14, 14, 14])), ([25, 25, 9], None)] {
+    // A full cube with a hollow in one group, a full slab two groups thick, and a rod of
+    // more layers of groups than the boxes are counted in runs of (4096).
+    let shapes = [
+        ([29, 29, 29], Some([14, 14, 14])),
+        ([25, 25, 9], None),
+        ([9, 9, 16_401], None),
+    ];
+    for (dims, hollow) in shapes {
         let mut raw = vec![255u8; dims.iter().product()];
         // (Zero nodes 3 a side: the two cells within them pass no bound.)
         if let Some([i, j, k]) = hollow {
