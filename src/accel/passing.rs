@@ -180,7 +180,7 @@ pub(super) fn passing_boxes(
             for (gj, row) in codes.chunks_exact_mut(gx).enumerate() {
                 passing_groups_row(data, mask, cells, (gj, gk), row);
             }
-            // (Along z a group between two layers: none is enclosed with fewer than three.)
+            // (With fewer than three layers no group lies between two along z: none is enclosed.)
             if gz >= 3 {
                 flag_plane_full(codes, gx, gy);
             }
