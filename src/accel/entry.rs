@@ -229,11 +229,18 @@ impl EntryMarks {
     /// than [`ENTRY_BOXES_PER_PIXEL`] allows.
     pub(crate) fn of_boxes(boxes: &Boxes, to_world: DMat4, camera: &Pinhole) -> Option<EntryMarks> {
         let pixels = (camera.width as usize).saturating_mul(camera.height as usize);
-        if boxes.len() > pixels.saturating_mul(ENTRY_BOXES_PER_PIXEL) {
+        if boxes.len() > EntryMarks::most_boxes(camera) {
             return None;
         }
         let budget = pixels.saturating_mul(ENTRY_BUDGET);
         Self::build_within(boxes, to_world, camera, budget)
+    }
+
+    /// The most boxes [`EntryMarks::of_boxes`] projects for `camera`'s image
+    /// ([`ENTRY_BOXES_PER_PIXEL`] a pixel).
+    pub(crate) fn most_boxes(camera: &Pinhole) -> usize {
+        let pixels = (camera.width as usize).saturating_mul(camera.height as usize);
+        pixels.saturating_mul(ENTRY_BOXES_PER_PIXEL)
     }
 
     /// [`EntryMarks::of_boxes`], giving up past `budget` marked rectangle pixels.

@@ -30,7 +30,7 @@ pub(crate) struct SkipGrid {
     pub(super) shell: Boxes,
     /// The boxes of the dataset's cells that can pass a zero test, by 4³ cells (see
     /// [`SkipGrid::passing_boxes`]), made by the first render that asks.
-    pub(super) passing: std::sync::OnceLock<Option<std::sync::Arc<Boxes>>>,
+    pub(super) passing: std::sync::Mutex<super::passing::Passing>,
 }
 
 /// Object-space boxes an [`super::EntryMap`] projects, and the size per axis of the blocks or

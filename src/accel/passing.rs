@@ -151,13 +151,28 @@ fn flag_plane_full(codes: &mut [GroupCode], gx: usize, gy: usize) {
     }
 }
 
-/// See [`SkipGrid::passing_boxes`].
+/// What a [`SkipGrid`] keeps of its passing boxes ([`SkipGrid::passing_boxes`]).
+#[derive(Default)]
+pub(super) enum Passing {
+    /// Not yet asked for.
+    #[default]
+    Unknown,
+    /// None can be made: a dataset with an axis of one node, or memory that cannot be had.
+    Unavailable,
+    /// More of them than the image that asked could project: their number (not made).
+    Many(usize),
+    Made(std::sync::Arc<Boxes>),
+}
+
+/// See [`SkipGrid::passing_boxes`]; `Some(Err(n))` where there are `n` > `most` of them
+/// (found, not made).
 pub(super) fn passing_boxes(
     data: &Dataset,
     mask: &CellMask,
     box_min: DVec3,
     box_max: DVec3,
-) -> Option<Boxes> {
+    most: usize,
+) -> Option<Result<Boxes, usize>> {
     let n = data.dims();
     if n.iter().any(|&k| k < 2) {
         return None;
@@ -210,7 +225,11 @@ pub(super) fn passing_boxes(
         .into_par_iter()
         .map(|run| found(run).count())
         .collect();
-    let mut boxes = crate::num::try_vec(counts.iter().sum(), (0, GroupCode::NONE), "").ok()?;
+    let total = counts.iter().sum();
+    if total > most {
+        return Some(Err(total));
+    }
+    let mut boxes = crate::num::try_vec(total, (0, GroupCode::NONE), "").ok()?;
     let mut rest = boxes.as_mut_slice();
     let mut parts = Vec::with_capacity(runs);
     for &n in &counts {
@@ -247,7 +266,7 @@ pub(super) fn passing_boxes(
         low,
         high,
     };
-    Some(Boxes::of_groups(groups, unit))
+    Some(Ok(Boxes::of_groups(groups, unit)))
 }
 
 /// The passing boxes of [`SkipGrid::passing_boxes`] as their groups: per box its group's index
@@ -306,7 +325,10 @@ impl SkipGrid {
     /// For the batched march of `data` with the cell mask `mask` (its cells whose samples can
     /// pass the zero test) over the object box [box_min, box_max]: boxes that hold every
     /// sample whose opacity is above 0, or at least the first one along any ray, computed
-    /// once per grid (the mask belongs to the grid's object).
+    /// once per grid (the mask belongs to the grid's object), where there are at most `most`
+    /// of them (the boxes an image can project, `EntryMarks::most_boxes`): `None` where there
+    /// are more. Only their number is kept then; an image that can project them makes them
+    /// again.
     ///
     /// Per 4³ cells of the dataset, the box of those that can pass: a sample's value comes
     /// from the cell that holds its point, so a sample whose opacity is above 0 lies in such
@@ -322,11 +344,24 @@ impl SkipGrid {
         &self,
         data: &Dataset,
         mask: &CellMask,
-        box_min: DVec3,
-        box_max: DVec3,
+        (box_min, box_max): (DVec3, DVec3),
+        most: usize,
     ) -> Option<std::sync::Arc<Boxes>> {
-        self.passing
-            .get_or_init(|| passing_boxes(data, mask, box_min, box_max).map(std::sync::Arc::new))
-            .clone()
+        let mut kept = self.passing.lock().unwrap_or_else(|e| e.into_inner());
+        match &*kept {
+            Passing::Made(b) => return (b.len() <= most).then(|| b.clone()),
+            Passing::Unavailable => return None,
+            Passing::Many(n) if *n > most => return None,
+            Passing::Many(_) | Passing::Unknown => {}
+        }
+        *kept = match passing_boxes(data, mask, box_min, box_max, most) {
+            None => Passing::Unavailable,
+            Some(Err(n)) => Passing::Many(n),
+            Some(Ok(b)) => Passing::Made(std::sync::Arc::new(b)),
+        };
+        match &*kept {
+            Passing::Made(b) => Some(b.clone()),
+            _ => None,
+        }
     }
 }

@@ -11,7 +11,7 @@ mod walk;
 
 use super::entry::{EntryMap, EntryMarks, Mark, Pinhole, ENTRY_BIN, MAX_MAP_SIDE};
 use super::grid::{chessboard, Boxes, SkipGrid, MAX_LEAP};
-use super::passing::{passing_boxes, passing_groups_row, GroupCode};
+use super::passing::{passing_boxes, passing_groups_row, GroupCode, Passing};
 use super::project::Projection;
 use super::rect::lower_rect;
 use super::walk::{block_index, outside, Walk};

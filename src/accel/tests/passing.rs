@@ -228,7 +228,8 @@ fn passing_boxes_are_the_groups_not_enclosed() {
                 }
             }
             kept += want.len();
-            let boxes = passing_boxes(data, &mask, DVec3::ZERO, DVec3::ONE).expect("3D");
+            let boxes = passing_boxes(data, &mask, DVec3::ZERO, DVec3::ONE, usize::MAX);
+            let boxes = boxes.expect("3D").expect("at most usize::MAX");
             assert_eq!(boxes.groups(), Some(&want[..]), "{:?} z {z}", data.dims());
         }
     }
@@ -297,7 +298,8 @@ fn passing_boxes_bound_every_ray() {
         let mask = data.cells_above(0.5);
         let half = if case % 2 == 0 { 0.5 } else { 0.65 };
         let (box_min, box_max) = (DVec3::splat(0.5 - half), DVec3::splat(0.5 + half));
-        let boxes = passing_boxes(&data, &mask, box_min, box_max).expect("3D");
+        let boxes = passing_boxes(&data, &mask, box_min, box_max, usize::MAX);
+        let boxes = boxes.expect("3D").expect("at most usize::MAX");
         let to_world = random_placement(&mut rng);
         let from = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
         let camera = if case % 6 != 5 {
@@ -320,6 +322,61 @@ fn passing_boxes_bound_every_ray() {
     // A volume whose every cell passes: only the groups at its faces have boxes.
     let raw = vec![255u8; 17 * 17 * 17];
     let full = Dataset::new([17; 3], crate::data::Voxels::U8(raw), 0.0, 255.0).unwrap();
-    let boxes = passing_boxes(&full, &full.cells_above(0.5), DVec3::ZERO, DVec3::ONE).expect("3D");
-    assert_eq!(boxes.len(), 4 * 4 * 4 - 2 * 2 * 2);
+    let mask = full.cells_above(0.5);
+    let boxes = passing_boxes(&full, &mask, DVec3::ZERO, DVec3::ONE, usize::MAX);
+    assert_eq!(
+        boxes.expect("3D").expect("all").len(),
+        4 * 4 * 4 - 2 * 2 * 2
+    );
+}
+
+/// A grid keeps its passing boxes where the image that asked can project them, else only
+/// their number: an image that cannot gets none without their being found again, one that can
+/// gets them made (once, then shared), and a smaller one after it none.
+#[test]
+fn a_grid_keeps_only_the_boxes_an_image_can_use() {
+    let mut rng = Rng(0x5eed_0033);
+    let data = spheres(&mut rng, [30, 27, 33], 6);
+    let mask = data.cells_above(0.5);
+    let cube = (DVec3::ZERO, DVec3::ONE);
+    let all = passing_boxes(&data, &mask, cube.0, cube.1, usize::MAX);
+    let n = all.expect("3D").expect("all").len();
+    assert!(n > 10, "{n} boxes");
+    assert!(matches!(
+        passing_boxes(&data, &mask, cube.0, cube.1, n - 1),
+        Some(Err(m)) if m == n
+    ));
+    let grid = grid_of([2, 2, 2], &[true; 8]);
+    let kept = |grid: &SkipGrid| match &*grid.passing.lock().unwrap() {
+        Passing::Unknown => "unknown".to_string(),
+        Passing::Unavailable => "unavailable".to_string(),
+        Passing::Many(m) => format!("many {m}"),
+        Passing::Made(b) => format!("made {}", b.len()),
+    };
+    assert!(grid.passing_boxes(&data, &mask, cube, n - 1).is_none());
+    assert_eq!(kept(&grid), format!("many {n}"));
+    // (Known too many: answered from the number, with a mask that would give other boxes.)
+    let other = data.cells_above(0.05);
+    assert!(grid.passing_boxes(&data, &other, cube, n - 1).is_none());
+    let made = grid.passing_boxes(&data, &mask, cube, n).expect("n fit");
+    assert_eq!((made.len(), kept(&grid)), (n, format!("made {n}")));
+    assert!(grid.passing_boxes(&data, &mask, cube, n - 1).is_none());
+    let again = grid
+        .passing_boxes(&data, &mask, cube, usize::MAX)
+        .expect("made");
+    assert!(std::sync::Arc::ptr_eq(&made, &again));
+    // A dataset with an axis of one node has none, whatever the image.
+    let flat = Dataset::new(
+        [5, 5, 1],
+        crate::data::Voxels::U8(vec![255; 25]),
+        0.0,
+        255.0,
+    )
+    .unwrap();
+    let flat_grid = grid_of([2, 2, 2], &[true; 8]);
+    let flat_mask = flat.cells_above(0.5);
+    assert!(flat_grid
+        .passing_boxes(&flat, &flat_mask, cube, usize::MAX)
+        .is_none());
+    assert_eq!(kept(&flat_grid), "unavailable");
 }

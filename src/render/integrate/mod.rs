@@ -98,7 +98,8 @@ impl Compiled {
         // its zero test bound where rays meet opacity more tightly than the shell's blocks.
         let passing = match (&obj.cells, obj.lean.as_ref().and_then(Lean::value_head)) {
             (Some(mask), Some((data, _))) => {
-                grid.passing_boxes(data, mask, obj.box_min, obj.box_max)
+                let most = EntryMarks::most_boxes(camera);
+                grid.passing_boxes(data, mask, (obj.box_min, obj.box_max), most)
             }
             _ => None,
         };
