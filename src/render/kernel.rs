@@ -9,7 +9,7 @@
 //!
 //! - **The zero test.** When opacity is last written by a transfer function that is 0 on an
 //!   interval [0, z] of its input ([`Mapping::zero_below`]), a sample whose input is at most z
-//!   has opacity 0 and is dropped before the transfer function is evaluated.
+//!   has opacity 0 and is skipped before the transfer function is evaluated.
 //! - **Fused outputs.** Consecutive `vlMap`s of one source through one transfer function (the
 //!   r, g, b columns of a colour table) locate the input's segment once and evaluate every
 //!   output there ([`Mapping::locate`], [`Mapping::eval_at`]).
