@@ -662,11 +662,14 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
 
 /// The pre-integrated packet march (`Optimise::preintegrate` with `Optimise::packets`) against
 /// the scalar pre-integrated march, in every case of `packets_are_the_scalar_march`. The two
-/// composite the same slabs by the same scalar code (tables, halving, lighting, composite in
-/// f64): the lanes only find the samples to take and their values. From node values those
-/// values are the scalar code's bits; these volumes are 8-bit voxels, which the lanes
-/// interpolate and normalise once (a relative 10⁻⁷ from the node values, as in the midpoint
-/// march), so a slab's ends, its table lookup and its halving test may differ by that much:
+/// composite the same slabs by the same scalar code (tables, halving, composite in f64): the
+/// lanes find the samples to take and their values, and in the shaded cases (one directional
+/// light, the node gradient) light the slabs' pieces by the midpoint march's f32 lighting (a
+/// relative 10⁻⁶ or so from the scalar f64 model; scaling those colours by 1.02 fails this
+/// test). From node values the values are the scalar code's bits; these volumes are 8-bit
+/// voxels, which the lanes interpolate and normalise once (a relative 10⁻⁷ from the node
+/// values, as in the midpoint march), so a slab's ends, its table lookup and its halving test
+/// may differ by that much:
 /// a table's bilinear interpolation moves by at most its slope times 10⁻⁷, far below an 8-bit
 /// level, and a halving decided the other way at the tolerance's edge changes the slab by
 /// the table's resolution (about 10⁻⁴). A termination one slab apart adds at most the bound

@@ -119,7 +119,7 @@ impl Integral {
     /// Takes a sample of opacity `alpha` whose colour comes later ([`Integral::add_weighted`]):
     /// its weight `t·α`, and whether the ray ends there.
     #[inline(always)]
-    fn weigh(&mut self, alpha: f64) -> (f64, bool) {
+    pub(in crate::render) fn weigh(&mut self, alpha: f64) -> (f64, bool) {
         let w = self.t * alpha;
         self.t *= 1.0 - alpha;
         if self.t < self.stop {

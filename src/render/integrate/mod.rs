@@ -15,7 +15,7 @@ mod preint;
 mod surface;
 
 pub(in crate::render) use dvr::*;
-pub(in crate::render) use preint::{Bytes, PreMarch, PreRay};
+pub(in crate::render) use preint::{Bytes, PieceLighting, PreMarch, PreRay};
 
 /// What kind of ray is being traced: how many bounces it has made, whether it is a mirror ray
 /// (it then sees only objects that cast reflections), what it shows where it escapes

@@ -98,13 +98,60 @@ impl Bytes<'_> {
 }
 
 /// One ray's state in a [`PreMarch`]: the composite so far, its lighting, the last position
-/// taken (number, ray parameter, value) and the ray (the eye and the world direction).
+/// taken (number, ray parameter, value) and the ray (the eye and the world direction); where
+/// its pieces are lit later ([`PieceLighting`]), its pixel and its view direction as f32.
 pub(in crate::render) struct PreRay<'a> {
     acc: Integral,
     headlit: Option<Headlit<'a>>,
     origin: DVec3,
     dir: DVec3,
     last: Option<(u64, f64, f32)>,
+    pub(in crate::render) px: u32,
+    pub(in crate::render) view: [f32; 3],
+}
+
+/// Where the pieces of a ray's slabs are lit. [`CellGradients`] (a cache of the last cell's
+/// node differences) lights each piece at once by the scalar model in f64 and composites it;
+/// the packet march's buffer (`simd::preint`) takes each piece's weight at once (the ray's
+/// transmittance and so its end do not depend on colours) and lights the pieces later, several
+/// side by side in lanes.
+pub(in crate::render) trait PieceLighting {
+    /// Composites a piece of opacity `alpha` and mean colour `col` into `ray` (of cursor `c`),
+    /// lit at ray parameter `tm`; whether the ray ends there.
+    #[allow(clippy::too_many_arguments)]
+    fn composite(
+        &mut self,
+        march: &PreMarch<'_>,
+        ray: &mut PreRay<'_>,
+        c: &Cursor,
+        alpha: f64,
+        col: DVec3,
+        tm: f64,
+    ) -> bool;
+}
+
+impl PieceLighting for CellGradients {
+    #[inline]
+    fn composite(
+        &mut self,
+        march: &PreMarch<'_>,
+        ray: &mut PreRay<'_>,
+        c: &Cursor,
+        alpha: f64,
+        col: DVec3,
+        tm: f64,
+    ) -> bool {
+        let (origin, dir) = (ray.origin, ray.dir);
+        let (p, w) = (ray_point(c.o, c.d, tm), origin + tm * dir);
+        let normal = || march.obj.gradient_normal(w, -dir, p, 9, self);
+        let lit = match &ray.headlit {
+            Some(h) => h.colour(col, normal),
+            None => march
+                .scene
+                .illuminate_colour(march.obj, w, dir, col, march.k, march.e, normal),
+        };
+        ray.acc.add(alpha, lit)
+    }
 }
 
 impl<'a> PreMarch<'a> {
@@ -146,6 +193,8 @@ impl<'a> PreMarch<'a> {
             origin,
             dir,
             last: (c.k == 0).then(|| (0, c.t0, self.value(c, c.t0))),
+            px: 0,
+            view: [0.0; 3],
         }
     }
 
@@ -183,9 +232,9 @@ impl<'a> PreMarch<'a> {
         i: u64,
         t: f64,
         v: f32,
-        cache: &mut CellGradients,
+        light: &mut impl PieceLighting,
     ) -> bool {
-        self.take_position(ray, c, i + 1, t, v, cache)
+        self.take_position(ray, c, i + 1, t, v, light)
     }
 
     /// The end of the ray (its samples all taken or passed over, the ray not ended): the slabs
@@ -194,10 +243,10 @@ impl<'a> PreMarch<'a> {
         &self,
         ray: &mut PreRay<'a>,
         c: &Cursor,
-        cache: &mut CellGradients,
+        light: &mut impl PieceLighting,
     ) -> (DVec3, f64) {
         let v = self.value(c, c.t1);
-        self.take_position(ray, c, c.n + 1, c.t1, v, cache);
+        self.take_position(ray, c, c.n + 1, c.t1, v, light);
         ray.acc.result()
     }
 
@@ -210,12 +259,12 @@ impl<'a> PreMarch<'a> {
         p: u64,
         t: f64,
         v: f32,
-        cache: &mut CellGradients,
+        light: &mut impl PieceLighting,
     ) -> bool {
         let z = self.z;
         let ends = match ray.last {
             // The slab from the position before.
-            Some((q, tq, vq)) if q + 1 == p => self.slab(ray, c, tq, vq, t, v, cache),
+            Some((q, tq, vq)) if q + 1 == p => self.slab(ray, c, tq, vq, t, v, light),
             // Positions passed over between (values at most z): the slab after the last one
             // taken where its value is above z, and the one before this one where this value
             // is, each reading the value of the position passed over.
@@ -225,20 +274,20 @@ impl<'a> PreMarch<'a> {
                 (vq > z && {
                     let t1 = Self::at(c, q + 1);
                     let v1 = *after.insert(self.value(c, t1));
-                    self.slab(ray, c, tq, vq, t1, v1, cache)
+                    self.slab(ray, c, tq, vq, t1, v1, light)
                 }) || (v > z && {
                     let tp = Self::at(c, p - 1);
                     let vp = match after {
                         Some(v1) if q + 2 == p => v1,
                         _ => self.value(c, tp),
                     };
-                    self.slab(ray, c, tp, vp, t, v, cache)
+                    self.slab(ray, c, tp, vp, t, v, light)
                 })
             }
             None => {
                 v > z && {
                     let tp = Self::at(c, p - 1);
-                    self.slab(ray, c, tp, self.value(c, tp), t, v, cache)
+                    self.slab(ray, c, tp, self.value(c, tp), t, v, light)
                 }
             }
         };
@@ -260,7 +309,7 @@ impl<'a> PreMarch<'a> {
         va: f32,
         tb: f64,
         vb: f32,
-        cache: &mut CellGradients,
+        light: &mut impl PieceLighting,
     ) -> bool {
         let z = self.z;
         if va <= z && vb <= z {
@@ -283,7 +332,7 @@ impl<'a> PreMarch<'a> {
                     continue;
                 }
             }
-            if self.piece(ray, c, level, (a, x), (b, y), cache) {
+            if self.piece(ray, c, level, (a, x), (b, y), light) {
                 return true;
             }
         }
@@ -299,7 +348,7 @@ impl<'a> PreMarch<'a> {
         level: u32,
         (ta, va): (f64, f32),
         (tb, vb): (f64, f32),
-        cache: &mut CellGradients,
+        light: &mut impl PieceLighting,
     ) -> bool {
         let (obj, pre, z) = (self.obj, self.pre, self.z);
         let shading = &pre.shading;
@@ -335,22 +384,18 @@ impl<'a> PreMarch<'a> {
                 (depth / a).clamp(0.0, 1.0) as f64,
             )
         };
-        let col = DVec3::from_array(rgb);
-        let tm = ta + at * len;
-        let (origin, dir) = (ray.origin, ray.dir);
-        let (p, w) = (ray_point(c.o, c.d, tm), origin + tm * dir);
-        let normal = || obj.gradient_normal(w, -dir, p, 9, cache);
-        let lit = match &ray.headlit {
-            Some(h) => h.colour(col, normal),
-            None => self
-                .scene
-                .illuminate_colour(obj, w, dir, col, self.k, self.e, normal),
-        };
-        ray.acc.add(alpha, lit)
+        light.composite(self, ray, c, alpha, DVec3::from_array(rgb), ta + at * len)
     }
 }
 
 impl PreRay<'_> {
+    /// Takes a piece of opacity `alpha` whose colour is composited elsewhere: its weight (the
+    /// transmittance before it times α), and whether the ray ends there.
+    #[inline]
+    pub(in crate::render) fn weigh(&mut self, alpha: f64) -> (f64, bool) {
+        self.acc.weigh(alpha)
+    }
+
     /// The colour gathered and the transmittance left.
     pub(in crate::render) fn result(&self) -> (DVec3, f64) {
         self.acc.result()

@@ -169,7 +169,9 @@ pub(in crate::render) fn detected() -> bool {
 }
 
 /// The lighting of [`Packets`]: unlit (kd and ks 0: the ambient term alone) or a headlight
-/// as [`HeadlitLanes`] holds it, in f32.
+/// as [`HeadlitLanes`] holds it, in f32. For a pre-integrated object, `Lit` lights its slabs'
+/// pieces in lanes ([`Packets::tile_pre`]); `Unlit` is not read there, the scalar code lighting
+/// them.
 enum Light32 {
     Unlit {
         ka_ambient: [f32; 3],
@@ -261,8 +263,7 @@ impl<'a> Packets<'a> {
         }
         let lean = obj.lean.as_ref()?;
         let (data, z) = lean.value_head()?;
-        // A pre-integrated object's slabs are composited and lit by the scalar code
-        // (`Packets::tile_pre`).
+        // (Normal functions are the scalar code's, for a pre-integrated object too.)
         if !obj.normals.is_empty() {
             return None;
         }
@@ -277,8 +278,8 @@ impl<'a> Packets<'a> {
         // The node values only where the voxels are not read instead (made on first use):
         // 8-bit voxels straight ([`Raw8`]), 16-bit voxels through their table of node values.
         let raw8 = Raw8::of(data);
-        // A pre-integrated object's slabs are composited and lit by the scalar code
-        // (`Packets::tile_pre`), its values read as the lanes read them.
+        // A pre-integrated object's slabs are composited by the scalar code (`Packets::tile_pre`),
+        // its values read as the lanes read them.
         let pre = obj.preint.as_ref().map(|pre| {
             let march = PreMarch::new(scene, obj, pre, data, z);
             match &raw8 {
@@ -300,44 +301,47 @@ impl<'a> Packets<'a> {
             (None, _) => NodeValues::F32(data.values()),
         };
         let [ka, kd, ks, spec] = tables.coefficients;
-        let light = match scene.lanes[0].as_ref() {
-            // (Not read: the slabs are lit by the scalar code.)
-            _ if pre.is_some() => Light32::Unlit {
+        // The lanes' lighting where the scene's headlight has lanes (`Compiled::lanes`) and the
+        // gradient is this very dataset's, trilinear (as the batched march's `same_cells`), in
+        // object space; a pre-integrated object without it has its slabs lit by the scalar code
+        // (`Light32::Unlit` then unread), any other object no packet march.
+        let lit = scene.lanes[0].as_ref().and_then(|h| {
+            match &obj.f_dataset {
+                Some((d, Filter::Trilinear, GradientFilter::Nodes))
+                    if std::ptr::eq(Arc::as_ptr(d), data) => {}
+                _ => return None,
+            }
+            let f = |v: &Lanes| v.to_array()[0] as f32;
+            let (to_world, diagonal) = match &h.to_world {
+                ToWorld::None => return None,
+                ToWorld::General(m) => (m.map(|c| c.each_ref().map(f)), false),
+                ToWorld::Diagonal(d) => {
+                    let mut m = [[0f32; 3]; 3];
+                    for (i, x) in d.iter().enumerate() {
+                        m[i][i] = f(x);
+                    }
+                    (m, true)
+                }
+            };
+            Some(Light32::Lit {
+                ka_ambient: h.ka_ambient.each_ref().map(f),
+                kd: f(&h.kd),
+                ks: h.ks.as_ref().map(f),
+                e: h.e,
+                to_light: h.to_light.each_ref().map(f),
+                radiance: h.radiance.each_ref().map(f),
+                flip: h.flip,
+                to_world,
+                diagonal,
+            })
+        });
+        let light = match (lit, scene.lanes[0].as_ref()) {
+            (Some(lit), _) => lit,
+            (None, _) if pre.is_some() => Light32::Unlit {
                 ka_ambient: [0.0; 3],
             },
-            Some(h) => {
-                // The gradient must be this very dataset's, trilinear (as the batched march's
-                // `same_cells`), in object space.
-                match &obj.f_dataset {
-                    Some((d, Filter::Trilinear, GradientFilter::Nodes))
-                        if std::ptr::eq(Arc::as_ptr(d), data) => {}
-                    _ => return None,
-                }
-                let f = |v: &Lanes| v.to_array()[0] as f32;
-                let (to_world, diagonal) = match &h.to_world {
-                    ToWorld::None => return None,
-                    ToWorld::General(m) => (m.map(|c| c.each_ref().map(f)), false),
-                    ToWorld::Diagonal(d) => {
-                        let mut m = [[0f32; 3]; 3];
-                        for (i, x) in d.iter().enumerate() {
-                            m[i][i] = f(x);
-                        }
-                        (m, true)
-                    }
-                };
-                Light32::Lit {
-                    ka_ambient: h.ka_ambient.each_ref().map(f),
-                    kd: f(&h.kd),
-                    ks: h.ks.as_ref().map(f),
-                    e: h.e,
-                    to_light: h.to_light.each_ref().map(f),
-                    radiance: h.radiance.each_ref().map(f),
-                    flip: h.flip,
-                    to_world,
-                    diagonal,
-                }
-            }
-            None => {
+            (None, Some(_)) => return None,
+            (None, None) => {
                 let h = Headlit::new(
                     scene,
                     obj,

@@ -6,17 +6,30 @@
 //! midpoint march's arithmetic: the same values bit for bit from node values, a relative 10⁻⁷
 //! apart from 8-bit voxels). Each lane's slabs are then composited by the scalar march's own
 //! code ([`PreMarch::take`], [`PreMarch::finish`]: the tables, the halving where the data
-//! bends, the lighting, the composite in f64), which reads the values of passed-over samples
-//! next to a taken one by the scalar trilinear interpolation, and does nothing more for a
-//! sample whose slabs cannot show anything (both ends at most the zero test's bound). A
-//! sample the lanes pass over lies in a cell the mask clears, so its value is at most that
-//! bound: the slabs composited, and so the pixels, are the scalar pre-integrated march's.
+//! bends, the composite in f64), which reads the values of passed-over samples next to a
+//! taken one by the scalar trilinear interpolation, and does nothing more for a sample whose
+//! slabs cannot show anything (both ends at most the zero test's bound). A sample the lanes
+//! pass over lies in a cell the mask clears, so its value is at most that bound: the slabs
+//! composited are the scalar pre-integrated march's.
+//!
+//! Where the midpoint march lights its samples in lanes (a headlight, the dataset's own
+//! trilinear node gradient: [`Light32::Lit`]), the slabs' pieces are lit in lanes too
+//! ([`Deferred`]): a ray's transmittance, and so where it ends, does not depend on colours,
+//! so each piece is weighed as it is composited and waits, with its pixel, mean colour, object
+//! point and view, until [`PIECES`] of the tile's pieces are ready; eight at a time then get
+//! the midpoint march's gradient and lighting ([`Packets::gradient`], [`Packets::lit`], in
+//! f32), and each pixel adds its pieces' weighted colours in the order of its pieces, in f64.
+//! A piece's colour depends on that piece alone (not on which lanes carry it), so the pixels
+//! are the same for any thread count. Elsewhere the scalar code lights each piece at once.
 //!
 //! Not here: which samples the lanes take ([`runs`]), the reads of nodes and voxels
 //! ([`nodes`]), the slabs (`integrate::preint`), the tables (`render::preint`).
 
 use super::step::Sampled;
 use super::*;
+
+/// The pieces [`Deferred`] gathers before it lights them: eight lanes at a time.
+const PIECES: usize = 8 * W;
 
 impl<'a> Packets<'a> {
     /// Whether the object is pre-integrated: its tiles are traced by [`Packets::tile_pre`],
@@ -46,13 +59,29 @@ impl<'a> Packets<'a> {
             size: (tw, th),
         };
         let pre = self.pre.as_ref().expect("a pre-integrated object");
+        if let Light32::Lit { .. } = self.light {
+            let mut light = Deferred::new(self, out.len());
+            self.tile_pre_lit(pre, &tile, out, &mut light)
+        } else {
+            self.tile_pre_lit(pre, &tile, out, &mut CellGradients::default())
+        }
+    }
+
+    /// [`Packets::tile_pre`] with its slabs' pieces lit by `light`.
+    fn tile_pre_lit(
+        &self,
+        pre: &PreMarch<'a>,
+        tile: &TileRays<'_>,
+        out: Vec<Pixel>,
+        light: &mut impl TileLight,
+    ) -> Vec<Pixel> {
         if self.wide {
             // SAFETY: `Packets::new` set `wide` only where `detected` found every
             // feature `tile_pre_avx512` enables (and AVX2 and FMA before it).
-            return unsafe { self.tile_pre_avx512(pre, &tile, out) };
+            return unsafe { self.tile_pre_avx512(pre, tile, out, light) };
         }
         // SAFETY: `Packets::new` (the only way to make `self`) found AVX2 and FMA.
-        unsafe { self.tile_pre_avx2(pre, &tile, out) }
+        unsafe { self.tile_pre_avx2(pre, tile, out, light) }
     }
 
     /// [`Packets::tile_pre`] in [`PACKETS8`] packets of eight lanes.
@@ -62,15 +91,18 @@ impl<'a> Packets<'a> {
         pre: &PreMarch<'a>,
         tile: &TileRays<'_>,
         out: Vec<Pixel>,
+        light: &mut impl TileLight,
     ) -> Vec<Pixel> {
         let values = |st: &_, active, out: &mut _| self.values8(st, active, out);
         let taken = |c: &mut _, run: &mut _, trusted: &mut _| self.next_taken_at8(c, run, trusted);
         // SAFETY: this function has the AVX2 and FMA `march_pre` asks for.
         unsafe {
             match self.packets() {
-                1 => self.march_pre::<W, 1, W>(pre, tile, out, values, taken),
-                4 => self.march_pre::<W, 4, { 4 * W }>(pre, tile, out, values, taken),
-                _ => self.march_pre::<W, PACKETS8, { PACKETS8 * W }>(pre, tile, out, values, taken),
+                1 => self.march_pre::<W, 1, W>(pre, tile, out, light, values, taken),
+                4 => self.march_pre::<W, 4, { 4 * W }>(pre, tile, out, light, values, taken),
+                _ => self.march_pre::<W, PACKETS8, { PACKETS8 * W }>(
+                    pre, tile, out, light, values, taken,
+                ),
             }
         }
     }
@@ -82,15 +114,16 @@ impl<'a> Packets<'a> {
         pre: &PreMarch<'a>,
         tile: &TileRays<'_>,
         out: Vec<Pixel>,
+        light: &mut impl TileLight,
     ) -> Vec<Pixel> {
         let values = |st: &_, active, out: &mut _| self.values16(st, active, out);
         let taken = |c: &mut _, run: &mut _, trusted: &mut _| self.next_taken_at16(c, run, trusted);
         // SAFETY: this function has AVX2 and FMA, which `march_pre` asks for.
         unsafe {
             match self.packets() {
-                1 => self.march_pre::<V, 1, V>(pre, tile, out, values, taken),
-                4 => self.march_pre::<V, 4, { 4 * V }>(pre, tile, out, values, taken),
-                _ => self.march_pre::<V, P, { P * V }>(pre, tile, out, values, taken),
+                1 => self.march_pre::<V, 1, V>(pre, tile, out, light, values, taken),
+                4 => self.march_pre::<V, 4, { 4 * V }>(pre, tile, out, light, values, taken),
+                _ => self.march_pre::<V, P, { P * V }>(pre, tile, out, light, values, taken),
             }
         }
     }
@@ -114,6 +147,7 @@ impl<'a> Packets<'a> {
         pre: &PreMarch<'a>,
         tile: &TileRays<'_>,
         mut out: Vec<Pixel>,
+        light: &mut impl TileLight,
         mut values: impl FnMut(&LaneState<N>, u32, &mut [f32; N]),
         next_taken: impl Fn(&mut Cursor, &mut Run16, &mut u32) -> (u32, u64),
     ) -> Vec<Pixel> {
@@ -134,13 +168,6 @@ impl<'a> Packets<'a> {
         let mut index = [0u64; L];
         let mut st: [LaneState<N>; P] = std::array::from_fn(|_| LaneState::default());
         let mut vals = [[0f32; N]; P];
-        let mut cache = CellGradients::default();
-        // The composite of a ray that ends, into its pixel (`Compiled::trace`'s colour plus
-        // the transmittance times the background).
-        let done = |ray: &PreRay<'_>, out: &mut [Pixel], px: usize| {
-            let (col, t) = ray.result();
-            out[px] = pixel(col + t * background, t);
-        };
         loop {
             let mut active = 0u64;
             for i in 0..L {
@@ -168,7 +195,9 @@ impl<'a> Packets<'a> {
                         // (`ray_lanes` gave the cursor this direction's object-space form.)
                         let dir = tile.view.ray(x as f64 + 0.5, y as f64 + 0.5);
                         let c = &lanes[i].as_ref().expect("a ray").cursor;
-                        rays[i] = Some(pre.ray(c, tile.view.eye, dir));
+                        let mut ray = pre.ray(c, tile.view.eye, dir);
+                        (ray.px, ray.view) = (px, view);
+                        rays[i] = Some(ray);
                     }
                     let lane = lanes[i].as_mut().expect("a ray");
                     let (keep, base) =
@@ -176,8 +205,8 @@ impl<'a> Packets<'a> {
                     if keep == 0 {
                         // The ray's last samples are passed over: the slabs to its end.
                         let ray = rays[i].as_mut().expect("a ray");
-                        pre.finish(ray, &lane.cursor, &mut cache);
-                        done(ray, &mut out, lane.px);
+                        pre.finish(ray, &lane.cursor, light);
+                        light.done(ray, lane.px, &mut out, background);
                         lanes[i] = None;
                         rays[i] = None;
                         continue;
@@ -203,22 +232,16 @@ impl<'a> Packets<'a> {
                 let (Some(lane), Some(ray)) = (lanes[i].as_ref(), rays[i].as_mut()) else {
                     continue;
                 };
-                let ends = pre.take(
-                    ray,
-                    &lane.cursor,
-                    index[i],
-                    st[h].mid[l],
-                    vals[h][l],
-                    &mut cache,
-                );
+                let ends = pre.take(ray, &lane.cursor, index[i], st[h].mid[l], vals[h][l], light);
                 if ends {
-                    done(ray, &mut out, lane.px);
+                    light.done(ray, lane.px, &mut out, background);
                     lanes[i] = None;
                     rays[i] = None;
                     keeps[i] = 0;
                 }
             }
         }
+        light.end(&mut out, background);
         out
     }
 
@@ -307,5 +330,175 @@ impl<'a> Packets<'a> {
             }
             None => [0f32; N],
         };
+    }
+}
+
+/// How [`Packets::march_pre`] lights a tile's pieces and writes the pixels of its rays.
+trait TileLight: PieceLighting {
+    /// Ray `ray`, of pixel `px` of the tile, has ended.
+    fn done(&mut self, ray: &PreRay<'_>, px: usize, out: &mut [Pixel], background: DVec3);
+
+    /// The tile's rays have all ended.
+    fn end(&mut self, out: &mut [Pixel], background: DVec3);
+}
+
+/// Each piece lit at once by the scalar code: a ray's composite is its pixel as it ends
+/// (`Compiled::trace`'s colour plus the transmittance times the background).
+impl TileLight for CellGradients {
+    fn done(&mut self, ray: &PreRay<'_>, px: usize, out: &mut [Pixel], background: DVec3) {
+        let (col, t) = ray.result();
+        out[px] = pixel(col + t * background, t);
+    }
+
+    fn end(&mut self, _: &mut [Pixel], _: DVec3) {}
+}
+
+/// A piece of a slab waiting for its colour: its ray's pixel in the tile, its weight (the
+/// transmittance before it times its α), its mean colour, the object point where it is lit and
+/// the view direction (towards the eye).
+#[derive(Clone, Copy, Default)]
+struct Piece {
+    px: u32,
+    w: f64,
+    rgb: [f32; 3],
+    p: [f32; 3],
+    view: [f32; 3],
+}
+
+/// The pieces of a tile's rays, weighed as they are composited and lit later in lanes (see
+/// the module documentation).
+struct Deferred<'p, 'a> {
+    packets: &'p Packets<'a>,
+    /// Per pixel of the tile: the weighted colours of its ray's pieces lit so far, added in
+    /// the pieces' order, and the ray's transmittance once it has ended (NaN before, and for
+    /// the pixels whose rays the march does not composite).
+    acc: Vec<[f64; 4]>,
+    pieces: [Piece; PIECES],
+    n: usize,
+    cache: CellGradients,
+}
+
+impl<'p, 'a> Deferred<'p, 'a> {
+    /// For a tile of `pixels` pixels, traced by `packets` (whose light is [`Light32::Lit`]).
+    fn new(packets: &'p Packets<'a>, pixels: usize) -> Deferred<'p, 'a> {
+        debug_assert!(matches!(packets.light, Light32::Lit { .. }));
+        Deferred {
+            packets,
+            acc: vec![[0.0, 0.0, 0.0, f64::NAN]; pixels],
+            pieces: [Piece::default(); PIECES],
+            n: 0,
+            cache: CellGradients::default(),
+        }
+    }
+
+    /// Lights the pieces gathered, eight at a time, and adds each one's weighted colour to its
+    /// pixel, in their order.
+    fn flush(&mut self) {
+        for chunk in self.pieces[..self.n].chunks(W) {
+            // SAFETY: `Packets::tile_pre` makes a `Deferred` of its own `Packets`, which
+            // `Packets::new` made only where it found AVX2 and FMA.
+            let col = unsafe { self.packets.light_pieces8(chunk, &mut self.cache) };
+            for (l, q) in chunk.iter().enumerate() {
+                let acc = &mut self.acc[q.px as usize];
+                for (ch, c) in col.iter().enumerate() {
+                    acc[ch] += q.w * c[l] as f64;
+                }
+            }
+        }
+        self.n = 0;
+    }
+}
+
+impl PieceLighting for Deferred<'_, '_> {
+    #[inline]
+    fn composite(
+        &mut self,
+        _: &PreMarch<'_>,
+        ray: &mut PreRay<'_>,
+        c: &Cursor,
+        alpha: f64,
+        col: DVec3,
+        tm: f64,
+    ) -> bool {
+        let (w, ends) = ray.weigh(alpha);
+        // (A piece of weight 0 adds nothing: its colour is finite.)
+        if w > 0.0 {
+            self.pieces[self.n] = Piece {
+                px: ray.px,
+                w,
+                // (The mean colour is an f32's: exact.)
+                rgb: col.to_array().map(|x| x as f32),
+                p: ray_point(c.o, c.d, tm),
+                view: ray.view,
+            };
+            self.n += 1;
+            if self.n == PIECES {
+                self.flush();
+            }
+        }
+        ends
+    }
+}
+
+impl TileLight for Deferred<'_, '_> {
+    fn done(&mut self, ray: &PreRay<'_>, px: usize, _: &mut [Pixel], _: DVec3) {
+        self.acc[px][3] = ray.result().1;
+    }
+
+    fn end(&mut self, out: &mut [Pixel], background: DVec3) {
+        self.flush();
+        for (px, &[r, g, b, t]) in self.acc.iter().enumerate() {
+            if !t.is_nan() {
+                out[px] = pixel(DVec3::new(r, g, b) + t * background, t);
+            }
+        }
+    }
+}
+
+impl Packets<'_> {
+    /// The lit colours (by channel, then lane) of `pieces`, at most eight, side by side: the
+    /// midpoint march's gradient and lighting at each piece's object point, for its view and
+    /// mean colour.
+    #[target_feature(enable = "avx2,fma")]
+    fn light_pieces8(&self, pieces: &[Piece], cache: &mut CellGradients) -> [[f32; W]; 3] {
+        debug_assert!(!pieces.is_empty() && pieces.len() <= W);
+        // SAFETY: this function has AVX2 and FMA.
+        let s = unsafe { Avx2::new() };
+        let live = u32::MAX >> (32 - pieces.len());
+        let (mut p, mut view, mut rgb) = ([[0f32; W]; 3], [[0f32; W]; 3], [[0f32; W]; 3]);
+        for (l, q) in pieces.iter().enumerate() {
+            for a in 0..3 {
+                p[a][l] = q.p[a];
+                view[a][l] = q.view[a];
+                rgb[a][l] = q.rgb[a];
+            }
+        }
+        let [p, view, rgb] = [p, view, rgb].map(|x| x.map(|a| s.ld(&a)));
+        let (f, base, interior) = self.cells(s, &p);
+        let base = s.keep_i(live, base);
+        let (nodes, rows) = match &self.raw8 {
+            Some(r8) => {
+                let rows = r8.central_rows(s, base, live, self.sy, self.sz);
+                (rows.cell_nodes(s), Some(rows))
+            }
+            None => (s.value_nodes(self, base), None),
+        };
+        let g = self.gradient(
+            s,
+            &p,
+            &f,
+            base,
+            interior,
+            live,
+            cache,
+            &nodes,
+            rows.as_ref(),
+        );
+        let col = self.lit(s, &view, g, rgb);
+        let mut out = [[0f32; W]; 3];
+        for (o, c) in out.iter_mut().zip(col) {
+            s.st(o, c);
+        }
+        out
     }
 }
