@@ -67,6 +67,7 @@ pub(in crate::render) struct Bytes<'a> {
 
 impl Bytes<'_> {
     /// The value at object point `p` of `data` (these voxels' dataset).
+    #[inline(always)]
     fn value(&self, data: &Dataset, p: [f32; 3]) -> f32 {
         if !data.covers(p) {
             return 0.0;
@@ -298,8 +299,10 @@ impl<'a> PreMarch<'a> {
     /// Composites the slab from ray parameter ta (value va) to tb (value vb), halved where the
     /// data is not linear along it: where its value can reach the opacity table's non-zero
     /// part and the value at its middle is off the mean of its ends by more than the
-    /// tolerance, each half is taken in turn, front first, down to [`REFINE_LEVELS`] halvings.
-    /// Whether the ray ends there.
+    /// tolerance, each half is taken in turn, front first, and each half the same way once
+    /// more ([`REFINE_LEVELS`] = 2 halvings, down to a quarter). The values at the middle and
+    /// at the quarters are read together, before the first test: the quarters' reads do not
+    /// wait for it (and are not used where the slab stays whole). Whether the ray ends there.
     #[allow(clippy::too_many_arguments)]
     fn slab(
         &self,
@@ -311,32 +314,39 @@ impl<'a> PreMarch<'a> {
         vb: f32,
         light: &mut impl PieceLighting,
     ) -> bool {
+        const { assert!(REFINE_LEVELS == 2) };
         let z = self.z;
         if va <= z && vb <= z {
             return false;
         }
-        // The halves still to take, the front one last: (ta, va, tb, vb, level).
-        let mut todo = [(0.0, 0.0, 0.0, 0.0, 0); REFINE_LEVELS as usize + 1];
-        todo[0] = (ta, va, tb, vb, 0u32);
-        let mut n = 1;
-        while n > 0 {
-            n -= 1;
-            let (a, x, b, y, level) = todo[n];
-            if level < REFINE_LEVELS && (x > z || y > z) {
-                let m = 0.5 * (a + b);
-                let vm = self.value(c, m);
-                if (vm - 0.5 * (x + y)).abs() > REFINE_TOLERANCE {
-                    todo[n] = (m, vm, b, y, level + 1);
-                    todo[n + 1] = (a, x, m, vm, level + 1);
-                    n += 2;
-                    continue;
-                }
-            }
-            if self.piece(ray, c, level, (a, x), (b, y), light) {
-                return true;
-            }
+        let m = 0.5 * (ta + tb);
+        let (qa, qb) = (0.5 * (ta + m), 0.5 * (m + tb));
+        let [vm, vqa, vqb] = self.values3(c, [m, qa, qb]);
+        if !bends(va, vm, vb) {
+            return self.piece(ray, c, 0, (ta, va), (tb, vb), light);
         }
-        false
+        // Each half: whole where its values are at most z or it is linear, else its quarters.
+        let half = |ray: &mut PreRay<'a>, light: &mut _, (ta, va), (tq, vq), (tb, vb)| {
+            if (va > z || vb > z) && bends(va, vq, vb) {
+                self.piece(ray, c, 2, (ta, va), (tq, vq), light)
+                    || self.piece(ray, c, 2, (tq, vq), (tb, vb), light)
+            } else {
+                self.piece(ray, c, 1, (ta, va), (tb, vb), light)
+            }
+        };
+        half(ray, light, (ta, va), (qa, vqa), (m, vm))
+            || half(ray, light, (m, vm), (qb, vqb), (tb, vb))
+    }
+
+    /// The dataset's values at ray parameters `ts` of cursor `c`'s ray ([`PreMarch::value`]),
+    /// read side by side.
+    #[inline]
+    fn values3(&self, c: &Cursor, ts: [f64; 3]) -> [f32; 3] {
+        let ps = ts.map(|t| ray_point(c.o, c.d, t));
+        match &self.bytes {
+            Some(b) => ps.map(|p| b.value(self.data, p)),
+            None => ps.map(|p| clamp_field(self.data.trilinear(p))),
+        }
     }
 
     /// Composites the slab from ray parameter ta (value va) to tb (value vb), of level
@@ -386,6 +396,13 @@ impl<'a> PreMarch<'a> {
         };
         light.composite(self, ray, c, alpha, DVec3::from_array(rgb), ta + at * len)
     }
+}
+
+/// Whether the data bends along a slab of values `va` at its front, `vm` at its middle and
+/// `vb` at its back: the middle off the mean of the ends by more than [`REFINE_TOLERANCE`].
+#[inline]
+fn bends(va: f32, vm: f32, vb: f32) -> bool {
+    (vm - 0.5 * (va + vb)).abs() > REFINE_TOLERANCE
 }
 
 impl PreRay<'_> {
