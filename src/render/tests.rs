@@ -1768,6 +1768,81 @@ fn tiles_buffers_go_back_as_each_tile_ends() {
     assert!(image.pixels == alone.pixels && image.transmittance == alone.transmittance);
 }
 
+/// `Bytes::values3` (three points in SSE lanes) is `Bytes::value` at each point, bit for bit
+/// (a zero's sign apart): points inside the grid, on and just past its faces, outside it and
+/// NaN, a normalisation that clamps at both ends, and voxels cut short (the cells whose last
+/// node is missing read 0 there, in both).
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn bytes_read_three_at_once_as_one_by_one() {
+    use crate::render::integrate::Bytes;
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        eprintln!("no AVX2 and FMA: nothing to compare");
+        return;
+    }
+    let dims = [7usize, 9, 6];
+    let mut seed = 12345u64;
+    let mut next = move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 33) as u32
+    };
+    let voxels: Vec<u8> = (0..dims.iter().product()).map(|_| next() as u8).collect();
+    let data = Dataset::new(dims, crate::data::Voxels::U8(voxels.clone()), 0.0, 255.0).unwrap();
+    let edge = crate::data::FACE_TOLERANCE;
+    let mut points: Vec<[f32; 3]> = (0..3000)
+        .map(|_| std::array::from_fn(|_| next() as f32 / u32::MAX as f32 * 1.2 - 0.1))
+        .collect();
+    for x in [
+        0.0,
+        1.0,
+        -edge,
+        1.0 + edge,
+        -2.0 * edge,
+        1.0 + 2.0 * edge,
+        f32::NAN,
+    ] {
+        points.push([x, 0.5, 0.5]);
+        points.push([0.3, x, 0.7]);
+        points.push([0.6, 0.2, x]);
+        points.push([x, x, x]);
+    }
+    let (mut compared, mut zeros) = (0, 0);
+    for (raw, scale, offset) in [
+        (&voxels[..], 1.0 / 255.0, 0.0),
+        (&voxels[..], 1.0 / 200.0, -0.1),
+        (&voxels[..voxels.len() - 40], 1.0 / 255.0, 0.0),
+    ] {
+        let bytes = Bytes {
+            raw,
+            scale,
+            offset,
+            last: dims.map(|n| (n - 1) as f32),
+            top: dims.map(|n| (n - 2) as f32),
+            sy: dims[0],
+            sz: dims[0] * dims[1],
+        };
+        for three in points.chunks_exact(3) {
+            let ps = [three[0], three[1], three[2]];
+            // SAFETY: the processor has AVX2 and FMA (tested above).
+            let got = unsafe { bytes.values3(&data, ps) };
+            for (p, v) in ps.iter().zip(got) {
+                let one = bytes.value(&data, *p);
+                assert!(
+                    v.to_bits() == one.to_bits() || (v == 0.0 && one == 0.0),
+                    "{p:?}: {v} against {one}"
+                );
+                compared += 1;
+                zeros += (one == 0.0) as usize;
+            }
+        }
+    }
+    assert_eq!(compared, 3 * (points.len() / 3 * 3), "three voxel sets");
+    // Some points are outside or clamp to 0, most are not.
+    assert!(zeros > 0 && zeros < compared / 2, "{zeros} of {compared}");
+}
+
 /// A pre-integrated object's tables are built by the first compilation of its scene and shared
 /// by later ones, as its empty-space grid; a fresh `Caches` builds its own, with the same
 /// entries (the tables depend on the closed object and its step alone).
