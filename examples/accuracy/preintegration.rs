@@ -141,8 +141,8 @@ fn document(
          tables per object for the step, its half and its quarter, built by a scene's \
          first frame, the untimed warm-up, and kept for the frames timed below); without \
          it, each segment is its midpoint sample. Both are traced by the packet march where the processor has AVX2 (for \
-         pre-integrated images, the samples and values in lanes and the slabs by scalar \
-         code). A ★ marks the Pareto front of both sweeps together.\n",
+         pre-integrated images, the samples, their values and the lighting in lanes, the \
+         slabs by scalar code). A ★ marks the Pareto front of both sweeps together.\n",
         RAMP.0,
         RAMP.1,
         REFERENCE_STEP,
