@@ -665,8 +665,7 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
 /// composite the same slabs by the same scalar code (tables, halving, composite in f64): the
 /// lanes find the samples to take and their values, and in the shaded cases (one directional
 /// light, the node gradient) light the slabs' pieces by the midpoint march's f32 lighting (a
-/// relative 10⁻⁶ or so from the scalar f64 model; scaling those colours by 1.02 fails this
-/// test). From node values the values are the scalar code's bits; these volumes are 8-bit
+/// relative 10⁻⁶ or so from the scalar f64 model). From node values the values are the scalar code's bits; these volumes are 8-bit
 /// voxels, which the lanes interpolate and normalise once (a relative 10⁻⁷ from the node
 /// values, as in the midpoint march), so a slab's ends, its table lookup and its halving test
 /// may differ by that much:

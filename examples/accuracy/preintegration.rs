@@ -208,9 +208,9 @@ fn document(
         d,
         "\n**Recommendation for steep transfer functions.** The cheapest setting under 2 grey \
          levels RMS is {}, under 1 {}, under 0.5 {}. At a given step pre-integration lowers \
-         the error (the terracing of a steep ramp); at a given time the packet march's \
-         midpoint samples at a finer step may still win, which is why it is off by default: \
-         switch it on where the step must stay coarse.",
+         the error (the terracing of a steep ramp) and costs over twice the packet march's \
+         time, which is why it is off by default (`compat.md`): switch it on with a coarse \
+         step.",
         cheapest(2.0),
         cheapest(1.0),
         cheapest(0.5),

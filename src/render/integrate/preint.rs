@@ -10,9 +10,10 @@
 //!
 //! The slabs of a ray are composited by [`PreMarch`] and [`PreRay`], which both marches drive:
 //! this scalar one, sample by sample from the cursor, and the packet march of `simd::preint`,
-//! which finds each lane's samples and their values in SIMD lanes and hands them here. The
-//! tables are `preint`'s; the lighting is `shade`'s, applied to each slab's mean colour where
-//! its light comes from.
+//! which finds each lane's samples and their values in SIMD lanes and hands them here. Each
+//! piece of a slab is lit where its light comes from, through [`PieceLighting`]: at once by
+//! `shade`'s model (this march, and the packet march where it cannot light in lanes), or
+//! later in lanes by the packet march. The tables are `preint`'s.
 
 use crate::model::program::clamp_field;
 use crate::render::preint::{PreIntegrated, REFINE_LEVELS, REFINE_TOLERANCE};
@@ -44,6 +45,9 @@ pub(in crate::render) struct PreMarch<'a> {
     /// The dataset's 8-bit voxels where values are read from them, as the packet march
     /// reads them ([`PreMarch::with_bytes`]); else the node values' trilinear interpolation.
     bytes: Option<Bytes<'a>>,
+    /// Whether the processor has AVX2 and FMA, for [`Bytes::values3`] (found once, by
+    /// [`PreMarch::with_bytes`]).
+    simd: bool,
 }
 
 /// A dataset's 8-bit voxels whose normalisation `raw·scale + offset` never clamps, read as
@@ -238,14 +242,20 @@ impl<'a> PreMarch<'a> {
             k: [ka, kd, ks],
             e: Specular::of_field(spec),
             bytes: None,
+            simd: false,
         }
     }
 
     /// This march with its values read from the dataset's 8-bit voxels `bytes`, as the
     /// packet march reads them.
     pub(in crate::render) fn with_bytes(self, bytes: Bytes<'a>) -> PreMarch<'a> {
+        #[cfg(target_arch = "x86_64")]
+        let simd = is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
+        #[cfg(not(target_arch = "x86_64"))]
+        let simd = false;
         PreMarch {
             bytes: Some(bytes),
+            simd,
             ..self
         }
     }
@@ -365,9 +375,11 @@ impl<'a> PreMarch<'a> {
     /// data is not linear along it: where its value can reach the opacity table's non-zero
     /// part and the value at its middle is off the mean of its ends by more than the
     /// tolerance, each half is taken in turn, front first, and each half the same way once
-    /// more ([`REFINE_LEVELS`] = 2 halvings, down to a quarter). The values at the middle and
-    /// at the quarters are read together, before the first test: the quarters' reads do not
-    /// wait for it (and are not used where the slab stays whole). Whether the ray ends there.
+    /// more ([`REFINE_LEVELS`] = 2 halvings, down to a quarter). From 8-bit voxels in SIMD
+    /// lanes ([`Bytes::values3`]) the values at the middle and at the quarters are read
+    /// together, before the first test, so that the quarters' reads do not wait for it (and go
+    /// unused where the slab stays whole); otherwise each is read where a test needs it.
+    /// Whether the ray ends there.
     #[allow(clippy::too_many_arguments)]
     fn slab(
         &self,
@@ -386,36 +398,45 @@ impl<'a> PreMarch<'a> {
         }
         let m = 0.5 * (ta + tb);
         let (qa, qb) = (0.5 * (ta + m), 0.5 * (m + tb));
-        let [vm, vqa, vqb] = self.values3(c, [m, qa, qb]);
+        let (vm, quarters) = match self.values3(c, [m, qa, qb]) {
+            Some([vm, vqa, vqb]) => (vm, [Some(vqa), Some(vqb)]),
+            None => (self.value(c, m), [None, None]),
+        };
         if !bends(va, vm, vb) {
             return self.piece(ray, c, 0, (ta, va), (tb, vb), light);
         }
         // Each half: whole where its values are at most z or it is linear, else its quarters.
-        let half = |ray: &mut PreRay<'a>, light: &mut _, (ta, va), (tq, vq), (tb, vb)| {
-            if (va > z || vb > z) && bends(va, vq, vb) {
-                self.piece(ray, c, 2, (ta, va), (tq, vq), light)
-                    || self.piece(ray, c, 2, (tq, vq), (tb, vb), light)
-            } else {
-                self.piece(ray, c, 1, (ta, va), (tb, vb), light)
+        let half = |ray: &mut PreRay<'a>,
+                    light: &mut _,
+                    (ta, va): (f64, f32),
+                    (tq, vq): (f64, Option<f32>),
+                    (tb, vb): (f64, f32)| {
+            if va > z || vb > z {
+                let vq = vq.unwrap_or_else(|| self.value(c, tq));
+                if bends(va, vq, vb) {
+                    return self.piece(ray, c, 2, (ta, va), (tq, vq), light)
+                        || self.piece(ray, c, 2, (tq, vq), (tb, vb), light);
+                }
             }
+            self.piece(ray, c, 1, (ta, va), (tb, vb), light)
         };
-        half(ray, light, (ta, va), (qa, vqa), (m, vm))
-            || half(ray, light, (m, vm), (qb, vqb), (tb, vb))
+        half(ray, light, (ta, va), (qa, quarters[0]), (m, vm))
+            || half(ray, light, (m, vm), (qb, quarters[1]), (tb, vb))
     }
 
     /// The dataset's values at ray parameters `ts` of cursor `c`'s ray ([`PreMarch::value`]),
-    /// read side by side.
+    /// read side by side in SSE lanes where they come from 8-bit voxels and the processor has
+    /// AVX2 and FMA; else `None`.
     #[inline]
-    fn values3(&self, c: &Cursor, ts: [f64; 3]) -> [f32; 3] {
-        let ps = ts.map(|t| ray_point(c.o, c.d, t));
+    fn values3(&self, c: &Cursor, ts: [f64; 3]) -> Option<[f32; 3]> {
         match &self.bytes {
             #[cfg(target_arch = "x86_64")]
-            Some(b) if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") => {
-                // SAFETY: the processor has AVX2 and FMA (just found).
-                unsafe { b.values3(self.data, ps) }
+            Some(b) if self.simd => {
+                let ps = ts.map(|t| ray_point(c.o, c.d, t));
+                // SAFETY: the processor has AVX2 and FMA (`PreMarch::simd`).
+                Some(unsafe { b.values3(self.data, ps) })
             }
-            Some(b) => ps.map(|p| b.value(self.data, p)),
-            None => ps.map(|p| clamp_field(self.data.trilinear(p))),
+            _ => None,
         }
     }
 

@@ -7,7 +7,8 @@
 //! apart from 8-bit voxels). Each lane's slabs are then composited by the scalar march's own
 //! code ([`PreMarch::take`], [`PreMarch::finish`]: the tables, the halving where the data
 //! bends, the composite in f64), which reads the values of passed-over samples next to a
-//! taken one by the scalar trilinear interpolation, and does nothing more for a sample whose
+//! taken one as the lanes read them (`integrate::preint::Bytes` from 8-bit voxels, else the
+//! trilinear interpolation of the node values), and does nothing more for a sample whose
 //! slabs cannot show anything (both ends at most the zero test's bound). A sample the lanes
 //! pass over lies in a cell the mask clears, so its value is at most that bound: the slabs
 //! composited are the scalar pre-integrated march's.
@@ -370,9 +371,9 @@ struct Piece {
 struct Deferred<'p, 'a> {
     packets: &'p Packets<'a>,
     /// Per pixel of the tile: the weighted colours of its ray's pieces lit so far, added in
-    /// the pieces' order, and the ray's transmittance once it has ended (NaN before, and for
-    /// the pixels whose rays the march does not composite).
-    acc: Vec<[f64; 4]>,
+    /// the pieces' order, and the ray's transmittance once it has ended (`None` before, and
+    /// for the pixels whose rays the march does not composite: those it writes itself).
+    acc: Vec<([f64; 3], Option<f64>)>,
     pieces: [Piece; PIECES],
     n: usize,
     cache: CellGradients,
@@ -384,7 +385,7 @@ impl<'p, 'a> Deferred<'p, 'a> {
         debug_assert!(matches!(packets.light, Light32::Lit { .. }));
         Deferred {
             packets,
-            acc: vec![[0.0, 0.0, 0.0, f64::NAN]; pixels],
+            acc: vec![([0.0; 3], None); pixels],
             pieces: [Piece::default(); PIECES],
             n: 0,
             cache: CellGradients::default(),
@@ -399,7 +400,7 @@ impl<'p, 'a> Deferred<'p, 'a> {
             // `Packets::new` made only where it found AVX2 and FMA.
             let col = unsafe { self.packets.light_pieces8(chunk, &mut self.cache) };
             for (l, q) in chunk.iter().enumerate() {
-                let acc = &mut self.acc[q.px as usize];
+                let acc = &mut self.acc[q.px as usize].0;
                 for (ch, c) in col.iter().enumerate() {
                     acc[ch] += q.w * c[l] as f64;
                 }
@@ -442,14 +443,14 @@ impl PieceLighting for Deferred<'_, '_> {
 
 impl TileLight for Deferred<'_, '_> {
     fn done(&mut self, ray: &PreRay<'_>, px: usize, _: &mut [Pixel], _: DVec3) {
-        self.acc[px][3] = ray.result().1;
+        self.acc[px].1 = Some(ray.result().1);
     }
 
     fn end(&mut self, out: &mut [Pixel], background: DVec3) {
         self.flush();
-        for (px, &[r, g, b, t]) in self.acc.iter().enumerate() {
-            if !t.is_nan() {
-                out[px] = pixel(DVec3::new(r, g, b) + t * background, t);
+        for (px, &(col, t)) in self.acc.iter().enumerate() {
+            if let Some(t) = t {
+                out[px] = pixel(DVec3::from_array(col) + t * background, t);
             }
         }
     }
