@@ -476,14 +476,7 @@ impl Packets<'_> {
         }
         let [p, view, rgb] = [p, view, rgb].map(|x| x.map(|a| s.ld(&a)));
         let (f, base, interior) = self.cells(s, &p);
-        let base = s.keep_i(live, base);
-        let (nodes, rows) = match &self.raw8 {
-            Some(r8) => {
-                let rows = r8.central_rows(s, base, live, self.sy, self.sz);
-                (rows.cell_nodes(s), Some(rows))
-            }
-            None => (s.value_nodes(self, base), None),
-        };
+        let (base, nodes, rows) = self.cell_nodes(s, base, live);
         let g = self.gradient(
             s,
             &p,

@@ -165,15 +165,7 @@ impl Packets<'_> {
             }
         }
         // The eight nodes and the trilinear value (`trilinear_rows`' lerps).
-        // (Lanes without a sample read node 0 instead: no memory traffic for them.)
-        let base = s.keep_i(pass, base);
-        let (nodes, rows) = match &self.raw8 {
-            Some(r8) => {
-                let rows = r8.central_rows(s, base, pass, self.sy, self.sz);
-                (rows.cell_nodes(s), Some(rows))
-            }
-            None => (s.value_nodes(self, base), None),
-        };
+        let (base, nodes, rows) = self.cell_nodes(s, base, pass);
         let v = trilinear_lanes(s, &nodes, f);
         // (Raw voxels: the value normalised once, `raw·scale + offset`.)
         let v = match &self.raw8 {
@@ -191,6 +183,26 @@ impl Packets<'_> {
             rows,
             v,
         })
+    }
+
+    /// The nodes of the cells whose first nodes are `base`, in the lanes of `pass`: that
+    /// `base` with node 0 in the other lanes (so that they cause no memory traffic), the
+    /// cells' eight nodes, and the voxels' central rows where the 8-bit voxels are read.
+    #[inline(always)]
+    pub(super) fn cell_nodes<S: Simd<N>, const N: usize>(
+        &self,
+        s: S,
+        base: S::I,
+        pass: u32,
+    ) -> CellNodes<S::I, S::F> {
+        let base = s.keep_i(pass, base);
+        match &self.raw8 {
+            Some(r8) => {
+                let rows = r8.central_rows(s, base, pass, self.sy, self.sz);
+                (base, rows.cell_nodes(s), Some(rows))
+            }
+            None => (base, s.value_nodes(self, base), None),
+        }
     }
 
     /// The cells of object points `p`, as `Dataset::trilinear8` finds them: the weights
@@ -227,6 +239,10 @@ impl Packets<'_> {
         (f, base, interior)
     }
 }
+
+/// [`Packets::cell_nodes`]: the cells' first nodes, their eight nodes and the voxels'
+/// central rows where read.
+pub(super) type CellNodes<I, F> = (I, [F; 8], Option<Rows<I>>);
 
 /// A packet's samples as [`Packets::sample`] reads them: object points, weights within their
 /// cells, the cells' first nodes (node 0 for lanes not in `pass`), the interior lanes, the
