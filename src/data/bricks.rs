@@ -23,6 +23,9 @@ pub struct Bricks {
     pub dims: [usize; 3],
     /// Smallest and largest raw voxel per brick, x fastest.
     raw: RawRanges,
+    /// The smallest and largest raw voxel of the whole grid (every node lies in some brick's
+    /// span).
+    extremes: (f64, f64),
     /// The dataset's normalisation `(v − a)/(b − a)`, clamped to [0, 1].
     a: f32,
     b: f32,
@@ -37,6 +40,11 @@ enum RawRanges {
 }
 
 impl Bricks {
+    /// The smallest and largest raw voxel of the dataset, before its normalisation.
+    pub(crate) fn raw_extremes(&self) -> (f64, f64) {
+        self.extremes
+    }
+
     /// The (min, max) of brick (i, j, k); indices are clamped to the grid.
     #[inline]
     pub fn get(&self, i: usize, j: usize, k: usize) -> (f32, f32) {
@@ -101,20 +109,30 @@ impl Dataset {
     fn compute_bricks(&self, reach: usize) -> crate::error::Result<Bricks> {
         // Over the raw voxels (a quarter or half of the node values' memory, compared a byte
         // or two at a time), normalised when read ([`Bricks::get`]).
-        let raw = match &self.raw {
+        // (Raw voxels are integers: no NaN among the extremes.)
+        fn whole<T: Copy + Into<f64>>(lo: &[T], hi: &[T]) -> (f64, f64) {
+            let lo = lo.iter().fold(f64::INFINITY, |m, &v| m.min(v.into()));
+            let hi = hi.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v.into()));
+            (lo, hi)
+        }
+        let (raw, extremes) = match &self.raw {
             Voxels::U8(v) => {
                 let (lo, hi) = self.raw_brick_extremes(v, reach)?;
                 let norm = normaliser(self.a, self.b);
-                RawRanges::U8(lo, hi, Box::new(std::array::from_fn(|v| norm(v as f64))))
+                let extremes = whole(&lo, &hi);
+                let table = Box::new(std::array::from_fn(|v| norm(v as f64)));
+                (RawRanges::U8(lo, hi, table), extremes)
             }
             Voxels::U16(v) => {
                 let (lo, hi) = self.raw_brick_extremes(v, reach)?;
-                RawRanges::U16(lo, hi)
+                let extremes = whole(&lo, &hi);
+                (RawRanges::U16(lo, hi), extremes)
             }
         };
         Ok(Bricks {
             dims: self.brick_counts(),
             raw,
+            extremes,
             a: self.a,
             b: self.b,
         })

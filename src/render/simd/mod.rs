@@ -202,6 +202,9 @@ pub(super) struct Packets<'a> {
     /// The dataset's 8-bit voxels, read instead of `values` where its normalisation is
     /// linear over every byte ([`Raw8::of`]).
     raw8: Option<Raw8<'a>>,
+    /// The dataset's 16-bit voxels, whose gradients' differences are read from them where its
+    /// normalisation clamps none of them ([`Raw16::of`]).
+    raw16: Option<Raw16<'a>>,
     /// The cell mask's bits as 32-bit words (empty: no mask).
     mask: &'a [u32],
     /// The runs taken untested after one the mask passed whole ([`TRUSTED_RUNS`], or 0 where
@@ -300,6 +303,15 @@ impl<'a> Packets<'a> {
             (None, Voxels::U16(raw)) => NodeValues::U16(raw, data.table16()?),
             (None, _) => NodeValues::F32(data.values()),
         };
+        // (The brick ranges the skip grid reads; where they cannot be made, the table's
+        // differences.)
+        let raw16 = match data.raw() {
+            Voxels::U16(_) => data
+                .try_bricks(Filter::Trilinear)
+                .ok()
+                .and_then(|b| Raw16::of(data, b.raw_extremes())),
+            Voxels::U8(_) => None,
+        };
         let [ka, kd, ks, spec] = tables.coefficients;
         // The lanes' lighting where the scene's headlight has lanes (`Compiled::lanes`) and the
         // gradient is this very dataset's, trilinear (as the batched march's `same_cells`), in
@@ -393,6 +405,7 @@ impl<'a> Packets<'a> {
                 .filter(|_| scene.settings.optimise.skip_empty),
             values,
             raw8,
+            raw16,
             mask,
             trusted_runs: if scene.settings.optimise.trust_whole_runs {
                 TRUSTED_RUNS

@@ -1,8 +1,9 @@
 //! What a sample reads: the cell's nodes and the neighbours its gradient needs, either from
 //! the dataset's f32 node values by per-lane loads clamped into the values ([`Nodes`], eight
 //! lanes, or each half of sixteen) or from its 8-bit voxels by gathers of four bytes
-//! ([`Raw8`], generic over [`Simd`]), and the clamped gathers of tables ([`gather`]). Not here: what is done with the values
-//! ([`step`], [`shade`]).
+//! ([`Raw8`], generic over [`Simd`]); the gradient's differences of 16-bit voxels by gathers
+//! of two voxels ([`Raw16`]); and the clamped gathers of tables ([`gather`]). Not here: what
+//! is done with the values ([`step`], [`shade`]).
 
 use super::*;
 
@@ -203,6 +204,111 @@ impl<'a> Raw8<'a> {
         for (t, &w) in two.iter_mut().zip(&side) {
             *t = [s.byte::<0>(w), s.byte::<1>(w)];
         }
+        let [ym0, ym1, yp0, yp1, zm0, zm1, zp0, zp1] = two;
+        let (ym, yp, zm, zp) = ([ym0, ym1], [yp0, yp1], [zm0, zm1], [zp0, zp1]);
+        let mut d = [[s.zero(); 3]; 8];
+        for (k, dk) in d.iter_mut().enumerate() {
+            let (a, b, c) = (k & 1, k >> 1 & 1, k >> 2);
+            let row = &rb[b + 2 * c];
+            let dx = s.sub_i(row[2 + a], row[a]);
+            let dy = if b == 0 {
+                s.sub_i(rb[1 + 2 * c][1 + a], ym[c][a])
+            } else {
+                s.sub_i(yp[c][a], rb[2 * c][1 + a])
+            };
+            let dz = if c == 0 {
+                s.sub_i(rb[b + 2][1 + a], zm[b][a])
+            } else {
+                s.sub_i(zp[b][a], rb[b][1 + a])
+            };
+            *dk = [s.to_f(dx), s.to_f(dy), s.to_f(dz)];
+        }
+        d
+    }
+}
+
+/// A dataset's 16-bit voxels, where its normalisation `(v − a)/(b − a)` maps every voxel of the
+/// grid into [0, 1] (so it clamps none, and is linear over them): the gradient's central
+/// differences are read from the voxels themselves, as exact integers, and scaled once by the
+/// normalisation's slope ([`Raw16::differences`]), where the node values' differences would
+/// subtract two rounded f32 (an error of up to an f32 ulp of the value, against a difference
+/// that a smooth scan's neighbours make thousands of times smaller). The samples' values still
+/// come from the voxels' table of node values ([`NodeValues::U16`]).
+pub(super) struct Raw16<'a> {
+    /// The voxels' bytes, two a voxel, the low byte first (little-endian: x86-64's order).
+    bytes: &'a [u8],
+    pub(super) scale: f32,
+}
+
+impl<'a> Raw16<'a> {
+    /// The 16-bit voxels of `data`, where its normalisation maps its smallest and largest
+    /// voxel (`extremes`, those of its brick ranges) into [0, 1] and every voxel's byte offset
+    /// is an i32.
+    pub(super) fn of(data: &'a Dataset, extremes: (f64, f64)) -> Option<Raw16<'a>> {
+        let Voxels::U16(raw) = data.raw() else {
+            return None;
+        };
+        let (a, b) = data.range();
+        let (a, b) = (a as f64, b as f64);
+        let norm = |v: f64| (v - a) / (b - a);
+        let inside = |x: f64| (0.0..=1.0).contains(&x);
+        if !(inside(norm(extremes.0)) && inside(norm(extremes.1)))
+            || raw.len() >= i32::MAX as usize / 4
+        {
+            return None;
+        }
+        // SAFETY: a u16 slice's memory is 2·len initialised bytes, and u8 has no alignment.
+        let bytes = unsafe { std::slice::from_raw_parts(raw.as_ptr().cast::<u8>(), 2 * raw.len()) };
+        Some(Raw16 {
+            bytes,
+            scale: (1.0 / (b - a)) as f32,
+        })
+    }
+
+    /// The central differences along x, y and z at the eight corners (a + 2b + 4c) of the
+    /// cells whose first nodes are `base`, for the lanes of `inner` (whose 4³ neighbourhoods
+    /// lie inside the grid), in raw voxels: exact integers, as f32 (the same nodes and
+    /// subtractions as [`Raw8::differences`]). Each central row's four voxels by two gathers
+    /// of two, each row beside the cell by one.
+    #[inline(always)]
+    pub(super) fn differences<S: Simd<N>, const N: usize>(
+        &self,
+        s: S,
+        base: S::I,
+        inner: u32,
+        sy: i32,
+        sz: i32,
+    ) -> [[S::F; 3]; 8] {
+        assert!(self.bytes.len() >= 4);
+        // Voxel index → byte offset (`Raw16::of`: every one an i32).
+        let base = s.add_i(s.keep_i(inner, base), s.keep_i(inner, base));
+        let hi = s.splat_i(self.bytes.len() as i32 - 4);
+        let zero = s.zero_i();
+        let (low, sixteen) = (s.splat_i(0xFFFF), s.splat_i(16));
+        // Two voxels a lane from voxel `at + off`, clamped (a no-op for an interior cell's
+        // lane), as its low and high half. (Loops, not closures, which the compiler may leave
+        // out of line, without this function's target features.)
+        let mut offs = [0i32; 16];
+        for (r, off) in central_offsets(sy, sz).into_iter().enumerate() {
+            (offs[2 * r], offs[2 * r + 1]) = (off - 1, off + 1);
+        }
+        offs[8..].copy_from_slice(&side_offsets(sy, sz));
+        let mut halves = [[zero; 2]; 16];
+        for (h, off) in halves.iter_mut().zip(offs) {
+            let at = s.min_i(s.max_i(s.add_i(base, s.splat_i(2 * off)), zero), hi);
+            // SAFETY: every lane of `at` is in [0, 2·len − 4] (2·len ≥ 4: asserted).
+            let w = unsafe { s.gather_bytes(self.bytes, at) };
+            *h = [s.and_i(w, low), s.srlv_i(w, sixteen)];
+        }
+        // Central row (b, c): voxels x0 − 1 … x0 + 2; then rows y0 − 1 and y0 + 2 at z0 + c,
+        // rows z0 − 1 and z0 + 2 at y0 + b: voxels x0, x0 + 1.
+        let mut rb = [[zero; 4]; 4];
+        for (r, row) in rb.iter_mut().enumerate() {
+            let ([v0, v1], [v2, v3]) = (halves[2 * r], halves[2 * r + 1]);
+            *row = [v0, v1, v2, v3];
+        }
+        let mut two = [[zero; 2]; 8];
+        two.copy_from_slice(&halves[8..]);
         let [ym0, ym1, yp0, yp1, zm0, zm1, zp0, zp1] = two;
         let (ym, yp, zm, zp) = ([ym0, ym1], [yp0, yp1], [zm0, zm1], [zp0, zp1]);
         let mut d = [[s.zero(); 3]; 8];

@@ -12,10 +12,10 @@ impl Packets<'_> {
     /// The object-space gradients of the lanes in `shown` (at points `p`, cells `base` with
     /// weights `f`, `interior` as `Dataset::interior8`, cell nodes `nodes`, central rows of
     /// voxels `rows` where the voxels are read): in interior cells from the central
-    /// differences ([`Raw8::differences`], or from node values by per-lane loads), with
-    /// `Dataset::trilinear_gradient_at`'s f32 operations in its order; in the others by
-    /// `Dataset::gradient_cached`. The scale 0.5·(n − 1) applied; where a gradient vanishes,
-    /// NaN.
+    /// differences ([`Raw8::differences`], [`Raw16::differences`], or from node values by
+    /// per-lane loads), with `Dataset::trilinear_gradient_at`'s f32 operations in its order;
+    /// in the others by `Dataset::gradient_cached`. The scale 0.5·(n − 1) applied (times the
+    /// normalisation's slope for raw differences); where a gradient vanishes, NaN.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(super) fn gradient<S: Simd<N>, const N: usize>(
@@ -35,11 +35,12 @@ impl Packets<'_> {
         let inner = shown & s.bits(interior);
         let mut g = [zero; 3];
         if inner != 0 {
-            let (d, scale) = match (&self.raw8, rows) {
-                (Some(r8), Some(rows)) => (
+            let (d, scale) = match (&self.raw8, rows, &self.raw16) {
+                (Some(r8), Some(rows), _) => (
                     r8.differences(s, rows, base, inner, self.sy, self.sz),
                     r8.scale,
                 ),
+                (_, _, Some(r16)) => (r16.differences(s, base, inner, self.sy, self.sz), r16.scale),
                 _ => (s.value_differences(self, base, inner, nodes), 1.0),
             };
             let [fx, fy, fz] = *f;

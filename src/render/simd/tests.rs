@@ -458,3 +458,99 @@ fn nodes_of_16_bit_voxels_are_the_node_values() {
     let bytes = Dataset::new(dims, Voxels::U8(vec![0; n]), 0.0, 255.0).unwrap();
     assert!(bytes.table16().is_none(), "8-bit voxels have no table");
 }
+
+/// The gradient's central differences read from 16-bit voxels ([`Raw16::differences`]) are the
+/// voxels' integer differences exactly (an independent count: each corner node's neighbours
+/// read by index, subtracted as i64), in every lane of random interior cells of voxels over
+/// the whole 16-bit range; scaled by the normalisation's slope they are within two f32
+/// roundings of the exact differences of normalised values, where node values' differences err
+/// over a thousand times more; a normalisation that would clamp some voxel reads the node
+/// values instead, and a decreasing one scales by its negative slope.
+#[test]
+fn differences_of_16_bit_voxels_are_exact() {
+    if !is_x86_feature_detected!("avx2") {
+        return;
+    }
+    use crate::data::{Dataset, Filter, Voxels};
+    let rng = crate::testing::Xorshift::new(11);
+    let dims = [9usize, 7, 6];
+    let (sy, sz) = (dims[0], dims[0] * dims[1]);
+    let n = dims.iter().product::<usize>();
+    let raw: Vec<u16> = (0..n).map(|_| rng.bits() as u16).collect();
+    let extremes = |d: &Dataset| d.bricks(Filter::Trilinear).raw_extremes();
+    let lo = *raw.iter().min().unwrap() as f64;
+    let hi = *raw.iter().max().unwrap() as f64;
+    let data = Dataset::new(dims, Voxels::U16(raw.clone()), 0.0, 65535.0).unwrap();
+    assert_eq!(
+        extremes(&data),
+        (lo, hi),
+        "the brick ranges' extremes are the voxels'"
+    );
+    let r16 = Raw16::of(&data, extremes(&data)).expect("no voxel clamps");
+    assert_eq!(r16.scale, (1.0 / 65535.0f64) as f32);
+    let at = |x: usize, y: usize, z: usize| raw[x + sy * y + sz * z] as i64;
+    for _ in 0..200 {
+        // Interior cells: first node in [1, n − 3] per axis.
+        let cells: [[usize; 3]; 8] =
+            std::array::from_fn(|_| dims.map(|d| 1 + (rng.bits() as usize) % (d - 3)));
+        let base: [i32; 8] = cells.map(|[x, y, z]| (x + sy * y + sz * z) as i32);
+        let live = 0b1011_1111u32;
+        // SAFETY: the processor has AVX2 and FMA (checked above: the packet march asks both).
+        let d = unsafe {
+            let s = Avx2::new();
+            r16.differences(s, s.ld_i(&base), live, sy as i32, sz as i32)
+        };
+        for (k, dk) in d.iter().enumerate() {
+            let (a, b, c) = (k & 1, k >> 1 & 1, k >> 2);
+            for (axis, da) in dk.iter().enumerate() {
+                let mut out = [0f32; 8];
+                // SAFETY: `out` holds eight f32; the store has no alignment requirement.
+                unsafe { _mm256_storeu_ps(out.as_mut_ptr(), *da) };
+                for (l, &[x, y, z]) in cells.iter().enumerate() {
+                    if live >> l & 1 == 0 {
+                        continue;
+                    }
+                    let [x, y, z] = [x + a, y + b, z + c];
+                    let e = [(1, 0, 0), (0, 1, 0), (0, 0, 1)][axis];
+                    let want = at(x + e.0, y + e.1, z + e.2) - at(x - e.0, y - e.1, z - e.2);
+                    assert_eq!(out[l], want as f32, "corner {k}, axis {axis}, lane {l}");
+                }
+            }
+        }
+    }
+    // Scaled by the slope, an integer difference is within two f32 roundings of the exact
+    // difference of normalised values (the slope's and the product's), where the difference
+    // of two node values rounded to f32 errs by up to an ulp of the values: over pairs of
+    // neighbours one to sixteen units apart, the node values' worst relative error is over a
+    // thousand times the scaled integers'.
+    let table = data.table16().expect("16-bit voxels have a table");
+    let (mut worst_raw, mut worst_table) = (0f64, 0f64);
+    for _ in 0..10_000 {
+        let v0 = 32768 + (rng.bits() % 30000) as i64;
+        let v1 = v0 + 1 + (rng.bits() % 16) as i64;
+        let exact = (v1 - v0) as f64 / 65535.0;
+        let raw = ((v1 - v0) as f32 * r16.scale) as f64;
+        let nodes = (table[v1 as usize] - table[v0 as usize]) as f64;
+        worst_raw = worst_raw.max((raw - exact).abs() / exact);
+        worst_table = worst_table.max((nodes - exact).abs() / exact);
+    }
+    // (Two roundings of at most 2⁻²⁴ each: f32::EPSILON = 2⁻²³.)
+    assert!(worst_raw <= f32::EPSILON as f64, "{worst_raw}");
+    assert!(
+        worst_table > 1000.0 * worst_raw,
+        "{worst_table} against {worst_raw}"
+    );
+    // A normalisation from 1000 to 60000 clamps the voxels outside: none read raw.
+    assert!(lo < 1000.0 && hi > 60000.0);
+    let clamps = Dataset::new(dims, Voxels::U16(raw.clone()), 1000.0, 60000.0).unwrap();
+    assert!(Raw16::of(&clamps, extremes(&clamps)).is_none());
+    // Decreasing (b < a) over every voxel: the slope −1/65535.
+    let down = Dataset::new(dims, Voxels::U16(raw), 65535.0, 0.0).unwrap();
+    let r16 = Raw16::of(&down, extremes(&down)).expect("no voxel clamps");
+    assert_eq!(r16.scale, (-1.0 / 65535.0f64) as f32);
+    let bytes = Dataset::new(dims, Voxels::U8(vec![0; n]), 0.0, 255.0).unwrap();
+    assert!(
+        Raw16::of(&bytes, (0.0, 0.0)).is_none(),
+        "8-bit voxels are not 16-bit ones"
+    );
+}
