@@ -13,12 +13,14 @@
 //! interpolates the voxels and normalises once, a relative 10⁻⁷ from the node values' rounding (a
 //! sample that close to the zero test's bound has an opacity that close to 0). It differs in the
 //! f32 rounding of the tables (slopes rounded to f32), the opacity correction, the lighting (a
-//! normal from an f32 gradient, `rv^e` with e ≤ 12 multiplying a relative error by e) and the
-//! composite (a sum of up to a few hundred terms): relative errors of about 10⁻⁶ per sample, 10⁻⁴
-//! over a ray (measured: at most 4·10⁻⁷, root mean square 2·10⁻⁸). Where a ray's transmittance
-//! lands within that of the termination bound, the two marches may stop one sample apart: at most
-//! the bound (1/512) times a colour. So 1/255 (one 8-bit level) per channel, and a root mean
-//! square far below it.
+//! normal from an f32 gradient, from 8- and 16-bit voxels from their integer differences, which
+//! the scalar march takes as differences of rounded node values: a relative 4·10⁻³ for 16-bit
+//! neighbours one unit apart, only where the gradient is that small; `rv^e` with e ≤ 12
+//! multiplying a relative error by e) and the composite (a sum of up to a few hundred terms):
+//! relative errors of about 10⁻⁶ per sample, 10⁻⁴ over a ray (measured: at most 4·10⁻⁷, root
+//! mean square 2·10⁻⁸). Where a ray's transmittance lands within that of the termination bound,
+//! the two marches may stop one sample apart: at most the bound (1/512) times a colour. So 1/255
+//! (one 8-bit level) per channel, and a root mean square far below it.
 
 use vlib::Optimise;
 use vlib::{Camera, Feature, Fields, Library, MappingType};
@@ -512,7 +514,7 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
         (
             [4usize..9, 4usize..9, 4usize..9],
             any::<u64>(),
-            0u8..4,
+            0u8..5,
             [scale.clone(), scale.clone(), scale],
             [-360f32..360.0, -360f32..360.0, -360f32..360.0],
         ),
@@ -561,6 +563,14 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                         Voxels::U16((0..n).map(|_| (rng.next() * 65536.0) as u16).collect()),
                         -1e30,
                         1e30,
+                    ),
+                    // Decreasing over every voxel: the gradient's integer differences scaled
+                    // by a negative slope.
+                    3 => Dataset::new(
+                        dims,
+                        Voxels::U16((0..n).map(|_| (rng.next() * 65536.0) as u16).collect()),
+                        65535.0,
+                        0.0,
                     ),
                     _ => Dataset::new(
                         dims,

@@ -303,15 +303,6 @@ impl<'a> Packets<'a> {
             (None, Voxels::U16(raw)) => NodeValues::U16(raw, data.table16()?),
             (None, _) => NodeValues::F32(data.values()),
         };
-        // (The brick ranges the skip grid reads; where they cannot be made, the table's
-        // differences.)
-        let raw16 = match data.raw() {
-            Voxels::U16(_) => data
-                .try_bricks(Filter::Trilinear)
-                .ok()
-                .and_then(|b| Raw16::of(data, b.raw_extremes())),
-            Voxels::U8(_) => None,
-        };
         let [ka, kd, ks, spec] = tables.coefficients;
         // The lanes' lighting where the scene's headlight has lanes (`Compiled::lanes`) and the
         // gradient is this very dataset's, trilinear (as the batched march's `same_cells`), in
@@ -368,6 +359,15 @@ impl<'a> Packets<'a> {
                     ka_ambient: h.ka_ambient.to_array().map(|x| x as f32),
                 }
             }
+        };
+        // Only lit lanes take gradients. (The dataset's extremes from the brick ranges the skip
+        // grid reads; where they cannot be made, the table's differences.)
+        let raw16 = match (data.raw(), &light) {
+            (Voxels::U16(_), Light32::Lit { .. }) => data
+                .try_bricks(Filter::Trilinear)
+                .ok()
+                .and_then(|b| Raw16::of(data, b.raw_extremes())),
+            _ => None,
         };
         let mask = obj.cells.as_deref().map_or(&[][..], |m| m.words32());
         if mask.len() >= i32::MAX as usize {

@@ -242,8 +242,8 @@ pub(super) struct Raw16<'a> {
 
 impl<'a> Raw16<'a> {
     /// The 16-bit voxels of `data`, where its normalisation maps its smallest and largest
-    /// voxel (`extremes`, those of its brick ranges) into [0, 1] and every voxel's byte offset
-    /// is an i32.
+    /// voxel (`extremes`, those of its brick ranges) into [0, 1] and the voxels' bytes are
+    /// fewer than 2³¹ (every byte offset an i32; `Packets::new` asks that of every march).
     pub(super) fn of(data: &'a Dataset, extremes: (f64, f64)) -> Option<Raw16<'a>> {
         let Voxels::U16(raw) = data.raw() else {
             return None;
@@ -253,7 +253,7 @@ impl<'a> Raw16<'a> {
         let norm = |v: f64| (v - a) / (b - a);
         let inside = |x: f64| (0.0..=1.0).contains(&x);
         if !(inside(norm(extremes.0)) && inside(norm(extremes.1)))
-            || raw.len() >= i32::MAX as usize / 4
+            || raw.len() >= i32::MAX as usize / 2
         {
             return None;
         }

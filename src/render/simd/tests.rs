@@ -468,7 +468,7 @@ fn nodes_of_16_bit_voxels_are_the_node_values() {
 /// values instead, and a decreasing one scales by its negative slope.
 #[test]
 fn differences_of_16_bit_voxels_are_exact() {
-    if !is_x86_feature_detected!("avx2") {
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
         return;
     }
     use crate::data::{Dataset, Filter, Voxels};
