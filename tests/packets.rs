@@ -449,8 +449,9 @@ fn preintegrated_packets_of_bytes_leave_the_node_values_unmade() {
     assert!(shown >= 10, "{shown}");
 }
 
-/// The packet march of 16-bit voxels reads them through their table of node values and leaves
-/// the node values unmade, in every case of `packets_are_the_scalar_march` with skipping on
+/// The packet march of 16-bit voxels reads them (normalised in lanes where that gives the node
+/// values' bits, else through their table of node values) and leaves the node values unmade,
+/// in every case of `packets_are_the_scalar_march` with skipping on
 /// (its volumes as 16-bit voxels), within one 8-bit level of the scalar march (the tolerance
 /// of `packets_are_the_scalar_march`), which leaves them unmade too; in sixteen
 /// lanes (where the processor has AVX-512) the image of eight, bit for bit.

@@ -202,7 +202,8 @@ pub(super) struct Packets<'a> {
     /// The dataset's 8-bit voxels, read instead of `values` where its normalisation is
     /// linear over every byte ([`Raw8::of`]).
     raw8: Option<Raw8<'a>>,
-    /// The dataset's 16-bit voxels, whose gradients' differences are read from them where its
+    /// The dataset's 16-bit voxels, whose gradients' differences (and, where the lanes'
+    /// normalisation gives the node values' bits, cell nodes) are read from them where its
     /// normalisation clamps none of them ([`Raw16::of`]).
     raw16: Option<Raw16<'a>>,
     /// The cell mask's bits as 32-bit words (empty: no mask).
@@ -360,14 +361,14 @@ impl<'a> Packets<'a> {
                 }
             }
         };
-        // Only lit lanes take gradients. (The dataset's extremes from the brick ranges the skip
-        // grid reads; where they cannot be made, the table's differences.)
-        let raw16 = match (data.raw(), &light) {
-            (Voxels::U16(_), Light32::Lit { .. }) => data
+        // (The dataset's extremes from the brick ranges the skip grid reads, made once per
+        // dataset; where they cannot be made, the table's nodes and differences.)
+        let raw16 = match data.raw() {
+            Voxels::U16(_) => data
                 .try_bricks(Filter::Trilinear)
                 .ok()
                 .and_then(|b| Raw16::of(data, b.raw_extremes())),
-            _ => None,
+            Voxels::U8(_) => None,
         };
         let mask = obj.cells.as_deref().map_or(&[][..], |m| m.words32());
         if mask.len() >= i32::MAX as usize {

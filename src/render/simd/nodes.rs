@@ -1,9 +1,9 @@
 //! What a sample reads: the cell's nodes and the neighbours its gradient needs, either from
 //! the dataset's f32 node values by per-lane loads clamped into the values ([`Nodes`], eight
 //! lanes, or each half of sixteen) or from its 8-bit voxels by gathers of four bytes
-//! ([`Raw8`], generic over [`Simd`]); the gradient's differences of 16-bit voxels by gathers
-//! of two voxels ([`Raw16`]); and the clamped gathers of tables ([`gather`]). Not here: what
-//! is done with the values ([`step`], [`shade`]).
+//! ([`Raw8`], generic over [`Simd`]); the cell nodes and the gradient's differences of 16-bit
+//! voxels by gathers of two voxels ([`Raw16`]); and the clamped gathers of tables
+//! ([`gather`]). Not here: what is done with the values ([`step`], [`shade`]).
 
 use super::*;
 
@@ -232,12 +232,17 @@ impl<'a> Raw8<'a> {
 /// differences are read from the voxels themselves, as exact integers, and scaled once by the
 /// normalisation's slope ([`Raw16::differences`]), where the node values' differences would
 /// subtract two rounded f32 (an error of up to an f32 ulp of the value, against a difference
-/// that a smooth scan's neighbours make thousands of times smaller). The samples' values still
-/// come from the voxels' table of node values ([`NodeValues::U16`]).
+/// that a smooth scan's neighbours make thousands of times smaller). A cell's nodes are the
+/// voxels normalised in f32 lanes, `(v − a)/(b − a)`, where that gives the node values' bits
+/// (the quotient in f64 rounded to f32) for every voxel from the grid's smallest to its
+/// largest, checked one by one against the table of node values ([`Raw16::cell_nodes`]);
+/// else they come through the table ([`NodeValues::U16`]).
 pub(super) struct Raw16<'a> {
     /// The voxels' bytes, two a voxel, the low byte first (little-endian: x86-64's order).
     bytes: &'a [u8],
     pub(super) scale: f32,
+    /// a and b − a as f32, where the lanes' normalisation gives the node values' bits.
+    exact: Option<(f32, f32)>,
 }
 
 impl<'a> Raw16<'a> {
@@ -259,10 +264,60 @@ impl<'a> Raw16<'a> {
         }
         // SAFETY: a u16 slice's memory is 2·len initialised bytes, and u8 has no alignment.
         let bytes = unsafe { std::slice::from_raw_parts(raw.as_ptr().cast::<u8>(), 2 * raw.len()) };
+        // (The extremes are voxels: integers in [0, 65535], exact in f32 as is v − a where a is
+        // an integer below 2²⁴ in magnitude; the check does not rely on it.)
+        let (lo, hi) = (extremes.0 as usize, extremes.1 as usize);
+        let (a32, d32) = (data.range().0, data.range().1 - data.range().0);
+        let exact = data.table16().and_then(|table| {
+            let same = (lo..=hi).all(|v| ((v as f32 - a32) / d32).to_bits() == table[v].to_bits());
+            same.then_some((a32, d32))
+        });
         Some(Raw16 {
             bytes,
             scale: (1.0 / (b - a)) as f32,
+            exact,
         })
+    }
+
+    /// Whether [`Raw16::cell_nodes`] gives the node values.
+    pub(super) fn exact(&self) -> bool {
+        self.exact.is_some()
+    }
+
+    /// The eight nodes (a + 2b + 4c: x0 + a of row y0 + b, z0 + c) of the cells whose first
+    /// nodes are `base` (every lane's cell inside the grid, or `base` 0): the node values,
+    /// bit for bit, where [`Raw16::exact`] (else 0), from one 32-bit gather of the two
+    /// voxels of each row.
+    #[inline(always)]
+    pub(super) fn cell_nodes<S: Simd<N>, const N: usize>(
+        &self,
+        s: S,
+        base: S::I,
+        sy: i32,
+        sz: i32,
+    ) -> [S::F; 8] {
+        let Some((a, d)) = self.exact else {
+            return [s.zero(); 8];
+        };
+        assert!(self.bytes.len() >= 4);
+        let base = s.add_i(base, base);
+        let (hi, zero) = (s.splat_i(self.bytes.len() as i32 - 4), s.zero_i());
+        let (low, sixteen) = (s.splat_i(0xFFFF), s.splat_i(16));
+        let (a, d) = (s.splat(a), s.splat(d));
+        let mut n = [s.zero(); 8];
+        for (row, off) in central_offsets(sy, sz).into_iter().enumerate() {
+            let at = s.min_i(s.max_i(s.add_i(base, s.splat_i(2 * off)), zero), hi);
+            // SAFETY: every lane of `at` is in [0, 2·len − 4] (2·len ≥ 4: asserted).
+            let w = unsafe { s.gather_bytes(self.bytes, at) };
+            for (x, v) in [s.and_i(w, low), s.srlv_i(w, sixteen)]
+                .into_iter()
+                .enumerate()
+            {
+                // `(v − a)/(b − a)` in f32: the node value (`exact`).
+                n[2 * row + x] = s.div(s.sub(s.to_f(v), a), d);
+            }
+        }
+        n
     }
 
     /// The central differences along x, y and z at the eight corners (a + 2b + 4c) of the

@@ -196,12 +196,15 @@ impl Packets<'_> {
         pass: u32,
     ) -> CellNodes<S::I, S::F> {
         let base = s.keep_i(pass, base);
-        match &self.raw8 {
-            Some(r8) => {
+        match (&self.raw8, &self.raw16) {
+            (Some(r8), _) => {
                 let rows = r8.central_rows(s, base, pass, self.sy, self.sz);
                 (base, rows.cell_nodes(s), Some(rows))
             }
-            None => (base, s.value_nodes(self, base), None),
+            (None, Some(r16)) if r16.exact() => {
+                (base, r16.cell_nodes(s, base, self.sy, self.sz), None)
+            }
+            _ => (base, s.value_nodes(self, base), None),
         }
     }
 

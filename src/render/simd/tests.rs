@@ -554,3 +554,61 @@ fn differences_of_16_bit_voxels_are_exact() {
         "8-bit voxels are not 16-bit ones"
     );
 }
+
+/// The cell nodes read from 16-bit voxels by [`Raw16::cell_nodes`] (the voxels normalised in f32
+/// lanes) are the node values bit for bit, in every lane of random cells (the grid's first and
+/// last among them), where the check of every voxel finds the lanes' normalisation exact: from 0
+/// to 65535, from 1000 to 60000 over voxels inside it, decreasing. From 0.1 to 65535.3, where
+/// some quotients round to another f32 than the node values, the table is read instead.
+#[test]
+fn cell_nodes_of_16_bit_voxels_are_the_node_values() {
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        return;
+    }
+    use crate::data::{Dataset, Filter, Voxels};
+    let rng = crate::testing::Xorshift::new(17);
+    let dims = [9usize, 7, 6];
+    let (sy, sz) = (dims[0], dims[0] * dims[1]);
+    let n = dims.iter().product::<usize>();
+    let extremes = |d: &Dataset| d.bricks(Filter::Trilinear).raw_extremes();
+    for (lo, span, a, b) in [
+        (0u64, 65536u64, 0.0f32, 65535.0f32),
+        (1000, 59001, 1000.0, 60000.0),
+        (0, 65536, 65535.0, 0.0),
+    ] {
+        let raw: Vec<u16> = (0..n).map(|_| (lo + rng.bits() % span) as u16).collect();
+        let data = Dataset::new(dims, Voxels::U16(raw), a, b).unwrap();
+        let r16 = Raw16::of(&data, extremes(&data)).expect("no voxel clamps");
+        assert!(r16.exact(), "{a} to {b}: the lanes' normalisation is exact");
+        let values = data.values();
+        for round in 0..100 {
+            let cells: [[usize; 3]; 8] = std::array::from_fn(|l| match (round, l) {
+                (0, 0) => [0; 3],
+                (0, 1) => dims.map(|d| d - 2),
+                _ => dims.map(|d| (rng.bits() as usize) % (d - 1)),
+            });
+            let base: [i32; 8] = cells.map(|[x, y, z]| (x + sy * y + sz * z) as i32);
+            // SAFETY: the processor has AVX2 and FMA (checked above).
+            let nodes = unsafe {
+                let s = Avx2::new();
+                r16.cell_nodes(s, s.ld_i(&base), sy as i32, sz as i32)
+            };
+            for (k, node) in nodes.iter().enumerate() {
+                let mut out = [0f32; 8];
+                // SAFETY: `out` holds eight f32; the store has no alignment requirement.
+                unsafe { _mm256_storeu_ps(out.as_mut_ptr(), *node) };
+                for (l, &[x, y, z]) in cells.iter().enumerate() {
+                    let at = (x + (k & 1)) + sy * (y + (k >> 1 & 1)) + sz * (z + (k >> 2));
+                    assert_eq!(out[l].to_bits(), values[at].to_bits(), "node {k}, lane {l}");
+                }
+            }
+        }
+    }
+    let raw: Vec<u16> = (0..n).map(|_| rng.bits() as u16).collect();
+    let data = Dataset::new(dims, Voxels::U16(raw), 0.1, 65535.3).unwrap();
+    let r16 = Raw16::of(&data, extremes(&data)).expect("no voxel clamps");
+    assert!(
+        !r16.exact(),
+        "some quotient rounds to another f32 than its node value"
+    );
+}
