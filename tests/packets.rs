@@ -515,7 +515,7 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
         (
             [4usize..9, 4usize..9, 4usize..9],
             any::<u64>(),
-            0u8..5,
+            0u8..6,
             [scale.clone(), scale.clone(), scale],
             [-360f32..360.0, -360f32..360.0, -360f32..360.0],
         ),
@@ -572,6 +572,14 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
                         Voxels::U16((0..n).map(|_| (rng.next() * 65536.0) as u16).collect()),
                         65535.0,
                         0.0,
+                    ),
+                    // Clamping none, but not exact in f32 lanes: the table's nodes with the
+                    // voxels' differences.
+                    4 => Dataset::new(
+                        dims,
+                        Voxels::U16((0..n).map(|_| 1 + (rng.next() * 65535.0) as u16).collect()),
+                        0.1,
+                        65535.3,
                     ),
                     _ => Dataset::new(
                         dims,

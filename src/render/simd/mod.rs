@@ -280,7 +280,8 @@ impl<'a> Packets<'a> {
             return None;
         }
         // The node values only where the voxels are not read instead (made on first use):
-        // 8-bit voxels straight ([`Raw8`]), 16-bit voxels through their table of node values.
+        // 8-bit voxels straight ([`Raw8`]), 16-bit voxels straight where the lanes' normalisation
+        // gives the node values' bits ([`Raw16`]), else through their table of node values.
         let raw8 = Raw8::of(data);
         // A pre-integrated object's slabs are composited by the scalar code (`Packets::tile_pre`),
         // its values read as the lanes read them.
@@ -361,8 +362,8 @@ impl<'a> Packets<'a> {
                 }
             }
         };
-        // (The dataset's extremes from the brick ranges the skip grid reads, made once per
-        // dataset; where they cannot be made, the table's nodes and differences.)
+        // (The dataset's extremes from its brick ranges, made once per dataset, where skipping
+        // is on for the skip grid; where they cannot be made, the table's nodes and differences.)
         let raw16 = match data.raw() {
             Voxels::U16(_) => data
                 .try_bricks(Filter::Trilinear)
