@@ -204,26 +204,7 @@ impl<'a> Raw8<'a> {
         for (t, &w) in two.iter_mut().zip(&side) {
             *t = [s.byte::<0>(w), s.byte::<1>(w)];
         }
-        let [ym0, ym1, yp0, yp1, zm0, zm1, zp0, zp1] = two;
-        let (ym, yp, zm, zp) = ([ym0, ym1], [yp0, yp1], [zm0, zm1], [zp0, zp1]);
-        let mut d = [[s.zero(); 3]; 8];
-        for (k, dk) in d.iter_mut().enumerate() {
-            let (a, b, c) = (k & 1, k >> 1 & 1, k >> 2);
-            let row = &rb[b + 2 * c];
-            let dx = s.sub_i(row[2 + a], row[a]);
-            let dy = if b == 0 {
-                s.sub_i(rb[1 + 2 * c][1 + a], ym[c][a])
-            } else {
-                s.sub_i(yp[c][a], rb[2 * c][1 + a])
-            };
-            let dz = if c == 0 {
-                s.sub_i(rb[b + 2][1 + a], zm[b][a])
-            } else {
-                s.sub_i(zp[b][a], rb[b][1 + a])
-            };
-            *dk = [s.to_f(dx), s.to_f(dy), s.to_f(dz)];
-        }
-        d
+        central_differences(s, &rb, two)
     }
 }
 
@@ -299,25 +280,29 @@ impl<'a> Raw16<'a> {
         let Some((a, d)) = self.exact else {
             return [s.zero(); 8];
         };
-        assert!(self.bytes.len() >= 4);
         let base = s.add_i(base, base);
-        let (hi, zero) = (s.splat_i(self.bytes.len() as i32 - 4), s.zero_i());
-        let (low, sixteen) = (s.splat_i(0xFFFF), s.splat_i(16));
         let (a, d) = (s.splat(a), s.splat(d));
         let mut n = [s.zero(); 8];
         for (row, off) in central_offsets(sy, sz).into_iter().enumerate() {
-            let at = s.min_i(s.max_i(s.add_i(base, s.splat_i(2 * off)), zero), hi);
-            // SAFETY: every lane of `at` is in [0, 2·len − 4] (2·len ≥ 4: asserted).
-            let w = unsafe { s.gather_bytes(self.bytes, at) };
-            for (x, v) in [s.and_i(w, low), s.srlv_i(w, sixteen)]
-                .into_iter()
-                .enumerate()
-            {
+            for (x, v) in self.pair(s, base, off).into_iter().enumerate() {
                 // `(v − a)/(b − a)` in f32: the node value (`exact`).
                 n[2 * row + x] = s.div(s.sub(s.to_f(v), a), d);
             }
         }
         n
+    }
+
+    /// The voxels `at + off` and `at + off + 1` of each lane of voxel indices `at` (as byte
+    /// offsets, `2·at`), from one 32-bit gather clamped into the voxels (a no-op where both
+    /// lie inside), as the word's low and high half.
+    #[inline(always)]
+    fn pair<S: Simd<N>, const N: usize>(&self, s: S, at: S::I, off: i32) -> [S::I; 2] {
+        assert!(self.bytes.len() >= 4);
+        let hi = s.splat_i(self.bytes.len() as i32 - 4);
+        let at = s.min_i(s.max_i(s.add_i(at, s.splat_i(2 * off)), s.zero_i()), hi);
+        // SAFETY: every lane of `at` is in [0, 2·len − 4] (2·len ≥ 4: asserted).
+        let w = unsafe { s.gather_bytes(self.bytes, at) };
+        [s.and_i(w, s.splat_i(0xFFFF)), s.srlv_i(w, s.splat_i(16))]
     }
 
     /// The central differences along x, y and z at the eight corners (a + 2b + 4c) of the
@@ -334,15 +319,12 @@ impl<'a> Raw16<'a> {
         sy: i32,
         sz: i32,
     ) -> [[S::F; 3]; 8] {
-        assert!(self.bytes.len() >= 4);
         // Voxel index → byte offset (`Raw16::of`: every one an i32).
         let base = s.add_i(s.keep_i(inner, base), s.keep_i(inner, base));
-        let hi = s.splat_i(self.bytes.len() as i32 - 4);
         let zero = s.zero_i();
-        let (low, sixteen) = (s.splat_i(0xFFFF), s.splat_i(16));
-        // Two voxels a lane from voxel `at + off`, clamped (a no-op for an interior cell's
-        // lane), as its low and high half. (Loops, not closures, which the compiler may leave
-        // out of line, without this function's target features.)
+        // Two voxels a lane from voxel `base + off` (`Raw16::pair`: clamped, a no-op for an
+        // interior cell's lane). (Loops, not closures, which the compiler may leave out of
+        // line, without this function's target features.)
         let mut offs = [0i32; 16];
         for (r, off) in central_offsets(sy, sz).into_iter().enumerate() {
             (offs[2 * r], offs[2 * r + 1]) = (off - 1, off + 1);
@@ -350,10 +332,7 @@ impl<'a> Raw16<'a> {
         offs[8..].copy_from_slice(&side_offsets(sy, sz));
         let mut halves = [[zero; 2]; 16];
         for (h, off) in halves.iter_mut().zip(offs) {
-            let at = s.min_i(s.max_i(s.add_i(base, s.splat_i(2 * off)), zero), hi);
-            // SAFETY: every lane of `at` is in [0, 2·len − 4] (2·len ≥ 4: asserted).
-            let w = unsafe { s.gather_bytes(self.bytes, at) };
-            *h = [s.and_i(w, low), s.srlv_i(w, sixteen)];
+            *h = self.pair(s, base, off);
         }
         // Central row (b, c): voxels x0 − 1 … x0 + 2; then rows y0 − 1 and y0 + 2 at z0 + c,
         // rows z0 − 1 and z0 + 2 at y0 + b: voxels x0, x0 + 1.
@@ -364,27 +343,41 @@ impl<'a> Raw16<'a> {
         }
         let mut two = [[zero; 2]; 8];
         two.copy_from_slice(&halves[8..]);
-        let [ym0, ym1, yp0, yp1, zm0, zm1, zp0, zp1] = two;
-        let (ym, yp, zm, zp) = ([ym0, ym1], [yp0, yp1], [zm0, zm1], [zp0, zp1]);
-        let mut d = [[s.zero(); 3]; 8];
-        for (k, dk) in d.iter_mut().enumerate() {
-            let (a, b, c) = (k & 1, k >> 1 & 1, k >> 2);
-            let row = &rb[b + 2 * c];
-            let dx = s.sub_i(row[2 + a], row[a]);
-            let dy = if b == 0 {
-                s.sub_i(rb[1 + 2 * c][1 + a], ym[c][a])
-            } else {
-                s.sub_i(yp[c][a], rb[2 * c][1 + a])
-            };
-            let dz = if c == 0 {
-                s.sub_i(rb[b + 2][1 + a], zm[b][a])
-            } else {
-                s.sub_i(zp[b][a], rb[b][1 + a])
-            };
-            *dk = [s.to_f(dx), s.to_f(dy), s.to_f(dz)];
-        }
-        d
+        central_differences(s, &rb, two)
     }
+}
+
+/// The central differences along x, y and z at the eight corners (a + 2b + 4c) of a cell from
+/// its voxels as i32 lanes ([`Raw8::differences`], [`Raw16::differences`]): `rb[b + 2c]` the
+/// voxels x0 − 1 … x0 + 2 of central row y0 + b, z0 + c; `two` the voxels x0, x0 + 1 of rows
+/// y0 − 1 and y0 + 2 at z0 + c, then of rows z0 − 1 and z0 + 2 at y0 + b ([`side_offsets`]).
+/// Exact integers, as f32.
+#[inline(always)]
+fn central_differences<S: Simd<N>, const N: usize>(
+    s: S,
+    rb: &[[S::I; 4]; 4],
+    two: [[S::I; 2]; 8],
+) -> [[S::F; 3]; 8] {
+    let [ym0, ym1, yp0, yp1, zm0, zm1, zp0, zp1] = two;
+    let (ym, yp, zm, zp) = ([ym0, ym1], [yp0, yp1], [zm0, zm1], [zp0, zp1]);
+    let mut d = [[s.zero(); 3]; 8];
+    for (k, dk) in d.iter_mut().enumerate() {
+        let (a, b, c) = (k & 1, k >> 1 & 1, k >> 2);
+        let row = &rb[b + 2 * c];
+        let dx = s.sub_i(row[2 + a], row[a]);
+        let dy = if b == 0 {
+            s.sub_i(rb[1 + 2 * c][1 + a], ym[c][a])
+        } else {
+            s.sub_i(yp[c][a], rb[2 * c][1 + a])
+        };
+        let dz = if c == 0 {
+            s.sub_i(rb[b + 2][1 + a], zm[b][a])
+        } else {
+            s.sub_i(zp[b][a], rb[b][1 + a])
+        };
+        *dk = [s.to_f(dx), s.to_f(dy), s.to_f(dz)];
+    }
+    d
 }
 
 /// The central rows of a packet's cells ([`Raw8::central_rows`]): four voxels a lane, in its
