@@ -12,7 +12,7 @@
 
 use super::{Dataset, Voxels, MAX_VOXELS};
 use crate::error::{Error, ErrorCode, Result};
-use crate::num::{no_memory, try_with_capacity};
+use crate::num::{no_memory, try_vec, try_with_capacity};
 use std::io::Read;
 use std::os::unix::fs::OpenOptionsExt;
 use std::path::Path;
@@ -117,19 +117,18 @@ impl Dataset {
             }
             Voxels::U8(v)
         } else {
-            // Through a small buffer of bytes, converted as they come: the voxels' memory once.
-            let mut v = try_with_capacity::<u16>(n, &what)?;
-            let mut chunk = [0u8; 1 << 14];
-            while v.len() < n {
-                let want = (2 * (n - v.len())).min(chunk.len());
-                f.read_exact(&mut chunk[..want]).map_err(|e| {
-                    if e.kind() == std::io::ErrorKind::UnexpectedEof {
-                        shrank()
-                    } else {
-                        io(e)
-                    }
-                })?;
-                extend_le(&mut v, &chunk[..want]);
+            // Straight into the voxels' memory (its pages made in parallel by `try_vec`),
+            // then put in the host's byte order (nothing to do on a little-endian host).
+            let mut v = try_vec(n, 0u16, &what)?;
+            f.read_exact(u16_bytes(&mut v)).map_err(|e| {
+                if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                    shrank()
+                } else {
+                    io(e)
+                }
+            })?;
+            if cfg!(target_endian = "big") {
+                v.iter_mut().for_each(|x| *x = u16::from_le(*x));
             }
             Voxels::U16(v)
         };
@@ -200,6 +199,13 @@ pub(crate) fn header(dims: [usize; 3], width: u32, a: f32, b: f32) -> [u8; HEADE
     h[20..24].copy_from_slice(&a.to_le_bytes());
     h[24..28].copy_from_slice(&b.to_le_bytes());
     h
+}
+
+/// The bytes of `v`, in memory order.
+fn u16_bytes(v: &mut [u16]) -> &mut [u8] {
+    // SAFETY: the bytes of initialised u16 are initialised u8, of alignment 1, and span
+    // exactly `v`'s memory, borrowed as long as `v`.
+    unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr().cast::<u8>(), 2 * v.len()) }
 }
 
 /// Appends the little-endian 16-bit voxels of `bytes` (of even length) to `v`.
