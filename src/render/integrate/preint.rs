@@ -274,6 +274,20 @@ impl<'a> PreMarch<'a> {
         }
     }
 
+    /// [`PreMarch::ray`] for pieces lit elsewhere (the packet march's lanes): no world origin,
+    /// direction or [`Headlit`], which only the scalar lighting reads.
+    pub(in crate::render) fn ray_in_lanes(&self, c: &Cursor) -> PreRay<'a> {
+        PreRay {
+            acc: Integral::new(self.scene),
+            headlit: None,
+            origin: DVec3::ZERO,
+            dir: DVec3::ZERO,
+            last: (c.k == 0).then(|| (0, c.t0, self.value(c, c.t0))),
+            px: 0,
+            view: [0.0; 3],
+        }
+    }
+
     /// The dataset's value at ray parameter `t` of cursor `c`'s ray.
     #[inline]
     pub(in crate::render) fn value(&self, c: &Cursor, t: f64) -> f32 {

@@ -99,9 +99,9 @@ impl<'a> Packets<'a> {
         // SAFETY: this function has the AVX2 and FMA `march_pre` asks for.
         unsafe {
             match self.packets() {
-                1 => self.march_pre::<W, 1, W>(pre, tile, out, light, values, taken),
-                4 => self.march_pre::<W, 4, { 4 * W }>(pre, tile, out, light, values, taken),
-                _ => self.march_pre::<W, PACKETS8, { PACKETS8 * W }>(
+                1 => self.march_pre::<W, 1, W, _>(pre, tile, out, light, values, taken),
+                4 => self.march_pre::<W, 4, { 4 * W }, _>(pre, tile, out, light, values, taken),
+                _ => self.march_pre::<W, PACKETS8, { PACKETS8 * W }, _>(
                     pre, tile, out, light, values, taken,
                 ),
             }
@@ -122,9 +122,9 @@ impl<'a> Packets<'a> {
         // SAFETY: this function has AVX2 and FMA, which `march_pre` asks for.
         unsafe {
             match self.packets() {
-                1 => self.march_pre::<V, 1, V>(pre, tile, out, light, values, taken),
-                4 => self.march_pre::<V, 4, { 4 * V }>(pre, tile, out, light, values, taken),
-                _ => self.march_pre::<V, P, { P * V }>(pre, tile, out, light, values, taken),
+                1 => self.march_pre::<V, 1, V, _>(pre, tile, out, light, values, taken),
+                4 => self.march_pre::<V, 4, { 4 * V }, _>(pre, tile, out, light, values, taken),
+                _ => self.march_pre::<V, P, { P * V }, _>(pre, tile, out, light, values, taken),
             }
         }
     }
@@ -143,12 +143,12 @@ impl<'a> Packets<'a> {
     /// The caller must have AVX2 and FMA (for [`Packets::next_ray`]). Always inlined, so
     /// that the steps inline into the caller's target features.
     #[inline(always)]
-    unsafe fn march_pre<const N: usize, const P: usize, const L: usize>(
+    unsafe fn march_pre<const N: usize, const P: usize, const L: usize, T: TileLight>(
         &self,
         pre: &PreMarch<'a>,
         tile: &TileRays<'_>,
         mut out: Vec<Pixel>,
-        light: &mut impl TileLight,
+        light: &mut T,
         mut values: impl FnMut(&LaneState<N>, u32, &mut [f32; N]),
         next_taken: impl Fn(&mut Cursor, &mut Run16, &mut u32) -> (u32, u64),
     ) -> Vec<Pixel> {
@@ -193,10 +193,15 @@ impl<'a> Packets<'a> {
                         st[h].start(l, c, view);
                         let px = lanes[i].as_ref().expect("a ray").px as u32;
                         let (x, y) = (tile.origin.0 + px % tw, tile.origin.1 + px / tw);
-                        // (`ray_lanes` gave the cursor this direction's object-space form.)
-                        let dir = tile.view.ray(x as f64 + 0.5, y as f64 + 0.5);
                         let c = &lanes[i].as_ref().expect("a ray").cursor;
-                        let mut ray = pre.ray(c, tile.view.eye, dir);
+                        let mut ray = if T::SCALAR {
+                            // (`ray_lanes` gave the cursor this direction's object-space
+                            // form.)
+                            let dir = tile.view.ray(x as f64 + 0.5, y as f64 + 0.5);
+                            pre.ray(c, tile.view.eye, dir)
+                        } else {
+                            pre.ray_in_lanes(c)
+                        };
                         (ray.px, ray.view) = (px, view);
                         rays[i] = Some(ray);
                     }
@@ -336,6 +341,11 @@ impl<'a> Packets<'a> {
 
 /// How [`Packets::march_pre`] lights a tile's pieces and writes the pixels of its rays.
 trait TileLight: PieceLighting {
+    /// Whether the pieces are lit by the scalar code, which needs each ray's world origin,
+    /// direction and [`Headlit`] ([`PreMarch::ray`]); else a ray needs neither
+    /// ([`PreMarch::ray_in_lanes`]).
+    const SCALAR: bool;
+
     /// Ray `ray`, of pixel `px` of the tile, has ended.
     fn done(&mut self, ray: &PreRay<'_>, px: usize, out: &mut [Pixel], background: DVec3);
 
@@ -346,6 +356,8 @@ trait TileLight: PieceLighting {
 /// Each piece lit at once by the scalar code: a ray's composite is its pixel as it ends
 /// (`Compiled::trace`'s colour plus the transmittance times the background).
 impl TileLight for CellGradients {
+    const SCALAR: bool = true;
+
     fn done(&mut self, ray: &PreRay<'_>, px: usize, out: &mut [Pixel], background: DVec3) {
         let (col, t) = ray.result();
         out[px] = pixel(col + t * background, t);
@@ -442,6 +454,8 @@ impl PieceLighting for Deferred<'_, '_> {
 }
 
 impl TileLight for Deferred<'_, '_> {
+    const SCALAR: bool = false;
+
     fn done(&mut self, ray: &PreRay<'_>, px: usize, _: &mut [Pixel], _: DVec3) {
         self.acc[px].1 = Some(ray.result().1);
     }
