@@ -366,16 +366,28 @@ impl TileLight for CellGradients {
     fn end(&mut self, _: &mut [Pixel], _: DVec3) {}
 }
 
-/// A piece of a slab waiting for its colour: its ray's pixel in the tile, its weight (the
-/// transmittance before it times its α), its mean colour, the object point where it is lit and
-/// the view direction (towards the eye).
-#[derive(Clone, Copy, Default)]
-struct Piece {
-    px: u32,
-    w: f64,
-    rgb: [f32; 3],
-    p: [f32; 3],
-    view: [f32; 3],
+/// The pieces of slabs waiting for their colours, piece i at index i of each array: its ray's
+/// pixel in the tile, its weight (the transmittance before it times its α), and by axis (or
+/// channel) its mean colour, the object point where it is lit and the view direction (towards
+/// the eye). By axis, so that eight consecutive pieces load into lanes as they are.
+struct Pieces {
+    px: [u32; PIECES],
+    w: [f64; PIECES],
+    rgb: [[f32; PIECES]; 3],
+    p: [[f32; PIECES]; 3],
+    view: [[f32; PIECES]; 3],
+}
+
+impl Default for Pieces {
+    fn default() -> Pieces {
+        Pieces {
+            px: [0; PIECES],
+            w: [0.0; PIECES],
+            rgb: [[0.0; PIECES]; 3],
+            p: [[0.0; PIECES]; 3],
+            view: [[0.0; PIECES]; 3],
+        }
+    }
 }
 
 /// The pieces of a tile's rays, weighed as they are composited and lit later in lanes (see
@@ -386,7 +398,7 @@ struct Deferred<'p, 'a> {
     /// the pieces' order, and the ray's transmittance once it has ended (`None` before, and
     /// for the pixels whose rays the march does not composite: those it writes itself).
     acc: Vec<([f64; 3], Option<f64>)>,
-    pieces: [Piece; PIECES],
+    pieces: Pieces,
     n: usize,
     cache: CellGradients,
 }
@@ -398,7 +410,7 @@ impl<'p, 'a> Deferred<'p, 'a> {
         Deferred {
             packets,
             acc: vec![([0.0; 3], None); pixels],
-            pieces: [Piece::default(); PIECES],
+            pieces: Pieces::default(),
             n: 0,
             cache: CellGradients::default(),
         }
@@ -407,14 +419,19 @@ impl<'p, 'a> Deferred<'p, 'a> {
     /// Lights the pieces gathered, eight at a time, and adds each one's weighted colour to its
     /// pixel, in their order.
     fn flush(&mut self) {
-        for chunk in self.pieces[..self.n].chunks(W) {
+        for first in (0..self.n).step_by(W) {
+            let len = (self.n - first).min(W);
             // SAFETY: `Packets::tile_pre` makes a `Deferred` of its own `Packets`, which
             // `Packets::new` made only where it found AVX2 and FMA.
-            let col = unsafe { self.packets.light_pieces8(chunk, &mut self.cache) };
-            for (l, q) in chunk.iter().enumerate() {
-                let acc = &mut self.acc[q.px as usize].0;
+            let col = unsafe {
+                self.packets
+                    .light_pieces8(&self.pieces, first, len, &mut self.cache)
+            };
+            for l in 0..len {
+                let (px, w) = (self.pieces.px[first + l], self.pieces.w[first + l]);
+                let acc = &mut self.acc[px as usize].0;
                 for (ch, c) in col.iter().enumerate() {
-                    acc[ch] += q.w * c[l] as f64;
+                    acc[ch] += w * c[l] as f64;
                 }
             }
         }
@@ -436,14 +453,15 @@ impl PieceLighting for Deferred<'_, '_> {
         let (w, ends) = ray.weigh(alpha);
         // (A piece of weight 0 adds nothing: its colour is finite.)
         if w > 0.0 {
-            self.pieces[self.n] = Piece {
-                px: ray.px,
-                w,
-                // (The mean colour is an f32's: exact.)
-                rgb: col.to_array().map(|x| x as f32),
-                p: ray_point(c.o, c.d, tm),
-                view: ray.view,
-            };
+            let (q, i) = (&mut self.pieces, self.n);
+            (q.px[i], q.w[i]) = (ray.px, w);
+            // (The mean colour is an f32's: exact.)
+            let (rgb, p) = (col.to_array(), ray_point(c.o, c.d, tm));
+            for a in 0..3 {
+                q.rgb[a][i] = rgb[a] as f32;
+                q.p[a][i] = p[a];
+                q.view[a][i] = ray.view[a];
+            }
             self.n += 1;
             if self.n == PIECES {
                 self.flush();
@@ -471,24 +489,34 @@ impl TileLight for Deferred<'_, '_> {
 }
 
 impl Packets<'_> {
-    /// The lit colours (by channel, then lane) of `pieces`, at most eight, side by side: the
-    /// midpoint march's gradient and lighting at each piece's object point, for its view and
-    /// mean colour.
+    /// The lit colours (by channel, then lane) of the `len` pieces from `first` of `pieces`
+    /// (`first` a multiple of eight, `len` at most eight), side by side: the midpoint march's
+    /// gradient and lighting at each piece's object point, for its view and mean colour.
+    /// Lanes past `len` hold what their arrays hold there and come out unread.
     #[target_feature(enable = "avx2,fma")]
-    fn light_pieces8(&self, pieces: &[Piece], cache: &mut CellGradients) -> [[f32; W]; 3] {
-        debug_assert!(!pieces.is_empty() && pieces.len() <= W);
+    fn light_pieces8(
+        &self,
+        pieces: &Pieces,
+        first: usize,
+        len: usize,
+        cache: &mut CellGradients,
+    ) -> [[f32; W]; 3] {
+        debug_assert!(len > 0 && len <= W && first.is_multiple_of(W) && first + W <= PIECES);
         // SAFETY: this function has AVX2 and FMA.
         let s = unsafe { Avx2::new() };
-        let live = u32::MAX >> (32 - pieces.len());
-        let (mut p, mut view, mut rgb) = ([[0f32; W]; 3], [[0f32; W]; 3], [[0f32; W]; 3]);
-        for (l, q) in pieces.iter().enumerate() {
-            for a in 0..3 {
-                p[a][l] = q.p[a];
-                view[a][l] = q.view[a];
-                rgb[a][l] = q.rgb[a];
+        let live = u32::MAX >> (32 - len);
+        // (Loops, not closures: a closure would not have this function's target features.)
+        let mut v = [[s.zero(); 3]; 3];
+        for (k, by_axis) in [&pieces.p, &pieces.view, &pieces.rgb]
+            .into_iter()
+            .enumerate()
+        {
+            for (a, values) in by_axis.iter().enumerate() {
+                let eight: &[f32; W] = values[first..first + W].try_into().expect("eight");
+                v[k][a] = s.ld(eight);
             }
         }
-        let [p, view, rgb] = [p, view, rgb].map(|x| x.map(|a| s.ld(&a)));
+        let [p, view, rgb] = v;
         let (f, base, interior) = self.cells(s, &p);
         let (base, nodes, rows) = self.cell_nodes(s, base, live);
         let g = self.gradient(
