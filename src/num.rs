@@ -77,8 +77,10 @@ pub(crate) fn try_with_capacity<T>(len: usize, what: &str) -> crate::error::Resu
 pub(crate) const PARALLEL_FILL: usize = 1 << 16;
 
 /// `vec![value; len]`, or `NoMemory` where it cannot be allocated ([`try_with_capacity`]).
-/// A long vector is filled in parallel (rayon): its first touch of fresh pages, about 2 µs a
-/// page on the VMs measured, is most of a large buffer's cost.
+/// A long vector is filled in parallel on the library's pool (`pool::install`; never rayon's
+/// global pool, whose threads a forked child would wait on): its first touch of fresh pages,
+/// about 2 µs a page on the VMs measured, is most of a large buffer's cost. Where the pool's
+/// threads cannot be started, `NoMemory` too.
 pub(crate) fn try_vec<T: Clone + Send + Sync>(
     len: usize,
     value: T,
@@ -88,7 +90,10 @@ pub(crate) fn try_vec<T: Clone + Send + Sync>(
     if len >= PARALLEL_FILL {
         use rayon::prelude::*;
         // Into the room reserved above: no reallocation.
-        v.par_extend(rayon::iter::repeat_n(value, len));
+        crate::pool::install(|| {
+            v.par_extend(rayon::iter::repeat_n(value, len));
+            Ok(())
+        })?;
     } else {
         v.resize(len, value);
     }

@@ -117,8 +117,9 @@ impl Dataset {
             }
             Voxels::U8(v)
         } else {
-            // Straight into the voxels' memory (its pages made in parallel by `try_vec`),
-            // then put in the host's byte order (nothing to do on a little-endian host).
+            // Straight into the voxels' memory, its pages made first in parallel by the
+            // library's threads (`try_vec`), then put in the host's byte order (nothing to do
+            // on a little-endian host).
             let mut v = try_vec(n, 0u16, &what)?;
             f.read_exact(u16_bytes(&mut v)).map_err(|e| {
                 if e.kind() == std::io::ErrorKind::UnexpectedEof {
@@ -204,7 +205,8 @@ pub(crate) fn header(dims: [usize; 3], width: u32, a: f32, b: f32) -> [u8; HEADE
 /// The bytes of `v`, in memory order.
 fn u16_bytes(v: &mut [u16]) -> &mut [u8] {
     // SAFETY: the bytes of initialised u16 are initialised u8, of alignment 1, and span
-    // exactly `v`'s memory, borrowed as long as `v`.
+    // exactly `v`'s memory, borrowed as long as `v`; every pattern of two bytes is a u16, so
+    // whatever is written through the view leaves valid u16.
     unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr().cast::<u8>(), 2 * v.len()) }
 }
 

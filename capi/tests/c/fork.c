@@ -1,6 +1,6 @@
-/* A process that forks after a render: the child renders again, as any program may, and must
- * finish (the library's threads are not in the child, so it starts its own), and the parent
- * renders on afterwards. An alarm in each process turns a hang into a failure; the child ends by
+/* A process that forks after a render and a dataset's load: the child loads and renders again,
+ * as any program may, and must finish (the library's threads are not in the child, so it starts
+ * its own: a 16-bit dataset's memory is made on them), and the parent renders on afterwards. An alarm in each process turns a hang into a failure; the child ends by
  * exec, so that under valgrind only the parent's memory is checked. Prints one line
  * per check and exits non-zero if any fails. C89 (with POSIX); built and run by
  * capi/tests/c_examples.rs, under valgrind by capi/tests/memcheck.rs. */
@@ -30,6 +30,35 @@ static void on_alarm(int sig)
     _exit(2);
 }
 
+static void put_u32(FILE *f, unsigned long v)
+{
+    int k;
+    for (k = 0; k < 4; k++)
+        fputc((int)((v >> (8 * k)) & 0xff), f);
+}
+
+/* A 64×32×32 16-bit .vlb (normalisation 0 to 65535, little-endian floats by their bits): more
+   voxels than the library fills on one thread. */
+static int write_vlb16(const char *path)
+{
+    unsigned long i;
+    FILE *f = fopen(path, "wb");
+    if (!f)
+        return 0;
+    fputs("VLB1", f);
+    put_u32(f, 64);
+    put_u32(f, 32);
+    put_u32(f, 32);
+    put_u32(f, 2);
+    put_u32(f, 0x00000000UL); /* 0.0f */
+    put_u32(f, 0x477fff00UL); /* 65535.0f */
+    for (i = 0; i < 64UL * 32 * 32; i++) {
+        fputc((int)(i & 0xff), f);
+        fputc((int)((i >> 8) & 0xff), f);
+    }
+    return fclose(f) == 0;
+}
+
 /* A 64×64 image of a sphere: large enough to run on the library's threads. */
 static int render(const char *path)
 {
@@ -50,13 +79,17 @@ int main(void)
     int status = 0;
     signal(SIGALRM, on_alarm);
     alarm(120);
+    check("wrote a 16-bit dataset", write_vlb16("fork16.vlb"));
     vlInit();
+    vlLoad(1, "fork16.vlb");
+    check("the parent loads a 16-bit dataset before the fork", vlError() == VL_NOERROR);
     check("the parent renders before the fork", render("before.ppm"));
     child = fork();
     if (child == 0) {
         int ok;
         alarm(60);
-        ok = render("child.ppm");
+        vlLoad(2, "fork16.vlb");
+        ok = vlError() == VL_NOERROR && render("child.ppm");
         vlEnd();
         /* The child reports by the status of a program it becomes: ending by exec, it leaves
            nothing for a memory checker to count of the parent's threads, whose bookkeeping it

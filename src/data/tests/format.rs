@@ -21,13 +21,24 @@ fn vlb_round_trip_is_bit_exact() {
     std::fs::remove_file(&path).unwrap();
 }
 
-/// A 16-bit file composed byte by byte from the format's description (not by our writer):
-/// every voxel's two bytes differ, so a swapped or shifted pair, or a voxel read twice or
-/// skipped, gives another value; and a file one byte short of its voxels is refused.
+/// A 16-bit file composed byte by byte from the format's description (not by our writer),
+/// large enough for the voxels' memory to be made in parallel (`num::PARALLEL_FILL`): the
+/// voxels' two bytes differ (a swapped pair gives another value) and so do neighbours (a
+/// shifted, repeated or skipped voxel too); and a file one byte short of its voxels is refused.
 #[test]
 fn sixteen_bit_files_load_their_little_endian_voxels() {
-    let dims = [3u32, 2, 2];
-    let voxels: Vec<u16> = (0..12u16).map(|i| 0x0102 + i * 0x1f03).collect();
+    let dims = [64u32, 32, 32];
+    let n = (dims[0] * dims[1] * dims[2]) as usize;
+    assert!(n >= crate::num::PARALLEL_FILL);
+    // Low byte i mod 251, the high one 1 to 254 above it (mod 256).
+    let voxels: Vec<u16> = (0..n)
+        .map(|i| {
+            let lo = (i % 251) as u8;
+            let hi = lo.wrapping_add(1 + (i / 251 % 254) as u8);
+            u16::from_le_bytes([lo, hi])
+        })
+        .collect();
+    assert!(voxels.iter().all(|v| v >> 8 != v & 0xff) && voxels.windows(2).all(|w| w[0] != w[1]));
     let mut bytes = b"VLB1".to_vec();
     for d in dims.iter().chain(&[2u32]) {
         bytes.extend_from_slice(&d.to_le_bytes());
@@ -40,8 +51,9 @@ fn sixteen_bit_files_load_their_little_endian_voxels() {
     let path = std::env::temp_dir().join(format!("vlib-le16-{}.vlb", std::process::id()));
     std::fs::write(&path, &bytes).unwrap();
     let d = Dataset::load(&path).unwrap();
-    assert_eq!(d.raw(), &Voxels::U16(voxels.clone()));
-    assert_eq!(d.raw_node(2, 1, 1), voxels[11] as f64);
+    let last = voxels[n - 1] as f64;
+    assert_eq!(d.raw(), &Voxels::U16(voxels));
+    assert_eq!(d.raw_node(63, 31, 31), last);
     std::fs::write(&path, &bytes[..bytes.len() - 1]).unwrap();
     assert_eq!(Dataset::load(&path).unwrap_err().code, ErrorCode::BadSize);
     std::fs::remove_file(&path).unwrap();

@@ -168,8 +168,10 @@ impl Bytes<'_> {
 }
 
 /// One ray's state in a [`PreMarch`]: the composite so far, its lighting, the last position
-/// taken (number, ray parameter, value) and the ray (the eye and the world direction); where
-/// its pieces are lit later ([`PieceLighting`]), its pixel and its view direction as f32.
+/// taken (number, ray parameter, value) and the ray (the eye and the world direction, which
+/// only the scalar lighting reads: zero, and no lighting, for a ray whose pieces are lit in
+/// lanes, [`PreMarch::ray_in_lanes`]); where its pieces are lit later ([`PieceLighting`]), its
+/// pixel and its view direction as f32.
 pub(in crate::render) struct PreRay<'a> {
     acc: Integral,
     headlit: Option<Headlit<'a>>,
@@ -212,6 +214,7 @@ impl PieceLighting for CellGradients {
         tm: f64,
     ) -> bool {
         let (origin, dir) = (ray.origin, ray.dir);
+        debug_assert!(dir != DVec3::ZERO, "a ray started for the lanes' lighting");
         let (p, w) = (ray_point(c.o, c.d, tm), origin + tm * dir);
         let normal = || march.obj.gradient_normal(w, -dir, p, 9, self);
         let lit = match &ray.headlit {
@@ -263,25 +266,32 @@ impl<'a> PreMarch<'a> {
     /// A ray of cursor `c` (before its first sample is taken) from `origin` along the world
     /// direction `dir`: its start t0 taken where the cursor is at its first sample.
     pub(in crate::render) fn ray(&self, c: &Cursor, origin: DVec3, dir: DVec3) -> PreRay<'a> {
-        PreRay {
-            acc: Integral::new(self.scene),
-            headlit: Headlit::new(self.scene, self.obj, dir, self.k, self.e),
-            origin,
-            dir,
-            last: (c.k == 0).then(|| (0, c.t0, self.value(c, c.t0))),
-            px: 0,
-            view: [0.0; 3],
-        }
+        let headlit = Headlit::new(self.scene, self.obj, dir, self.k, self.e);
+        self.start(c, headlit, origin, dir)
     }
 
     /// [`PreMarch::ray`] for pieces lit elsewhere (the packet march's lanes): no world origin,
     /// direction or [`Headlit`], which only the scalar lighting reads.
     pub(in crate::render) fn ray_in_lanes(&self, c: &Cursor) -> PreRay<'a> {
+        self.start(c, None, DVec3::ZERO, DVec3::ZERO)
+    }
+
+    /// A ray of cursor `c` (before its first sample is taken) with these lighting, origin and
+    /// direction: nothing composited yet, its start t0 taken where the cursor is at its first
+    /// sample.
+    #[inline]
+    fn start(
+        &self,
+        c: &Cursor,
+        headlit: Option<Headlit<'a>>,
+        origin: DVec3,
+        dir: DVec3,
+    ) -> PreRay<'a> {
         PreRay {
             acc: Integral::new(self.scene),
-            headlit: None,
-            origin: DVec3::ZERO,
-            dir: DVec3::ZERO,
+            headlit,
+            origin,
+            dir,
             last: (c.k == 0).then(|| (0, c.t0, self.value(c, c.t0))),
             px: 0,
             view: [0.0; 3],

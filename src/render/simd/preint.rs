@@ -192,9 +192,9 @@ impl<'a> Packets<'a> {
                         };
                         st[h].start(l, c, view);
                         let px = lanes[i].as_ref().expect("a ray").px as u32;
-                        let (x, y) = (tile.origin.0 + px % tw, tile.origin.1 + px / tw);
                         let c = &lanes[i].as_ref().expect("a ray").cursor;
                         let mut ray = if T::SCALAR {
+                            let (x, y) = (tile.origin.0 + px % tw, tile.origin.1 + px / tw);
                             // (`ray_lanes` gave the cursor this direction's object-space
                             // form.)
                             let dir = tile.view.ray(x as f64 + 0.5, y as f64 + 0.5);
@@ -342,7 +342,7 @@ impl<'a> Packets<'a> {
 /// How [`Packets::march_pre`] lights a tile's pieces and writes the pixels of its rays.
 trait TileLight: PieceLighting {
     /// Whether the pieces are lit by the scalar code, which needs each ray's world origin,
-    /// direction and [`Headlit`] ([`PreMarch::ray`]); else a ray needs neither
+    /// direction and [`Headlit`] ([`PreMarch::ray`]); else a ray needs none of them
     /// ([`PreMarch::ray_in_lanes`]).
     const SCALAR: bool;
 
