@@ -1,26 +1,19 @@
 /* A process that forks after a render and a dataset's load: the child loads and renders again,
  * as any program may, and must finish (the library's threads are not in the child, so it starts
- * its own: a 16-bit dataset's memory is made on them), and the parent renders on afterwards. An alarm in each process turns a hang into a failure; the child ends by
- * exec, so that under valgrind only the parent's memory is checked. Prints one line
- * per check and exits non-zero if any fails. C89 (with POSIX); built and run by
- * capi/tests/c_examples.rs, under valgrind by capi/tests/memcheck.rs. */
+ * its own: a 16-bit dataset's memory is made on them), and the parent renders on afterwards.
+ * An alarm in each process turns a hang into a failure; the child ends by exec, so that under
+ * valgrind only the parent's memory is checked. Prints one line per check and exits non-zero if
+ * any fails. C89 (with POSIX); built and run by capi/tests/c_examples.rs, under valgrind by
+ * capi/tests/memcheck.rs. */
 #include <signal.h>
 #include <stdio.h>
+#include <string.h>
 #include <sys/types.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include "checks.h"
 #include <vlib.h>
 #include <vlaux.h>
-
-static int failures = 0;
-
-static void check(const char *what, int ok)
-{
-    printf("%-4s %s\n", ok ? "ok" : "FAIL", what);
-    fflush(stdout);
-    if (!ok)
-        failures++;
-}
 
 static void on_alarm(int sig)
 {
@@ -30,33 +23,31 @@ static void on_alarm(int sig)
     _exit(2);
 }
 
-static void put_u32(FILE *f, unsigned long v)
-{
-    int k;
-    for (k = 0; k < 4; k++)
-        fputc((int)((v >> (8 * k)) & 0xff), f);
-}
-
-/* A 64×32×32 16-bit .vlb (normalisation 0 to 65535, little-endian floats by their bits): more
+/* A 64×32×32 16-bit .vlb (a = 0, b = 65535): the 28-byte header of docs/compat.md, then more
    voxels than the library fills on one thread. */
 static int write_vlb16(const char *path)
 {
+    unsigned char h[28];
+    float a = 0.0f, b = 65535.0f;
     unsigned long i;
+    int ok;
     FILE *f = fopen(path, "wb");
     if (!f)
         return 0;
-    fputs("VLB1", f);
-    put_u32(f, 64);
-    put_u32(f, 32);
-    put_u32(f, 32);
-    put_u32(f, 2);
-    put_u32(f, 0x00000000UL); /* 0.0f */
-    put_u32(f, 0x477fff00UL); /* 65535.0f */
+    memcpy(h, "VLB1", 4);
+    put_u32(h + 4, 64);
+    put_u32(h + 8, 32);
+    put_u32(h + 12, 32);
+    put_u32(h + 16, 2);
+    memcpy(h + 20, &a, 4); /* little-endian IEEE floats, as on every target vlib builds for */
+    memcpy(h + 24, &b, 4);
+    ok = fwrite(h, 1, sizeof h, f) == sizeof h;
     for (i = 0; i < 64UL * 32 * 32; i++) {
         fputc((int)(i & 0xff), f);
         fputc((int)((i >> 8) & 0xff), f);
     }
-    return fclose(f) == 0;
+    ok = ok && !ferror(f);
+    return fclose(f) == 0 && ok;
 }
 
 /* A 64×64 image of a sphere: large enough to run on the library's threads. */
