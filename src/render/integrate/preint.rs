@@ -125,32 +125,37 @@ impl Bytes<'_> {
             unsafe { _mm_storeu_si128(c[a].as_mut_ptr().cast(), ci) };
         }
         let (sy, sz) = (self.sy, self.sz);
-        // Per lane, its cell's eight voxels (0 where one is not a voxel), x fastest.
-        let mut cells = [[0f32; 4]; 8];
-        for l in 0..3 {
-            let base = c[0][l].max(0) as usize
-                + c[1][l].max(0) as usize * sy
-                + c[2][l].max(0) as usize * sz;
-            let offsets = [0, sy, sz, sy + sz];
+        let offsets = [0, sy, sz, sy + sz];
+        // Per lane, its cell's first voxel; per row of the cell (y and z, `offsets`), each
+        // lane's two voxels of the row as one i32, the first in its low byte (0 where one is
+        // not a voxel).
+        let bases: [usize; 3] = std::array::from_fn(|l| {
+            c[0][l].max(0) as usize + c[1][l].max(0) as usize * sy + c[2][l].max(0) as usize * sz
+        });
+        let mut pairs = [[0i32; 3]; 4];
+        for (l, &base) in bases.iter().enumerate() {
             if base + sy + sz + 1 < self.raw.len() {
                 // Each row's two voxels, read at once: at most base + sy + sz + 1 (tested).
                 for (r, off) in offsets.into_iter().enumerate() {
                     // SAFETY: base + off + 1 ≤ base + sy + sz + 1 < the voxels' length.
                     let pair = unsafe { self.raw.get_unchecked(base + off..base + off + 2) };
-                    cells[2 * r][l] = pair[0] as f32;
-                    cells[2 * r + 1][l] = pair[1] as f32;
+                    pairs[r][l] = u16::from_le_bytes([pair[0], pair[1]]) as i32;
                 }
             } else {
                 for (r, off) in offsets.into_iter().enumerate() {
-                    for x in 0..2 {
-                        let v = self.raw.get(base + off + x).map_or(0.0, |&v| v as f32);
-                        cells[2 * r + x][l] = v;
-                    }
+                    let at = |x: usize| self.raw.get(base + off + x).map_or(0, |&v| v as i32);
+                    pairs[r][l] = at(0) | at(1) << 8;
                 }
             }
         }
-        // SAFETY: each row of `cells` is four f32, an unaligned load's 16 bytes.
-        let nodes = cells.map(|n| unsafe { _mm_loadu_ps(n.as_ptr()) });
+        // Each row's voxels as f32 lanes (exact): the first of the pair, then the second.
+        let byte = _mm_set1_epi32(0xff);
+        let mut nodes = [zero; 8];
+        for (r, [p0, p1, p2]) in pairs.into_iter().enumerate() {
+            let row = _mm_setr_epi32(p0, p1, p2, 0);
+            nodes[2 * r] = _mm_cvtepi32_ps(_mm_and_si128(row, byte));
+            nodes[2 * r + 1] = _mm_cvtepi32_ps(_mm_srli_epi32::<8>(row));
+        }
         let lerp = |a, b, t| _mm_add_ps(a, _mm_mul_ps(_mm_sub_ps(b, a), t));
         let [n000, n100, n010, n110, n001, n101, n011, n111] = nodes;
         let c00 = lerp(n000, n100, f[0]);
