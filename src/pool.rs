@@ -66,3 +66,32 @@ pub(crate) fn threads() -> usize {
         Err(_) => rayon::current_num_threads(),
     }
 }
+
+/// `cell`'s value, made by `make` where it has none yet: for a cache whose making runs parallel
+/// work on a pool. `make` runs holding no lock. A pool thread waiting for the parts of its work
+/// runs other tasks of the pool meanwhile, and one of them may ask for the same cache (another
+/// render sharing the dataset or the scene): waiting for the making it sits inside would never
+/// end (`OnceLock::get_or_init` and `Mutex::lock` are not re-entrant). Here that task makes the
+/// value itself. So threads asking at once may each make it; the first stored is kept and
+/// returned to all, and the others' are dropped. An error is returned and nothing kept (a later
+/// call tries again).
+pub(crate) fn try_once<T, E>(
+    cell: &std::sync::OnceLock<T>,
+    make: impl FnOnce() -> std::result::Result<T, E>,
+) -> std::result::Result<&T, E> {
+    if let Some(v) = cell.get() {
+        return Ok(v);
+    }
+    let made = make()?;
+    // (Where another thread stored its value first, `set` hands ours back, dropped here.)
+    let _ = cell.set(made);
+    Ok(cell.get().expect("a value was stored"))
+}
+
+/// [`try_once`] for a `make` that cannot fail.
+pub(crate) fn once<T>(cell: &std::sync::OnceLock<T>, make: impl FnOnce() -> T) -> &T {
+    match try_once(cell, || Ok::<T, std::convert::Infallible>(make())) {
+        Ok(v) => v,
+        Err(never) => match never {},
+    }
+}

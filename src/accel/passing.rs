@@ -347,18 +347,29 @@ impl SkipGrid {
         (box_min, box_max): (DVec3, DVec3),
         most: usize,
     ) -> Option<std::sync::Arc<Boxes>> {
-        let mut kept = self.passing.lock().unwrap_or_else(|e| e.into_inner());
-        match &*kept {
-            Passing::Made(b) => return (b.len() <= most).then(|| b.clone()),
-            Passing::Unavailable => return None,
-            Passing::Many(n) if *n > most => return None,
-            Passing::Many(_) | Passing::Unknown => {}
+        let kept = || self.passing.lock().unwrap_or_else(|e| e.into_inner());
+        // What is kept answers, where it can.
+        let known = |kept: &Passing| match kept {
+            Passing::Made(b) => Some((b.len() <= most).then(|| b.clone())),
+            Passing::Unavailable => Some(None),
+            Passing::Many(n) if *n > most => Some(None),
+            Passing::Many(_) | Passing::Unknown => None,
+        };
+        if let Some(answer) = known(&kept()) {
+            return answer;
         }
-        *kept = match passing_boxes(data, mask, box_min, box_max, most) {
+        // Made holding no lock, as `pool::try_once` makes a cache: the first boxes (or
+        // outcome) kept are what every later caller gets.
+        let made = match passing_boxes(data, mask, box_min, box_max, most) {
             None => Passing::Unavailable,
             Some(Err(n)) => Passing::Many(n),
             Some(Ok(b)) => Passing::Made(std::sync::Arc::new(b)),
         };
+        let mut kept = kept();
+        if let Some(answer) = known(&kept) {
+            return answer;
+        }
+        *kept = made;
         match &*kept {
             Passing::Made(b) => Some(b.clone()),
             _ => None,

@@ -103,7 +103,7 @@ impl Dataset {
             Filter::Nearest | Filter::Trilinear => 1,
             Filter::Cubic { .. } => 2,
         };
-        super::get_or_try_init(&self.bricks[reach - 1], || self.compute_bricks(reach))
+        crate::pool::try_once(&self.bricks[reach - 1], || self.compute_bricks(reach))
     }
 
     fn compute_bricks(&self, reach: usize) -> crate::error::Result<Bricks> {

@@ -149,18 +149,29 @@ impl Dataset {
     /// [`Dataset::cells_above`], or `NoMemory` where the mask cannot be allocated (nothing is
     /// kept: a later call tries again).
     pub(crate) fn try_cells_above(&self, z: f32) -> crate::error::Result<std::sync::Arc<CellMask>> {
-        // A poisoned lock only means another thread panicked while building: the list itself
-        // is always in a consistent state (entries are pushed whole).
-        let mut masks = self
-            .cell_masks
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
-        if let Some((_, m)) = masks.iter().find(|(b, _)| *b == z.to_bits()) {
-            return Ok(m.clone());
+        // A poisoned lock only means another thread panicked while it held the lock: the list
+        // itself is always in a consistent state (entries are pushed whole).
+        let masks = || {
+            self.cell_masks
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+        };
+        let find = |masks: &CellMasks| {
+            let kept = masks.iter().find(|(b, _)| *b == z.to_bits());
+            kept.map(|(_, m)| m.clone())
+        };
+        if let Some(m) = find(&masks()) {
+            return Ok(m);
         }
-        let m = std::sync::Arc::new(self.compute_cell_mask(z)?);
-        masks.push((z.to_bits(), m.clone()));
-        Ok(m)
+        // Made holding no lock, as `pool::try_once` makes a cache: the first mask kept for the
+        // bound is the one every caller gets.
+        let made = std::sync::Arc::new(self.compute_cell_mask(z)?);
+        let mut masks = masks();
+        if let Some(m) = find(&masks) {
+            return Ok(m);
+        }
+        masks.push((z.to_bits(), made.clone()));
+        Ok(made)
     }
 
     fn compute_cell_mask(&self, z: f32) -> crate::error::Result<CellMask> {

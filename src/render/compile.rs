@@ -185,12 +185,10 @@ impl CObj {
             refract: r.toggle(Feature::Refract),
             reflect_background: r.toggle(Feature::ReflectBackground),
             recursion: r.recursion,
-            skip: cache
-                .grid
-                .get_or_init(|| {
-                    SkipGrid::build(&o.program[..o_prefix], box_min, box_max).map(Arc::new)
-                })
-                .clone(),
+            skip: crate::pool::once(&cache.grid, || {
+                SkipGrid::build(&o.program[..o_prefix], box_min, box_max).map(Arc::new)
+            })
+            .clone(),
             o_prefix,
             f_dataset,
             grad_to_world: glam::DMat3::from_mat4(to_object).transpose(),

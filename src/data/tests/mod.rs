@@ -120,3 +120,66 @@ fn normalisation_clamps() {
     // A dimension of 1 is constant along its axis.
     assert_eq!(d.sample([1.0, 0.3, 0.9], Filter::Trilinear), 0.0);
 }
+
+/// The caches a render asks a dataset for (brick ranges, cell masks, node values) are built
+/// with parallel work; a thread of the pool waiting for its parts may meanwhile run another
+/// task of the pool that asks for the same cache (another render sharing the dataset). That
+/// must not wait for the build it sits inside: many tasks on one pool ask for every cache of
+/// fresh datasets at once, and all of them finish, with the caches every thread count gives.
+#[test]
+fn caches_asked_for_while_being_built_on_the_same_pool_are_built() {
+    // Every brick's range, as bits.
+    fn ranges(b: &Bricks, dims: [usize; 3]) -> Vec<(u32, u32)> {
+        let [nx, ny, nz] = dims.map(|n| (n - 1).div_ceil(BRICK));
+        let at = |i| b.get(i % nx, i / nx % ny, i / (nx * ny));
+        (0..nx * ny * nz)
+            .map(|i| (at(i).0.to_bits(), at(i).1.to_bits()))
+            .collect()
+    }
+    let (done, finished) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(4)
+            .build()
+            .unwrap();
+        let mut rng = Lcg(7);
+        for round in 0..40 {
+            let dims = [40, 36, 150 + round];
+            let n: usize = dims.iter().product();
+            let raw = Voxels::U8((0..n).map(|_| (rng.next() * 256.0) as u8).collect());
+            let d = Dataset::new(dims, raw, 0.0, 255.0).unwrap();
+            let z = 0.3 + 0.01 * (round % 5) as f32;
+            // Each from a thread of its own, as sessions render: each `install` is a task
+            // that any thread of the pool may take, one waiting inside a build among them.
+            let all: Vec<_> = std::thread::scope(|s| {
+                let asks: Vec<_> = (0..8)
+                    .map(|_| {
+                        s.spawn(|| {
+                            pool.install(|| {
+                                let bricks = ranges(d.try_bricks(Filter::Trilinear).unwrap(), dims);
+                                let mask = d.try_cells_above(z).unwrap().bits.clone();
+                                (bricks, mask, d.values().len())
+                            })
+                        })
+                    })
+                    .collect();
+                asks.into_iter().map(|a| a.join().unwrap()).collect()
+            });
+            // The same caches as one thread builds on a fresh copy.
+            let e = Dataset::new(dims, d.raw.clone(), 0.0, 255.0).unwrap();
+            let one = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .unwrap();
+            let want = one.install(|| {
+                let bricks = ranges(e.try_bricks(Filter::Trilinear).unwrap(), dims);
+                (bricks, e.try_cells_above(z).unwrap().bits.clone(), n)
+            });
+            assert!(all.iter().all(|got| *got == want), "round {round}");
+        }
+        done.send(()).unwrap();
+    });
+    finished
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("every task asking for the caches finished");
+}
