@@ -90,7 +90,8 @@ impl Dataset {
         })
     }
 
-    /// The brick ranges for `filter` (computed once per dataset and reach, then shared).
+    /// The brick ranges for `filter` (computed on first use, in parallel and holding no lock,
+    /// [`crate::pool::try_once`]; then kept per dataset and reach, and shared).
     /// Where they cannot be allocated this unwinds ([`super::or_unwind`]);
     /// [`Dataset::try_bricks`] reports it instead.
     pub(crate) fn bricks(&self, filter: Filter) -> &Bricks {

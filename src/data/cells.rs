@@ -138,8 +138,9 @@ pub(super) fn reaches(bits: &[u64], c: usize) -> bool {
 }
 
 impl Dataset {
-    /// The [`CellMask`] of bound `z`, built on first use (in parallel) and kept for the
-    /// dataset's life: an object's zero test asks for one bound, so a dataset holds few.
+    /// The [`CellMask`] of bound `z`, built on first use (in parallel, holding no lock, as
+    /// [`crate::pool::try_once`] makes a cache) and kept for the dataset's life: an object's
+    /// zero test asks for one bound, so a dataset holds few.
     /// Where it cannot be allocated this unwinds ([`super::or_unwind`]);
     /// [`Dataset::try_cells_above`] reports it instead.
     pub(crate) fn cells_above(&self, z: f32) -> std::sync::Arc<CellMask> {
