@@ -5,8 +5,10 @@
 //! so the thread count is what rayon's global pool would have) and kept for later renders. A
 //! process that forked after the pool was made has none of its threads, so a pool made by
 //! another process is left alone and a new one built. A failure to start the threads is an
-//! error of the render that needed them (`VL_NOMEMORY`), and the next render tries again. Part
-//! of the base layer: it knows nothing of scenes.
+//! error of the render that needed them (`VL_NOMEMORY`), and the next render tries again. Work
+//! that a pool thread must be able to wait for without running other pool tasks is split over
+//! threads of its own ([`fill`]), which only help: where none can start, the caller does it
+//! all. Part of the base layer: it knows nothing of scenes.
 
 use crate::error::{Error, ErrorCode, Result};
 use std::sync::{Arc, Mutex};
@@ -95,3 +97,77 @@ pub(crate) fn once<T>(cell: &std::sync::OnceLock<T>, make: impl FnOnce() -> T) -
         Err(never) => match never {},
     }
 }
+
+/// Writes every element of `out` by `write(part, from)` over parts of `chunk` elements (part
+/// k from element k·chunk), on up to `threads` threads of their own (not the pool's, so that
+/// the caller may wait for them inside a pool task): the calling thread and the others take
+/// parts in turn until none is left. A thread that cannot start leaves its parts to the
+/// threads that did, the caller's at least, so every element is written even where no other
+/// thread starts. Which thread writes a part changes nothing of what it writes.
+pub(crate) fn fill<T: Send>(
+    out: &mut [std::mem::MaybeUninit<T>],
+    chunk: usize,
+    threads: usize,
+    write: impl Fn(&mut [std::mem::MaybeUninit<T>], usize) + Sync,
+) {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    /// The start of `out`, shared by the threads: each writes only the parts it takes.
+    struct Start<T>(*mut std::mem::MaybeUninit<T>);
+    // SAFETY: the threads reach the memory only through the disjoint parts `work` takes.
+    unsafe impl<T: Send> Sync for Start<T> {}
+    impl<T> Start<T> {
+        fn at(&self, from: usize) -> *mut std::mem::MaybeUninit<T> {
+            // SAFETY: `from` is a part's start, inside `out` (`work`).
+            unsafe { self.0.add(from) }
+        }
+    }
+    let (len, chunk) = (out.len(), chunk.max(1));
+    let parts = len.div_ceil(chunk);
+    let next = AtomicUsize::new(0);
+    let start = Start(out.as_mut_ptr());
+    let work = || loop {
+        let k = next.fetch_add(1, Ordering::Relaxed);
+        if k >= parts {
+            break;
+        }
+        let from = k * chunk;
+        let n = chunk.min(len - from);
+        // SAFETY: part k, elements from … from + n − 1 of `out` (from < len), is taken by
+        // this thread alone (`fetch_add` gives each k once), and `out` is borrowed mutably
+        // for the whole scope.
+        let part = unsafe { std::slice::from_raw_parts_mut(start.at(from), n) };
+        write(part, from);
+    };
+    std::thread::scope(|scope| {
+        for _ in 1..threads.min(parts) {
+            if spawn_scoped(scope, work).is_err() {
+                break;
+            }
+        }
+        work();
+    });
+}
+
+/// `Builder::spawn_scoped` of `f` in `scope` (in tests, failing where `FAIL_SPAWNS` says
+/// so).
+fn spawn_scoped<'scope, 'env>(
+    scope: &'scope std::thread::Scope<'scope, 'env>,
+    f: impl FnOnce() + Send + 'scope,
+) -> std::io::Result<()> {
+    #[cfg(test)]
+    if FAIL_SPAWNS.with(|f| f.get()) {
+        return Err(std::io::Error::other("no thread (a test)"));
+    }
+    std::thread::Builder::new()
+        .spawn_scoped(scope, f)
+        .map(|_| ())
+}
+
+#[cfg(test)]
+thread_local! {
+    /// In tests: whether [`spawn_scoped`] fails on this thread, as where no thread can start.
+    pub(crate) static FAIL_SPAWNS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+#[cfg(test)]
+mod tests;

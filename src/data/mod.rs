@@ -338,42 +338,38 @@ impl Dataset {
     }
 
     /// The node values of the raw voxels ([`normaliser`]), on as many threads as rayon's pool
-    /// has, but threads of their own, which also make the values' memory (written once, not
-    /// filled first): made from inside a render's parallel loop (a first read there), a rayon
-    /// job that waits for its parts may run another part of the render meanwhile, which would
-    /// ask for the values again, in the thread that is making them.
+    /// has, but threads of their own ([`crate::pool::fill`]), which also make the values'
+    /// memory (written once, not filled first): made from inside a render's parallel loop (a
+    /// first read there), a rayon job that waits for its parts may run another part of the
+    /// render meanwhile, which would ask for the values again, in the thread that is making
+    /// them. Where threads cannot be started the calling thread makes them all.
     fn compute_values(&self) -> Result<Vec<f32>> {
         let norm = normaliser(self.a, self.b);
         let len = self.raw.len();
         let mut values = crate::num::try_with_capacity::<f32>(len, "a dataset's node values")?;
         let threads = rayon::current_num_threads().clamp(1, 64);
         let chunk = len.div_ceil(threads).max(1 << 16);
-        let lut = &*self.table8;
-        std::thread::scope(|scope| {
-            for (k, out) in values.spare_capacity_mut()[..len]
-                .chunks_mut(chunk)
-                .enumerate()
-            {
-                let from = k * chunk;
-                let raw = &self.raw;
-                scope.spawn(move || match raw {
-                    Voxels::U8(v) => {
-                        for (o, &x) in out.iter_mut().zip(&v[from..]) {
-                            o.write(lut[x as usize]);
-                        }
+        let (lut, raw) = (&*self.table8, &self.raw);
+        crate::pool::fill(
+            &mut values.spare_capacity_mut()[..len],
+            chunk,
+            threads,
+            |out, from| match raw {
+                Voxels::U8(v) => {
+                    for (o, &x) in out.iter_mut().zip(&v[from..]) {
+                        o.write(lut[x as usize]);
                     }
-                    Voxels::U16(v) => {
-                        for (o, &x) in out.iter_mut().zip(&v[from..]) {
-                            o.write(norm(x as f64));
-                        }
+                }
+                Voxels::U16(v) => {
+                    for (o, &x) in out.iter_mut().zip(&v[from..]) {
+                        o.write(norm(x as f64));
                     }
-                });
-            }
-        });
-        // SAFETY: the chunks cover the first `len` elements of the capacity, and each thread
-        // wrote every element of its chunk (chunk k starts at k·chunk, and the voxels from
-        // there are at least as many as the chunk, so its zip runs to the chunk's end); a
-        // thread that panicked would have ended `scope` by that panic, before this line.
+                }
+            },
+        );
+        // SAFETY: `fill` wrote every one of the first `len` elements of the capacity: each
+        // part's zip runs to the part's end, as the voxels from its start are at least as
+        // many (a panic in a part would have unwound out of `fill`, before this line).
         unsafe { values.set_len(len) };
         Ok(values)
     }

@@ -104,6 +104,24 @@ fn node_values_are_made_on_first_use_the_same_on_any_threads() {
             };
             assert_eq!(made(1), want);
             assert_eq!(made(3), want);
+            // Where no thread of their own can start, the caller makes them all (two parts
+            // for the largest case).
+            let alone = d.clone();
+            let made_alone = rayon::ThreadPoolBuilder::new()
+                .num_threads(3)
+                .build()
+                .unwrap()
+                .install(|| {
+                    crate::pool::FAIL_SPAWNS.with(|f| f.set(true));
+                    let v = alone
+                        .values()
+                        .iter()
+                        .map(|v| v.to_bits())
+                        .collect::<Vec<_>>();
+                    crate::pool::FAIL_SPAWNS.with(|f| f.set(false));
+                    v
+                });
+            assert_eq!(made_alone, want);
             assert_eq!(d.values().len(), n);
             assert!(d.values_made());
         }
