@@ -14,6 +14,11 @@ const STEPS: [f32; 5] = [4.0, 2.0, 1.0, 0.5, 0.25];
 /// The reference's step, in voxels.
 const REFERENCE_STEP: f32 = 1.0 / 16.0;
 
+/// Interleaved rounds of the target's two settings (pre-integration at 2 voxels, the midpoint
+/// march at 0.5 voxel), whose median ratio decides the target's time: one setting timed minutes
+/// after the other sees another load of a shared host.
+const TARGET_ROUNDS: usize = 7;
+
 /// What the section made: the document's text and the plot's file name.
 pub(crate) struct Preint {
     pub(crate) doc: String,
@@ -100,6 +105,17 @@ pub(crate) fn study(p: &Params, brain: &Brain, start: Instant) -> Res<Preint> {
         let (s, j) = if i < n0 { (0, i) } else { (1, i - n0) };
         series[s].rows[j].pareto = r.pareto;
     }
+    // The target's two settings again, in interleaved rounds.
+    let (pre2, base) = (scene(brain, 2.0, true)?, scene(brain, 0.5, false)?);
+    let mut rounds = Vec::new();
+    for round in 1..=TARGET_ROUNDS {
+        let (a, b) = (render(&pre2, size)?.secs, render(&base, size)?.secs);
+        log(
+            start,
+            format!("steep ramp: target round {round}: {a:.4} s against {b:.4} s"),
+        );
+        rounds.push((a, b));
+    }
     let on = series.pop().expect("two sweeps");
     let off = series.pop().expect("two sweeps");
     let plot = plot_control(
@@ -108,7 +124,7 @@ pub(crate) fn study(p: &Params, brain: &Brain, start: Instant) -> Res<Preint> {
         "Pre-integration, steep ramp: RMS error (grey levels) against render time (s)",
         &[off.clone(), on.clone()],
     )?;
-    let doc = document(p, size, &reference, &off, &on, &plot);
+    let doc = document(p, size, &reference, &off, &on, &rounds, &plot);
     Ok(Preint { doc, plot })
 }
 
@@ -118,12 +134,15 @@ fn at(s: &Series, step: f32) -> &Row {
     &s.rows[i]
 }
 
+/// The section's text; `rounds` are the target's interleaved rounds (pre-integrated time,
+/// midpoint time).
 fn document(
     p: &Params,
     size: u32,
     reference: &Timed,
     off: &Series,
     on: &Series,
+    rounds: &[(f64, f64)],
     plot: &str,
 ) -> String {
     let mut d = String::new();
@@ -169,20 +188,33 @@ fn document(
             g(b.err.max),
         );
     }
-    // The issue's target: at 2 voxels, at most the error and the time of 0.5 voxel without.
+    // The issue's target: at 2 voxels, at most the error and the time of 0.5 voxel without;
+    // the time by the median ratio of the interleaved rounds.
     let (base, pre2) = (at(off, 0.5), at(on, 2.0));
     let error_met = pre2.err.rms <= base.err.rms;
-    let time_met = pre2.secs <= base.secs;
+    let mut ratios: Vec<f64> = rounds.iter().map(|(a, b)| a / b).collect();
+    ratios.sort_by(f64::total_cmp);
+    let median = ratios.get(ratios.len() / 2).copied().unwrap_or(f64::NAN);
+    let time_met = median <= 1.0;
+    let each: Vec<String> = rounds
+        .iter()
+        .map(|(a, b)| format!("{} against {}", ms(*a), ms(*b)))
+        .collect();
     let _ = writeln!(
         d,
         "\nThe target (pre-integration at 2 voxels: at most the error and the time of 0.5 voxel \
-         without it): {} RMS against {} ({}), {} ms against {} ms ({}).{}",
+         without it): {} RMS against {} ({}); the time, in {} interleaved rounds of the two \
+         (ms, each round's best frame as in the table): {}; the median ratio {:.2} ({}, \
+         its range {:.2}–{:.2}).{}",
         g(pre2.err.rms),
         g(base.err.rms),
         if error_met { "met" } else { "not met" },
-        ms(pre2.secs),
-        ms(base.secs),
+        rounds.len(),
+        each.join("; "),
+        median,
         if time_met { "met" } else { "not met" },
+        ratios.first().copied().unwrap_or(f64::NAN),
+        ratios.last().copied().unwrap_or(f64::NAN),
         if p.quick {
             " (A quick run: small images, times not representative.)"
         } else {
