@@ -33,6 +33,29 @@ const O_NONBLOCK: i32 = 0o4000;
 #[cfg(not(any(target_os = "linux", target_os = "android")))]
 const O_NONBLOCK: i32 = 0x0004;
 
+/// The most bytes a placement sidecar (`.vlb.geom`) may hold: a few lines of text (64 KiB).
+const MAX_SIDECAR: u64 = 64 * 1024;
+
+/// Opens `path` for reading without waiting, so that a FIFO with no writer (or a device that
+/// would wait) is refused instead of hanging (the flag changes nothing for regular files),
+/// and checks what was opened (not what the name pointed to before) is a regular file: the
+/// file and its metadata. A directory or another kind of file is an error of kind `Other`
+/// saying so; a missing file keeps its kind `NotFound`.
+fn open_regular(path: &Path) -> std::io::Result<(std::fs::File, std::fs::Metadata)> {
+    let f = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(O_NONBLOCK)
+        .open(path)?;
+    let meta = f.metadata()?;
+    if meta.is_dir() {
+        return Err(std::io::Error::other("is a directory"));
+    }
+    if !meta.is_file() {
+        return Err(std::io::Error::other("not a regular file"));
+    }
+    Ok((f, meta))
+}
+
 impl Dataset {
     /// Parses a `.vlb` file held in memory (the voxels are copied once, into the dataset).
     pub fn from_vlb_bytes(bytes: &[u8]) -> Result<Dataset> {
@@ -63,26 +86,7 @@ impl Dataset {
     pub fn load(path: &Path) -> Result<Dataset> {
         let io =
             |e: std::io::Error| Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()));
-        // Opened without blocking, so that a FIFO with no writer (or a device that would wait)
-        // is refused below instead of hanging; the flag changes nothing for regular files.
-        let mut f = std::fs::OpenOptions::new()
-            .read(true)
-            .custom_flags(O_NONBLOCK)
-            .open(path)
-            .map_err(io)?;
-        let meta = f.metadata().map_err(io)?;
-        if meta.is_dir() {
-            return Err(Error::new(
-                ErrorCode::IoError,
-                format!("{}: is a directory", path.display()),
-            ));
-        }
-        if !meta.is_file() {
-            return Err(Error::new(
-                ErrorCode::IoError,
-                format!("{}: not a regular file", path.display()),
-            ));
-        }
+        let (mut f, meta) = open_regular(path).map_err(io)?;
         let len = meta.len();
         let named = |e: Error| bad(e.code, format!("{}: {}", path.display(), e.message));
         let mut head = [0u8; HEADER_LEN];
@@ -136,18 +140,33 @@ impl Dataset {
         let d = Dataset::new(h.dims, raw, h.a, h.b)?;
         // The physical placement, where a sidecar gives it (`geometry`).
         let sidecar = super::Geometry::sidecar(path);
-        match std::fs::read_to_string(&sidecar) {
-            Ok(text) => Ok(
-                d.with_geometry(super::Geometry::parse(&text, h.dims).map_err(|e| {
-                    Error::new(e.code, format!("{}: {}", sidecar.display(), e.message))
-                })?),
-            ),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(d),
-            Err(e) => Err(Error::new(
-                ErrorCode::IoError,
-                format!("{}: {e}", sidecar.display()),
-            )),
+        let side_io = |e: std::io::Error| {
+            Error::new(ErrorCode::IoError, format!("{}: {e}", sidecar.display()))
+        };
+        let (f, meta) = match open_regular(&sidecar) {
+            Ok(opened) => opened,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(d),
+            Err(e) => return Err(side_io(e)),
+        };
+        if meta.len() > MAX_SIDECAR {
+            return Err(Error::new(
+                ErrorCode::BadValue,
+                format!(
+                    "{}: {} bytes, more than a placement's {MAX_SIDECAR}",
+                    sidecar.display(),
+                    meta.len()
+                ),
+            ));
         }
+        // (No further than the length checked: a file growing meanwhile is cut there.)
+        let mut text = String::new();
+        f.take(MAX_SIDECAR)
+            .read_to_string(&mut text)
+            .map_err(side_io)?;
+        Ok(d.with_geometry(
+            super::Geometry::parse(&text, h.dims)
+                .map_err(|e| Error::new(e.code, format!("{}: {}", sidecar.display(), e.message)))?,
+        ))
     }
 
     /// The `.vlb` encoding of the dataset; `NoMemory` where its bytes cannot be allocated

@@ -179,6 +179,52 @@ fn non_regular_files_are_refused_without_blocking() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A placement sidecar that is not a regular file is refused with `VL_IOERROR` without
+/// waiting or reading without end: a FIFO with no writer, a link to an endless device, a
+/// directory. One longer than a placement can be is refused with `VL_BADVALUE` before it is
+/// read. Where no sidecar is, the dataset loads without a placement.
+#[test]
+fn sidecars_that_are_not_regular_files_are_refused_without_blocking() {
+    let dir = std::env::temp_dir().join(format!("vlib-sidecar-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let vlb = dir.join("d.vlb");
+    std::fs::write(&vlb, random_u8([3, 2, 2], 7).to_vlb_bytes().unwrap()).unwrap();
+    let side = super::super::Geometry::sidecar(&vlb);
+    let load = |want: Option<ErrorCode>, what: &str| {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let q = vlb.clone();
+        std::thread::spawn(move || {
+            let _ = tx.send(Dataset::load(&q).map(|d| d.geometry().is_some()));
+        });
+        let got = rx
+            .recv_timeout(std::time::Duration::from_secs(10))
+            .unwrap_or_else(|_| panic!("{what}: vlLoad blocked"));
+        match want {
+            Some(code) => assert_eq!(got.map_err(|e| e.code), Err(code), "{what}"),
+            None => assert_eq!(got.map_err(|e| e.code), Ok(false), "{what}"),
+        }
+    };
+    load(None, "no sidecar");
+    let made = std::process::Command::new("mkfifo").arg(&side).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+    load(Some(ErrorCode::IoError), "a FIFO");
+    std::fs::remove_file(&side).unwrap();
+    if std::path::Path::new("/dev/zero").exists() {
+        std::os::unix::fs::symlink("/dev/zero", &side).unwrap();
+        load(Some(ErrorCode::IoError), "a link to /dev/zero");
+        std::fs::remove_file(&side).unwrap();
+    }
+    std::fs::create_dir(&side).unwrap();
+    load(Some(ErrorCode::IoError), "a directory");
+    std::fs::remove_dir(&side).unwrap();
+    // One byte more than the most a sidecar may hold, in comment lines.
+    let long = "#".repeat(63) + "\n";
+    std::fs::write(&side, long.repeat(1024) + "#").unwrap();
+    load(Some(ErrorCode::BadValue), "a sidecar of 64 KiB + 1");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A cache whose computation fails is left empty and the error returned (a later call
 /// computes it again), and the infallible form unwinds with the error instead of aborting.
 #[test]
