@@ -32,6 +32,8 @@ fn allocation_failure_is_no_memory_and_voxelization_memory_is_bounded() {
         "ok   a small dataset loads after the failure",
         "ok   1024 x 1024 x 129 nodes voxelized under the limit",
         "ok   a render whose node values do not fit reports VL_NOMEMORY",
+        "ok   vlSample whose node values do not fit returns 0",
+        "ok   and reports VL_NOMEMORY",
         "ok   a 16384^2 image reports VL_NOMEMORY",
         "ok   a 4096^2 image renders under the limit",
         "0 failure(s)",

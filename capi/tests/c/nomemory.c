@@ -6,7 +6,8 @@
  * memory of a 256^3 × 1-byte voxelization (a 16 MiB file) is measured with getrusage: it must
  * grow by at most twice the file plus 8 MiB. Prints one line per check and exits non-zero if
  * any fails. Last, under a tighter limit: a render whose dataset's node values (computed on
- * first use, 4 bytes a voxel) do not fit is VL_NOMEMORY, not VL_INTERNAL; a 16384^2 image is
+ * first use, 4 bytes a voxel) do not fit is VL_NOMEMORY, not VL_INTERNAL (and so is vlSample
+ * of it); a 16384^2 image is
  * VL_NOMEMORY; a 4096^2 one renders in strips. C89 (with POSIX); built and run by
  * capi/tests/nomemory.rs and c_examples.rs, never under valgrind (which does not run under an address-space limit: see memcheck.rs). */
 #include <dirent.h>
@@ -196,6 +197,14 @@ int main(void)
     vlEnd();
     check("a render whose node values do not fit reports VL_NOMEMORY", only(VL_NOMEMORY));
     check("and writes nothing", file_size("mid.ppm") < 0 && !temporaries_left());
+    /* vlSample reads the same node values (the nearest filter, outside any scene): the core
+     * unwinds with its NoMemory error, which the C boundary reports as VL_NOMEMORY too. */
+    vlInterpolationType(VL_NEAREST);
+    check("vlSample whose node values do not fit returns 0",
+          vlSample(3, 0.5f, 0.5f, 0.5f) == 0.0f);
+    check("and reports VL_NOMEMORY", only(VL_NOMEMORY));
+    vlInterpolationType(VL_TRILINEAR);
+    only(VL_NOERROR);
     vlUnload(3);
     check("the dataset unloads", only(VL_NOERROR));
 
