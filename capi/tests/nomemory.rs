@@ -5,7 +5,8 @@
 //! 2³¹ voxels is `VL_NOMEMORY` with the id left unloaded and the library usable, that a
 //! voxelization of more than 2²⁷ nodes is written in full under the limit, and, under
 //! a tighter limit, that a render whose node values do not fit and a 16384² image are
-//! `VL_NOMEMORY` while a 4096² image renders. `capi/tests/c/pool.c` checks that a render whose
+//! `VL_NOMEMORY` while a 4096² image renders, and a 4096² PNG of noise is written where a second
+//! copy of its pixels would not fit. `capi/tests/c/pool.c` checks that a render whose
 //! threads cannot start (item 6) is `VL_NOMEMORY` and the next one recovers. These tests compile
 //! them (warnings as errors), run them in fresh directories and require every check to pass and
 //! the directory to be left empty. They are not run under valgrind (see `memcheck.rs`).
@@ -36,6 +37,8 @@ fn allocation_failure_is_no_memory_and_voxelization_memory_is_bounded() {
         "ok   and reports VL_NOMEMORY",
         "ok   a 16384^2 image reports VL_NOMEMORY",
         "ok   a 4096^2 image renders under the limit",
+        "ok   a 4096^2 PNG of noise renders under the limit",
+        "ok   and is written in full",
         "0 failure(s)",
     ] {
         assert!(stdout.contains(line), "missing {line:?} in:\n{stdout}");

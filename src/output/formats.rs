@@ -9,7 +9,9 @@
 
 use super::files::AtomicFile;
 use crate::error::{err, Error, ErrorCode, Result};
+use crate::num::try_with_capacity;
 use crate::render::PixelFormat;
+use std::io::Write;
 use std::path::Path;
 
 /// The kind of file.
@@ -99,10 +101,14 @@ impl ImageFormat {
     }
 }
 
+/// The most bytes of compressed image a PNG's IDAT chunk holds: the PNG encoder's output buffer.
+const PNG_CHUNK: usize = 1 << 20;
+
 /// Encodes `pixels` (a `width × height` image laid out as `format.pixels`, in the machine's
 /// byte order) into the file `f` and commits it. Where the file wants another byte order or
-/// row order, a row at a time is reordered: no copy of the image is made (the PNG encoder
-/// holds its compressed stream, and for 16 bits its own big-endian copy of the pixels).
+/// row order, a row at a time is reordered: no copy of the image is made, and a PNG is
+/// compressed as its rows are written (its encoder holds a few rows and a chunk of
+/// [`PNG_CHUNK`] bytes of compressed stream).
 pub(crate) fn encode_into(
     mut f: AtomicFile,
     format: ImageFormat,
@@ -132,23 +138,55 @@ pub(crate) fn encode_into(
             }
         }
         Container::Png => {
-            use image::{ExtendedColorType as C, ImageEncoder};
-            let colour = match format.pixels {
-                PixelFormat::Rgb8 => C::Rgb8,
-                PixelFormat::Rgba8 => C::Rgba8,
-                PixelFormat::Rgb16 => C::Rgb16,
-                PixelFormat::Rgba16 => C::Rgba16,
+            let (colour, depth) = match format.pixels {
+                PixelFormat::Rgb8 => (png::ColorType::Rgb, png::BitDepth::Eight),
+                PixelFormat::Rgba8 => (png::ColorType::Rgba, png::BitDepth::Eight),
+                PixelFormat::Rgb16 => (png::ColorType::Rgb, png::BitDepth::Sixteen),
+                PixelFormat::Rgba16 => (png::ColorType::Rgba, png::BitDepth::Sixteen),
                 other => unreachable!("no PNG of {other:?}"),
             };
             let path = f.path().to_path_buf();
-            image::codecs::png::PngEncoder::new(f.writer())
-                .write_image(pixels, width, height, colour)
-                .map_err(|e| match e {
-                    image::ImageError::IoError(e) => {
-                        Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()))
-                    }
-                    e => Error::new(ErrorCode::Internal, format!("PNG encoding failed: {e}")),
-                })?;
+            let failed = |e: png::EncodingError| match e {
+                png::EncodingError::IoError(e) => {
+                    Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()))
+                }
+                e => Error::new(ErrorCode::Internal, format!("PNG encoding failed: {e}")),
+            };
+            let sixteen = format.pixels.channel_bytes() == 2;
+            // 16-bit samples go big-endian, a row at a time.
+            let mut line = if sixteen {
+                try_with_capacity(row, "a PNG row")?
+            } else {
+                Vec::new()
+            };
+            let mut encoder = png::Encoder::new(f.writer(), width, height);
+            encoder.set_color(colour);
+            encoder.set_depth(depth);
+            encoder.set_compression(png::Compression::Fast);
+            encoder.set_filter(png::Filter::Adaptive);
+            // Streamed: each row is filtered and compressed as it comes, and the compressed
+            // stream leaves in IDAT chunks of at most `PNG_CHUNK` bytes, so the encoder's
+            // memory is a few rows and a chunk, whatever the image's size.
+            let mut writer = encoder.write_header().map_err(failed)?;
+            let mut stream = writer.stream_writer_with_size(PNG_CHUNK).map_err(failed)?;
+            for r in rows {
+                let bytes = if sixteen {
+                    line.clear();
+                    line.extend(
+                        r.chunks_exact(2)
+                            .flat_map(|v| u16::from_ne_bytes([v[0], v[1]]).to_be_bytes()),
+                    );
+                    &line[..]
+                } else {
+                    r
+                };
+                stream
+                    .write_all(bytes)
+                    .map_err(|e| failed(png::EncodingError::IoError(e)))?;
+            }
+            stream.finish().map_err(failed)?;
+            // (The image's end, IEND.)
+            writer.finish().map_err(failed)?;
         }
         Container::Pfm => {
             // A negative scale: little-endian floats. Rows bottom to top.
@@ -170,7 +208,7 @@ pub(crate) fn encode_into(
 /// Encodes 8-bit RGB pixels (row-major, top row first) in the format of `path` (by its name:
 /// `.ppm`, `.png`, `.rgb.png` ...; a name that asks for other pixels is `BadFile`: those are
 /// written by [`crate::Image::save`]) and writes them atomically, straight into the file: no
-/// copy of the pixels is made (PNG holds its compressed stream, at most about their size).
+/// copy of the pixels is made (nor of the PNG's compressed stream).
 /// A slice that is not `3 · width · height` bytes long is `BadValue`.
 pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
     let format = ImageFormat::from_path(path)?;

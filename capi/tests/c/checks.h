@@ -79,6 +79,13 @@ static CHECKS_UNUSED void put_u32(unsigned char *p, unsigned long v)
     p[3] = (unsigned char)((v >> 24) & 255);
 }
 
+/* The 4 big-endian bytes at p as a number (a PNG's integers). */
+static CHECKS_UNUSED unsigned long get_u32be(const unsigned char *p)
+{
+    return ((unsigned long)p[0] << 24) | ((unsigned long)p[1] << 16) |
+           ((unsigned long)p[2] << 8) | (unsigned long)p[3];
+}
+
 /* The address space mapped now (VmSize of /proc/self/status), in bytes; 0 if unknown. */
 static CHECKS_UNUSED double mapped_bytes(void)
 {

@@ -8,7 +8,8 @@
  * any fails. Last, under a tighter limit: a render whose dataset's node values (computed on
  * first use, 4 bytes a voxel) do not fit is VL_NOMEMORY, not VL_INTERNAL (and so is vlSample
  * of it); a 16384^2 image is
- * VL_NOMEMORY; a 4096^2 one renders in strips. C89 (with POSIX); built and run by
+ * VL_NOMEMORY; a 4096^2 one renders in strips; a 4096^2 PNG of noise is written under a
+ * limit that holds its pixels and not a second copy. C89 (with POSIX); built and run by
  * capi/tests/nomemory.rs and c_examples.rs, never under valgrind (which does not run under an address-space limit: see memcheck.rs). */
 #include <dirent.h>
 #include <fcntl.h>
@@ -90,6 +91,52 @@ static void image(const char *path, int side)
     vlSet(VL_COLORS | VL_KA, 1.0f);
     vlEnd();
     vlEnd();
+}
+
+/* A hash of x's bits in [0, 1]: noise that does not compress. */
+static float hash01(float x)
+{
+    unsigned int u;
+    memcpy(&u, &x, sizeof u);
+    u *= 2654435761u;
+    u ^= u >> 13;
+    u *= 0x5bd1e995u;
+    return (float)((u >> 8) & 0xffffu) / 65535.0f;
+}
+
+/* An opaque field of noise colours, lit by the ambient light alone. */
+static void noise(vlfloat *p, void *data)
+{
+    (void)data;
+    vlSet(VL_O | VL_KA, 1.0f);
+    vlSet(VL_R, hash01(p[0] + p[1]));
+    vlSet(VL_G, hash01(3.0f * p[1] + p[2]));
+    vlSet(VL_B, hash01(p[2] + 7.0f * p[0]));
+}
+
+/* Whether the PNG at `path` is whole: its signature, an IHDR of width x height, and every
+ * chunk's length within the file up to IEND as the last chunk. */
+static int png_is_whole(const char *path, unsigned long width, unsigned long height)
+{
+    static const unsigned char sig[8] = {137, 80, 78, 71, 13, 10, 26, 10};
+    long n, at = 8;
+    unsigned char *b = read_file(path, &n);
+    int ok = b && n > 33 && memcmp(b, sig, 8) == 0 && memcmp(b + 12, "IHDR", 4) == 0 &&
+             get_u32be(b + 16) == width && get_u32be(b + 20) == height;
+    while (ok) {
+        unsigned long len = get_u32be(b + at);
+        if (at + 12 + (long)len > n) {
+            ok = 0;
+            break;
+        }
+        if (memcmp(b + at + 4, "IEND", 4) == 0) {
+            ok = at + 12 == n;
+            break;
+        }
+        at += 12 + (long)len;
+    }
+    free(b);
+    return ok;
 }
 
 /* A scene of one object of constant fields voxelized at nx·ny·nz nodes over the unit box. */
@@ -218,6 +265,28 @@ int main(void)
     /* The header "P6\n4096 4096\n255\n" is 17 bytes. */
     check("its file has every pixel", file_size("fits.ppm") == 4096.0 * 4096.0 * 3 + 17);
     unlink("fits.ppm");
+
+    /* A PNG of 4096^2 pixels of noise (48 MiB that do not compress) under a limit of 96 MiB
+     * above what is mapped: its pixels and a strip fit, a second image-sized buffer does not.
+     * The encoder compresses the rows as they are written, so it renders and is written in
+     * full (an encoder that held its whole compressed stream would run out of memory there,
+     * and one whose allocation cannot fail would abort the host). */
+    limit = mapped_bytes() + 96.0 * MiB;
+    lim.rlim_cur = lim.rlim_max = (rlim_t)limit;
+    check("setrlimit(RLIMIT_AS) lowered again", setrlimit(RLIMIT_AS, &lim) == 0);
+    vlScene();
+    vluCamera(0.0f, 0.0f, -1.2f, 0.0f, 0.0f, 0.0f);
+    vlAmbient(1.0f, 1.0f, 1.0f, 1.0f);
+    vlImage("noise.png", 1.0f, 4096, 4096);
+    vlObject();
+    vlTranslate(-0.5f, -0.5f, -0.5f);
+    vlScale(4.0f, 4.0f, 1.0f); /* past the image's edges */
+    vlFunction(VL_ALLFIELDS, noise, NULL);
+    vlEnd();
+    vlEnd();
+    check("a 4096^2 PNG of noise renders under the limit", only(VL_NOERROR));
+    check("and is written in full", png_is_whole("noise.png", 4096, 4096));
+    unlink("noise.png");
 
     vlEnd();
     printf("%d failure(s)\n", failures);
