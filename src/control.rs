@@ -11,12 +11,13 @@
 
 use crate::error::{Error, ErrorCode, Result};
 use crate::team::Team;
+use std::cell::Cell;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 
 /// A flag that stops renders: cloned to any thread, [`CancelFlag::cancel`] makes the render in
-/// progress (and every later one, until [`CancelFlag::reset`]) stop within a tile of work and
-/// fail with [`ErrorCode::Cancelled`], writing no file.
+/// progress (and every later one, until [`CancelFlag::reset`]) stop within a few thousand
+/// samples of each ray and fail with [`ErrorCode::Cancelled`], writing no file.
 #[derive(Clone, Debug, Default)]
 pub struct CancelFlag(Arc<AtomicBool>);
 
@@ -246,4 +247,39 @@ impl Progress {
 /// The error of a cancelled render.
 pub(crate) fn cancelled() -> Error {
     Error::new(ErrorCode::Cancelled, "the render was cancelled")
+}
+
+thread_local! {
+    /// The render whose work this thread is doing ([`working_for`]); null outside one.
+    static WORKING_FOR: Cell<*const Progress> = const { Cell::new(std::ptr::null()) };
+}
+
+/// Runs `f` as work of the render that `progress` follows: while it runs, on this thread,
+/// [`stop_requested`] says whether that render is to stop, so that work within a pixel (a
+/// ray's march, each of its samples' shadow rays) can end early. Nested calls (a tile stolen
+/// by a thread waiting inside another tile) answer for the innermost one, and the outer one
+/// is restored when `f` returns or unwinds.
+pub(crate) fn working_for<R>(progress: &Progress, f: impl FnOnce() -> R) -> R {
+    /// Puts back the render the thread worked for before.
+    struct Restore(*const Progress);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            WORKING_FOR.with(|w| w.set(self.0));
+        }
+    }
+    let _restore = Restore(WORKING_FOR.with(|w| w.replace(progress)));
+    f()
+}
+
+/// Whether the render this thread is working for ([`working_for`]) is to stop
+/// ([`Progress::cancelled`]); `false` outside a render's work.
+pub(crate) fn stop_requested() -> bool {
+    WORKING_FOR.with(|w| {
+        let p = w.get();
+        // SAFETY: a non-null pointer was set by `working_for` on this thread from a borrowed
+        // `Progress`, which outlives the call of `f` that the pointer is set for; the pointer
+        // is restored to the one before (null, or an outer call's, still borrowed) when that
+        // call returns or unwinds.
+        !p.is_null() && unsafe { &*p }.cancelled()
+    })
 }

@@ -3,7 +3,7 @@
 //! voxelization's nodes, never decreasing, and 1 at the end, also where an output failed; a
 //! panicking progress function is an error, not a panic out of `end`; a cancel flag set from
 //! another thread stops a render that would otherwise take minutes, and its error counts the
-//! outputs that failed before it; a preview wider than the largest image side is refused.
+//! outputs that failed before it; the flag stops a single pixel's work within its rays; a preview wider than the largest image side is refused.
 
 use std::sync::{Arc, Mutex};
 use vlib::{CancelFlag, ErrorCode, Fields, Library, RenderControl};
@@ -179,6 +179,71 @@ fn a_cancel_flag_stops_a_long_render_from_another_thread() {
     );
     flag.reset();
     assert!(vl.render_preview(8, 8, 1.0).is_ok());
+}
+
+/// Renders one pixel of a scene that `setup` opens and whose one object's opacity comes from
+/// a field function of value `o` that sets the cancel flag at its `set_at`-th call (so that
+/// what is measured does not depend on timing): the render must fail with `Cancelled`, and
+/// the number of calls after the flag was set is returned.
+fn calls_after_cancel(setup: fn(&mut Library), o: f32, set_at: u64) -> u64 {
+    use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+    let flag = CancelFlag::new();
+    let mut vl = Library::new();
+    vl.set_render_control(RenderControl {
+        cancel: Some(flag.clone()),
+        progress: None,
+    });
+    let calls = Arc::new(AtomicU64::new(0));
+    let counted = calls.clone();
+    vl.scene().unwrap();
+    setup(&mut vl);
+    vl.object().unwrap();
+    vl.function(Fields::O, move |s| {
+        if counted.fetch_add(1, Relaxed) + 1 == set_at {
+            flag.cancel();
+        }
+        let _ = s.set(Fields::O, o);
+    })
+    .unwrap();
+    vl.set(Fields::COLORS | Fields::KD, 1.0).unwrap();
+    vl.end().unwrap();
+    let e = vl.render_preview(1, 1, 1.0).unwrap_err();
+    assert_eq!(e.code, ErrorCode::Cancelled, "{}", e.message);
+    calls.load(Relaxed) - set_at
+}
+
+/// A cancel flag stops a render within a pixel, whatever the pixel's work. One pixel whose
+/// samples each send a shadow ray through the object (step 3·10⁻⁵ through the unit cube:
+/// about 33 000 samples a ray, each with a shadow ray of up to as many, some 10⁹ calls of the
+/// field function, minutes of work) ends within a few thousand calls of the flag being set,
+/// not at the pixel's end: the shadow ray under way runs to its cursor's next look (every
+/// 4 096 segments), the primary ray to its own, its samples' shadow rays not sent. So does a
+/// DSR pixel whose surface search takes 10⁸ samples (step 10⁻⁸, an opacity under its
+/// threshold everywhere).
+#[test]
+fn a_cancel_flag_stops_a_pixel_whose_rays_take_minutes() {
+    let shadows = calls_after_cancel(
+        |vl| {
+            vl.step_size(3e-5, 1.0).unwrap();
+            vl.point_light([0.0, 3.0, 0.0], vlib::Attenuation::None, [1.0; 3], 1.0)
+                .unwrap();
+            vl.toggle(vlib::Feature::CastShadows, true).unwrap();
+            vl.toggle(vlib::Feature::ReceiveShadows, true).unwrap();
+        },
+        1e-6,
+        100_000,
+    );
+    assert!(shadows < 20_000, "{shadows} calls after the flag (shadows)");
+    let surface = calls_after_cancel(
+        |vl| {
+            vl.step_size(1e-8, 1.0).unwrap();
+            vl.render_type(vlib::RenderType::Dsr).unwrap();
+            vl.surface(Fields::O, 0.5).unwrap();
+        },
+        0.25,
+        100_000,
+    );
+    assert!(surface < 20_000, "{surface} calls after the flag (DSR)");
 }
 
 /// A preview's sides are bounded like `vlImage`'s, not only its pixel count.

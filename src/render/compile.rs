@@ -505,7 +505,9 @@ impl Compiled {
     /// [`MAX_SAMPLES_PER_RAY`] samples through each object (its world diagonal over its step),
     /// else the render is refused with `VL_BADVALUE` before any pixel (`vlStepSize(1e-9, 1)`
     /// through a 100-unit object would take 10¹¹ a ray). With it, a render's work grows at
-    /// most linearly with its pixels, super-sampling, lights and recursion.
+    /// most linearly with its pixels, super-sampling, lights and recursion, and with the
+    /// square of a ray's samples where shadow rays leave each sample; every ray can be
+    /// cancelled within [`PROBE_EVERY`] samples (`Cursor::stopping`).
     pub(crate) fn check_work(&self) -> Result<()> {
         for (i, obj) in self.objects.iter().enumerate() {
             let corner = |k: usize| {

@@ -59,7 +59,15 @@ pub(super) struct Cursor {
     /// Samples before this ray parameter lie in the occupied block the walk last reported:
     /// they are taken without consulting the walk.
     pub(super) occupied_until: f64,
+    /// The segment number from which [`Cursor::stopping`] looks again at whether the render
+    /// is to stop.
+    pub(super) probe_at: u64,
 }
+
+/// Segments a cursor passes between two looks at whether its render is to stop
+/// ([`Cursor::stopping`]): a few microseconds of work, so that a cancelled render stops
+/// within a ray, however many samples the ray (or each of its samples' shadow rays) takes.
+pub(super) const PROBE_EVERY: u64 = 4096;
 
 impl Cursor {
     /// The segments of object `obj` (number `index`) over [t0, t1] of a ray, given in the
@@ -102,7 +110,29 @@ impl Cursor {
             o,
             d,
             occupied_until: f64::NEG_INFINITY,
+            probe_at: PROBE_EVERY,
         }
+    }
+
+    /// Whether the render this thread works for is to stop (`control::stop_requested`),
+    /// looked at once every [`PROBE_EVERY`] segments: then the cursor ends (k = n), so that
+    /// the march over it ends as at the ray's end (a cancelled render's pixels are
+    /// discarded).
+    #[inline(always)]
+    pub(super) fn stopping(&mut self) -> bool {
+        self.k >= self.probe_at && self.look_at_stop()
+    }
+
+    /// [`Cursor::stopping`]'s look, out of line.
+    #[cold]
+    #[inline(never)]
+    fn look_at_stop(&mut self) -> bool {
+        self.probe_at = self.k.saturating_add(PROBE_EVERY);
+        let stop = crate::control::stop_requested();
+        if stop {
+            self.k = self.n;
+        }
+        stop
     }
 
     /// Starts an [`Cursor::unstarted`] cursor's walk when empty-space skipping is on, at `from`
@@ -268,7 +298,7 @@ impl Cursor {
         mids: &mut [f64; 8],
         lens: &mut [f64; 8],
     ) -> usize {
-        if self.k >= self.n {
+        if self.k >= self.n || self.stopping() {
             return 0;
         }
         let left = self.segments(mids, lens);
@@ -333,7 +363,7 @@ impl Cursor {
     /// samples lie in empty blocks.
     pub(super) fn peek(&mut self, grid: Option<&SkipGrid>) -> Option<f64> {
         loop {
-            if self.k >= self.n {
+            if self.k >= self.n || self.stopping() {
                 return None;
             }
             let mid = self.mid(self.k);

@@ -556,6 +556,12 @@ impl Compiled {
     /// ray's first segment ends its own step away; a surface does not shadow the point it
     /// holds: crossings within 10⁻³ of a step of the point are not counted.
     pub(super) fn transmittance(&self, w: DVec3, l: DVec3, dist: f64) -> f64 {
+        // A render that is to stop sends no more shadow rays (each sample of a ray has one per
+        // light, so one look a shadow ray is a small part of its cost; the cursors below look
+        // again every `PROBE_EVERY` segments).
+        if crate::control::stop_requested() {
+            return 0.0;
+        }
         let mut t_total = 1.0f64;
         for obj in self.objects.iter().filter(|o| o.cast_shadows) {
             let (o, d) = obj.object_ray(w, l);

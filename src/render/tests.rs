@@ -1178,6 +1178,7 @@ fn cursor(t0: f64, t1: f64, step: f64, n: u64, k: u64, occupied_until: f64) -> C
         o: DVec3::ZERO,
         d: DVec3::X,
         occupied_until,
+        probe_at: super::cursor::PROBE_EVERY,
     }
 }
 

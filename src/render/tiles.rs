@@ -165,7 +165,8 @@ where
                 let out = recycled
                     .take((tw * th) as usize, "a tile's pixels")
                     .unwrap_or_else(|e| crate::error::raise(e));
-                let out = f((tx, ty, tw, th), out);
+                // (Within the tile, its rays look at whether the render is to stop.)
+                let out = crate::control::working_for(progress, || f((tx, ty, tw, th), out));
                 let Some(bands) = &bands else {
                     taken.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     return out;

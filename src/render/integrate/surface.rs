@@ -159,6 +159,10 @@ impl Compiled {
                 prev_t = t;
                 prev_v = v;
                 k += 1;
+                // A render that is to stop ends the search (its pixels are discarded).
+                if k % PROBE_EVERY == 0 && crate::control::stop_requested() {
+                    break;
+                }
             }
         }
         hits.sort_by(|a, b| a.t.total_cmp(&b.t));

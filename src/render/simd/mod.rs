@@ -663,6 +663,7 @@ impl<'a> Packets<'a> {
                 o: tile.image.origin_o,
                 d: DVec3::from_array(r.d),
                 occupied_until: f64::NEG_INFINITY,
+                probe_at: crate::render::cursor::PROBE_EVERY,
             },
             px: r.px as usize,
             trusted: 0,

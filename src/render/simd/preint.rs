@@ -280,7 +280,7 @@ impl<'a> Packets<'a> {
         trusted: &mut u32,
     ) -> (u32, u64) {
         loop {
-            if c.k >= c.n {
+            if c.k >= c.n || c.stopping() {
                 return (0, c.k);
             }
             let test = *trusted == 0;

@@ -42,7 +42,7 @@ impl Packets<'_> {
         trusted: &mut u32,
     ) -> u32 {
         loop {
-            if c.k >= c.n {
+            if c.k >= c.n || c.stopping() {
                 return 0;
             }
             let test = *trusted == 0;
