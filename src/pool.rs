@@ -65,8 +65,33 @@ pub(crate) fn install<T: Send>(f: impl FnOnce() -> Result<T> + Send) -> Result<T
 pub(crate) fn threads() -> usize {
     match pool() {
         Ok(p) => p.current_num_threads(),
-        Err(_) => rayon::current_num_threads(),
+        Err(_) => default_threads(),
     }
+}
+
+/// The number of threads to split work over, starting none: the caller's pool's where the
+/// caller is a pool's thread, else the library pool's, built or not. (Not
+/// `rayon::current_num_threads`, which from outside a pool builds rayon's global pool, once
+/// for the process: a failure to start its threads then lasts.)
+pub(crate) fn width() -> usize {
+    if rayon::current_thread_index().is_some() {
+        return rayon::current_num_threads();
+    }
+    let slot = POOL.lock().unwrap_or_else(|e| e.into_inner());
+    match slot.as_ref() {
+        Some((pid, pool)) if *pid == std::process::id() => pool.current_num_threads(),
+        _ => default_threads(),
+    }
+}
+
+/// The threads a pool built with rayon's defaults has: `RAYON_NUM_THREADS` where it is a
+/// positive number, else one a core (at least one).
+fn default_threads() -> usize {
+    std::env::var("RAYON_NUM_THREADS")
+        .ok()
+        .and_then(|s| s.trim().parse::<usize>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
 
 /// `cell`'s value, made by `make` where it has none yet: for a cache whose making runs parallel

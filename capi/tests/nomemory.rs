@@ -7,7 +7,8 @@
 //! a tighter limit, that a render whose node values do not fit and a 16384² image are
 //! `VL_NOMEMORY` while a 4096² image renders, and a 4096² PNG of noise is written where a second
 //! copy of its pixels would not fit. `capi/tests/c/pool.c` checks that a render whose
-//! threads cannot start (item 6) is `VL_NOMEMORY` and the next one recovers. These tests compile
+//! threads cannot start (item 6) is `VL_NOMEMORY` and the next one recovers, and that `vlSample`
+//! of node values leaves no pool's threads running. These tests compile
 //! them (warnings as errors), run them in fresh directories and require every check to pass and
 //! the directory to be left empty. They are not run under valgrind (see `memcheck.rs`).
 
@@ -59,6 +60,9 @@ fn a_render_whose_threads_cannot_start_fails_and_the_next_recovers() {
     let stdout = common::run(&exe, cwd.path(), &[]);
     assert!(!stdout.contains("FAIL"), "{stdout}");
     for line in [
+        "ok   vlSample of node values",
+        "ok   at the last node",
+        "ok   leaves no thread of its own running",
         "ok   a render whose 256 threads cannot start reports VL_NOMEMORY",
         "ok   the next render starts its threads and completes",
         "0 failure(s)",

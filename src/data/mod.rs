@@ -337,8 +337,8 @@ impl Dataset {
         self.values.get().is_some()
     }
 
-    /// The node values of the raw voxels ([`normaliser`]), on as many threads as rayon's pool
-    /// has, but threads of their own ([`crate::pool::fill`]), which also make the values'
+    /// The node values of the raw voxels ([`normaliser`]), on as many threads as the library's
+    /// pool has ([`crate::pool::width`]: no pool is built for them), but threads of their own ([`crate::pool::fill`]), which also make the values'
     /// memory (written once, not filled first): made from inside a render's parallel loop (a
     /// first read there), a rayon job that waits for its parts may run another part of the
     /// render meanwhile, which would ask for the values again, in the thread that is making
@@ -347,7 +347,7 @@ impl Dataset {
         let norm = normaliser(self.a, self.b);
         let len = self.raw.len();
         let mut values = crate::num::try_with_capacity::<f32>(len, "a dataset's node values")?;
-        let threads = rayon::current_num_threads().clamp(1, 64);
+        let threads = crate::pool::width().clamp(1, 64);
         let chunk = len.div_ceil(threads).max(1 << 16);
         let (lut, raw) = (&*self.table8, &self.raw);
         crate::pool::fill(

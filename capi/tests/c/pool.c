@@ -1,11 +1,13 @@
 /* A render whose threads cannot be started fails, and the next one recovers (issue #24, item 6:
- * the library owns its thread pool, so a failure to build it is not kept). With 256 rendering
+ * the library owns its thread pool, so a failure to build it is not kept); before any render,
+ * vlSample of a dataset's node values starts no pool (no thread is left running). With 256 rendering
  * threads asked for (RAYON_NUM_THREADS) and an address-space soft limit 64 MiB above what the
  * process has mapped (setrlimit(RLIMIT_AS)), the first render cannot map the threads' stacks:
  * its vlEnd reports VL_NOMEMORY and writes nothing. With the limit restored, the next render
  * starts its threads and writes its image. Prints one line per check and exits non-zero if any
  * fails. C89 (with POSIX); built and run by capi/tests/nomemory.rs and c_examples.rs, never
  * under valgrind (which does not run under an address-space limit: see memcheck.rs). */
+#include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,6 +16,43 @@
 #include "checks.h"
 #include <vlaux.h>
 #include <vlib.h>
+
+/* The threads of this process now (the entries of /proc/self/task); -1 if unknown. */
+static int threads_now(void)
+{
+    int n = 0;
+    struct dirent *d;
+    DIR *dir = opendir("/proc/self/task");
+    if (!dir)
+        return -1;
+    while ((d = readdir(dir)) != NULL)
+        if (d->d_name[0] != '.')
+            n++;
+    closedir(dir);
+    return n;
+}
+
+/* A .vlb of 4^3 one-byte voxels, voxel i of value i (a = 0, b = 255). */
+static int small_vlb(const char *path)
+{
+    unsigned char b[28 + 64];
+    float a = 0.0f, top = 255.0f;
+    FILE *f = fopen(path, "wb");
+    int i, ok;
+    memcpy(b, "VLB1", 4);
+    put_u32(b + 4, 4);
+    put_u32(b + 8, 4);
+    put_u32(b + 12, 4);
+    put_u32(b + 16, 1);
+    memcpy(b + 20, &a, 4);
+    memcpy(b + 24, &top, 4);
+    for (i = 0; i < 64; i++)
+        b[28 + i] = (unsigned char)i;
+    if (!f)
+        return 0;
+    ok = fwrite(b, 1, sizeof b, f) == sizeof b;
+    return fclose(f) == 0 && ok;
+}
 
 static void render(const char *path)
 {
@@ -31,8 +70,24 @@ int main(void)
 {
     struct rlimit saved, lim;
     vlint e;
+    int before;
+    float v;
     setenv("RAYON_NUM_THREADS", "256", 1);
     vlInit();
+    /* vlSample outside a render makes the dataset's node values (the nearest filter reads them)
+     * on helper threads that end with the work: no pool is built for it, rayon's global one
+     * (256 threads, kept for the process) least of all. */
+    check("a 4^3 .vlb", small_vlb("small.vlb"));
+    vlLoad(1, "small.vlb");
+    remove("small.vlb");
+    vlInterpolationType(VL_NEAREST);
+    before = threads_now();
+    v = vlSample(1, 0.0f, 0.0f, 0.0f);
+    check("vlSample of node values", vlError() == VL_NOERROR && v == 0.0f);
+    v = vlSample(1, 1.0f, 1.0f, 1.0f);
+    check("at the last node", vlError() == VL_NOERROR && v == 63.0f / 255.0f);
+    check("leaves no thread of its own running", before > 0 && threads_now() == before);
+    vlInterpolationType(VL_TRILINEAR);
     check("getrlimit(RLIMIT_AS)", getrlimit(RLIMIT_AS, &saved) == 0);
     lim = saved;
     lim.rlim_cur = (rlim_t)(mapped_bytes() + 64.0 * 1024 * 1024);
