@@ -48,11 +48,20 @@ pub(crate) fn sample(id: vlint, x: vlfloat, y: vlfloat, z: vlfloat) -> Result<vl
             return s.sample(DatasetId(id), x, y, z);
         }
     }
-    either(
+    let sampled = either(
         Command::Sample,
         |s| s.dataset(DatasetId(id), [x, y, z]),
         |lib| lib.sample(DatasetId(id), x, y, z),
-    )
+    );
+    // A render that started while this waited for the state: its datasets, as above.
+    if let Err(e) = &sampled {
+        if e.code == ErrorCode::BadScope && !crate::sample::active() {
+            if let Some(s) = render_sampler() {
+                return s.sample(DatasetId(id), x, y, z);
+            }
+        }
+    }
+    sampled
 }
 
 /// Declares transfer function `id`, `VL_LOOKUP` or `VL_RAMP`: `table` holds `points` rows of

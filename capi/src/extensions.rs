@@ -11,7 +11,7 @@
 //! module holds the C forms: the process's cancel flag, the wrapper of the C progress
 //! function, and the checks of the buffer's pointer, size and format.
 
-use crate::ffi::{ffi_boundary, lock_state, null, rendering, Rendering};
+use crate::ffi::{ffi_boundary, lock_unless_rendering, null, rendering, Rendering};
 use crate::sample;
 use crate::types::{vlfloat, vlint, VL_FALSE, VL_GRADIENT_CUBIC, VL_GRADIENT_NODES, VL_TRUE};
 use std::os::raw::{c_ulong, c_void};
@@ -75,13 +75,18 @@ pub extern "C" fn vlProgress(
     misc: *mut c_void,
 ) {
     ffi_boundary((), || {
-        if sample::active() || rendering() {
-            return Err(Error::new(
+        let busy = || {
+            Err(Error::new(
                 ErrorCode::BadScope,
                 "vlProgress: not while a scene renders",
-            ));
+            ))
+        };
+        if sample::active() {
+            return busy();
         }
-        let mut state = lock_state();
+        let Some(mut state) = lock_unless_rendering() else {
+            return busy();
+        };
         let lib: &mut Library = match state.as_mut() {
             Some(lib) if lib.scope() != vlib_core::Scope::Object => lib,
             Some(_) => return scope_error(),
@@ -155,13 +160,18 @@ pub unsafe extern "C" fn vlRenderBuffer(
 ) -> vlint {
     ffi_boundary(VL_FALSE, || {
         const NAME: &str = "vlRenderBuffer";
-        if sample::active() || rendering() {
-            return Err(Error::new(
+        let busy = || {
+            Err(Error::new(
                 ErrorCode::BadScope,
                 format!("{NAME}: not while a scene renders"),
-            ));
+            ))
+        };
+        if sample::active() {
+            return busy();
         }
-        let state = lock_state();
+        let Some(state) = lock_unless_rendering() else {
+            return busy();
+        };
         let lib: &Library = match state.as_ref() {
             Some(lib) if lib.scope() == vlib_core::Scope::Scene => lib,
             _ => {
@@ -229,13 +239,18 @@ pub unsafe extern "C" fn vlRenderBuffer(
 pub extern "C" fn vlGradientFilter(r#type: vlint, b: vlfloat, c: vlfloat) {
     ffi_boundary((), || {
         const NAME: &str = "vlGradientFilter";
-        if sample::active() || rendering() {
-            return Err(Error::new(
+        let busy = || {
+            Err(Error::new(
                 ErrorCode::BadScope,
                 format!("{NAME}: not while a scene renders"),
-            ));
+            ))
+        };
+        if sample::active() {
+            return busy();
         }
-        let mut state = lock_state();
+        let Some(mut state) = lock_unless_rendering() else {
+            return busy();
+        };
         let lib: &mut Library = match state.as_mut() {
             Some(lib) if lib.scope() != vlib_core::Scope::Object => lib,
             _ => {

@@ -39,6 +39,29 @@ pub(crate) fn lock_state() -> MutexGuard<'static, Option<Library>> {
     STATE.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// The state, locked ([`lock_state`]), unless a scene is rendering: `None` then, at once, or as
+/// soon as a render starts while this waits for the state. A render holds the state until it
+/// ends, and nothing waits for a render; a thread blocked on the lock when a render took it
+/// would wait for the whole render, so the lock is tried, and while another command holds it
+/// this looks again after a pause that doubles up to a millisecond, each time first asking
+/// whether a render has started.
+pub(crate) fn lock_unless_rendering() -> Option<MutexGuard<'static, Option<Library>>> {
+    let mut pause = std::time::Duration::from_micros(1);
+    loop {
+        if rendering() {
+            return None;
+        }
+        match STATE.try_lock() {
+            Ok(state) => return Some(state),
+            Err(std::sync::TryLockError::Poisoned(e)) => return Some(e.into_inner()),
+            Err(std::sync::TryLockError::WouldBlock) => {
+                std::thread::sleep(pause);
+                pause = (pause * 2).min(std::time::Duration::from_millis(1));
+            }
+        }
+    }
+}
+
 /// How many calls are inside [`ffi_boundary`] now, on any thread.
 static INSIDE: AtomicUsize = AtomicUsize::new(0);
 
@@ -117,9 +140,12 @@ pub(crate) fn dispatch<T>(
         require(cmd, Scope::Sample)?;
         in_sample(s)
     });
-    match sampled {
-        Some(r) => r,
-        None if rendering() => Err(Error::new(
+    if let Some(r) = sampled {
+        return r;
+    }
+    match lock_unless_rendering() {
+        Some(mut state) => outside(&mut state),
+        None => Err(Error::new(
             ErrorCode::BadScope,
             format!(
                 "{} while a scene renders: only its field functions' sample-scope commands, \
@@ -127,7 +153,6 @@ pub(crate) fn dispatch<T>(
                 cmd.name()
             ),
         )),
-        None => outside(&mut lock_state()),
     }
 }
 

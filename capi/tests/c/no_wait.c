@@ -1,0 +1,164 @@
+/* Nothing waits for a render, also a command that was already waiting for the library when the
+ * render began. In each of six rounds the main thread holds the library with a long command
+ * (vlSample of a 256^3 dataset with the nearest filter, which makes its 64 MiB of node values
+ * first: some tens of milliseconds) while a second thread calls vlAmbient, which has to wait for
+ * it; the main thread then closes its scene at once, and the render's first field function
+ * call waits up to five seconds for the second thread's call to return. That call must return
+ * while the render goes on: VL_BADSCOPE (it found the scene rendering) or VL_NOERROR (it took
+ * the library between the two commands), never after the render. Prints one line per check and
+ * exits non-zero if any fails. C89 (with POSIX threads); built and run by
+ * capi/tests/c_examples.rs. */
+#include <fcntl.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+#include "checks.h"
+#include <vlib.h>
+
+#define ROUNDS 6
+
+static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
+static pthread_cond_t changed = PTHREAD_COND_INITIALIZER;
+/* The round the second thread is to call in (0: none yet; -1: stop), the last round whose call
+ * returned, and that call's error. */
+static int go = 0, returned = 0;
+static vlint code = VL_NOERROR;
+/* Per round: whether the render's field function saw the call return in time. */
+static int in_time[ROUNDS + 1];
+static int current = 0, waited = 0;
+
+static void pause_ms(long ms)
+{
+    struct timespec t;
+    t.tv_sec = ms / 1000;
+    t.tv_nsec = (ms % 1000) * 1000000L;
+    nanosleep(&t, NULL);
+}
+
+static void *second(void *arg)
+{
+    int round = 0;
+    (void)arg;
+    for (;;) {
+        vlint e;
+        pthread_mutex_lock(&lock);
+        while (go == round)
+            pthread_cond_wait(&changed, &lock);
+        round = go;
+        pthread_mutex_unlock(&lock);
+        if (round < 0)
+            return NULL;
+        /* By now the main thread is inside its long vlSample: this call waits for it. */
+        pause_ms(5);
+        vlAmbient(1.0f, 1.0f, 1.0f, 1.0f);
+        e = vlError();
+        pthread_mutex_lock(&lock);
+        returned = round;
+        code = e;
+        pthread_cond_broadcast(&changed);
+        pthread_mutex_unlock(&lock);
+    }
+}
+
+/* The object's field: the first call of a round waits (five seconds at most) for the second
+ * thread's call to return. */
+static void field(vlvector p, void *misc)
+{
+    (void)p;
+    (void)misc;
+    vlSet(VL_O, 0.5f);
+    if (waited == current)
+        return;
+    waited = current;
+    {
+        int i;
+        for (i = 0; i < 5000; i++) {
+            int done;
+            pthread_mutex_lock(&lock);
+            done = returned == current;
+            pthread_mutex_unlock(&lock);
+            if (done) {
+                in_time[current] = 1;
+                return;
+            }
+            pause_ms(1);
+        }
+    }
+}
+
+/* A .vlb of n^3 one-byte voxels, all 0 (a sparse file). */
+static int zero_vlb(const char *path, unsigned long n)
+{
+    unsigned char h[28];
+    float a = 0.0f, b = 255.0f;
+    int fd, ok;
+    memcpy(h, "VLB1", 4);
+    put_u32(h + 4, n);
+    put_u32(h + 8, n);
+    put_u32(h + 12, n);
+    put_u32(h + 16, 1);
+    memcpy(h + 20, &a, 4);
+    memcpy(h + 24, &b, 4);
+    fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd < 0)
+        return 0;
+    ok = write(fd, h, 28) == 28 && ftruncate(fd, (off_t)(28 + (double)n * n * n)) == 0;
+    return close(fd) == 0 && ok;
+}
+
+int main(void)
+{
+    pthread_t t;
+    int round, all_in_time = 1, codes_ok = 1;
+    vlInit();
+    check("a 256^3 .vlb", zero_vlb("big.vlb", 256));
+    check("the second thread starts", pthread_create(&t, NULL, second, NULL) == 0);
+    for (round = 1; round <= ROUNDS; round++) {
+        vlint e;
+        vlLoad(1, "big.vlb"); /* again each round: its node values are made anew */
+        vlInterpolationType(VL_NEAREST);
+        vlScene();
+        vlImage("round.ppm", 1.0f, 8, 8);
+        vlObject();
+        vlFunction(VL_O, field, NULL);
+        vlEnd();
+        current = round;
+        pthread_mutex_lock(&lock);
+        go = round;
+        pthread_cond_broadcast(&changed);
+        pthread_mutex_unlock(&lock);
+        (void)vlSample(1, 0.5f, 0.5f, 0.5f); /* holds the library while it makes node values */
+        vlEnd();                             /* renders at once */
+        e = vlError();
+        if (e != VL_NOERROR)
+            printf("     (round %d: vlEnd reported %d)\n", round, (int)e);
+        pthread_mutex_lock(&lock);
+        while (returned != round)
+            pthread_cond_wait(&changed, &lock);
+        if (code != VL_NOERROR && code != VL_BADSCOPE)
+            codes_ok = 0;
+        pthread_mutex_unlock(&lock);
+        if (!in_time[round]) {
+            printf("     (round %d: the waiting call returned after the render)\n", round);
+            all_in_time = 0;
+        }
+        vlUnload(1);
+        vlInterpolationType(VL_TRILINEAR);
+        remove("round.ppm");
+        while (vlError() != VL_NOERROR)
+            ;
+    }
+    pthread_mutex_lock(&lock);
+    go = -1;
+    pthread_cond_broadcast(&changed);
+    pthread_mutex_unlock(&lock);
+    pthread_join(t, NULL);
+    remove("big.vlb");
+    check("every waiting call returned while the render went on", all_in_time);
+    check("with VL_BADSCOPE or VL_NOERROR", codes_ok);
+    vlEnd();
+    printf("%d failure(s)\n", failures);
+    return failures != 0;
+}
