@@ -112,7 +112,8 @@ fn scope_error() -> Result<()> {
 }
 
 /// Extension. Stops the render in progress, if a scene is rendering: each rendering thread
-/// stops after the pixel (or tile of 32 x 32 rays, or voxelized node) it is working on; the
+/// stops within the ray it is tracing (rays look every 4096 samples; no pixel, tile of 32 x 32
+/// rays or voxelized node starts after it); the
 /// scene's `vlEnd` records `VL_CANCELLED` and writes no file of the output it was making
 /// (outputs it finished before are written). Legal anywhere and from any thread (a field
 /// function, a progress function, another thread of the program); it never waits. Without a
