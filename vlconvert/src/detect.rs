@@ -49,7 +49,7 @@ pub fn format(path: &Path) -> Result<Format, String> {
     if head.starts_with(&[0x1f, 0x8b]) {
         // gzip: look inside (a .nii.gz).
         let mut inner = Vec::new();
-        let f = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let (f, _) = crate::volume::open_regular(path)?;
         let _ = flate2::read::MultiGzDecoder::new(f)
             .take(512)
             .read_to_end(&mut inner);

@@ -5,7 +5,7 @@
 //!
 //! ```text
 //! vlconvert brain.nii.gz brain.vlb                    # the format from the file's first bytes
-//! vlconvert nifti brain.nii.gz brain.vlb
+//! vlconvert nifti brain.nii.gz brain.vlb                # or a .hdr with its .img
 //! vlconvert nifti ct.nii.gz ct.vlb --window -1000 2000   # Hounsfield units to 0 … 1
 //! vlconvert nrrd ct.nrrd ct.vlb                        # raw, gzip or ascii; .nhdr too
 //! vlconvert metaimage ct.mha ct.vlb        # MetaImage: .mha, or .mhd with its .raw/.zraw
@@ -24,7 +24,7 @@
 //! others in 16-bit ones). A DICOM series' values are its modality values (Hounsfield units
 //! for CT: RescaleSlope and RescaleIntercept applied per slice); its slices are ordered along
 //! their normal and placed by their position, orientation and pixel spacing (`dicom`). TIFF
-//! stacks: `tiffstack`.
+//! stacks: `tiffstack`; NIfTI-1 files: `nifti`.
 //!
 //! Long steps (reading, decompressing, decoding slices, converting voxels) draw a progress
 //! line on standard error when it is a terminal, blanked out when the step ends; `--quiet`
@@ -42,6 +42,7 @@ use vlib::{Dataset, Voxels};
 mod detect;
 mod dicom;
 mod metaimage;
+mod nifti;
 mod nrrd;
 mod progress;
 mod tiffstack;
@@ -165,8 +166,8 @@ enum Cmd {
         #[command(flatten)]
         norm: Norm,
     },
-    /// A NIfTI-1 volume (.nii or .nii.gz) of any integer or float type, its scl_slope and
-    /// scl_inter applied.
+    /// A NIfTI-1 volume (.nii, .nii.gz, or a .hdr with its .img) of any integer or float type,
+    /// its voxels at vox_offset, its scl_slope and scl_inter applied.
     Nifti {
         input: PathBuf,
         output: PathBuf,
@@ -237,6 +238,9 @@ fn convert(
     geometry: Option<vlib::Geometry>,
 ) -> Res<()> {
     let converted = source.convert(window.ends())?;
+    if let Some(note) = &converted.note {
+        eprintln!("vlconvert: note: {note}");
+    }
     say(format_args!("{}", converted.report))?;
     let d = match geometry {
         Some(g) => {
@@ -250,61 +254,6 @@ fn convert(
         None => converted.dataset,
     };
     save(&d, output)
-}
-
-/// A NIfTI-1 header's placement of its voxels, in RAS millimetres: the sform where its code
-/// is set, else the qform (quaternion, pixdim, qfac), else the voxel sizes alone (NIfTI's
-/// "method 1"); units other than millimetres (xyzt_units) are converted.
-fn nifti_geometry(h: &nifti::NiftiHeader) -> Res<vlib::Geometry> {
-    let unit = match h.xyzt_units & 7 {
-        1 => 1000.0, // metres
-        3 => 0.001,  // micrometres
-        _ => 1.0,    // millimetres, or unknown
-    };
-    let p = |i: usize| h.pixdim[i] as f64;
-    let affine = if h.sform_code > 0 {
-        [h.srow_x, h.srow_y, h.srow_z].map(|r| r.map(|v| v as f64 * unit))
-    } else if h.qform_code > 0 {
-        let (b, c, d) = (h.quatern_b as f64, h.quatern_c as f64, h.quatern_d as f64);
-        let a = (1.0 - (b * b + c * c + d * d)).max(0.0).sqrt();
-        let r = [
-            [
-                a * a + b * b - c * c - d * d,
-                2.0 * (b * c - a * d),
-                2.0 * (b * d + a * c),
-            ],
-            [
-                2.0 * (b * c + a * d),
-                a * a + c * c - b * b - d * d,
-                2.0 * (c * d - a * b),
-            ],
-            [
-                2.0 * (b * d - a * c),
-                2.0 * (c * d + a * b),
-                a * a + d * d - c * c - b * b,
-            ],
-        ];
-        let qfac = if p(0) < 0.0 { -1.0 } else { 1.0 };
-        let s = [p(1), p(2), qfac * p(3)];
-        // (The crate names qoffset_x … z quatern_x … z.)
-        let off = [h.quatern_x as f64, h.quatern_y as f64, h.quatern_z as f64];
-        let row = |i: usize| {
-            [
-                r[i][0] * s[0] * unit,
-                r[i][1] * s[1] * unit,
-                r[i][2] * s[2] * unit,
-                off[i] * unit,
-            ]
-        };
-        [row(0), row(1), row(2)]
-    } else {
-        [
-            [p(1) * unit, 0.0, 0.0, 0.0],
-            [0.0, p(2) * unit, 0.0, 0.0],
-            [0.0, 0.0, p(3) * unit, 0.0],
-        ]
-    };
-    vlib::Geometry::new(affine).map_err(|e| e.message)
 }
 
 fn raw(
@@ -359,7 +308,20 @@ fn raw(
 
 /// Image rows run top to bottom; object y runs upwards, so row 0 becomes the top slab row.
 fn image(input: &Path, output: &Path, norm: Norm) -> Res<()> {
-    let img = image::open(input).map_err(|e| format!("{}: {e}", input.display()))?;
+    let bytes = volume::read_regular(input, None)?;
+    // The format from the name, as image::open does, else from the first bytes.
+    let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes));
+    match image::ImageFormat::from_path(input) {
+        Ok(format) => reader.set_format(format),
+        Err(_) => {
+            reader = reader
+                .with_guessed_format()
+                .map_err(|e| format!("{}: {e}", input.display()))?
+        }
+    }
+    let img = reader
+        .decode()
+        .map_err(|e| format!("{}: {e}", input.display()))?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let dims = [w, h, 1];
     let sixteen = matches!(
@@ -421,91 +383,6 @@ fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
         .map(|e| format!(".{}", e.to_string_lossy()))
         .unwrap_or_default();
     path.with_file_name(format!("{stem}{suffix}{ext}"))
-}
-
-/// Reads the NIfTI-1 file `input`, its progress shown: a single file (`n+1`, gzipped or not)
-/// through a reader that counts the file's bytes; a header whose volume is in an `.img` beside
-/// it, through the crate's own file pairing.
-fn read_nifti(input: &Path) -> Result<nifti::InMemNiftiObject, nifti::NiftiError> {
-    use std::io::{BufReader, Read};
-    let mut magic = [0u8; 2];
-    let gz = std::fs::File::open(input)?.read(&mut magic)? == 2 && magic == [0x1f, 0x8b];
-    let file = std::fs::File::open(input)?;
-    let name = input.file_name().unwrap_or_default().to_string_lossy();
-    let bar = progress::Progress::new(
-        format!("reading {name}"),
-        file.metadata()?.len(),
-        progress::Unit::Bytes,
-    );
-    let counted = BufReader::new(progress::Reading::new(file, bar));
-    let read = if gz {
-        nifti::InMemNiftiObject::from_reader(flate2::read::MultiGzDecoder::new(counted))
-    } else {
-        nifti::InMemNiftiObject::from_reader(counted)
-    };
-    match read {
-        Err(nifti::NiftiError::NoVolumeData) => nifti::ReaderOptions::new().read_file(input),
-        other => other,
-    }
-}
-
-fn nifti(input: &Path, output: &Path, window: &Window) -> Res<()> {
-    use nifti::{Endianness, NiftiObject, NiftiType, NiftiVolume};
-    let obj = read_nifti(input).map_err(|e| format!("{}: {e}", input.display()))?;
-    let header = obj.header().clone();
-    let volume = obj.into_volume();
-    let dim = volume.dim().to_vec();
-    if dim.len() < 3 || dim[3..].iter().any(|&d| d != 1) {
-        return Err(format!(
-            "{}: a {}-dimensional volume {dim:?}; only 3D volumes convert",
-            input.display(),
-            dim.len()
-        ));
-    }
-    let ty = match volume.data_type() {
-        NiftiType::Uint8 => Type::U8,
-        NiftiType::Int8 => Type::I8,
-        NiftiType::Uint16 => Type::U16,
-        NiftiType::Int16 => Type::I16,
-        NiftiType::Uint32 => Type::U32,
-        NiftiType::Int32 => Type::I32,
-        NiftiType::Uint64 => Type::U64,
-        NiftiType::Int64 => Type::I64,
-        NiftiType::Float32 => Type::F32,
-        NiftiType::Float64 => Type::F64,
-        other => {
-            return Err(format!(
-                "{}: data type {other:?} (complex, RGB, 128-bit) does not convert",
-                input.display()
-            ))
-        }
-    };
-    // NIfTI-1: a slope of 0 means the values are unscaled.
-    let (slope, inter) = if header.scl_slope == 0.0 || !header.scl_slope.is_finite() {
-        (1.0, 0.0)
-    } else {
-        (header.scl_slope as f64, header.scl_inter as f64)
-    };
-    let big = header.endianness == Endianness::Big;
-    // A placement that cannot be made (voxel sizes of 0, say) is said, and the volume
-    // converts without one.
-    let geometry = match nifti_geometry(&header) {
-        Ok(g) => Some(g),
-        Err(e) => {
-            eprintln!("vlconvert: note: {}: no placement: {e}", input.display());
-            None
-        }
-    };
-    let raw = volume.into_raw_data();
-    let source = Source {
-        dims: [dim[0] as usize, dim[1] as usize, dim[2] as usize],
-        bytes: &raw,
-        ty,
-        big,
-        slope,
-        inter,
-    };
-    convert(&source, window, output, geometry).map_err(|e| format!("{}: {e}", input.display()))
 }
 
 fn info(path: &Path) -> Res<()> {
@@ -580,7 +457,7 @@ fn auto(input: &Path, output: &Path, window: &Window, series: Option<&str>) -> R
     }
     match format {
         detect::Format::Dicom => dicom::convert(input, output, window, series),
-        detect::Format::Nifti => nifti(input, output, window),
+        detect::Format::Nifti => nifti::convert(input, output, window),
         detect::Format::Nrrd => nrrd_file(input, output, window),
         detect::Format::MetaImage => metaimage::convert(input, output, window),
         detect::Format::Tiff => tiffstack::convert_auto(input, output, window),
@@ -641,7 +518,7 @@ fn main() -> ExitCode {
             input,
             output,
             window,
-        } => nifti(input, output, window),
+        } => nifti::convert(input, output, window),
         Cmd::Nrrd {
             input,
             output,

@@ -6,9 +6,15 @@
 //! directions` and `space origin` (turned into RAS; LPS, LAS and RAS spaces), or from
 //! `spacings` alone. Other encodings (`bzip2`, `hex`), detached data lists (`LIST`, `%d`
 //! patterns) and more than one value per voxel are refused by name.
+//!
+//! Ascii values are kept as written: an integer type takes whole numbers in its range only,
+//! `float` no finite number beyond its range, and the first value that breaks this is refused by
+//! value and index; `byte skip` skips bytes of the text (as teem reads it), −1 raw data only.
+//! Data after the volume's (raw or gzip bytes, ascii values) is ignored with a note, and a gzip
+//! stream is read to its end, so that its checksums are checked.
 
 use crate::progress::{Progress, Reading, Unit};
-use crate::volume::{read_regular, Source, Type};
+use crate::volume::{inflate_rest, read_regular, Source, Type};
 use std::path::{Path, PathBuf};
 
 /// A NRRD file's volume: its dimensions, type, byte order and decoded bytes.
@@ -236,7 +242,7 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
     let line_skip = number(&["line skip", "lineskip"])?;
     let byte_skip = number(&["byte skip", "byteskip"])?;
     // The data: after the header, or in the detached data file (relative to the header).
-    let data: Vec<u8> = match field(&["data file", "datafile"]) {
+    let (data, data_path): (Vec<u8>, PathBuf) = match field(&["data file", "datafile"]) {
         Some(name) if name.starts_with("LIST") || name.contains('%') => {
             return Err(bad(format!(
                 "data file {name:?}: lists of files do not convert"
@@ -249,9 +255,9 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
             } else {
                 p.to_path_buf()
             };
-            read_regular(&p, None)?
+            (read_regular(&p, None)?, p)
         }
-        None => file[header_end..].to_vec(),
+        None => (file[header_end..].to_vec(), path.to_path_buf()),
     };
     // Line skip, then byte skip (−1: the data is the file's last bytes, raw only).
     let mut data = data.as_slice();
@@ -271,11 +277,19 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
     if byte_skip < -1 {
         return Err(bad(format!("byte skip {byte_skip}: at least -1")));
     }
-    let raw = |data: &[u8]| -> Result<Vec<u8>, String> {
+    if byte_skip == -1 && encoding != "raw" {
+        return Err(bad(format!(
+            "byte skip -1 with {encoding} encoding: the data ending the file is for raw \
+             encoding only"
+        )));
+    }
+    let skip = byte_skip.max(0) as u64;
+    // The volume's bytes from `data` (after the byte skip), and how many follow them.
+    let raw = |data: &[u8]| -> Result<(Vec<u8>, u64), String> {
         let data = if byte_skip == -1 {
             data.get(data.len().saturating_sub(need)..).unwrap_or(data)
         } else {
-            data.get(byte_skip.max(0) as usize..).unwrap_or(&[])
+            data.get(skip as usize..).unwrap_or(&[])
         };
         if data.len() < need {
             return Err(bad(format!(
@@ -283,43 +297,36 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
                 data.len()
             )));
         }
-        Ok(data[..need].to_vec())
+        Ok((data[..need].to_vec(), (data.len() - need) as u64))
     };
-    let (bytes, big) = match encoding {
-        "raw" => (raw(data)?, big),
-        "gzip" | "gz" if byte_skip == -1 => {
-            return Err(bad(
-                "byte skip -1 with gzip encoding: the specification forbids it".into(),
-            ))
+    // The volume's bytes, their byte order, and what follows them (a count and its noun).
+    let (bytes, big, extra) = match encoding {
+        "raw" => {
+            let (bytes, extra) = raw(data)?;
+            (bytes, big, (extra, "bytes"))
         }
         "gzip" | "gz" => {
-            use std::io::Read;
             let mut out = Vec::new();
-            // No more than the volume needs after the skip (a bomb stops there).
-            let most = need as u64 + byte_skip.max(0) as u64 + 1;
-            let bar = Progress::new(format!("decompressing {}", name(path)), most, Unit::Bytes);
-            Reading::new(flate2::read::MultiGzDecoder::new(data).take(most), bar)
-                .read_to_end(&mut out)
-                .map_err(|e| bad(format!("gzip data: {e}")))?;
-            // Byte skip counts bytes of the decompressed data.
-            (raw(&out)?, big)
+            // Byte skip counts bytes of the decompressed data. The stream is read to its end
+            // (its checksums checked), what follows the volume counted, not kept.
+            let keep = need as u64 + skip;
+            let bar = Progress::new(format!("decompressing {}", name(path)), keep, Unit::Bytes);
+            let mut inflate = Reading::new(flate2::read::MultiGzDecoder::new(data), bar);
+            let after = inflate_rest(&mut inflate, &mut out, keep).map_err(bad)?;
+            let (bytes, _) = raw(&out)?;
+            (bytes, big, (after, "bytes"))
         }
         "ascii" | "text" | "txt" => {
-            let text = String::from_utf8_lossy(data);
-            let mut out = Vec::with_capacity(need.min(data.len()));
-            for word in text.split_whitespace().take(n) {
-                let v: f64 = word
-                    .parse()
-                    .map_err(|_| bad(format!("ascii value {word:?}")))?;
-                ty.push_le(v, &mut out);
-            }
-            if out.len() < need {
-                return Err(bad(format!(
-                    "{} ascii values, {n} needed",
-                    out.len() / ty.bytes()
-                )));
-            }
-            (out, false)
+            // Byte skip counts bytes of the text, as teem reads it.
+            let text = data.get(skip as usize..).ok_or_else(|| {
+                bad(format!(
+                    "byte skip {skip} is past the end of the data ({} bytes)",
+                    data.len()
+                ))
+            })?;
+            let (bytes, extra) =
+                ascii(&String::from_utf8_lossy(text), ty, ty_name, n).map_err(bad)?;
+            (bytes, false, (extra as u64, "ascii values"))
         }
         e => {
             return Err(bad(format!(
@@ -327,6 +334,12 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
             )))
         }
     };
+    if let (count @ 1.., what) = extra {
+        eprintln!(
+            "vlconvert: note: {} has {count} {what} after the data (ignored)",
+            data_path.display()
+        );
+    }
     Ok(Nrrd {
         dims,
         ty,
@@ -334,4 +347,58 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
         bytes,
         geometry,
     })
+}
+
+/// The first `n` whitespace-separated values of `text` as elements of `ty` (the NRRD type
+/// `ty_name`), little-endian, and how many values follow them. Nothing is altered: an integer
+/// type takes whole numbers in its range only, `float` no finite number beyond its range;
+/// the first value that breaks this is an error naming it and its index.
+fn ascii(text: &str, ty: Type, ty_name: &str, n: usize) -> Result<(Vec<u8>, usize), String> {
+    let mut out = Vec::with_capacity(n.min(text.len() / 2 + 1) * ty.bytes());
+    let mut words = text.split_whitespace();
+    for (i, word) in words.by_ref().take(n).enumerate() {
+        let offence =
+            |why: String| format!("ascii value {word:?} (value {i}, counting from 0): {why}");
+        let number = || {
+            word.parse::<f64>()
+                .map_err(|_| offence("not a number".into()))
+        };
+        match ty.int_range() {
+            Some((min, max)) => {
+                let v = match word.parse::<i128>() {
+                    Ok(v) => v,
+                    Err(_) => {
+                        let f = number()?;
+                        if !f.is_finite() || f.fract() != 0.0 {
+                            return Err(offence(format!(
+                                "not a whole number, and {ty_name} holds whole numbers only"
+                            )));
+                        }
+                        f as i128
+                    }
+                };
+                if v < min || v > max {
+                    return Err(offence(format!(
+                        "outside the range of {ty_name}, {min} … {max}"
+                    )));
+                }
+                ty.push_int_le(v, &mut out);
+            }
+            None if ty == Type::F32 => {
+                let f = number()?;
+                if f.is_finite() && !(f as f32).is_finite() {
+                    return Err(offence(format!("beyond the range of {ty_name}")));
+                }
+                out.extend((f as f32).to_le_bytes());
+            }
+            None => out.extend(number()?.to_le_bytes()),
+        }
+    }
+    if out.len() < n * ty.bytes() {
+        return Err(format!(
+            "{} ascii values, {n} needed",
+            out.len() / ty.bytes()
+        ));
+    }
+    Ok((out, words.count()))
 }

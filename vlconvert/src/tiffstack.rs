@@ -348,11 +348,7 @@ fn decode<R: Read + Seek>(d: &mut Decoder<R>, page: &Page, out: &mut Vec<u8>) ->
 /// A decoder for the regular file `path`, and its length.
 fn open(path: &Path) -> Res<(Decoder<BufReader<File>>, u64)> {
     let at = |e: String| format!("{}: {e}", path.display());
-    let meta = std::fs::metadata(path).map_err(|e| at(e.to_string()))?;
-    if !meta.is_file() {
-        return Err(at("not a regular file".into()));
-    }
-    let f = File::open(path).map_err(|e| at(e.to_string()))?;
+    let (f, meta) = crate::volume::open_regular(path)?;
     let mut limits = Limits::default();
     // Each page's size is checked against its data before it is decoded (`inspect`).
     limits.decoding_buffer_size = usize::MAX;

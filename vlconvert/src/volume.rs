@@ -8,13 +8,27 @@
 //!   the scaling is linear, so a and b absorb it.
 //! - Wider integers and floats are quantised to 16 bits over their range: the voxel is the
 //!   nearest of 0 … 65535 to (value − min)/(max − min)·65535, within half a quantum.
-//! - Values that are not finite (NaN, ±∞ in a float file) take the range's minimum.
+//! - Values that are not finite (NaN, ±∞ in a float file, or a finite value the scaling takes
+//!   past f64's range) are counted and said in a note: +∞ takes the largest finite value, −∞
+//!   and NaN the smallest. A range wider than f64 can subtract (−1e308 … 1e308) is measured in
+//!   halves, so it quantises like any other.
 //!
-//! Reading a whole file ([`read_regular`]) and converting its voxels (two passes: the range,
-//! then the voxels) show their progress on a terminal (`progress`).
+//! Files are opened by [`open_regular`], which refuses a FIFO, a device or a directory without
+//! waiting. Reading a whole file ([`read_regular`]), decompressing a gzip stream to its end
+//! ([`inflate_rest`]) and converting its voxels (two passes: the range, then the voxels) show
+//! their progress on a terminal (`progress`).
 
 use crate::progress::{Progress, Reading, Unit};
 use clap::ValueEnum;
+use std::io::Read;
+use std::os::unix::fs::OpenOptionsExt;
+use std::path::Path;
+
+/// `O_NONBLOCK`, for opening an input without waiting on a FIFO or a device.
+#[cfg(any(target_os = "linux", target_os = "android"))]
+const O_NONBLOCK: i32 = 0o4000;
+#[cfg(not(any(target_os = "linux", target_os = "android")))]
+const O_NONBLOCK: i32 = 0x0004;
 
 /// Elements converted between two looks at the progress line.
 const BLOCK: usize = 1 << 20;
@@ -98,6 +112,28 @@ impl Type {
         }
     }
 
+    /// The smallest and largest value of an integer type; `None` for a float type.
+    pub fn int_range(self) -> Option<(i128, i128)> {
+        Some(match self {
+            Type::U8 => (0, u8::MAX as i128),
+            Type::I8 => (i8::MIN as i128, i8::MAX as i128),
+            Type::U16 => (0, u16::MAX as i128),
+            Type::I16 => (i16::MIN as i128, i16::MAX as i128),
+            Type::U32 => (0, u32::MAX as i128),
+            Type::I32 => (i32::MIN as i128, i32::MAX as i128),
+            Type::U64 => (0, u64::MAX as i128),
+            Type::I64 => (i64::MIN as i128, i64::MAX as i128),
+            Type::F32 | Type::F64 => return None,
+        })
+    }
+
+    /// Appends the integer `v`, which [`Type::int_range`] holds, as an element of this integer
+    /// type, little-endian.
+    pub fn push_int_le(self, v: i128, out: &mut Vec<u8>) {
+        let bytes = v.to_le_bytes();
+        out.extend_from_slice(&bytes[..self.bytes()]);
+    }
+
     /// Where the element's values fit a voxel exactly: the voxel width and the offset added.
     fn exact(self) -> Option<(u32, f64)> {
         match self {
@@ -121,10 +157,71 @@ pub struct Source<'a> {
     pub inter: f64,
 }
 
-/// What a conversion made: the dataset, and a line saying how values became voxels.
+/// What a conversion made: the dataset, a line saying how values became voxels, and a note
+/// where values were replaced (values that are not finite).
 pub struct Converted {
     pub dataset: vlib::Dataset,
     pub report: String,
+    pub note: Option<String>,
+}
+
+/// The values of a volume: the smallest and largest finite value, and how many are not finite.
+struct Range {
+    lo: f64,
+    hi: f64,
+    nan: u64,
+    /// +∞ (or a scaled value past f64's largest).
+    above: u64,
+    /// −∞ (or a scaled value past f64's smallest).
+    below: u64,
+}
+
+impl Range {
+    /// What the values that are not finite became, for a note; `None` if every value is.
+    fn note(&self) -> Option<String> {
+        let mut parts = Vec::new();
+        let (lo, hi) = (self.lo, self.hi);
+        if self.nan > 0 {
+            parts.push(format!(
+                "{} NaN value(s) set to the smallest finite value, {lo}",
+                self.nan
+            ));
+        }
+        if self.above > 0 {
+            parts.push(format!(
+                "{} +infinite value(s) set to the largest finite value, {hi}",
+                self.above
+            ));
+        }
+        if self.below > 0 {
+            parts.push(format!(
+                "{} -infinite value(s) set to the smallest finite value, {lo}",
+                self.below
+            ));
+        }
+        (!parts.is_empty()).then(|| parts.join("; "))
+    }
+
+    /// The finite value that stands for `v`: `v` itself, or the end of the range a note names.
+    fn finite(&self, v: f64) -> f64 {
+        if v.is_finite() {
+            v
+        } else if v == f64::INFINITY {
+            self.hi
+        } else {
+            self.lo
+        }
+    }
+}
+
+/// (x − c0)/c1, where x − c0 could overflow f64: then taken of halves, (x/2 − c0/2)/(c1/2).
+fn voxel_units(x: f64, c0: f64, c1: f64) -> f64 {
+    let d = x - c0;
+    if d.is_finite() {
+        d / c1
+    } else {
+        (x * 0.5 - c0 * 0.5) / (c1 * 0.5)
+    }
 }
 
 impl Source<'_> {
@@ -140,22 +237,34 @@ impl Source<'_> {
         self.ty.read(&self.bytes[i * n..], self.big)
     }
 
-    /// The smallest and largest finite value (scaled); `None` if none is finite.
-    fn range(&self, bar: &mut Progress) -> Option<(f64, f64)> {
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    /// The values' range (scaled); `None` if none is finite.
+    fn range(&self, bar: &mut Progress) -> Option<Range> {
+        let mut r = Range {
+            lo: f64::INFINITY,
+            hi: f64::NEG_INFINITY,
+            nan: 0,
+            above: 0,
+            below: 0,
+        };
         let n = self.len();
         for start in (0..n).step_by(BLOCK) {
             let end = (start + BLOCK).min(n);
             for i in start..end {
                 let v = self.slope * self.element(i) + self.inter;
                 if v.is_finite() {
-                    lo = lo.min(v);
-                    hi = hi.max(v);
+                    r.lo = r.lo.min(v);
+                    r.hi = r.hi.max(v);
+                } else if v.is_nan() {
+                    r.nan += 1;
+                } else if v > 0.0 {
+                    r.above += 1;
+                } else {
+                    r.below += 1;
                 }
             }
             bar.advance((end - start) as u64);
         }
-        (lo <= hi).then_some((lo, hi))
+        (r.lo <= r.hi).then_some(r)
     }
 
     /// The dataset whose normalised values are clamp((value − A)/(B − A), 0, 1) for the window
@@ -182,7 +291,8 @@ impl Source<'_> {
         let mut bar = Progress::new("finding the range", n as u64, Unit::Voxels);
         let range = self.range(&mut bar);
         bar.finish();
-        let (lo, hi) = range.ok_or("no finite value: nothing to normalise by")?;
+        let range = range.ok_or("no finite value: nothing to normalise by")?;
+        let (lo, hi) = (range.lo, range.hi);
         match window {
             (None, Some(b)) if b <= lo => {
                 return Err(format!(
@@ -216,42 +326,63 @@ impl Source<'_> {
             let how = format!("{:?} values kept exactly in {width}-byte voxels", self.ty);
             (raw, self.inter - self.slope * offset, self.slope, how)
         } else {
-            let span = if hi > lo { hi - lo } else { 1.0 };
+            // h = 1/2 where hi − lo overflows f64: the span and each value's distance from lo
+            // are then taken of halved values, which cannot overflow.
+            let h = if (hi - lo).is_finite() { 1.0 } else { 0.5 };
+            let span = if hi > lo { hi * h - lo * h } else { 1.0 };
             let q = |i: usize| {
-                let v = self.slope * self.element(i) + self.inter;
-                let v = if v.is_finite() { v } else { lo };
-                ((v - lo) / span * 65535.0).round().clamp(0.0, 65535.0) as u16
+                let v = range.finite(self.slope * self.element(i) + self.inter);
+                ((v * h - lo * h) / span * 65535.0)
+                    .round()
+                    .clamp(0.0, 65535.0) as u16
             };
             let how = format!("{:?} values {lo} … {hi} quantised to 0 … 65535", self.ty);
             (
                 vlib::Voxels::U16(collect(n, &mut bar, q)),
                 lo,
-                span / 65535.0,
+                span / 65535.0 / h,
                 how,
             )
         };
         bar.finish();
-        let (va, vb) = ((a - c0) / c1, (b - c0) / c1);
+        let (va, vb) = (voxel_units(a, c0, c1), voxel_units(b, c0, c1));
         let dataset =
             vlib::Dataset::new(self.dims, raw, va as f32, vb as f32).map_err(|e| e.to_string())?;
         Ok(Converted {
             dataset,
             report: format!("{how}; window {a} … {b} (a, b = {va} {vb} in voxel units)"),
+            note: range.note(),
         })
     }
 }
 
-/// The bytes of the regular file `path`, at most `limit` of them (`None`: all): a FIFO, a
-/// device or a directory is refused rather than read (it could block, or never end). Reads of
-/// more than 64 KiB (not a format's first bytes) show their progress.
-pub fn read_regular(path: &std::path::Path, limit: Option<u64>) -> Result<Vec<u8>, String> {
-    use std::io::Read;
-    let at = |e: std::io::Error| format!("{}: {e}", path.display());
-    let meta = std::fs::metadata(path).map_err(at)?;
-    if !meta.is_file() {
-        return Err(format!("{}: not a regular file", path.display()));
+/// The regular file `path`, opened for reading, and its metadata: a FIFO, a device or a
+/// directory is refused without waiting. The file is opened with `O_NONBLOCK` (which changes
+/// nothing for a regular file, and keeps the open of a FIFO from waiting for a writer), and the
+/// metadata checked is the opened file's, not the name's.
+pub fn open_regular(path: &Path) -> Result<(std::fs::File, std::fs::Metadata), String> {
+    let at = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+    let f = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(O_NONBLOCK)
+        .open(path)
+        .map_err(|e| at(&e))?;
+    let meta = f.metadata().map_err(|e| at(&e))?;
+    if meta.is_dir() {
+        return Err(at(&"is a directory"));
     }
-    let f = std::fs::File::open(path).map_err(at)?;
+    if !meta.is_file() {
+        return Err(at(&"not a regular file (a FIFO, a device or a socket)"));
+    }
+    Ok((f, meta))
+}
+
+/// The bytes of the regular file `path`, at most `limit` of them (`None`: all), opened by
+/// [`open_regular`]. Reads of more than 64 KiB (not a format's first bytes) show their
+/// progress.
+pub fn read_regular(path: &Path, limit: Option<u64>) -> Result<Vec<u8>, String> {
+    let at = |e: std::io::Error| format!("{}: {e}", path.display());
+    let (f, meta) = open_regular(path)?;
     let total = limit.map_or(meta.len(), |l| l.min(meta.len()));
     let mut out = Vec::new();
     let mut f = f.take(limit.unwrap_or(u64::MAX));
@@ -263,4 +394,26 @@ pub fn read_regular(path: &std::path::Path, limit: Option<u64>) -> Result<Vec<u8
         f.read_to_end(&mut out).map_err(at)?;
     }
     Ok(out)
+}
+
+/// What a failure to read a gzip stream means: one cut short says so; a corrupt one (a
+/// checksum or length that does not match, a malformed block or header) gives the decoder's
+/// reason.
+pub fn gzip_error(e: std::io::Error) -> String {
+    if e.kind() == std::io::ErrorKind::UnexpectedEof {
+        "the file ends inside the gzip stream (it is cut short)".into()
+    } else if e.to_string().contains("gzip") {
+        e.to_string()
+    } else {
+        format!("gzip stream: {e}")
+    }
+}
+
+/// Reads the gzip stream `r` (a decoder of one or more members) to its end: into `out` until
+/// `out` holds `keep` bytes, then the bytes after those, counted and dropped, so that every
+/// member's checksum and length are checked. Returns that count.
+pub fn inflate_rest(r: &mut impl Read, out: &mut Vec<u8>, keep: u64) -> Result<u64, String> {
+    let room = keep.saturating_sub(out.len() as u64);
+    r.by_ref().take(room).read_to_end(out).map_err(gzip_error)?;
+    std::io::copy(r, &mut std::io::sink()).map_err(gzip_error)
 }

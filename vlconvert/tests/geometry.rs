@@ -53,6 +53,7 @@ fn the_sidecar_is_the_writers_affine() {
     for (file, stem) in [
         ("nifti/int16_aniso.nii", "nifti/int16_aniso"),
         ("nifti/uint8_qform.nii", "nifti/uint8_qform"),
+        ("nifti/uint8_pair.hdr", "nifti/uint8_pair"),
         ("nrrd/int16_lps.nrrd", "nrrd/int16_lps"),
         ("nrrd/uint8_oblique.nrrd", "nrrd/uint8_oblique"),
         ("metaimage/int16_oblique.mha", "metaimage/int16_oblique"),

@@ -6,8 +6,11 @@
 
 mod common;
 
-use common::{normalised, run, s, tmp};
-use std::path::{Path, PathBuf};
+use common::{
+    assert_writers_values, converts_like_the_writer, fixture, normalised, run, s, tmp,
+    writers_values,
+};
+use std::path::Path;
 use std::process::Command;
 use vlib::{Dataset, Voxels};
 
@@ -208,40 +211,6 @@ fn command_line_errors_exit_2_and_help_exits_0() {
     assert!(String::from_utf8_lossy(&help.stdout).contains("nifti"));
 }
 
-/// The values an independent writer put in a fixture, from `NAME.txt` beside it: one a line,
-/// in file order (x fastest).
-fn writers_values(txt: &Path) -> Vec<f64> {
-    std::fs::read_to_string(txt)
-        .unwrap()
-        .lines()
-        .map(|l| l.parse().unwrap())
-        .collect()
-}
-
-/// Converts fixture `tests/fixtures/<file>` with `vlconvert <sub>` and checks the dataset:
-/// `dims` nodes of `width` bytes whose normalised values are the writer's
-/// ([`assert_writers_values`]).
-fn converts_like_the_writer(sub: &str, file: &str, dims: [usize; 3], width: u32, exact: bool) {
-    let input = fixture(file);
-    let want = writers_values(&fixture(&format!(
-        "{}.txt",
-        file.rsplit_once('.').unwrap().0
-    )));
-    let d = tmp(&file.replace(['/', '.'], "-"));
-    let out = d.join("out.vlb");
-    let o = run(&[sub, s(&input), s(&out)]);
-    assert!(
-        o.status.success(),
-        "{file}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let v = Dataset::load(&out).unwrap();
-    assert_eq!(v.dims(), dims, "{file}");
-    assert_eq!(v.raw().width(), width, "{file}");
-    assert_writers_values(file, &v, &want, exact);
-    std::fs::remove_dir_all(&d).unwrap();
-}
-
 /// Converts the CT fixture `tests/fixtures/<file>` (whose values are in `<stem>.txt`) with
 /// `vlconvert <sub> --window -1000 2000`: Hounsfield units −1000 … 2000 to 0 … 1, clamped
 /// outside ([`assert_windowed`]).
@@ -256,34 +225,6 @@ fn converts_in_a_ct_window(sub: &str, file: &str) {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_windowed(&Dataset::load(&out).unwrap(), &want, -1000.0, 2000.0);
     std::fs::remove_dir_all(&d).unwrap();
-}
-
-/// The path of fixture `tests/fixtures/<name>`.
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
-}
-
-/// Each node's normalised value in `v` is the writer's value placed in the data's range,
-/// (w − min)/(max − min): within 10⁻⁶ where the type is kept `exact`ly (the slack is f32's in
-/// a and b), within half a quantum of 16 bits (plus that) where it is quantised.
-fn assert_writers_values(name: &str, v: &Dataset, want: &[f64], exact: bool) {
-    let (lo, hi) = want
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
-            (l.min(v), h.max(v))
-        });
-    let got = normalised(v);
-    assert_eq!(got.len(), want.len(), "{name}: nodes");
-    let tol = if exact { 1e-6 } else { 0.5 / 65535.0 + 1e-6 };
-    for (n, (got, w)) in got.iter().zip(want).enumerate() {
-        let expect = (w - lo) / (hi - lo);
-        assert!(
-            (got - expect).abs() <= tol,
-            "{name} node {n}: {got} vs ({w} − {lo})/({hi} − {lo}) = {expect}"
-        );
-    }
 }
 
 /// Each node's normalised value in `v` is the writer's value in the window `a` … `b`,
@@ -707,72 +648,5 @@ fn metaimage_errors_exit_1_without_output() {
         assert!(err.contains(says), "{name}: {err}");
         assert!(!out.exists(), "{name}");
     }
-    std::fs::remove_dir_all(&d).unwrap();
-}
-
-/// Values that are not finite (NaN, ±∞ in a float file) take the range of the finite ones'
-/// minimum: the field is 0 there; the finite values span 0 … 1.
-#[test]
-fn non_finite_values_take_the_minimum() {
-    let d = tmp("nonfinite");
-    let values = [
-        f32::NAN,
-        1.0,
-        3.0,
-        f32::INFINITY,
-        2.0,
-        f32::NEG_INFINITY,
-        1.5,
-        3.0,
-    ];
-    let raw = d.join("f.raw");
-    std::fs::write(
-        &raw,
-        values
-            .iter()
-            .flat_map(|v| v.to_le_bytes())
-            .collect::<Vec<u8>>(),
-    )
-    .unwrap();
-    let out = d.join("f.vlb");
-    let o = run(&[
-        "raw",
-        s(&raw),
-        s(&out),
-        "--dims",
-        "2",
-        "2",
-        "2",
-        "--type",
-        "f32",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let got = normalised(&Dataset::load(&out).unwrap());
-    let want = [0.0, 0.0, 1.0, 0.0, 0.5, 0.0, 0.25, 1.0];
-    for (g, w) in got.iter().zip(want) {
-        assert!((g - w).abs() <= 0.5 / 65535.0 + 1e-6, "{got:?} vs {want:?}");
-    }
-    // Nothing finite: nothing to normalise by (exit 1).
-    std::fs::write(
-        &raw,
-        [f32::NAN; 8]
-            .iter()
-            .flat_map(|v| v.to_le_bytes())
-            .collect::<Vec<u8>>(),
-    )
-    .unwrap();
-    let o = run(&[
-        "raw",
-        s(&raw),
-        s(&d.join("g.vlb")),
-        "--dims",
-        "2",
-        "2",
-        "2",
-        "--type",
-        "f32",
-    ]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("no finite value"));
     std::fs::remove_dir_all(&d).unwrap();
 }

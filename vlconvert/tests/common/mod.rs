@@ -1,5 +1,6 @@
-//! What the converter's tests share: running `vlconvert`, scratch directories, paths as
-//! arguments, and a dataset's nodes normalised by its a … b.
+//! What the converter's tests share: running `vlconvert` (with a time limit where an input
+//! could make it wait), scratch directories, paths as arguments, a dataset's nodes normalised by
+//! its a … b, and the comparison of a conversion with an independent writer's values.
 //!
 //! A directory module, so that cargo does not take it for a test target of its own.
 
@@ -15,6 +16,29 @@ pub const BIN: &str = env!("CARGO_BIN_EXE_vlconvert");
 /// Runs `vlconvert args`; its exit status and both outputs.
 pub fn run(args: &[&str]) -> Output {
     Command::new(BIN).args(args).output().unwrap()
+}
+
+/// Runs `vlconvert args`, failing the test if it has not ended within 20 seconds (it is then
+/// killed): for inputs that could make a reader wait (a FIFO, a device).
+pub fn run_within(args: &[&str]) -> Output {
+    use std::process::Stdio;
+    let mut child = Command::new(BIN)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > std::time::Duration::from_secs(20) {
+            child.kill().unwrap();
+            let _ = child.wait();
+            panic!("vlconvert {args:?} still running after 20 s: killed");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
 }
 
 /// Bytes a program wrote, as text.
@@ -58,4 +82,59 @@ pub fn normalised(v: &Dataset) -> Vec<f64> {
         }
     }
     out
+}
+
+/// The values an independent writer put in a fixture, from `NAME.txt` beside it: one a line,
+/// in file order (x fastest).
+pub fn writers_values(txt: &Path) -> Vec<f64> {
+    std::fs::read_to_string(txt)
+        .unwrap()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect()
+}
+
+/// Converts fixture `tests/fixtures/<file>` with `vlconvert <sub>` and checks the dataset:
+/// `dims` nodes of `width` bytes whose normalised values are the writer's
+/// ([`assert_writers_values`]).
+pub fn converts_like_the_writer(sub: &str, file: &str, dims: [usize; 3], width: u32, exact: bool) {
+    let input = fixture(file);
+    let want = writers_values(&fixture(&format!(
+        "{}.txt",
+        file.rsplit_once('.').unwrap().0
+    )));
+    let d = tmp(&file.replace(['/', '.'], "-"));
+    let out = d.join("out.vlb");
+    let o = run(&[sub, s(&input), s(&out)]);
+    assert!(
+        o.status.success(),
+        "{file}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v = Dataset::load(&out).unwrap();
+    assert_eq!(v.dims(), dims, "{file}");
+    assert_eq!(v.raw().width(), width, "{file}");
+    assert_writers_values(file, &v, &want, exact);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Each node's normalised value in `v` is the writer's value placed in the data's range,
+/// (w − min)/(max − min): within 10⁻⁶ where the type is kept `exact`ly (the slack is f32's in
+/// a and b), within half a quantum of 16 bits (plus that) where it is quantised.
+pub fn assert_writers_values(name: &str, v: &Dataset, want: &[f64], exact: bool) {
+    let (lo, hi) = want
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
+    let got = normalised(v);
+    assert_eq!(got.len(), want.len(), "{name}: nodes");
+    let tol = if exact { 1e-6 } else { 0.5 / 65535.0 + 1e-6 };
+    for (n, (got, w)) in got.iter().zip(want).enumerate() {
+        let expect = (w - lo) / (hi - lo);
+        assert!(
+            (got - expect).abs() <= tol,
+            "{name} node {n}: {got} vs ({w} − {lo})/({hi} − {lo}) = {expect}"
+        );
+    }
 }
