@@ -17,6 +17,19 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// How many links [`destination`] follows before it gives up (as the kernel's `ELOOP`).
 const MAX_LINKS: usize = 40;
 
+/// The file name `path` ends with, as the system reads the path: none where it ends with `/` or
+/// `/.` (or is `.`), which name a directory, not a file, though `Path::file_name` drops them
+/// (`x.ppm/` would be `x.ppm`, the checks below would look at `x.ppm/`, fail with "not a
+/// directory", and take that for "nothing there"); none either where it ends with `..`.
+pub(crate) fn file_name(path: &Path) -> Option<&std::ffi::OsStr> {
+    use std::os::unix::ffi::OsStrExt;
+    let b = path.as_os_str().as_bytes();
+    if b.ends_with(b"/") || b.ends_with(b"/.") || b == b"." {
+        return None;
+    }
+    path.file_name()
+}
+
 /// The file a write to `path` replaces: `path` itself, or, where `path` is a symbolic link, the
 /// file the chain of links ends at (which need not exist yet), so that the link stays a link
 /// and its target is updated.
@@ -26,6 +39,13 @@ fn destination(path: &Path) -> std::io::Result<PathBuf> {
         match fs::symlink_metadata(&p) {
             Ok(m) if m.file_type().is_symlink() => {
                 let target = fs::read_link(&p)?;
+                if file_name(&target).is_none() {
+                    return Err(std::io::Error::other(format!(
+                        "the link {} names a directory ({}), not a file",
+                        p.display(),
+                        target.display()
+                    )));
+                }
                 p = match p.parent() {
                     Some(dir) if target.is_relative() => dir.join(target),
                     _ => target,
@@ -126,7 +146,7 @@ pub(crate) struct AtomicFile {
 impl AtomicFile {
     /// Starts writing `path`: checks the destination and creates the temporary.
     pub(crate) fn create(path: &Path) -> Result<AtomicFile> {
-        if path.file_name().is_none() {
+        if file_name(path).is_none() {
             return err(
                 ErrorCode::BadFile,
                 format!("{}: not a file name", path.display()),

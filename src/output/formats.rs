@@ -55,7 +55,7 @@ impl ImageFormat {
     /// file name, an unknown extension, and a modifier its file type cannot hold (alpha in a
     /// PPM, any modifier on a PFM) are `BadFile`.
     pub fn from_path(path: &Path) -> Result<ImageFormat> {
-        let Some(name) = path.file_name() else {
+        let Some(name) = super::files::file_name(path) else {
             return err(
                 ErrorCode::BadFile,
                 format!("{}: not a file name", path.display()),

@@ -46,6 +46,10 @@ fn formats_by_name() {
         "a.rgb16.pfm",
         "a.rgba.pfm",
         "a.rgb.pfm",
+        "a.ppm/",
+        "a.png/.",
+        "x/a.ppm/",
+        "a.ppm/..",
     ] {
         let e = ImageFormat::from_path(Path::new(bad)).unwrap_err();
         assert_eq!(e.code, ErrorCode::BadFile, "{bad}");
@@ -210,6 +214,41 @@ fn protected_outputs_are_kept() {
         names(&dir).iter().filter(|n| n.ends_with(".tmp")).count(),
         0
     );
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A name that ends with `/` or `/.` names a directory, as the system reads it: `BadFile`, and
+/// the file (or link) that the name without its slash is stays as it was (a read-only file is
+/// not replaced, a link is not turned into a file). A link whose target ends with `/` is an
+/// I/O error, and nothing is made.
+#[test]
+fn names_ending_in_a_slash_are_not_files() {
+    use std::os::unix::fs::{symlink, PermissionsExt};
+    let dir = scratch("slash");
+    let ro = dir.join("ro.ppm");
+    fs::write(&ro, b"keep").unwrap();
+    fs::set_permissions(&ro, fs::Permissions::from_mode(0o444)).unwrap();
+    symlink("real.ppm", dir.join("link.ppm")).unwrap();
+    for name in ["ro.ppm/", "ro.ppm/.", "link.ppm/", "link.ppm/."] {
+        let mut p = dir.as_os_str().to_owned();
+        p.push("/");
+        p.push(name);
+        let e = write_atomic(Path::new(&p), b"new").unwrap_err();
+        assert_eq!(e.code, ErrorCode::BadFile, "{name}: {}", e.message);
+    }
+    assert_eq!(fs::read(&ro).unwrap(), b"keep");
+    assert_eq!(
+        fs::metadata(&ro).unwrap().permissions().mode() & 0o777,
+        0o444
+    );
+    assert!(fs::symlink_metadata(dir.join("link.ppm"))
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    symlink("made.ppm/", dir.join("to_dir.ppm")).unwrap();
+    let e = write_atomic(&dir.join("to_dir.ppm"), b"x").unwrap_err();
+    assert_eq!(e.code, ErrorCode::IoError, "{}", e.message);
+    assert_eq!(names(&dir), ["link.ppm", "ro.ppm", "to_dir.ppm"]);
     fs::remove_dir_all(&dir).unwrap();
 }
 
