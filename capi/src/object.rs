@@ -94,7 +94,12 @@ pub extern "C" fn vlSet(fields: vlint, value: vlfloat) {
 pub(crate) fn set(fields: vlint, value: vlfloat) -> Result<()> {
     either(
         Command::Set,
-        |s| s.set(Fields::from_raw(fields)?, value),
+        // (The function's role first: a normal or spatial function's vlSet is VL_BADSCOPE
+        // whatever its mask.)
+        |s| {
+            s.may_set()?;
+            s.set(Fields::from_raw(fields)?, value)
+        },
         |lib| lib.set(Fields::from_raw(fields)?, value),
     )
 }

@@ -92,6 +92,7 @@ pub unsafe extern "C" fn vlChildNormal(child: vlint, n: *mut vlfloat) {
         either(
             Command::ChildNormal,
             |s| {
+                s.may_take_child_normals()?;
                 if n.is_null() {
                     return Err(null(Command::ChildNormal.name(), "n"));
                 }

@@ -233,12 +233,7 @@ impl<'a> Sample<'a> {
     /// point, −∇F of the child by central differences in its object space (offset 10⁻³ of its
     /// cube), taken to world space; zero where the gradient vanishes.
     pub fn child_normal(&self, i: i32) -> Result<[f32; 3]> {
-        if self.role != SampleRole::Normal {
-            return err(
-                ErrorCode::BadScope,
-                "vlChildNormal is legal only in normal functions",
-            );
-        }
+        self.may_take_child_normals()?;
         let c = self.child(i)?;
         let q = self.child_point(c);
         let h = 1e-3;
@@ -302,16 +297,35 @@ impl<'a> Sample<'a> {
     /// `vlSet` inside a field function: writes `value` (clamped to [0, 1], NaN → 0) to the fields
     /// of `fields` that the running function's `vlFunction` call named; others are left alone.
     pub fn set(&mut self, fields: Fields, value: f32) -> Result<()> {
+        self.may_set()?;
         if fields == Fields::NONE {
             return err(ErrorCode::BadField, "vlSet: empty field mask");
         }
+        self.write(fields & self.mask, value);
+        Ok(())
+    }
+
+    /// Whether `vlSet` is legal in this function (a field function's; not a normal or a
+    /// spatial function's): `VL_BADSCOPE` otherwise, checked before its arguments.
+    pub fn may_set(&self) -> Result<()> {
         if self.role != SampleRole::Field {
             return err(
                 ErrorCode::BadScope,
                 "vlSet is legal only inside field functions (not normal or spatial ones)",
             );
         }
-        self.write(fields & self.mask, value);
+        Ok(())
+    }
+
+    /// Whether `vlChildNormal` is legal in this function (a normal function's):
+    /// `VL_BADSCOPE` otherwise, checked before its arguments.
+    pub fn may_take_child_normals(&self) -> Result<()> {
+        if self.role != SampleRole::Normal {
+            return err(
+                ErrorCode::BadScope,
+                "vlChildNormal is legal only in normal functions",
+            );
+        }
         Ok(())
     }
 

@@ -259,6 +259,22 @@ static void null_child_normal(vlfloat *n, vlfloat *p, void *misc)
     vlChildNormal(1, NULL);
 }
 
+static void bad_set_in_normal_function(vlfloat *n, vlfloat *p, void *misc)
+{
+    (void)n;
+    (void)p;
+    (void)misc;
+    vlSet(0, 1.0); /* an empty mask, in a function that may not set at all */
+}
+
+static void bad_calls_in_spatial_function(vlfloat *p, void *misc)
+{
+    (void)p;
+    (void)misc;
+    vlSet(VL_O | 4096, 1.0);  /* an unknown bit, in a function that may not set */
+    vlChildNormal(1, NULL);   /* NULL, in a function that may not take child normals */
+}
+
 static void opaque(vlfloat *p, void *misc)
 {
     (void)p;
@@ -290,6 +306,18 @@ static void build_null_child_normal(void)
 {
     vlFunction(VL_ALLFIELDS, opaque, NULL);
     vlNormal(null_child_normal, NULL);
+}
+
+static void build_bad_normal(void)
+{
+    vlFunction(VL_ALLFIELDS, opaque, NULL);
+    vlNormal(bad_set_in_normal_function, NULL);
+}
+
+static void build_bad_spatial(void)
+{
+    vlSpatial(bad_calls_in_spatial_function, NULL);
+    vlSet(VL_ALLFIELDS, 0.5);
 }
 
 static void build_plain(void)
@@ -700,6 +728,13 @@ int main(void)
     expect_all("vlSet in a normal function", VL_BADSCOPE);
     small_scene("sample.ppm", build_null_child_normal);
     expect_all("vlChildNormal(1, NULL) in a normal function", VL_NULLPOINTER);
+    /* Scope first, however bad the arguments. */
+    small_scene("sample.ppm", build_bad_normal);
+    expect_all("vlSet(0) in a normal function (scope first)", VL_BADSCOPE);
+    small_scene("sample.ppm", build_bad_spatial);
+    expect_all("vlSet of an unknown bit and vlChildNormal(NULL) in a spatial function (scope "
+               "first)",
+               VL_BADSCOPE);
     check(exists("sample.ppm"), "the scenes with misbehaving functions still rendered");
 
     /* ---- outputs that cannot be written ---- */
