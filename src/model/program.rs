@@ -266,9 +266,17 @@ impl<'a> Sample<'a> {
         self.p
     }
 
-    /// The point in world space (`vlPosition`).
+    /// The point in world space (`vlPosition`), each coordinate the nearest f32: finite, a
+    /// coordinate beyond f32's range (a scene scaled past 3.4·10³⁸, whose points f64 holds) at
+    /// ±`f32::MAX`, a NaN (none the renderer makes) 0.
     pub fn world_position(&self) -> [f32; 3] {
-        self.world.map(|c| c as f32)
+        self.world.map(|c| {
+            if c.is_nan() {
+                0.0
+            } else {
+                c.clamp(-f32::MAX as f64, f32::MAX as f64) as f32
+            }
+        })
     }
 
     /// The role of the function now running.

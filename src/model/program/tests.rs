@@ -111,3 +111,15 @@ fn normal_role_cannot_write() {
         ErrorCode::BadField
     );
 }
+
+/// `vlPosition` is finite however far the point: a world coordinate beyond f32's range is
+/// ±`f32::MAX`, one within it the f32 nearest (as `as f32` rounds), a NaN 0.
+#[test]
+fn world_positions_are_finite_f32() {
+    let far = Sample::new([0.5; 3], [1e39, -1e300, 2.5e38]);
+    assert_eq!(far.world_position(), [f32::MAX, -f32::MAX, 2.5e38]);
+    let near = Sample::new([0.5; 3], [0.1, -3.0, f32::MAX as f64]);
+    assert_eq!(near.world_position(), [0.1f64 as f32, -3.0, f32::MAX]);
+    let nan = Sample::new([0.5; 3], [f64::NAN, f64::INFINITY, f64::NEG_INFINITY]);
+    assert_eq!(nan.world_position(), [0.0, f32::MAX, -f32::MAX]);
+}
