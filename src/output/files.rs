@@ -98,17 +98,22 @@ pub(super) fn create_temporary(
     Err(last.unwrap_or_else(|| std::io::Error::other("no temporary name")))
 }
 
-/// The directory `dest` is in, as a path to create a temporary in: where the path is long,
-/// the directory reached through `/proc/self/fd` (so that a path near `PATH_MAX` leaves room
-/// for the temporary's name); the open directory is returned with it to keep that path valid.
+/// The directory `dest` is in, as a path to create a temporary in that stays valid when the
+/// working directory changes (a progress function, or another thread, calling chdir): its
+/// absolute path, or, where that is long (or cannot be had), the directory opened now and
+/// reached through `/proc/self/fd` (so that a path near `PATH_MAX` leaves room for the
+/// temporary's name); the open directory is returned with it to keep that path valid.
 fn directory_of(dest: &Path) -> (PathBuf, Option<fs::File>) {
     let dir = match dest.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
     // Room for "/" and the longest file name, within Linux's PATH_MAX of 4096 with its NUL.
-    if dir.as_os_str().len() + 1 + 255 < 4095 {
-        return (dir, None);
+    let fits = |p: &Path| p.as_os_str().len() + 1 + 255 < 4095;
+    if let Ok(abs) = std::path::absolute(&dir) {
+        if fits(&abs) {
+            return (abs, None);
+        }
     }
     match fs::File::open(&dir) {
         Ok(f) => {
