@@ -3,7 +3,8 @@
 //! voxelization's nodes, never decreasing, and 1 at the end, also where an output failed; a
 //! panicking progress function is an error, not a panic out of `end`; a cancel flag set from
 //! another thread stops a render that would otherwise take minutes, and its error counts the
-//! outputs that failed before it; the flag stops a single pixel's work within its rays; a preview wider than the largest image side is refused.
+//! outputs that failed before it; the flag stops a single pixel's work within its rays; a
+//! preview wider than the largest image side is refused.
 
 use std::sync::{Arc, Mutex};
 use vlib::{CancelFlag, ErrorCode, Fields, Library, RenderControl};
@@ -181,11 +182,16 @@ fn a_cancel_flag_stops_a_long_render_from_another_thread() {
     assert!(vl.render_preview(8, 8, 1.0).is_ok());
 }
 
-/// Renders one pixel of a scene that `setup` opens and whose one object's opacity comes from
-/// a field function of value `o` that sets the cancel flag at its `set_at`-th call (so that
-/// what is measured does not depend on timing): the render must fail with `Cancelled`, and
-/// the number of calls after the flag was set is returned.
-fn calls_after_cancel(setup: fn(&mut Library), o: f32, set_at: u64) -> u64 {
+/// Segments a ray takes between two looks at whether its render is to stop (`PROBE_EVERY` of
+/// the renderer's cursor).
+const PROBE_EVERY: u64 = 4096;
+
+/// Renders 2 × 2 pixels (their corners meet at the object's middle) of a scene that `setup`
+/// opens and whose one object's opacity at object
+/// point p is `opacity(p)`, from a field function that sets the cancel flag at its `set_at`-th
+/// call (so that what is measured does not depend on timing): the render must fail with
+/// `Cancelled`, and the number of calls after the flag was set is returned.
+fn calls_after_cancel(setup: fn(&mut Library), opacity: fn([f32; 3]) -> f32, set_at: u64) -> u64 {
     use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
     let flag = CancelFlag::new();
     let mut vl = Library::new();
@@ -202,24 +208,31 @@ fn calls_after_cancel(setup: fn(&mut Library), o: f32, set_at: u64) -> u64 {
         if counted.fetch_add(1, Relaxed) + 1 == set_at {
             flag.cancel();
         }
-        let _ = s.set(Fields::O, o);
+        let _ = s.set(Fields::O, opacity(s.position()));
     })
     .unwrap();
-    vl.set(Fields::COLORS | Fields::KD, 1.0).unwrap();
+    vl.set(Fields::COLORS | Fields::KA | Fields::KD, 1.0)
+        .unwrap();
     vl.end().unwrap();
-    let e = vl.render_preview(1, 1, 1.0).unwrap_err();
+    let e = vl.render_preview(2, 2, 1.0).unwrap_err();
     assert_eq!(e.code, ErrorCode::Cancelled, "{}", e.message);
     calls.load(Relaxed) - set_at
 }
 
-/// A cancel flag stops a render within a pixel, whatever the pixel's work. One pixel whose
-/// samples each send a shadow ray through the object (step 3·10⁻⁵ through the unit cube:
-/// about 33 000 samples a ray, each with a shadow ray of up to as many, some 10⁹ calls of the
-/// field function, minutes of work) ends within a few thousand calls of the flag being set,
-/// not at the pixel's end: the shadow ray under way runs to its cursor's next look (every
-/// 4 096 segments), the primary ray to its own, its samples' shadow rays not sent. So does a
-/// DSR pixel whose surface search takes 10⁸ samples (step 10⁻⁸, an opacity under its
-/// threshold everywhere).
+/// A cancel flag stops a render within a pixel, whatever the pixel's work, each case making
+/// 10⁸ to 10⁹ calls of the field function uncancelled; after the flag, each makes at most
+/// what the rays under way take to their next look (every [`PROBE_EVERY`] segments), and no
+/// ray starts:
+/// - a pixel whose samples each send a shadow ray through the object (step 3·10⁻⁵ through the
+///   unit cube: about 33 000 samples a ray, each with a shadow ray of up to as many): the
+///   shadow ray under way runs to its next look, the primary ray to its own (one call a
+///   sample, no more shadow rays sent);
+/// - a DSR pixel whose surface search takes 10⁸ samples (step 10⁻⁸, an opacity under its
+///   threshold everywhere): one look;
+/// - a pixel super-sampled 16 × 16 whose rays take about 3 300 samples each (step 3·10⁻⁴,
+///   under one look's worth; lit by an ambient light, an opacity x·y varying across the image
+///   so that its sub-pixels are refined): the ray under way ends, and none of the others
+///   starts.
 #[test]
 fn a_cancel_flag_stops_a_pixel_whose_rays_take_minutes() {
     let shadows = calls_after_cancel(
@@ -230,20 +243,39 @@ fn a_cancel_flag_stops_a_pixel_whose_rays_take_minutes() {
             vl.toggle(vlib::Feature::CastShadows, true).unwrap();
             vl.toggle(vlib::Feature::ReceiveShadows, true).unwrap();
         },
-        1e-6,
+        |_| 1e-6,
         100_000,
     );
-    assert!(shadows < 20_000, "{shadows} calls after the flag (shadows)");
+    assert!(
+        shadows <= 2 * PROBE_EVERY,
+        "{shadows} calls after the flag (shadows)"
+    );
     let surface = calls_after_cancel(
         |vl| {
             vl.step_size(1e-8, 1.0).unwrap();
             vl.render_type(vlib::RenderType::Dsr).unwrap();
             vl.surface(Fields::O, 0.5).unwrap();
         },
-        0.25,
+        |_| 0.25,
         100_000,
     );
-    assert!(surface < 20_000, "{surface} calls after the flag (DSR)");
+    assert!(
+        surface <= PROBE_EVERY,
+        "{surface} calls after the flag (DSR)"
+    );
+    let super_sampled = calls_after_cancel(
+        |vl| {
+            vl.step_size(3e-4, 1.0).unwrap();
+            vl.super_sample(16).unwrap();
+            vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+        },
+        |p| p[0] * p[1],
+        10_000,
+    );
+    assert!(
+        super_sampled <= PROBE_EVERY,
+        "{super_sampled} calls after the flag (super-sampled)"
+    );
 }
 
 /// A preview's sides are bounded like `vlImage`'s, not only its pixel count.

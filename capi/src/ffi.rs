@@ -6,8 +6,9 @@
 //! ## The panic boundary
 //! Every exported function, command or vlaux, has a body that is one call of [`ffi_boundary`]:
 //! an `Err` from the core or from argument checks is recorded for `vlError` and a neutral value
-//! returned; a panic is caught and recorded as `VL_INTERNAL`, and its message is not printed
-//! (the library never writes to stderr). No error ever crosses into C as anything but a
+//! returned; a panic is caught and recorded as `VL_INTERNAL` (an unwind carrying the core's
+//! own error, a cache that could not be allocated, as that error), and its message is not
+//! printed (the library never writes to stderr). No error ever crosses into C as anything but a
 //! queued code. The helpers below return a `Result` and run inside that call;
 //! none of them catches anything itself. A unit test (`tests/exports.rs`) reads the sources and
 //! fails on an export whose body does not start with `ffi_boundary(`.

@@ -124,7 +124,7 @@ pub fn render_outputs(
 /// Renders one requested image, against the backdrop its pixels call for (transparent for
 /// RGBA), and writes it. The memory it takes is the file's pixels (the output's own bytes,
 /// 3 to 12 a pixel, held whole for the encoder), a strip of the render, and for PNG the
-/// compressed stream (and for 16-bit PNG the encoder's big-endian copy of the pixels).
+/// encoder's few rows and output chunk (`formats::encode_into`).
 /// With a team, rank 0 alone opens and writes the file, and every rank returns its result.
 fn image(compiled: &Compiled, req: &ImageRequest, progress: &Progress) -> Result<()> {
     let (w, h) = (req.width, req.height);

@@ -199,6 +199,12 @@ impl Compiled {
         ray: Ray,
         bound: f64,
     ) -> (DVec3, f64) {
+        // A render that is to stop starts no more rays (a super-sampled pixel's next ray, a
+        // mirror's, a refracted one): its pixels are discarded. Rays under way look again
+        // every `PROBE_EVERY` segments.
+        if crate::control::stop_requested() {
+            return (DVec3::ZERO, 0.0);
+        }
         let background = if ray.background && !ray.transparent {
             match image {
                 Some(i) => i.background,
