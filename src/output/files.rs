@@ -136,6 +136,9 @@ fn directory_of(dest: &Path) -> (PathBuf, Option<fs::File>) {
 pub(crate) struct AtomicFile {
     /// The path the caller named (for messages).
     path: PathBuf,
+    /// That path made absolute when the write began (where that fits in `PATH_MAX`), for the
+    /// files that go beside it ([`AtomicFile::named`]).
+    named: PathBuf,
     /// The temporary and its directory, the destination's file name, the permissions of the
     /// file it replaces.
     tmp: PathBuf,
@@ -194,8 +197,13 @@ impl AtomicFile {
         };
         let (dir, open_dir) = directory_of(&dest);
         let (tmp, f) = create_temporary(&dir, temporary_name).map_err(io)?;
+        let named = match std::path::absolute(path) {
+            Ok(abs) if abs.as_os_str().len() < 4095 => abs,
+            _ => path.to_path_buf(),
+        };
         Ok(AtomicFile {
             path: path.to_path_buf(),
+            named,
             tmp,
             dir,
             name: name.to_owned(),
@@ -208,6 +216,13 @@ impl AtomicFile {
     /// The path the caller named.
     pub(crate) fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// The path the caller named, as it was resolved when the write began (absolute where
+    /// that fits in `PATH_MAX`): for a file that goes beside this one (a `.vlb`'s sidecar,
+    /// [`write_sidecar`]), so that a working directory changed since does not move it.
+    pub(crate) fn named(&self) -> &Path {
+        &self.named
     }
 
     /// The error of a failed write, with the caller's path.

@@ -43,10 +43,12 @@ impl crate::data::Dataset {
         self.vlb_body(|bytes| file.write(bytes))?;
         // The old sidecar goes before the new file replaces the old one, and the new sidecar
         // comes after: whatever fails between, no file is described by another's geometry.
-        files::write_sidecar(path, None)?;
+        // (Both beside the path as it was resolved when the write began.)
+        let named = file.named().to_path_buf();
+        files::write_sidecar(&named, None)?;
         file.commit()?;
         match self.geometry() {
-            Some(g) => files::write_sidecar(path, Some((g, self.dims()))),
+            Some(g) => files::write_sidecar(&named, Some((g, self.dims()))),
             None => Ok(()),
         }
     }

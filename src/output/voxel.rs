@@ -201,11 +201,11 @@ fn write_files(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Re
     // (With a team, an error held after the last step fails every rank here, before any
     // file is committed.)
     progress.settle()?;
-    for (field, file) in files {
+    for (_, file) in files {
         let Some(file) = file else { continue };
         // (A voxelization's nodes lie in the scene's world, not in millimetres: no geometry,
         // and a sidecar an earlier file left is removed.)
-        let path = file_name(req, field);
+        let path = file.named().to_path_buf();
         if let Err(e) =
             crate::output::files::write_sidecar(&path, None).and_then(|()| file.commit())
         {
