@@ -277,7 +277,9 @@ extern "C" fn probe(_p: *mut vlfloat, _misc: *mut c_void) {
             misuse("vlPosition(NULL)", VL_NULLPOINTER, &|| {
                 vlPosition(ptr::null_mut())
             });
-            misuse("vlChildNormal(1, NULL)", VL_NULLPOINTER, &|| {
+            // (A field function may not take child normals: scope first, whatever its
+            // arguments.)
+            misuse("vlChildNormal(1, NULL)", VL_BADSCOPE, &|| {
                 vlChildNormal(1, ptr::null_mut())
             });
             misuse("vlSet(0, …)", VL_BADFIELD, &|| vlSet(0, 1.0));
