@@ -26,7 +26,7 @@ use std::os::raw::c_char;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Mutex, MutexGuard, Once, RwLock};
+use std::sync::{Condvar, Mutex, MutexGuard, Once, RwLock};
 use vlib_core::scope::require;
 use vlib_core::{Command, Error, ErrorCode, Library, Result, Sample, Sampler, Scope};
 
@@ -40,27 +40,65 @@ pub(crate) fn lock_state() -> MutexGuard<'static, Option<Library>> {
     STATE.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// Whether a command holds the state through a [`StateGuard`]; [`CHANGED`] is notified when it
+/// lets it go and when a render starts.
+static BUSY: Mutex<bool> = Mutex::new(false);
+
+/// Wakes the commands waiting in [`lock_unless_rendering`].
+static CHANGED: Condvar = Condvar::new();
+
+/// The state, locked, for a command ([`lock_unless_rendering`]); letting it go wakes the
+/// commands waiting for it.
+pub(crate) struct StateGuard {
+    /// `None` only while dropped.
+    state: Option<MutexGuard<'static, Option<Library>>>,
+}
+
+impl std::ops::Deref for StateGuard {
+    type Target = Option<Library>;
+    fn deref(&self) -> &Option<Library> {
+        self.state.as_ref().expect("held")
+    }
+}
+
+impl std::ops::DerefMut for StateGuard {
+    fn deref_mut(&mut self) -> &mut Option<Library> {
+        self.state.as_mut().expect("held")
+    }
+}
+
+impl Drop for StateGuard {
+    fn drop(&mut self) {
+        drop(self.state.take());
+        *BUSY.lock().unwrap_or_else(|e| e.into_inner()) = false;
+        CHANGED.notify_all();
+    }
+}
+
 /// The state, locked ([`lock_state`]), unless a scene is rendering: `None` then, at once, or as
 /// soon as a render starts while this waits for the state. A render holds the state until it
-/// ends, and nothing waits for a render; a thread blocked on the lock when a render took it
-/// would wait for the whole render, so the lock is tried, and while another command holds it
-/// this looks again after a pause that doubles up to a millisecond, each time first asking
-/// whether a render has started.
-pub(crate) fn lock_unless_rendering() -> Option<MutexGuard<'static, Option<Library>>> {
-    let mut pause = std::time::Duration::from_micros(1);
+/// ends, and nothing waits for a render: a thread blocked on the state's mutex when a render
+/// took it would wait for the whole render. So a command waits on a condition variable
+/// instead, woken when the command before it lets the state go (it then takes it) and when a
+/// render starts (it then returns `None`).
+pub(crate) fn lock_unless_rendering() -> Option<StateGuard> {
+    let mut busy = BUSY.lock().unwrap_or_else(|e| e.into_inner());
     loop {
+        // (Under `BUSY`, which `Rendering::start` takes to notify after it has published the
+        // render: a start between this look and the wait below still wakes the wait.)
         if rendering() {
             return None;
         }
-        match STATE.try_lock() {
-            Ok(state) => return Some(state),
-            Err(std::sync::TryLockError::Poisoned(e)) => return Some(e.into_inner()),
-            Err(std::sync::TryLockError::WouldBlock) => {
-                std::thread::sleep(pause);
-                pause = (pause * 2).min(std::time::Duration::from_millis(1));
-            }
+        if !*busy {
+            *busy = true;
+            break;
         }
+        busy = CHANGED.wait(busy).unwrap_or_else(|e| e.into_inner());
     }
+    drop(busy);
+    Some(StateGuard {
+        state: Some(lock_state()),
+    })
 }
 
 /// How many calls are inside [`ffi_boundary`] now, on any thread.
@@ -184,6 +222,9 @@ impl Rendering {
     pub(crate) fn start(sampler: Sampler) -> Rendering {
         crate::extensions::cancel_flag().reset();
         *RENDERING.write().unwrap_or_else(|e| e.into_inner()) = Some(sampler);
+        // The commands waiting for the state return at once (`lock_unless_rendering`).
+        let _busy = BUSY.lock().unwrap_or_else(|e| e.into_inner());
+        CHANGED.notify_all();
         Rendering(())
     }
 }
