@@ -338,11 +338,12 @@ impl Dataset {
     }
 
     /// The node values of the raw voxels ([`normaliser`]), on as many threads as the library's
-    /// pool has ([`crate::pool::width`]: no pool is built for them), but threads of their own ([`crate::pool::fill`]), which also make the values'
-    /// memory (written once, not filled first): made from inside a render's parallel loop (a
-    /// first read there), a rayon job that waits for its parts may run another part of the
-    /// render meanwhile, which would ask for the values again, in the thread that is making
-    /// them. Where threads cannot be started the calling thread makes them all.
+    /// pool has ([`crate::pool::width`]: no pool is built for them), but on threads of their
+    /// own ([`crate::pool::fill`]), which also make the values' memory (written once, not
+    /// filled first). Not on the pool's: made from inside a render's parallel loop (a first
+    /// read there), a rayon job that waits for its parts may run another part of the render
+    /// meanwhile, which would ask for the values again, in the thread that is making them.
+    /// Where threads cannot be started the calling thread makes them all.
     fn compute_values(&self) -> Result<Vec<f32>> {
         let norm = normaliser(self.a, self.b);
         let len = self.raw.len();

@@ -101,6 +101,38 @@ impl ImageFormat {
     }
 }
 
+/// A writer that keeps the first error its inner writer gave (and gives it back as well), for
+/// an encoder that may drop it.
+pub(super) struct Kept<W: Write> {
+    pub(super) inner: W,
+    pub(super) error: Option<std::io::Error>,
+}
+
+impl<W: Write> Kept<W> {
+    /// `r`, its error kept (as its kind and message) if it is the first (an interrupted call,
+    /// which a caller tries again, is not an error to keep).
+    fn keep<T>(&mut self, r: std::io::Result<T>) -> std::io::Result<T> {
+        if let Err(e) = &r {
+            if self.error.is_none() && e.kind() != std::io::ErrorKind::Interrupted {
+                self.error = Some(std::io::Error::new(e.kind(), e.to_string()));
+            }
+        }
+        r
+    }
+}
+
+impl<W: Write> Write for Kept<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let r = self.inner.write(buf);
+        self.keep(r)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        let r = self.inner.flush();
+        self.keep(r)
+    }
+}
+
 /// The most bytes of compressed image a PNG's IDAT chunk holds: the PNG encoder's output buffer.
 const PNG_CHUNK: usize = 1 << 20;
 
@@ -159,7 +191,13 @@ pub(crate) fn encode_into(
             } else {
                 Vec::new()
             };
-            let mut encoder = png::Encoder::new(f.writer(), width, height);
+            // (Every write goes through `Kept`: the encoder drops some of its errors, in the
+            // flush of its last chunk.)
+            let mut kept = Kept {
+                inner: f.writer(),
+                error: None,
+            };
+            let mut encoder = png::Encoder::new(&mut kept, width, height);
             encoder.set_color(colour);
             encoder.set_depth(depth);
             encoder.set_compression(png::Compression::Fast);
@@ -187,6 +225,9 @@ pub(crate) fn encode_into(
             stream.finish().map_err(failed)?;
             // (The image's end, IEND.)
             writer.finish().map_err(failed)?;
+            if let Some(e) = kept.error.take() {
+                return Err(failed(png::EncodingError::IoError(e)));
+            }
         }
         Container::Pfm => {
             // A negative scale: little-endian floats. Rows bottom to top.

@@ -273,3 +273,43 @@ fn long_names_and_paths_work() {
     assert_eq!(names(&deep).len(), 1, "no temporary left");
     fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The PNG encoder's writer keeps the first error its file gave, which the encoder may drop,
+/// and gives every result back as it was; an interrupted call is not kept.
+#[test]
+fn the_png_writer_keeps_the_first_error() {
+    use std::io::{Error, ErrorKind, Write};
+    /// Fails each write with the next error of `errors`, then takes everything.
+    struct Failing(Vec<ErrorKind>);
+    impl Write for Failing {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            match self.0.pop() {
+                Some(k) => Err(Error::new(k, format!("{k:?}"))),
+                None => Ok(buf.len()),
+            }
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+    let mut kept = Kept {
+        inner: Failing(vec![
+            ErrorKind::WriteZero,
+            ErrorKind::StorageFull,
+            ErrorKind::Interrupted,
+        ]),
+        error: None,
+    };
+    assert_eq!(
+        kept.write(b"ab").unwrap_err().kind(),
+        ErrorKind::Interrupted
+    );
+    assert!(kept.error.is_none(), "an interrupted call is tried again");
+    // The encoder drops this one; it is kept.
+    let _ = kept.write(b"ab");
+    assert_eq!(kept.write(b"ab").unwrap_err().kind(), ErrorKind::WriteZero);
+    assert_eq!(kept.write(b"abc").unwrap(), 3);
+    let e = kept.error.take().expect("kept");
+    assert_eq!(e.kind(), ErrorKind::StorageFull, "the first one");
+    assert_eq!(e.to_string(), "StorageFull");
+}

@@ -141,8 +141,8 @@ fn vox_offset(h: &NiftiHeader, single: bool) -> Res<u64> {
     }
     if single && v < HEADER_LEN as f64 {
         return Err(format!(
-            "vox_offset {v}: inside the 348-byte header (a single-file NIfTI-1 puts its voxels \
-             at byte 352 or after)"
+            "vox_offset {v}: inside the 348-byte header (a single-file NIfTI-1's voxels follow \
+             it, at byte 352 by the standard)"
         ));
     }
     Ok(v as u64)
