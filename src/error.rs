@@ -138,6 +138,28 @@ impl Error {
             message: message.into(),
         }
     }
+
+    /// The error an unwind's `payload` stands for: the [`Error`] it carries (raised by
+    /// [`raise`], as a cache that could not be allocated is), else `Internal` with the message
+    /// `internal` makes of the panic's. For the library's panic boundaries: [`catch`] here,
+    /// and the C layer's around every exported function.
+    #[doc(hidden)]
+    pub fn from_unwind(
+        payload: Box<dyn std::any::Any + Send>,
+        internal: impl FnOnce(&str) -> String,
+    ) -> Error {
+        match payload.downcast::<Error>() {
+            Ok(e) => *e,
+            Err(payload) => {
+                let msg = payload
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| payload.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "unknown panic".into());
+                Error::new(ErrorCode::Internal, internal(&msg))
+            }
+        }
+    }
 }
 
 impl fmt::Display for Error {
@@ -167,20 +189,9 @@ mod tests;
 pub(crate) fn catch<T>(what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
     match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
         Ok(result) => result,
-        Err(payload) => Err(match payload.downcast::<Error>() {
-            Ok(e) => *e,
-            Err(payload) => {
-                let msg = payload
-                    .downcast_ref::<&str>()
-                    .map(|s| s.to_string())
-                    .or_else(|| payload.downcast_ref::<String>().cloned())
-                    .unwrap_or_else(|| "unknown panic".into());
-                Error::new(
-                    ErrorCode::Internal,
-                    format!("{what} stopped by a panic (in a field function?): {msg}"),
-                )
-            }
-        }),
+        Err(payload) => Err(Error::from_unwind(payload, |msg| {
+            format!("{what} stopped by a panic (in a field function?): {msg}")
+        })),
     }
 }
 

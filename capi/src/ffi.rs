@@ -150,18 +150,9 @@ pub(crate) fn ffi_boundary<T>(neutral: T, f: impl FnOnce() -> Result<T>) -> T {
         Err(payload) => {
             // The core unwinds with an `Error` where a cache cannot be allocated (a dataset's
             // node values, say): that error, `VL_NOMEMORY`, is the one recorded.
-            let e = match payload.downcast::<Error>() {
-                Ok(e) => *e,
-                Err(payload) => {
-                    let msg = payload
-                        .downcast_ref::<&str>()
-                        .map(|s| s.to_string())
-                        .or_else(|| payload.downcast_ref::<String>().cloned())
-                        .unwrap_or_else(|| "unknown panic".into());
-                    Error::new(ErrorCode::Internal, format!("panic caught: {msg}"))
-                }
-            };
-            errors::record(e);
+            errors::record(Error::from_unwind(payload, |msg| {
+                format!("panic caught: {msg}")
+            }));
             neutral
         }
     }
