@@ -1,16 +1,18 @@
-/* Helpers the test programs of capi/tests/c share: the ok/FAIL lines and their count, and
- * small file and buffer queries (a whole file, a run of equal bytes). Each program includes
+/* Helpers the test programs of capi/tests/c share: the ok/FAIL lines and their count, small
+ * file and buffer queries (a whole file, a run of equal bytes), and .vlb headers and files. Each program includes
  * it once ("checks.h", beside it) and uses what it needs; the functions are static and marked
  * unused, so a program that needs some of them compiles clean with -Wall -Wextra -Werror. C89
- * with POSIX (dirent, stat). */
+ * with POSIX (dirent, fcntl, stat, unistd). */
 #ifndef VLIB_TEST_CHECKS_H
 #define VLIB_TEST_CHECKS_H
 
 #include <dirent.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #define CHECKS_UNUSED __attribute__((unused))
 
@@ -84,6 +86,35 @@ static CHECKS_UNUSED unsigned long get_u32be(const unsigned char *p)
 {
     return ((unsigned long)p[0] << 24) | ((unsigned long)p[1] << 16) |
            ((unsigned long)p[2] << 8) | (unsigned long)p[3];
+}
+
+/* The 28-byte header of a .vlb (docs/compat.md) of nx·ny·nz voxels of `width` bytes,
+ * normalised by a and b, into h. */
+static CHECKS_UNUSED void vlb_header(unsigned char *h, unsigned long nx, unsigned long ny,
+                                     unsigned long nz, unsigned long width, float a, float b)
+{
+    memcpy(h, "VLB1", 4);
+    put_u32(h + 4, nx);
+    put_u32(h + 8, ny);
+    put_u32(h + 12, nz);
+    put_u32(h + 16, width);
+    memcpy(h + 20, &a, 4); /* little-endian IEEE floats, as on every target vlib builds for */
+    memcpy(h + 24, &b, 4);
+}
+
+/* A .vlb of nx·ny·nz one-byte voxels (a = 0, b = 255), the voxels a hole (ftruncate): its
+ * header, then the file extended to its full length. */
+static CHECKS_UNUSED int sparse_vlb(const char *path, unsigned long nx, unsigned long ny,
+                                    unsigned long nz)
+{
+    unsigned char h[28];
+    int fd, ok;
+    vlb_header(h, nx, ny, nz, 1, 0.0f, 255.0f);
+    fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd < 0)
+        return 0;
+    ok = write(fd, h, 28) == 28 && ftruncate(fd, (off_t)(28 + (double)nx * ny * nz)) == 0;
+    return close(fd) == 0 && ok;
 }
 
 /* The address space mapped now (VmSize of /proc/self/status), in bytes; 0 if unknown. */

@@ -28,19 +28,12 @@ static void on_alarm(int sig)
 static int write_vlb16(const char *path)
 {
     unsigned char h[28];
-    float a = 0.0f, b = 65535.0f;
     unsigned long i;
     int ok;
     FILE *f = fopen(path, "wb");
     if (!f)
         return 0;
-    memcpy(h, "VLB1", 4);
-    put_u32(h + 4, 64);
-    put_u32(h + 8, 32);
-    put_u32(h + 12, 32);
-    put_u32(h + 16, 2);
-    memcpy(h + 20, &a, 4); /* little-endian IEEE floats, as on every target vlib builds for */
-    memcpy(h + 24, &b, 4);
+    vlb_header(h, 64, 32, 32, 2, 0.0f, 65535.0f);
     ok = fwrite(h, 1, sizeof h, f) == sizeof h;
     for (i = 0; i < 64UL * 32 * 32; i++) {
         fputc((int)(i & 0xff), f);

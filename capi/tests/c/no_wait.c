@@ -9,7 +9,6 @@
  * vlSample held the library shows nothing; rounds go on until three did (at most twenty).
  * Prints one line per check and exits non-zero if any fails. C89 (with POSIX threads); built
  * and run by capi/tests/c_examples.rs, and under valgrind by memcheck.rs. */
-#include <fcntl.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <string.h>
@@ -96,32 +95,12 @@ static void field(vlvector p, void *misc)
     }
 }
 
-/* A .vlb of n^3 one-byte voxels, all 0 (a sparse file). */
-static int zero_vlb(const char *path, unsigned long n)
-{
-    unsigned char h[28];
-    float a = 0.0f, b = 255.0f;
-    int fd, ok;
-    memcpy(h, "VLB1", 4);
-    put_u32(h + 4, n);
-    put_u32(h + 8, n);
-    put_u32(h + 12, n);
-    put_u32(h + 16, 1);
-    memcpy(h + 20, &a, 4);
-    memcpy(h + 24, &b, 4);
-    fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd < 0)
-        return 0;
-    ok = write(fd, h, 28) == 28 && ftruncate(fd, (off_t)(28 + (double)n * n * n)) == 0;
-    return close(fd) == 0 && ok;
-}
-
 int main(void)
 {
     pthread_t t;
     int round, all_in_time = 1, codes_ok = 1, conclusive = 0;
     vlInit();
-    check("a 256^3 .vlb", zero_vlb("big.vlb", 256));
+    check("a 256^3 .vlb", sparse_vlb("big.vlb", 256, 256, 256));
     check("the second thread starts", pthread_create(&t, NULL, second, NULL) == 0);
     for (round = 1; round <= ROUNDS && conclusive < CONCLUSIVE; round++) {
         vlint e;

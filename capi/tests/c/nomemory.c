@@ -38,27 +38,6 @@ static int only(vlint code)
     return code == VL_NOERROR ? n == 0 : n == 1 && first == code;
 }
 
-/* A .vlb of nx·ny·nz one-byte voxels (a = 0, b = 255), the voxels a hole (ftruncate): the
- * 28-byte header of docs/compat.md, then the file extended to its full length. */
-static int sparse_vlb(const char *path, unsigned long nx, unsigned long ny, unsigned long nz)
-{
-    unsigned char h[28];
-    float a = 0.0f, b = 255.0f;
-    int fd, ok;
-    memcpy(h, "VLB1", 4);
-    put_u32(h + 4, nx);
-    put_u32(h + 8, ny);
-    put_u32(h + 12, nz);
-    put_u32(h + 16, 1);
-    memcpy(h + 20, &a, 4); /* little-endian IEEE floats, as on every target vlib builds for */
-    memcpy(h + 24, &b, 4);
-    fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd < 0)
-        return 0;
-    ok = write(fd, h, 28) == 28 && ftruncate(fd, (off_t)(28 + (double)nx * ny * nz)) == 0;
-    return close(fd) == 0 && ok;
-}
-
 /* Sets the voxels of the cube of 64^3 at the centre of a one-byte n^3 .vlb to 255. */
 static int poke_centre(const char *path, unsigned long n)
 {

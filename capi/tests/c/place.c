@@ -17,18 +17,11 @@
 static int write_vlb(const char *path)
 {
     unsigned char h[28], body[24];
-    float a = 0.0f, b = 255.0f;
     FILE *f = fopen(path, "wb");
     int ok;
     if (!f)
         return 0;
-    memcpy(h, "VLB1", 4);
-    put_u32(h + 4, 4);
-    put_u32(h + 8, 3);
-    put_u32(h + 12, 2);
-    put_u32(h + 16, 1);
-    memcpy(h + 20, &a, 4);
-    memcpy(h + 24, &b, 4);
+    vlb_header(h, 4, 3, 2, 1, 0.0f, 255.0f);
     memset(body, 200, sizeof body);
     ok = fwrite(h, 1, 28, f) == 28 && fwrite(body, 1, 24, f) == 24;
     return fclose(f) == 0 && ok;

@@ -36,16 +36,9 @@ static int threads_now(void)
 static int small_vlb(const char *path)
 {
     unsigned char b[28 + 64];
-    float a = 0.0f, top = 255.0f;
     FILE *f = fopen(path, "wb");
     int i, ok;
-    memcpy(b, "VLB1", 4);
-    put_u32(b + 4, 4);
-    put_u32(b + 8, 4);
-    put_u32(b + 12, 4);
-    put_u32(b + 16, 1);
-    memcpy(b + 20, &a, 4);
-    memcpy(b + 24, &top, 4);
+    vlb_header(b, 4, 4, 4, 1, 0.0f, 255.0f);
     for (i = 0; i < 64; i++)
         b[28 + i] = (unsigned char)i;
     if (!f)
