@@ -8,32 +8,13 @@
 //! equal, byte for byte, the one a fresh library with its own copy of the dataset renders
 //! alone; three rounds, each with a fresh shared dataset.
 
+#[path = "common/two_balls.rs"]
+mod two_balls;
+
 use std::sync::{Arc, Barrier};
 use vlib::{
     Camera, Dataset, DatasetId, Fields, Interpolation, Library, MappingId, MappingType, Optimise,
-    Voxels,
 };
-
-/// Two overlapping balls of 8-bit values in a 96³ grid (large enough that its caches take a
-/// while to make), values falling linearly from 255 at their centres.
-fn balls() -> Dataset {
-    let n = 96usize;
-    let raw: Vec<u8> = (0..n * n * n)
-        .map(|i| {
-            let (x, y, z) = (i % n, (i / n) % n, i / (n * n));
-            let ball = |c: [f32; 3], r: f32| {
-                let d = ((x as f32 - c[0]).powi(2)
-                    + (y as f32 - c[1]).powi(2)
-                    + (z as f32 - c[2]).powi(2))
-                .sqrt();
-                (1.0 - d / r).clamp(0.0, 1.0)
-            };
-            let v = ball([30.0, 36.0, 42.0], 27.0).max(ball([63.0, 57.0, 51.0], 24.0));
-            (v * 255.0) as u8
-        })
-        .collect();
-    Dataset::new([n, n, n], Voxels::U8(raw), 0.0, 255.0).unwrap()
-}
 
 /// The scenes: 0 pre-integrated, 1 the nearest filter, 2 trilinear, lit.
 const SCENES: usize = 3;
@@ -95,7 +76,7 @@ fn render(vl: &Library) -> Vec<u8> {
 #[test]
 fn renders_at_once_share_caches_and_give_the_bytes_they_give_alone() {
     let alone: Vec<Vec<u8>> = (0..SCENES)
-        .map(|which| render(&library(Arc::new(balls()), which)))
+        .map(|which| render(&library(Arc::new(two_balls::two_balls(96)), which)))
         .collect();
     for (which, img) in alone.iter().enumerate() {
         assert!(
@@ -107,7 +88,7 @@ fn renders_at_once_share_caches_and_give_the_bytes_they_give_alone() {
     assert_ne!(alone[0], alone[1], "the scenes differ");
     assert_ne!(alone[1], alone[2], "the scenes differ");
     for round in 0..3 {
-        let shared = Arc::new(balls());
+        let shared = Arc::new(two_balls::two_balls(96));
         let libraries: Vec<Library> = (0..SCENES)
             .map(|which| library(shared.clone(), which))
             .collect();

@@ -7,6 +7,8 @@
 
 #[path = "common/slab.rs"]
 mod slab;
+#[path = "common/two_balls.rs"]
+mod two_balls;
 
 use slab::{head_on, slab_object};
 use vlib::{Camera, Dataset, Fields, Library, MappingType, Optimise, Voxels};
@@ -234,23 +236,8 @@ fn balls(skip_empty: bool, step: f32, packets: bool) -> Vec<u8> {
 
 /// [`balls`] on a pool of `threads` threads (0: rayon's default).
 fn balls_on(skip_empty: bool, step: f32, threads: usize, packets: bool) -> Vec<u8> {
-    let n = 32usize;
-    let raw: Vec<u8> = (0..n * n * n)
-        .map(|i| {
-            let (x, y, z) = (i % n, (i / n) % n, i / (n * n));
-            let ball = |c: [f32; 3], r: f32| {
-                let d = ((x as f32 - c[0]).powi(2)
-                    + (y as f32 - c[1]).powi(2)
-                    + (z as f32 - c[2]).powi(2))
-                .sqrt();
-                (1.0 - d / r).clamp(0.0, 1.0)
-            };
-            let v = ball([10.0, 12.0, 14.0], 9.0).max(ball([21.0, 19.0, 17.0], 8.0));
-            (v * 255.0) as u8
-        })
-        .collect();
     let mut vl = Library::new();
-    let data = Dataset::new([n, n, n], Voxels::U8(raw), 0.0, 255.0).unwrap();
+    let data = two_balls::two_balls(32);
     vl.add_dataset(DatasetId(1), data).unwrap();
     vl.mapping(
         MappingId(1),
