@@ -84,7 +84,7 @@ pub mod limits {
 }
 
 /// The `.vlb` dataset format's constants (the format itself: [`Dataset::load`],
-/// [`Dataset::save`], `docs/compat.md`).
+/// [`Dataset::save`], `docs/compat.md`), and how an input file is opened.
 pub mod vlb {
-    pub use crate::data::{HEADER_LEN, MAGIC};
+    pub use crate::data::{open_regular, HEADER_LEN, MAGIC};
 }

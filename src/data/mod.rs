@@ -50,7 +50,7 @@ pub use gradient::GradientFilter;
 pub(crate) use lanes::Cells8;
 pub(crate) use trilinear::CellGradients;
 pub(crate) use vlb::header as vlb_header;
-pub use vlb::{HEADER_LEN, MAGIC};
+pub use vlb::{open_regular, HEADER_LEN, MAGIC};
 
 use crate::error::{err, Error, ErrorCode, Result};
 

@@ -36,12 +36,13 @@ const O_NONBLOCK: i32 = 0x0004;
 /// The most bytes a placement sidecar (`.vlb.geom`) may hold: a few lines of text (64 KiB).
 const MAX_SIDECAR: u64 = 64 * 1024;
 
-/// Opens `path` for reading without waiting, so that a FIFO with no writer (or a device that
+/// Opens the input file `path` as [`Dataset::load`] does (and the `vlconvert` tool its
+/// inputs): for reading, without waiting, so that a FIFO with no writer (or a device that
 /// would wait) is refused instead of hanging (the flag changes nothing for regular files),
-/// and checks what was opened (not what the name pointed to before) is a regular file: the
-/// file and its metadata. A directory or another kind of file is an error of kind `Other`
+/// and checking that what was opened (not what the name pointed to before) is a regular file:
+/// the file and its metadata. A directory or another kind of file is an error of kind `Other`
 /// saying so; a missing file keeps its kind `NotFound`.
-fn open_regular(path: &Path) -> std::io::Result<(std::fs::File, std::fs::Metadata)> {
+pub fn open_regular(path: &Path) -> std::io::Result<(std::fs::File, std::fs::Metadata)> {
     let f = std::fs::OpenOptions::new()
         .read(true)
         .custom_flags(O_NONBLOCK)
@@ -51,7 +52,9 @@ fn open_regular(path: &Path) -> std::io::Result<(std::fs::File, std::fs::Metadat
         return Err(std::io::Error::other("is a directory"));
     }
     if !meta.is_file() {
-        return Err(std::io::Error::other("not a regular file"));
+        return Err(std::io::Error::other(
+            "not a regular file (a FIFO, a device or a socket)",
+        ));
     }
     Ok((f, meta))
 }

@@ -21,14 +21,7 @@
 use crate::progress::{Progress, Reading, Unit};
 use clap::ValueEnum;
 use std::io::Read;
-use std::os::unix::fs::OpenOptionsExt;
 use std::path::Path;
-
-/// `O_NONBLOCK`, for opening an input without waiting on a FIFO or a device.
-#[cfg(any(target_os = "linux", target_os = "android"))]
-const O_NONBLOCK: i32 = 0o4000;
-#[cfg(not(any(target_os = "linux", target_os = "android")))]
-const O_NONBLOCK: i32 = 0x0004;
 
 /// Elements converted between two looks at the progress line.
 const BLOCK: usize = 1 << 20;
@@ -357,24 +350,9 @@ impl Source<'_> {
 }
 
 /// The regular file `path`, opened for reading, and its metadata: a FIFO, a device or a
-/// directory is refused without waiting. The file is opened with `O_NONBLOCK` (which changes
-/// nothing for a regular file, and keeps the open of a FIFO from waiting for a writer), and the
-/// metadata checked is the opened file's, not the name's.
+/// directory is refused without waiting, as `vlLoad` refuses it ([`vlib::vlb::open_regular`]).
 pub fn open_regular(path: &Path) -> Result<(std::fs::File, std::fs::Metadata), String> {
-    let at = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
-    let f = std::fs::OpenOptions::new()
-        .read(true)
-        .custom_flags(O_NONBLOCK)
-        .open(path)
-        .map_err(|e| at(&e))?;
-    let meta = f.metadata().map_err(|e| at(&e))?;
-    if meta.is_dir() {
-        return Err(at(&"is a directory"));
-    }
-    if !meta.is_file() {
-        return Err(at(&"not a regular file (a FIFO, a device or a socket)"));
-    }
-    Ok((f, meta))
+    vlib::vlb::open_regular(path).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// The bytes of the regular file `path`, at most `limit` of them (`None`: all), opened by
