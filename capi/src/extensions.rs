@@ -11,8 +11,7 @@
 //! module holds the C forms: the process's cancel flag, the wrapper of the C progress
 //! function, and the checks of the buffer's pointer, size and format.
 
-use crate::ffi::{ffi_boundary, lock_unless_rendering, null, rendering, Rendering};
-use crate::sample;
+use crate::ffi::{ffi_boundary, null, rendering, state_outside_render, Rendering};
 use crate::types::{vlfloat, vlint, VL_FALSE, VL_GRADIENT_CUBIC, VL_GRADIENT_NODES, VL_TRUE};
 use std::os::raw::{c_ulong, c_void};
 use std::sync::{Arc, OnceLock};
@@ -75,18 +74,7 @@ pub extern "C" fn vlProgress(
     misc: *mut c_void,
 ) {
     ffi_boundary((), || {
-        let busy = || {
-            Err(Error::new(
-                ErrorCode::BadScope,
-                "vlProgress: not while a scene renders",
-            ))
-        };
-        if sample::active() {
-            return busy();
-        }
-        let Some(mut state) = lock_unless_rendering() else {
-            return busy();
-        };
+        let mut state = state_outside_render("vlProgress")?;
         let lib: &mut Library = match state.as_mut() {
             Some(lib) if lib.scope() != vlib_core::Scope::Object => lib,
             Some(_) => return scope_error(),
@@ -161,18 +149,7 @@ pub unsafe extern "C" fn vlRenderBuffer(
 ) -> vlint {
     ffi_boundary(VL_FALSE, || {
         const NAME: &str = "vlRenderBuffer";
-        let busy = || {
-            Err(Error::new(
-                ErrorCode::BadScope,
-                format!("{NAME}: not while a scene renders"),
-            ))
-        };
-        if sample::active() {
-            return busy();
-        }
-        let Some(state) = lock_unless_rendering() else {
-            return busy();
-        };
+        let state = state_outside_render(NAME)?;
         let lib: &Library = match state.as_ref() {
             Some(lib) if lib.scope() == vlib_core::Scope::Scene => lib,
             _ => {
@@ -240,18 +217,7 @@ pub unsafe extern "C" fn vlRenderBuffer(
 pub extern "C" fn vlGradientFilter(r#type: vlint, b: vlfloat, c: vlfloat) {
     ffi_boundary((), || {
         const NAME: &str = "vlGradientFilter";
-        let busy = || {
-            Err(Error::new(
-                ErrorCode::BadScope,
-                format!("{NAME}: not while a scene renders"),
-            ))
-        };
-        if sample::active() {
-            return busy();
-        }
-        let Some(mut state) = lock_unless_rendering() else {
-            return busy();
-        };
+        let mut state = state_outside_render(NAME)?;
         let lib: &mut Library = match state.as_mut() {
             Some(lib) if lib.scope() != vlib_core::Scope::Object => lib,
             _ => {

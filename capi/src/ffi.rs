@@ -101,6 +101,21 @@ pub(crate) fn lock_unless_rendering() -> Option<StateGuard> {
     })
 }
 
+/// The state for a command legal only outside renders (an extension that takes the state
+/// itself): `VL_BADSCOPE` ("`name`: not while a scene renders") in sample scope or while a
+/// scene renders ([`lock_unless_rendering`]).
+pub(crate) fn state_outside_render(name: &str) -> Result<StateGuard> {
+    if !sample::active() {
+        if let Some(state) = lock_unless_rendering() {
+            return Ok(state);
+        }
+    }
+    Err(Error::new(
+        ErrorCode::BadScope,
+        format!("{name}: not while a scene renders"),
+    ))
+}
+
 /// How many calls are inside [`ffi_boundary`] now, on any thread.
 static INSIDE: AtomicUsize = AtomicUsize::new(0);
 
