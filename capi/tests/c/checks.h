@@ -102,8 +102,9 @@ static CHECKS_UNUSED void vlb_header(unsigned char *h, unsigned long nx, unsigne
     memcpy(h + 24, &b, 4);
 }
 
-/* A .vlb of nx·ny·nz one-byte voxels (a = 0, b = 255), the voxels a hole (ftruncate): its
- * header, then the file extended to its full length. */
+/* A .vlb of nx·ny·nz one-byte voxels (a = 0, b = 255), the voxels a hole: its header, then
+ * the last voxel (0) written at the file's full length (lseek and write, which strict C99
+ * builds of these programs declare, where ftruncate is not). */
 static CHECKS_UNUSED int sparse_vlb(const char *path, unsigned long nx, unsigned long ny,
                                     unsigned long nz)
 {
@@ -113,7 +114,9 @@ static CHECKS_UNUSED int sparse_vlb(const char *path, unsigned long nx, unsigned
     fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
     if (fd < 0)
         return 0;
-    ok = write(fd, h, 28) == 28 && ftruncate(fd, (off_t)(28 + (double)nx * ny * nz)) == 0;
+    ok = write(fd, h, 28) == 28 &&
+         lseek(fd, (off_t)(28 + (double)nx * ny * nz - 1), SEEK_SET) != (off_t)-1 &&
+         write(fd, "", 1) == 1;
     return close(fd) == 0 && ok;
 }
 
