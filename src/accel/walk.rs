@@ -145,10 +145,21 @@ impl Walk {
     /// leaving which passes `horizon` (∞ where the ray leaves the grid first). The blocks
     /// after the first are walked here rather than one question each: the same answer for
     /// every later sample, since each lies in an occupied block either way.
-    /// Calls must come with non-decreasing `t`. Always inlined: otherwise the compiler leaves
-    /// it a call per question in the callers' sample loops.
+    /// Calls must come with non-decreasing `t`. Where `t` lies past the block after the walk's
+    /// (a caller that has passed over blocks itself, as the packet march's runs do), the walk
+    /// moves to `t`'s block at once ([`Walk::relocate`]) rather than step through the blocks
+    /// between. Always inlined: otherwise the compiler leaves it a call per question in the
+    /// callers' sample loops.
     #[inline(always)]
     pub(crate) fn skip_until(&mut self, grid: &SkipGrid, t: f64, horizon: f64) -> Result<f64, f64> {
+        if !self.done && self.left_before(t) {
+            self.advance(grid);
+            if !self.done && self.left_before(t) {
+                // (Rounding may put `t` in the block before its own: the loop below steps on.)
+                self.relocate(grid, t, [None; 3]);
+                self.entry = t;
+            }
+        }
         while !self.done && self.left_before(t) {
             self.advance(grid);
         }

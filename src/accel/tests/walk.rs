@@ -1,5 +1,5 @@
-//! Tests of the walk's arithmetic: the block index, the exit, the relocation and the bounds
-//! test, each against the plain form it stands for, bit for bit.
+//! Tests of the walk: its arithmetic (the block index, the exit, the relocation and the bounds
+//! test, each against the plain form it stands for, bit for bit) and its answers along a ray.
 
 use super::*;
 
@@ -203,4 +203,86 @@ fn outside_is_the_two_sided_bounds_test() {
             assert_eq!(outside(c, dims), c < 0 || c >= d, "{c} in 0..{dims}");
         }
     }
+}
+
+/// `skip_until`'s answers hold along the ray, whether the questions come sample by sample or
+/// far apart (each past the blocks the last answer covered, as the callers ask) (the packet march asks after runs it passed over itself, where the walk moves to
+/// the question's block at once), with and without a horizon: `Ok(exit)` where the blocks
+/// from the question to `exit` are all empty, `Err(until)` where those up to `until` are all
+/// occupied. Checked at points of the ray between, in random grids and directions, by the
+/// block each point lies in (points within 10⁻⁹ of a block face, where rounding may place
+/// them either side, and points outside the grid, which a walk that has left it calls
+/// occupied, are not checked).
+#[test]
+fn skip_until_answers_hold_along_the_ray() {
+    let mut rng = Rng(0x5eed_0fb1_0c0f);
+    let mut checked = [0usize; 2];
+    for case in 0..400 {
+        let grid = random_grid(&mut rng, [0.05, 0.2, 0.5][case % 3]);
+        let o = DVec3::new(rng.next(), rng.next(), rng.next()) * 1.4 - 0.2;
+        let d = (DVec3::new(rng.next(), rng.next(), rng.next()) * 2.0 - 1.0).normalize_or_zero();
+        if d == DVec3::ZERO {
+            continue;
+        }
+        // The block a point lies in, `None` near a face or outside the grid.
+        let block = |t: f64| -> Option<[i64; 3]> {
+            let p = o + t * d;
+            let mut c = [0i64; 3];
+            for a in 0..3 {
+                let rel = (p[a] - grid.origin[a]) * grid.inv_cell[a];
+                if !(rel >= 0.0 && rel < grid.dims[a] as f64) || (rel - rel.round()).abs() < 1e-9 {
+                    return None;
+                }
+                c[a] = rel as i64;
+            }
+            Some(c)
+        };
+        let check = |from: f64, to: f64, empty: bool, checked: &mut [usize; 2]| {
+            let to = to.min(from + 4.0);
+            for i in 0..64 {
+                let t = from + (to - from) * (i as f64 + 0.5) / 64.0;
+                if let Some(c) = block(t) {
+                    assert_eq!(
+                        grid.distance(c) != 0,
+                        empty,
+                        "case {case}: {o} + t·{d}, t = {t} in block {c:?}, asked from {from} to {to}"
+                    );
+                    checked[empty as usize] += 1;
+                }
+            }
+        };
+        let mut slot = None;
+        let walk = grid.walk_into(&mut slot, o, d, 0.0);
+        let mut t = 0.0;
+        while t < 3.0 {
+            // Some questions a sample apart, some many blocks apart.
+            t += if rng.next() < 0.5 {
+                0.02
+            } else {
+                0.3 * rng.next()
+            };
+            let horizon = if rng.next() < 0.5 {
+                t
+            } else {
+                t + 0.2 * rng.next()
+            };
+            match walk.skip_until(&grid, t, horizon) {
+                Ok(exit) => {
+                    assert!(exit >= t, "case {case}: exit {exit} before {t}");
+                    check(t, exit, true, &mut checked);
+                    t = exit;
+                }
+                Err(until) => {
+                    assert!(
+                        until >= t,
+                        "case {case}: occupied until {until}, before {t}"
+                    );
+                    check(t, until, false, &mut checked);
+                    // (As the callers do, the next question is past the occupied blocks.)
+                    t = until;
+                }
+            }
+        }
+    }
+    assert!(checked[0] > 10_000 && checked[1] > 10_000, "{checked:?}");
 }

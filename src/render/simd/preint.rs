@@ -297,7 +297,7 @@ impl<'a> Packets<'a> {
             if c.k >= c.n {
                 return (0, c.k);
             }
-            self.after_nothing_taken(c, 2 * W);
+            self.after_nothing_taken(c);
         }
     }
 

@@ -58,7 +58,7 @@ impl Packets<'_> {
             if c.k >= c.n {
                 return 0;
             }
-            self.after_nothing_taken(c, 2 * W);
+            self.after_nothing_taken(c);
         }
     }
 
@@ -115,10 +115,11 @@ impl Packets<'_> {
 
     /// After a run of cursor `c` of which nothing was taken (and with a segment left): where
     /// its next sample is past the occupied blocks the walk last reported, asks the walk (made
-    /// here on first use) about it and the next run's length of samples after it, and passes
-    /// over the empty blocks it reports.
+    /// here on first use) about it alone, and passes over the empty blocks it reports. No
+    /// horizon: the next run tests its samples against the cell mask whatever blocks they lie
+    /// in, so stepping through the occupied blocks after the sample's would only cost.
     #[inline]
-    pub(super) fn after_nothing_taken(&self, c: &mut Cursor, run: usize) {
+    pub(super) fn after_nothing_taken(&self, c: &mut Cursor) {
         let next = c.mid(c.k);
         if next >= c.occupied_until {
             if let Some(grid) = self.grid {
@@ -126,8 +127,7 @@ impl Packets<'_> {
                     Some(w) => w,
                     None => grid.walk_into(&mut c.walk, c.o, c.d, next),
                 };
-                let horizon = next + run as f64 * c.step;
-                match walk.skip_until(grid, next, horizon) {
+                match walk.skip_until(grid, next, next) {
                     Ok(exit) => c.pass_before(exit),
                     Err(until) => c.occupied_until = until,
                 }
