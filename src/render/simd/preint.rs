@@ -17,8 +17,9 @@
 //! trilinear node gradient: [`Light32::Lit`]), the slabs' pieces are lit in lanes too
 //! ([`Deferred`]): a ray's transmittance, and so where it ends, does not depend on colours,
 //! so each piece is weighed as it is composited and waits, with its pixel, mean colour, object
-//! point and view, until [`PIECES`] of the tile's pieces are ready; eight at a time then get
-//! the midpoint march's gradient and lighting ([`Packets::gradient`], [`Packets::lit`], in
+//! point and view, until [`PIECES`] of the tile's pieces are ready; sixteen at a time where
+//! the march runs in sixteen lanes, else eight, then get the midpoint march's gradient and
+//! lighting ([`Packets::gradient`], [`Packets::lit`], in
 //! f32), and each pixel adds its pieces' weighted colours in the order of its pieces, in f64.
 //! A piece's colour depends on that piece alone (not on which lanes carry it), so the pixels
 //! are the same for any thread count. Elsewhere the scalar code lights each piece at once.
@@ -29,7 +30,8 @@
 use super::step::Sampled;
 use super::*;
 
-/// The pieces [`Deferred`] gathers before it lights them: eight lanes at a time.
+/// The pieces [`Deferred`] gathers before it lights them: eight times eight lanes, four
+/// times sixteen.
 const PIECES: usize = 8 * W;
 
 impl<'a> Packets<'a> {
@@ -416,26 +418,47 @@ impl<'p, 'a> Deferred<'p, 'a> {
         }
     }
 
-    /// Lights the pieces gathered, eight at a time, and adds each one's weighted colour to its
+    /// Lights the pieces gathered, sixteen at a time where the march runs in sixteen lanes
+    /// (else eight), and adds each one's weighted colour to its
     /// pixel, in their order.
     fn flush(&mut self) {
-        for first in (0..self.n).step_by(W) {
-            let len = (self.n - first).min(W);
-            // SAFETY: `Packets::tile_pre` makes a `Deferred` of its own `Packets`, which
-            // `Packets::new` made only where it found AVX2 and FMA.
-            let col = unsafe {
-                self.packets
-                    .light_pieces8(&self.pieces, first, len, &mut self.cache)
-            };
-            for l in 0..len {
-                let (px, w) = (self.pieces.px[first + l], self.pieces.w[first + l]);
-                let acc = &mut self.acc[px as usize].0;
-                for (ch, c) in col.iter().enumerate() {
-                    acc[ch] += w * c[l] as f64;
-                }
+        if self.packets.wide {
+            for first in (0..self.n).step_by(V) {
+                let len = (self.n - first).min(V);
+                // SAFETY: `Packets::new` set `wide` only where `detected` found every feature
+                // `light_pieces16` enables.
+                let col = unsafe {
+                    self.packets
+                        .light_pieces16(&self.pieces, first, len, &mut self.cache)
+                };
+                self.add(first, len, &col);
+            }
+        } else {
+            for first in (0..self.n).step_by(W) {
+                let len = (self.n - first).min(W);
+                // SAFETY: `Packets::tile_pre` makes a `Deferred` of its own `Packets`, which
+                // `Packets::new` made only where it found AVX2 and FMA.
+                let col = unsafe {
+                    self.packets
+                        .light_pieces8(&self.pieces, first, len, &mut self.cache)
+                };
+                self.add(first, len, &col);
             }
         }
         self.n = 0;
+    }
+
+    /// Adds the lit colours `col` (by channel, then lane) of the `len` pieces from `first`,
+    /// each times its weight, to its pixel, in their order.
+    #[inline]
+    fn add<const N: usize>(&mut self, first: usize, len: usize, col: &[[f32; N]; 3]) {
+        for l in 0..len {
+            let (px, w) = (self.pieces.px[first + l], self.pieces.w[first + l]);
+            let acc = &mut self.acc[px as usize].0;
+            for (ch, c) in col.iter().enumerate() {
+                acc[ch] += w * c[l] as f64;
+            }
+        }
     }
 }
 
@@ -501,9 +524,37 @@ impl Packets<'_> {
         len: usize,
         cache: &mut CellGradients,
     ) -> [[f32; W]; 3] {
-        debug_assert!(len > 0 && len <= W && first.is_multiple_of(W) && first + W <= PIECES);
         // SAFETY: this function has AVX2 and FMA.
         let s = unsafe { Avx2::new() };
+        self.light_pieces(s, pieces, first, len, cache)
+    }
+
+    /// [`Packets::light_pieces8`] in sixteen lanes.
+    #[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl,avx512cd,avx2,fma")]
+    fn light_pieces16(
+        &self,
+        pieces: &Pieces,
+        first: usize,
+        len: usize,
+        cache: &mut CellGradients,
+    ) -> [[f32; V]; 3] {
+        // SAFETY: this function has every feature `Avx512` stands for.
+        let s = unsafe { Avx512::new() };
+        self.light_pieces(s, pieces, first, len, cache)
+    }
+
+    /// [`Packets::light_pieces8`] in the `N` lanes of `s` (`first` a multiple of `N`, `len` at
+    /// most `N`).
+    #[inline(always)]
+    fn light_pieces<S: Simd<N>, const N: usize>(
+        &self,
+        s: S,
+        pieces: &Pieces,
+        first: usize,
+        len: usize,
+        cache: &mut CellGradients,
+    ) -> [[f32; N]; 3] {
+        debug_assert!(len > 0 && len <= N && first.is_multiple_of(N) && first + N <= PIECES);
         let live = u32::MAX >> (32 - len);
         // (Loops, not closures: a closure would not have this function's target features.)
         let mut v = [[s.zero(); 3]; 3];
@@ -512,8 +563,8 @@ impl Packets<'_> {
             .enumerate()
         {
             for (a, values) in by_axis.iter().enumerate() {
-                let eight: &[f32; W] = values[first..first + W].try_into().expect("eight");
-                v[k][a] = s.ld(eight);
+                let lanes: &[f32; N] = values[first..first + N].try_into().expect("N");
+                v[k][a] = s.ld(lanes);
             }
         }
         let [p, view, rgb] = v;
@@ -531,7 +582,7 @@ impl Packets<'_> {
             rows.as_ref(),
         );
         let col = self.lit(s, &view, g, rgb);
-        let mut out = [[0f32; W]; 3];
+        let mut out = [[0f32; N]; 3];
         for (o, c) in out.iter_mut().zip(col) {
             s.st(o, c);
         }
