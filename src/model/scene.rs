@@ -59,8 +59,11 @@ impl Camera {
                 ),
             );
         }
+        // (f32 points as f64: their difference is exact, 0 only where they are equal, and
+        // never so small that normalising it underflows; at any scale distinct points give a
+        // view direction.)
         let (f, up) = (self.forward_raw(), v3(self.up));
-        if f.length() <= 1e-12 * (1.0 + v3(self.eye).length()) {
+        if f == DVec3::ZERO {
             return err(
                 ErrorCode::BadValue,
                 "vlCamera: eye and look-at point coincide",

@@ -114,9 +114,7 @@ static void camera(vlfloat ex, vlfloat ey, vlfloat ez, vlfloat ax, vlfloat ay, v
 }
 
 /* Opens a scene writing `image` (w x h) with the probe's camera for a slab of width s, a black
-   background and white ambient light. The camera looks at (0, 0, 1), along +z whatever s is:
-   vlCamera refuses an eye closer than about 1e-12 to its look-at point, whatever the scene's
-   scale. */
+   background and white ambient light. The camera looks at (0, 0, 1), along +z whatever s is. */
 static void probe_scene(const char *image, int w, int h, vlfloat s)
 {
     vlScene();

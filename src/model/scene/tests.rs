@@ -21,3 +21,32 @@ fn the_default_step_is_a_256th_of_the_diagonal_at_most_one_unit() {
     assert_eq!(set.step_for(d), 0.25);
     assert_eq!(set.step_for(1e6), 0.25);
 }
+
+/// The eye and the look-at point are refused only where they are equal: distinct points at any
+/// scale give a view (a camera 10⁻³⁰ from its look-at point looks at it, as one at 10³⁰ does).
+#[test]
+fn cameras_are_refused_only_where_eye_and_look_at_point_coincide() {
+    let camera = |eye: [f32; 3], at: [f32; 3]| Camera {
+        eye,
+        at,
+        up: [0.0, 1.0, 0.0],
+        fov: 40.0,
+    };
+    for s in [1e-45f32, 1e-38, 1e-30, 1e-16, 1.0, 1e30, f32::MAX / 4.0] {
+        assert!(
+            camera([0.0, 0.0, -2.0 * s], [0.0; 3]).validate().is_ok(),
+            "{s:e}"
+        );
+        let c = camera([0.0, 0.0, -2.0 * s], [0.0; 3]);
+        let (_, _, forward) = c.basis();
+        assert!((forward - DVec3::Z).length() < 1e-12, "{s:e}: {forward}");
+    }
+    for p in [[0.0; 3], [1e-30, 0.0, 0.0], [3e38, -3e38, 1.0]] {
+        let e = camera(p, p).validate().unwrap_err();
+        assert_eq!(e.code, ErrorCode::BadValue);
+    }
+    // One f32 step apart far from the origin: a view.
+    let x = 1e30f32;
+    let next = f32::from_bits(x.to_bits() + 1);
+    assert!(camera([x, 0.0, 0.0], [next, 0.0, 0.0]).validate().is_ok());
+}
