@@ -257,3 +257,67 @@ fn transmittance_never_increases_along_a_ray() {
         )
         .unwrap();
 }
+
+/// A normal function that writes a NaN or an infinity hands the next one no normal, (0, 0, 0),
+/// as where the gradient vanishes: no NaN or infinity reaches a user's function. The pixels
+/// stay finite, and equal those of a chain whose first function writes (0, 0, 0) itself.
+#[test]
+fn normal_functions_never_see_a_nan_or_an_infinity() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0] {
+        let (calls, zero, hostile) = (
+            Arc::new(AtomicUsize::new(0)),
+            Arc::new(AtomicUsize::new(0)),
+            Arc::new(AtomicUsize::new(0)),
+        );
+        let mut vl = Library::new();
+        vl.scene().unwrap();
+        vl.camera(&Camera {
+            eye: [0.5, 0.5, -2.0],
+            at: [0.5, 0.5, 0.5],
+            up: [0.0, 1.0, 0.0],
+            fov: 30.0,
+        })
+        .unwrap();
+        vl.ambient(1.0, 1.0, 1.0, 0.2).unwrap();
+        vl.directional_light([0.3, -0.4, 1.0], [1.0; 3], 1.0)
+            .unwrap();
+        vl.object().unwrap();
+        // A ball: F falls from 1 at the centre.
+        vl.function(Fields::F, |s| {
+            let p = s.position();
+            let r2: f32 = p.iter().map(|x| (x - 0.5) * (x - 0.5)).sum();
+            let f = 1.0 - 4.0 * r2;
+            s.set(Fields::F, f).unwrap();
+        })
+        .unwrap();
+        vl.set(Fields::O, 0.5).unwrap();
+        vl.set(Fields::COLORS | Fields::KD | Fields::KA, 1.0)
+            .unwrap();
+        vl.normal(move |n, _| *n = [bad, 0.0, 1.0]).unwrap();
+        let (c, z, h) = (calls.clone(), zero.clone(), hostile.clone());
+        vl.normal(move |n, _| {
+            c.fetch_add(1, Ordering::Relaxed);
+            if !n.iter().all(|x| x.is_finite()) {
+                h.fetch_add(1, Ordering::Relaxed);
+            }
+            if *n == [0.0; 3] {
+                z.fetch_add(1, Ordering::Relaxed);
+            }
+        })
+        .unwrap();
+        vl.end().unwrap();
+        let image = vl.render_preview(16, 16, 1.0).unwrap();
+        assert!(image.pixels.iter().flatten().all(|v| v.is_finite()));
+        let calls = calls.load(Ordering::Relaxed);
+        assert!(calls > 100, "{bad}: {calls} calls");
+        assert_eq!(hostile.load(Ordering::Relaxed), 0, "{bad}");
+        if bad.is_finite() {
+            // (0, 0, 1) passed on as it is.
+            assert_eq!(zero.load(Ordering::Relaxed), 0, "{bad}");
+        } else {
+            assert_eq!(zero.load(Ordering::Relaxed), calls, "{bad}");
+        }
+    }
+}

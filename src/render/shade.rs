@@ -165,6 +165,11 @@ impl CObj {
         s.role = SampleRole::Normal;
         for f in &self.normals {
             f(&mut nv, s);
+            // A normal function that gives a NaN or an infinity gives no normal: the next one
+            // sees (0, 0, 0), as where the gradient vanishes.
+            if !nv.iter().all(|x| x.is_finite()) {
+                nv = [0.0; 3];
+            }
         }
         s.role = SampleRole::Field;
         let v = DVec3::new(nv[0] as f64, nv[1] as f64, nv[2] as f64);
