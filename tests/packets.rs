@@ -793,3 +793,110 @@ fn preintegrated_packets_are_the_scalar_march() {
         "no image differed: the packet march did not run"
     );
 }
+
+/// The lit packet march (and the pre-integrated one, whose pieces the lanes light) at the
+/// extremes of legal scenes: objects of world size 10⁻³⁰ to 10³⁰, whose normal matrix (the
+/// inverse of the object's scale) squared would overflow or vanish in f32, and lights up to
+/// `FLT_MAX`, whose lit colours would. Each image within the packet tolerance of the scalar
+/// march, which lights in f64 (an object's lighting is the same at every scale: its pixels are
+/// compared with those at scale 1 too). At the extreme scales the lanes still light (the
+/// images differ from the scalar march's in their last bits); under the brightest lights the
+/// scalar march lights the samples (the same bits).
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn lit_packets_hold_at_extreme_scales_and_lights() {
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        eprintln!("no AVX2 and FMA: the packet march never runs here");
+        return;
+    }
+    // A ball whose value falls from 1 at its centre to 0 at its surface.
+    let n = 24usize;
+    let c = (n - 1) as f32 / 2.0;
+    let voxels = (0..n * n * n)
+        .map(|k| {
+            let (x, y, z) = ((k % n) as f32, ((k / n) % n) as f32, (k / (n * n)) as f32);
+            let r = ((x - c).powi(2) + (y - c).powi(2) + (z - c).powi(2)).sqrt() / c;
+            ((1.0 - r).max(0.0) * 255.0) as u8
+        })
+        .collect();
+    let data = Dataset::new([n; 3], Voxels::U8(voxels), 0.0, 255.0).unwrap();
+    let render = |scale: f32, light: f32, packets: bool, preintegrate: bool| {
+        let mut vl = Library::new();
+        vl.add_dataset(DatasetId(1), data.clone()).unwrap();
+        // Opaque from half the radius in: no ray reaches the centre, where the gradient
+        // vanishes and a normal's direction is rounding's.
+        vl.mapping(MappingId(1), MappingType::Ramp, 2, 1, &[0.2, 0.0, 0.5, 1.0])
+            .unwrap();
+        vl.mapping(
+            MappingId(2),
+            MappingType::Ramp,
+            2,
+            3,
+            &[0.2, 1.0, 0.5, 0.2, 0.9, 0.3, 0.8, 0.4],
+        )
+        .unwrap();
+        vl.scene().unwrap();
+        vl.set_optimise(Optimise {
+            packets,
+            preintegrate,
+            ..Optimise::default()
+        })
+        .unwrap();
+        vl.camera(&Camera {
+            eye: [0.0, 0.0, -2.0 * scale],
+            at: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            fov: 40.0,
+        })
+        .unwrap();
+        vl.step_size(scale / 50.0, scale).unwrap();
+        vl.ambient(1.0, 1.0, 1.0, 0.1).unwrap();
+        vl.directional_light([1.0, -1.0, 1.0], [1.0; 3], light)
+            .unwrap();
+        vl.object().unwrap();
+        vl.translate(-0.5, -0.5, -0.5).unwrap();
+        vl.scale(scale, scale, scale).unwrap();
+        colour_program(&mut vl, Some([0.5, 1.0, 0.5]));
+        vl.set(Fields::N, 20.0 / 128.0).unwrap();
+        vl.end().unwrap();
+        let image = vl.render_preview(25, 25, 1.0).unwrap();
+        image.pixels.iter().flatten().copied().collect::<Vec<f32>>()
+    };
+    let near = |a: &[f32], b: &[f32], what: &str| {
+        for (k, (x, y)) in a.iter().zip(b).enumerate() {
+            assert!(
+                x.is_finite() && (x - y).abs() <= 1.0 / 255.0,
+                "{what}: channel {k}, {x} against {y}"
+            );
+        }
+    };
+    for preintegrate in [false, true] {
+        let at_one = render(1.0, 1.0, false, preintegrate);
+        // The ball is lit: its pixels differ from the background's.
+        assert!(at_one.iter().any(|&v| v > 0.05), "{at_one:?}");
+        for scale in [1e-30f32, 1e-20, 1e-19, 1.0, 1e20, 1e24, 1e30] {
+            let what = format!("scale {scale:e}, pre-integrated {preintegrate}");
+            let (packets, scalar) = (
+                render(scale, 1.0, true, preintegrate),
+                render(scale, 1.0, false, preintegrate),
+            );
+            near(
+                &packets,
+                &scalar,
+                &format!("{what}: packets against scalar"),
+            );
+            near(&scalar, &at_one, &format!("{what}: scalar against scale 1"));
+            assert_ne!(packets, scalar, "{what}: the lanes did not light");
+        }
+        for light in [1e19f32, 1e30, 3e38, f32::MAX] {
+            let what = format!("light {light:e}, pre-integrated {preintegrate}");
+            let (packets, scalar) = (
+                render(1.0, light, true, preintegrate),
+                render(1.0, light, false, preintegrate),
+            );
+            near(&packets, &scalar, &what);
+            // Lit that brightly, the ball is white where it is lit.
+            assert!(scalar.contains(&1.0), "{what}");
+        }
+    }
+}
