@@ -54,7 +54,6 @@ pub fn install(o: &InstallOptions) -> Result<(), String> {
                 .into(),
         );
     }
-    pc::check_paths(&o.prefix, &o.libdir, &o.includedir)?;
     let root = workspace_root();
     let package = metadata(&root)?;
     let (major, minor, patch) = numeric_version(&package.version)?;

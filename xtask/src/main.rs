@@ -134,6 +134,8 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
     }
     let prefix =
         std::path::absolute(&prefix).map_err(|e| format!("--prefix {}: {e}", prefix.display()))?;
+    // Before anything is built: vlib.pc must be able to name the directories.
+    pc::check_paths(&prefix, &libdir, &includedir)?;
     Ok(InstallOptions {
         prefix,
         libdir,
@@ -209,5 +211,17 @@ mod tests {
             .unwrap_err()
             .contains("unknown task"));
         assert!(run(&[]).unwrap_err().contains("no task"));
+    }
+
+    #[test]
+    fn paths_vlib_pc_cannot_name_are_refused_before_any_build() {
+        // parse_install refuses them, so install() never starts cargo for them.
+        let err = parse(&["--prefix", "/tmp/a#b"]).unwrap_err();
+        assert!(err.contains("starts a comment"), "{err}");
+        assert!(parse(&["--libdir", "lib dir"]).is_err());
+        assert!(parse(&["--includedir", "$inc"]).is_err());
+        assert!(run(&["install".into(), "--prefix=/tmp/a#b".into()])
+            .unwrap_err()
+            .contains("the prefix `/tmp/a#b`"));
     }
 }

@@ -23,15 +23,44 @@ pub struct PcFile<'a> {
     pub archive_only: bool,
 }
 
-/// A path as a pkg-config value: UTF-8 without whitespace (pkg-config splits its output at
-/// whitespace, so such a path cannot reach the compiler intact).
+/// Why pkg-config cannot carry `c` of a path from `vlib.pc` to a compiler's command line
+/// intact, if it cannot. Tried with pkgconf 1.8.1 (Debian 12's pkg-config) on every printable
+/// ASCII character and a non-ASCII one: letters, digits and `/-._+,=:@^~()` pass as they are.
+fn pc_unsafe(c: char) -> Option<&'static str> {
+    if c.is_ascii_alphanumeric() || "/-._+,=:@^~()".contains(c) {
+        return None;
+    }
+    Some(match c {
+        c if c.is_whitespace() => "white space, at which pkg-config splits its output",
+        '#' => "which starts a comment in a .pc file, so the path would be cut there",
+        '$' => "which starts a variable reference (`${name}`) in a .pc file",
+        '"' | '\'' | '\\' => "which pkg-config reads as shell quoting",
+        c if c.is_ascii() => {
+            "which pkg-config prints escaped with a backslash, and `$(pkg-config ...)` passes \
+             the backslash on to the compiler"
+        }
+        _ => {
+            "a non-ASCII character, whose bytes pkg-config prints escaped with backslashes, \
+             and `$(pkg-config ...)` passes them on to the compiler"
+        }
+    })
+}
+
+/// A path as a pkg-config value: UTF-8 of the characters [`pc_unsafe`] lets through, so that
+/// `vlib.pc` names it exactly (trailing slashes dropped).
 fn pc_path<'p>(what: &str, path: &'p Path) -> Result<&'p str, String> {
     let text = path
         .to_str()
         .ok_or_else(|| format!("{what} {}: not UTF-8", path.display()))?;
-    if text.chars().any(char::is_whitespace) {
+    if let Some((c, why)) = text.chars().find_map(|c| pc_unsafe(c).map(|why| (c, why))) {
+        let shown = if c.is_whitespace() || c.is_control() {
+            format!("{c:?}")
+        } else {
+            format!("'{c}'")
+        };
         return Err(format!(
-            "{what} `{text}` holds whitespace, which pkg-config cannot pass to a compiler"
+            "{what} `{text}` holds {shown}, {why}: vlib.pc cannot name it (use a path of \
+             letters, digits and /-._+,=:@^~() only)"
         ));
     }
     Ok(text.trim_end_matches('/'))
@@ -141,11 +170,57 @@ mod tests {
     #[test]
     fn paths_pkg_config_cannot_pass_are_refused() {
         let err = render(&pc("/my prefix", "lib", false)).unwrap_err();
-        assert!(err.contains("whitespace"), "{err}");
+        assert!(err.contains("white space"), "{err}");
         assert!(render(&pc("/p", "my lib", false)).is_err());
         let (p, lib, inc) = (Path::new("/p"), Path::new("lib"), Path::new("include"));
         assert!(check_paths(p, lib, inc).is_ok());
         assert!(check_paths(Path::new("/a\tb"), lib, inc).is_err());
         assert!(check_paths(p, lib, Path::new("my include")).is_err());
+    }
+
+    #[test]
+    fn characters_pkg_config_reads_or_prints_specially_are_refused() {
+        let refused = |prefix: &str| {
+            check_paths(Path::new(prefix), Path::new("lib"), Path::new("include")).unwrap_err()
+        };
+        // pkg-config prints `-I/tmp/a/include` for a prefix of `/tmp/a#b`.
+        let err = refused("/tmp/a#b");
+        assert!(
+            err.starts_with("the prefix `/tmp/a#b` holds '#', which starts a comment"),
+            "{err}"
+        );
+        assert!(refused("/tmp/a${x}b").contains("variable reference"));
+        assert!(refused("/tmp/a$b").contains("variable reference"));
+        for quoting in ["/tmp/a\"b", "/tmp/a'b", "/tmp/a\\b"] {
+            assert!(refused(quoting).contains("shell quoting"), "{quoting}");
+        }
+        // pkgconf prints these with a backslash before them.
+        for c in "!%&*;<>?[]`{}|".chars() {
+            assert!(
+                refused(&format!("/tmp/a{c}b")).contains("escaped with a backslash"),
+                "{c}"
+            );
+        }
+        assert!(refused("/home/jos\u{e9}").contains("holds '\u{e9}', a non-ASCII character"));
+        assert!(refused("/tmp/a\\b").contains("holds '\\', which"));
+        assert!(refused("/tmp/a\tb").contains("holds '\\t', white space"));
+        // Every printable ASCII character is either passed or refused with a reason; the
+        // passed ones are those pkgconf prints as they are.
+        let passed: String = (' '..='~').filter(|&c| pc_unsafe(c).is_none()).collect();
+        assert_eq!(
+            passed,
+            "()+,-./0123456789:=@ABCDEFGHIJKLMNOPQRSTUVWXYZ^_abcdefghijklmnopqrstuvwxyz~"
+        );
+        let (p, inc) = (
+            Path::new("/opt/v-1.2_x+y,z=w:u@v^t~(s)"),
+            Path::new("include"),
+        );
+        assert!(check_paths(p, Path::new("lib"), inc).is_ok());
+        assert!(check_paths(p, Path::new("lib#64"), inc)
+            .unwrap_err()
+            .starts_with("the libdir `lib#64`"));
+        assert!(check_paths(p, Path::new("lib"), Path::new("inc&"))
+            .unwrap_err()
+            .starts_with("the includedir `inc&`"));
     }
 }
