@@ -6,8 +6,9 @@
 //! `--strip-debug` for the archive, which keeps the symbol table a linker needs). Every file and
 //! link is made beside its destination and renamed over it, so a program using an installed
 //! `libvlib.so` never sees it half written. It sets no rpath and runs no `ldconfig`: how programs
-//! find the library is the system's business (docs/install.md). The command line is
-//! [`crate::parse_install`]'s; the pkg-config text is [`crate::pc`]'s.
+//! find the library is the system's business (docs/install.md). `--features` are passed to the
+//! build. The command line is [`crate::parse_install`]'s; the pkg-config text is
+//! [`crate::pc`]'s.
 
 use crate::pc::{self, PcFile};
 use crate::InstallOptions;
@@ -57,7 +58,7 @@ pub fn install(o: &InstallOptions) -> Result<(), String> {
     let root = workspace_root();
     let package = metadata(&root)?;
     let (major, minor, patch) = numeric_version(&package.version)?;
-    let built = build(&root, &o.profile, &package.id)?;
+    let built = build(&root, &o.profile, &o.features, &package.id)?;
 
     let libdir = o.prefix.join(&o.libdir);
     let includedir = o.prefix.join(&o.includedir);
@@ -179,22 +180,34 @@ fn metadata(root: &Path) -> Result<Package, String> {
     })
 }
 
+/// The arguments of cargo that build vlib-capi's library (both crate types) in `profile` with
+/// `features`, cargo printing JSON messages and rustc reporting the archive's system libraries.
+fn build_args(root: &Path, profile: &str, features: &[String]) -> Vec<std::ffi::OsString> {
+    let mut args: Vec<std::ffi::OsString> = [
+        "rustc",
+        "--package",
+        "vlib-capi",
+        "--lib",
+        "--profile",
+        profile,
+    ]
+    .map(Into::into)
+    .into();
+    if !features.is_empty() {
+        args.extend(["--features".into(), features.join(",").into()]);
+    }
+    args.extend(["--message-format", "json", "--manifest-path"].map(Into::into));
+    args.push(root.join("Cargo.toml").into());
+    args.extend(["--", "--print", "native-static-libs"].map(Into::into));
+    args
+}
+
 /// Builds vlib-capi's library (both crate types) with rustc reporting the archive's system
 /// libraries; cargo's own messages go to stderr, the compiler's warnings are shown there too.
 /// When the crate is fresh, cargo replays the report it stored with the build.
-fn build(root: &Path, profile: &str, id: &str) -> Result<Built, String> {
+fn build(root: &Path, profile: &str, features: &[String], id: &str) -> Result<Built, String> {
     let mut child = cargo()
-        .args([
-            "rustc",
-            "--package",
-            "vlib-capi",
-            "--lib",
-            "--profile",
-            profile,
-        ])
-        .args(["--message-format", "json", "--manifest-path"])
-        .arg(root.join("Cargo.toml"))
-        .args(["--", "--print", "native-static-libs"])
+        .args(build_args(root, profile, features))
         .stdout(Stdio::piped())
         .spawn()
         .map_err(|e| format!("run cargo: {e}"))?;
@@ -379,5 +392,27 @@ mod tests {
         names.sort();
         assert_eq!(names, ["dst", "ln", "src", "w"]);
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn features_reach_the_cargo_build() {
+        let root = Path::new("/w");
+        let args = |features: &[&str]| -> Vec<String> {
+            let features: Vec<String> = features.iter().map(|f| f.to_string()).collect();
+            build_args(root, "release", &features)
+                .into_iter()
+                .map(|a| a.into_string().unwrap())
+                .collect()
+        };
+        assert_eq!(
+            args(&[]).join(" "),
+            "rustc --package vlib-capi --lib --profile release --message-format json \
+             --manifest-path /w/Cargo.toml -- --print native-static-libs"
+        );
+        assert_eq!(
+            args(&["mpi", "capi"]).join(" "),
+            "rustc --package vlib-capi --lib --profile release --features mpi,capi \
+             --message-format json --manifest-path /w/Cargo.toml -- --print native-static-libs"
+        );
     }
 }

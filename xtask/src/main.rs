@@ -25,6 +25,8 @@ options:
   --library-type TYPE   cdylib (libvlib.so) or staticlib (libvlib.a); repeat for both
                         (default both)
   --profile NAME        the cargo profile to build (default release)
+  --features LIST       features of vlib-capi to build with (comma-separated; repeatable):
+                        mpi for the MPI build (docs/mpi.md)
   -h, --help            this text";
 
 fn main() -> ExitCode {
@@ -68,6 +70,8 @@ pub struct InstallOptions {
     pub destdir: Option<PathBuf>,
     pub types: LibraryTypes,
     pub profile: String,
+    /// The features of vlib-capi to build with, one a string.
+    pub features: Vec<String>,
 }
 
 fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
@@ -77,6 +81,7 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
     let mut destdir = None;
     let mut types: Option<LibraryTypes> = None;
     let mut profile = String::from("release");
+    let mut features = Vec::new();
     let mut i = 0;
     while i < args.len() {
         let arg = &args[i];
@@ -92,6 +97,7 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
             "--destdir",
             "--library-type",
             "--profile",
+            "--features",
         ];
         if !known.contains(&name) {
             return Err(format!("unknown option `{arg}`\n\n{USAGE}"));
@@ -114,6 +120,12 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
             "--includedir" => includedir = PathBuf::from(value),
             "--destdir" => destdir = Some(PathBuf::from(value)),
             "--profile" => profile = value,
+            "--features" => features.extend(
+                value
+                    .split([',', ' '])
+                    .filter(|f| !f.is_empty())
+                    .map(str::to_string),
+            ),
             _ => {
                 let t = types.get_or_insert(LibraryTypes {
                     shared: false,
@@ -146,6 +158,7 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
             archive: true,
         }),
         profile,
+        features,
     })
 }
 
@@ -166,6 +179,7 @@ mod tests {
         assert_eq!(o.destdir, None);
         assert!(o.types.shared && o.types.archive);
         assert_eq!(o.profile, "release");
+        assert!(o.features.is_empty());
     }
 
     #[test]
@@ -211,6 +225,19 @@ mod tests {
             .unwrap_err()
             .contains("unknown task"));
         assert!(run(&[]).unwrap_err().contains("no task"));
+    }
+
+    #[test]
+    fn features_accumulate_from_lists_and_repeats() {
+        let o = parse(&["--features", "mpi", "--features=capi,mpi"]).unwrap();
+        assert_eq!(o.features, ["mpi", "capi", "mpi"]);
+        assert_eq!(
+            parse(&["--features", "a b,,c"]).unwrap().features,
+            ["a", "b", "c"]
+        );
+        assert!(parse(&["--features"])
+            .unwrap_err()
+            .contains("--features needs a value"));
     }
 
     #[test]
