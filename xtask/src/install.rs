@@ -7,8 +7,9 @@
 //! link is made beside its destination and renamed over it, so a program using an installed
 //! `libvlib.so` never sees it half written. It sets no rpath and runs no `ldconfig`: how programs
 //! find the library is the system's business (docs/install.md). `--features` are passed to the
-//! build. The command line is [`crate::parse_install`]'s; the pkg-config text is
-//! [`crate::pc`]'s.
+//! build; `--from-stage` builds nothing and installs what an earlier `--destdir` run staged
+//! (root installing what a user built). The command line is [`crate::parse_install`]'s; the
+//! pkg-config text is [`crate::pc`]'s.
 
 use crate::pc::{self, PcFile};
 use crate::InstallOptions;
@@ -54,6 +55,9 @@ pub fn install(o: &InstallOptions) -> Result<(), String> {
              elsewhere use cargo cinstall (docs/install.md)"
                 .into(),
         );
+    }
+    if let Some(stage) = &o.from_stage {
+        return install_staged(o, stage);
     }
     let root = workspace_root();
     let package = metadata(&root)?;
@@ -110,11 +114,127 @@ pub fn install(o: &InstallOptions) -> Result<(), String> {
     }
     write(&pkgconfig.join("vlib.pc"), pc_text.as_bytes())?;
     if o.types.shared {
-        println!(
-            "note: programs find libvlib.so.{major} in {} if that directory is in the loader's \
-             path (/etc/ld.so.conf, then run ldconfig) or in LD_LIBRARY_PATH",
-            libdir.display()
-        );
+        loader_note(&libdir, &format!("libvlib.so.{major}"));
+    }
+    Ok(())
+}
+
+/// Where programs find the shared library, by its SONAME.
+fn loader_note(libdir: &Path, soname: &str) {
+    println!(
+        "note: programs find {soname} in {} if that directory is in the loader's path \
+         (/etc/ld.so.conf, then run ldconfig) or in LD_LIBRARY_PATH",
+        libdir.display()
+    );
+}
+
+/// `--from-stage`: installs what an earlier run with `--destdir stage` and the same prefix and
+/// directories staged, building nothing (so root can install what a user built): the headers,
+/// `vlib.pc`, the archive and the shared library found there, their links made anew. Every
+/// file and link is put in place by rename as above, so it is a new inode owned by whoever runs
+/// this, with the mode set here (0755 for the shared library, 0644 otherwise); directories that
+/// exist are left as they are and missing ones are created. The stage's `vlib.pc` must name the
+/// prefix, and only regular files are copied (a link in the stage where a file belongs is
+/// refused rather than followed).
+fn install_staged(o: &InstallOptions, stage: &Path) -> Result<(), String> {
+    let libdir = o.prefix.join(&o.libdir);
+    let includedir = o.prefix.join(&o.includedir);
+    let (from_lib, from_include) = (
+        staged(Some(stage), &libdir),
+        staged(Some(stage), &includedir),
+    );
+    let from_pc = from_lib.join("pkgconfig/vlib.pc");
+    let pc_text = std::fs::read_to_string(&from_pc).map_err(|e| {
+        format!(
+            "{}: {e} (stage with `cargo xtask install --destdir {}` and the same --prefix, \
+             --libdir and --includedir first)",
+            from_pc.display(),
+            stage.display()
+        )
+    })?;
+    let prefix_line = format!("prefix={}", pc::prefix_value(&o.prefix)?);
+    if pc_text.lines().next() != Some(prefix_line.as_str()) {
+        return Err(format!(
+            "{} was staged for another prefix than {} (its first line: {:?})",
+            from_pc.display(),
+            o.prefix.display(),
+            pc_text.lines().next().unwrap_or("")
+        ));
+    }
+    let regular = |path: &Path| -> Result<(), String> {
+        match std::fs::symlink_metadata(path) {
+            Ok(m) if m.is_file() => Ok(()),
+            Ok(_) => Err(format!("{} is not a regular file", path.display())),
+            Err(e) => Err(format!("{}: {e}", path.display())),
+        }
+    };
+    // The libraries and links the stage holds: files first, so that links are made to files
+    // already in place.
+    let mut files = Vec::new();
+    let mut links = Vec::new();
+    let entries =
+        std::fs::read_dir(&from_lib).map_err(|e| format!("{}: {e}", from_lib.display()))?;
+    for entry in entries {
+        let entry = entry.map_err(|e| format!("{}: {e}", from_lib.display()))?;
+        let Some(name) = entry.file_name().to_str().map(str::to_string) else {
+            continue;
+        };
+        if name != "libvlib.a" && name != "libvlib.so" && !name.starts_with("libvlib.so.") {
+            continue;
+        }
+        let path = entry.path();
+        let meta =
+            std::fs::symlink_metadata(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        if meta.file_type().is_symlink() && name != "libvlib.a" {
+            let target = std::fs::read_link(&path)
+                .map_err(|e| format!("{}: {e}", path.display()))?
+                .to_str()
+                .filter(|t| t.starts_with("libvlib.so.") && !t.contains('/'))
+                .ok_or_else(|| format!("{} links outside the library's names", path.display()))?
+                .to_string();
+            links.push((name, target));
+        } else {
+            regular(&path)?;
+            files.push(name);
+        }
+    }
+    if files.is_empty() {
+        return Err(format!("{} holds no libvlib", from_lib.display()));
+    }
+    files.sort();
+    links.sort();
+    for header in HEADERS {
+        regular(&from_include.join(header))?;
+    }
+    regular(&from_pc)?;
+
+    let pkgconfig = libdir.join("pkgconfig");
+    for dir in [&libdir, &includedir, &pkgconfig] {
+        std::fs::create_dir_all(dir).map_err(|e| format!("create {}: {e}", dir.display()))?;
+    }
+    for name in &files {
+        let mode = if name == "libvlib.a" { 0o644 } else { 0o755 };
+        put(&from_lib.join(name), &libdir.join(name), mode, None)?;
+    }
+    for (name, target) in &links {
+        link(target, &libdir.join(name))?;
+    }
+    for header in HEADERS {
+        put(
+            &from_include.join(header),
+            &includedir.join(header),
+            0o644,
+            None,
+        )?;
+    }
+    put(&from_pc, &pkgconfig.join("vlib.pc"), 0o644, None)?;
+    // The SONAME is the shortest of the names with a version, `libvlib.so.<major>`.
+    let versioned = links.iter().map(|(name, _)| name).chain(&files);
+    if let Some(soname) = versioned
+        .filter(|n| n.starts_with("libvlib.so."))
+        .min_by_key(|n| n.len())
+    {
+        loader_note(&libdir, soname);
     }
     Ok(())
 }
@@ -262,18 +382,35 @@ fn beside(to: &Path) -> PathBuf {
     to.with_file_name(format!(".{name}.xtask-{}", std::process::id()))
 }
 
-/// Copies `from` to `to` with permissions `mode`, stripped with `strip <flag>` when asked.
+/// Copies the regular file `from` to `to` with permissions `mode`, stripped with `strip <flag>`
+/// when asked. The copy is a new file, made with mode 0600 and given `mode` once written (it
+/// never has the source's mode, which could hold set-id bits), then renamed over `to`. `from`
+/// must be a regular file: a symbolic link there is refused, not followed.
 fn put(from: &Path, to: &Path, mode: u32, strip: Option<&str>) -> Result<(), String> {
-    use std::os::unix::fs::PermissionsExt;
+    use std::os::unix::fs::{MetadataExt, OpenOptionsExt, PermissionsExt};
     let tmp = beside(to);
     let result = (|| {
         let _ = std::fs::remove_file(&tmp);
-        std::fs::copy(from, &tmp).map_err(|e| format!("copy {}: {e}", from.display()))?;
-        std::fs::set_permissions(&tmp, std::fs::Permissions::from_mode(mode))
-            .map_err(|e| format!("set the mode of {}: {e}", tmp.display()))?;
+        let copy_err = |e: std::io::Error| format!("copy {}: {e}", from.display());
+        let mut source = std::fs::File::open(from).map_err(copy_err)?;
+        let opened = source.metadata().map_err(copy_err)?;
+        let entry = std::fs::symlink_metadata(from).map_err(copy_err)?;
+        if !entry.is_file() || (entry.dev(), entry.ino()) != (opened.dev(), opened.ino()) {
+            return Err(format!("{} is not a regular file", from.display()));
+        }
+        let mut copy = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .mode(0o600)
+            .open(&tmp)
+            .map_err(|e| format!("create {}: {e}", tmp.display()))?;
+        std::io::copy(&mut source, &mut copy).map_err(copy_err)?;
+        drop(copy);
         if let Some(flag) = strip {
             run_strip(flag, &tmp)?;
         }
+        std::fs::set_permissions(&tmp, std::fs::Permissions::from_mode(mode))
+            .map_err(|e| format!("set the mode of {}: {e}", tmp.display()))?;
         std::fs::rename(&tmp, to).map_err(|e| format!("install {}: {e}", to.display()))
     })();
     if result.is_err() {
@@ -370,11 +507,20 @@ mod tests {
         let (src, dst) = (dir.join("src"), dir.join("dst"));
         std::fs::write(&src, b"new").unwrap();
         std::fs::write(&dst, b"old").unwrap();
+        use std::os::unix::fs::{MetadataExt, PermissionsExt};
+        // The source's mode, set-user-ID bit included, is not copied.
+        std::fs::set_permissions(&src, std::fs::Permissions::from_mode(0o4755)).unwrap();
+        let old = std::fs::metadata(&dst).unwrap().ino();
         put(&src, &dst, 0o640, None).unwrap();
         assert_eq!(std::fs::read(&dst).unwrap(), b"new");
-        use std::os::unix::fs::PermissionsExt;
-        let mode = std::fs::metadata(&dst).unwrap().permissions().mode();
-        assert_eq!(mode & 0o777, 0o640);
+        let meta = std::fs::metadata(&dst).unwrap();
+        assert_eq!(meta.permissions().mode() & 0o7777, 0o640);
+        assert_ne!(meta.ino(), old, "rewritten in place");
+        // A symbolic link as the source is refused, not followed.
+        std::os::unix::fs::symlink("src", dir.join("to-src")).unwrap();
+        let err = put(&dir.join("to-src"), &dir.join("x"), 0o644, None).unwrap_err();
+        assert!(err.ends_with("to-src is not a regular file"), "{err}");
+        std::fs::remove_file(dir.join("to-src")).unwrap();
         link("dst", &dir.join("ln")).unwrap();
         link("src", &dir.join("ln")).unwrap();
         assert_eq!(
@@ -414,5 +560,147 @@ mod tests {
             "rustc --package vlib-capi --lib --profile release --features mpi,capi \
              --message-format json --manifest-path /w/Cargo.toml -- --print native-static-libs"
         );
+    }
+
+    fn options(prefix: &Path, stage: &Path) -> InstallOptions {
+        InstallOptions {
+            prefix: prefix.to_path_buf(),
+            libdir: PathBuf::from("lib"),
+            includedir: PathBuf::from("include"),
+            destdir: None,
+            types: crate::LibraryTypes {
+                shared: true,
+                archive: true,
+            },
+            profile: "release".into(),
+            features: Vec::new(),
+            from_stage: Some(stage.to_path_buf()),
+        }
+    }
+
+    /// A stage as `--destdir stage` leaves it for `prefix`, the files holding `content`; owned
+    /// by another user where this process may give them away (as root).
+    fn make_stage(stage: &Path, prefix: &Path, content: &[u8]) {
+        let lib = staged(Some(stage), &prefix.join("lib"));
+        let include = staged(Some(stage), &prefix.join("include"));
+        std::fs::create_dir_all(lib.join("pkgconfig")).unwrap();
+        std::fs::create_dir_all(&include).unwrap();
+        let pc = format!("prefix={}\nexec_prefix=${{prefix}}\n", prefix.display());
+        let files = [
+            (lib.join("libvlib.so.0.1.0"), content),
+            (lib.join("libvlib.a"), content),
+            (include.join("vlib.h"), content),
+            (include.join("vlaux.h"), content),
+            (lib.join("pkgconfig/vlib.pc"), pc.as_bytes()),
+        ];
+        for (path, bytes) in files {
+            std::fs::write(&path, bytes).unwrap();
+            let _ = std::os::unix::fs::chown(&path, Some(65534), Some(65534));
+        }
+        for name in ["libvlib.so.0", "libvlib.so"] {
+            std::os::unix::fs::symlink("libvlib.so.0.1.0", lib.join(name)).unwrap();
+        }
+    }
+
+    #[test]
+    fn a_stage_is_installed_as_new_files_of_the_installer_in_existing_directories() {
+        use std::os::unix::fs::{MetadataExt, PermissionsExt};
+        let dir = std::env::temp_dir().join(format!("xtask-stage-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let (stage, prefix) = (dir.join("stage"), dir.join("prefix"));
+        let lib = prefix.join("lib");
+        // An existing installation in directories of mode 0750: an old library, its links.
+        std::fs::create_dir_all(&lib).unwrap();
+        std::fs::set_permissions(&lib, std::fs::Permissions::from_mode(0o750)).unwrap();
+        std::fs::write(lib.join("libvlib.so.0.1.0"), b"old").unwrap();
+        std::os::unix::fs::symlink("libvlib.so.0.1.0", lib.join("libvlib.so.0")).unwrap();
+        let old = std::fs::metadata(lib.join("libvlib.so.0.1.0")).unwrap();
+        make_stage(&stage, &prefix, b"new");
+
+        install_staged(&options(&prefix, &stage), &stage).unwrap();
+        let me = std::fs::metadata(&dir).unwrap().uid();
+        let installed = std::fs::metadata(lib.join("libvlib.so.0.1.0")).unwrap();
+        assert_ne!(
+            installed.ino(),
+            old.ino(),
+            "the library was rewritten in place"
+        );
+        assert_eq!(
+            std::fs::metadata(&lib).unwrap().permissions().mode() & 0o777,
+            0o750
+        );
+        for (path, mode) in [
+            ("lib/libvlib.so.0.1.0", 0o755),
+            ("lib/libvlib.a", 0o644),
+            ("include/vlib.h", 0o644),
+            ("include/vlaux.h", 0o644),
+        ] {
+            let meta = std::fs::symlink_metadata(prefix.join(path)).unwrap();
+            assert!(meta.is_file(), "{path}");
+            assert_eq!(meta.permissions().mode() & 0o7777, mode, "{path}");
+            assert_eq!(meta.uid(), me, "{path}");
+            assert_eq!(std::fs::read(prefix.join(path)).unwrap(), b"new", "{path}");
+        }
+        let pc = std::fs::read_to_string(lib.join("pkgconfig/vlib.pc")).unwrap();
+        assert!(pc.starts_with(&format!("prefix={}\n", prefix.display())));
+        for name in ["libvlib.so.0", "libvlib.so"] {
+            assert_eq!(
+                std::fs::read_link(lib.join(name)).unwrap(),
+                Path::new("libvlib.so.0.1.0")
+            );
+        }
+        // Nothing else: no temporary file is left.
+        let mut names: Vec<String> = std::fs::read_dir(&lib)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(
+            names,
+            [
+                "libvlib.a",
+                "libvlib.so",
+                "libvlib.so.0",
+                "libvlib.so.0.1.0",
+                "pkgconfig"
+            ]
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_stage_for_another_prefix_or_with_foreign_links_is_refused() {
+        let dir = std::env::temp_dir().join(format!("xtask-badstage-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let (stage, prefix) = (dir.join("stage"), dir.join("prefix"));
+        let other = dir.join("other");
+        let err = install_staged(&options(&prefix, &stage), &stage).unwrap_err();
+        assert!(
+            err.contains("stage with `cargo xtask install --destdir"),
+            "{err}"
+        );
+        // Staged for `other`, moved to where `prefix` would be staged: its vlib.pc says so.
+        make_stage(&stage, &other, b"new");
+        std::fs::rename(staged(Some(&stage), &other), staged(Some(&stage), &prefix)).unwrap();
+        let err = install_staged(&options(&prefix, &stage), &stage).unwrap_err();
+        assert!(err.contains("was staged for another prefix"), "{err}");
+        std::fs::remove_dir_all(&stage).unwrap();
+
+        // A link where the archive belongs is not followed; a link out of the directory is
+        // not made.
+        make_stage(&stage, &prefix, b"new");
+        let lib = staged(Some(&stage), &prefix.join("lib"));
+        std::fs::remove_file(lib.join("libvlib.a")).unwrap();
+        std::os::unix::fs::symlink("/etc/passwd", lib.join("libvlib.a")).unwrap();
+        let err = install_staged(&options(&prefix, &stage), &stage).unwrap_err();
+        assert!(err.contains("libvlib.a is not a regular file"), "{err}");
+        std::fs::remove_file(lib.join("libvlib.a")).unwrap();
+        std::fs::remove_file(lib.join("libvlib.so")).unwrap();
+        std::os::unix::fs::symlink("/etc/passwd", lib.join("libvlib.so")).unwrap();
+        let err = install_staged(&options(&prefix, &stage), &stage).unwrap_err();
+        assert!(err.contains("links outside the library's names"), "{err}");
+        // Nothing was installed by the refused runs.
+        assert!(!prefix.exists());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

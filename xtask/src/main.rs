@@ -27,6 +27,9 @@ options:
   --profile NAME        the cargo profile to build (default release)
   --features LIST       features of vlib-capi to build with (comma-separated; repeatable):
                         mpi for the MPI build (docs/mpi.md)
+  --from-stage DIR      build nothing: install what an earlier run with --destdir DIR and
+                        the same --prefix, --libdir and --includedir staged there (run the
+                        xtask binary as root this way to install what you built as yourself)
   -h, --help            this text";
 
 fn main() -> ExitCode {
@@ -72,6 +75,8 @@ pub struct InstallOptions {
     pub profile: String,
     /// The features of vlib-capi to build with, one a string.
     pub features: Vec<String>,
+    /// Install the files staged under this directory instead of building.
+    pub from_stage: Option<PathBuf>,
 }
 
 fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
@@ -82,6 +87,9 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
     let mut types: Option<LibraryTypes> = None;
     let mut profile = String::from("release");
     let mut features = Vec::new();
+    let mut from_stage = None;
+    // The build options given, which --from-stage refuses.
+    let mut build_options = Vec::new();
     let mut i = 0;
     while i < args.len() {
         let arg = &args[i];
@@ -98,6 +106,7 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
             "--library-type",
             "--profile",
             "--features",
+            "--from-stage",
         ];
         if !known.contains(&name) {
             return Err(format!("unknown option `{arg}`\n\n{USAGE}"));
@@ -114,6 +123,9 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
         if value.is_empty() {
             return Err(format!("{name} needs a non-empty value"));
         }
+        if ["--destdir", "--library-type", "--profile", "--features"].contains(&name) {
+            build_options.push(name);
+        }
         match name {
             "--prefix" => prefix = PathBuf::from(value),
             "--libdir" => libdir = PathBuf::from(value),
@@ -126,6 +138,7 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
                     .filter(|f| !f.is_empty())
                     .map(str::to_string),
             ),
+            "--from-stage" => from_stage = Some(PathBuf::from(value)),
             _ => {
                 let t = types.get_or_insert(LibraryTypes {
                     shared: false,
@@ -144,6 +157,13 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
         }
         i += 1;
     }
+    if let (Some(stage), Some(option)) = (&from_stage, build_options.first()) {
+        return Err(format!(
+            "--from-stage {} installs what that stage holds as it is; {option} belongs to the \
+             run that staged it",
+            stage.display()
+        ));
+    }
     let prefix =
         std::path::absolute(&prefix).map_err(|e| format!("--prefix {}: {e}", prefix.display()))?;
     // Before anything is built: vlib.pc must be able to name the directories.
@@ -159,6 +179,7 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
         }),
         profile,
         features,
+        from_stage,
     })
 }
 
@@ -180,6 +201,7 @@ mod tests {
         assert!(o.types.shared && o.types.archive);
         assert_eq!(o.profile, "release");
         assert!(o.features.is_empty());
+        assert_eq!(o.from_stage, None);
     }
 
     #[test]
@@ -238,6 +260,25 @@ mod tests {
         assert!(parse(&["--features"])
             .unwrap_err()
             .contains("--features needs a value"));
+    }
+
+    #[test]
+    fn from_stage_takes_the_stage_and_refuses_build_options() {
+        let o = parse(&["--prefix", "/usr/local", "--from-stage", "/home/me/stage"]).unwrap();
+        assert_eq!(o.from_stage, Some(PathBuf::from("/home/me/stage")));
+        assert_eq!(o.prefix, PathBuf::from("/usr/local"));
+        for option in [
+            ["--destdir", "/x"],
+            ["--library-type", "cdylib"],
+            ["--profile", "dev"],
+            ["--features", "mpi"],
+        ] {
+            let err = parse(&["--from-stage", "/s", option[0], option[1]]).unwrap_err();
+            assert!(
+                err.contains(&format!("{} belongs to the run that staged it", option[0])),
+                "{err}"
+            );
+        }
     }
 
     #[test]

@@ -84,10 +84,15 @@ pub fn check_paths(prefix: &Path, libdir: &Path, includedir: &Path) -> Result<()
     Ok(())
 }
 
+/// The value of `prefix=` in `vlib.pc` for an absolute prefix.
+pub fn prefix_value(prefix: &Path) -> Result<&str, String> {
+    let text = pc_path("the prefix", prefix)?;
+    Ok(if text.is_empty() { "/" } else { text })
+}
+
 /// The text of `vlib.pc`.
 pub fn render(pc: &PcFile) -> Result<String, String> {
-    let prefix = pc_path("the prefix", pc.prefix)?;
-    let prefix = if prefix.is_empty() { "/" } else { prefix };
+    let prefix = prefix_value(pc.prefix)?;
     let libdir = under("exec_prefix", "the libdir", pc.libdir)?;
     let includedir = under("prefix", "the includedir", pc.includedir)?;
     let private = pc
