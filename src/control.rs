@@ -44,8 +44,9 @@ impl CancelFlag {
 }
 
 /// A progress function: called with the fraction of a scene's outputs done, in [0, 1],
-/// never decreasing, between pieces of work (a strip of image rows, a slab of voxelized
-/// nodes) and with 1 at the end (also where an output failed); returning `false` cancels the
+/// never decreasing, as an image's tiles end (at most every 0.1 s), between pieces of work (a
+/// strip of image rows, a slab of voxelized nodes) and with 1 at the end (also where an output
+/// failed); returning `false` cancels the
 /// render. It is called on one of the library's rendering threads (the one that called the
 /// scene's `end` or `render_preview` waits meanwhile), one call at a time.
 pub type ProgressFn = Arc<dyn Fn(f32) -> bool + Send + Sync>;
@@ -82,7 +83,17 @@ pub(crate) struct Progress {
     /// With a team: an error this rank met between steps, for the next step (or
     /// [`Progress::settle`]) to fail every rank with ([`Progress::hold`]).
     held: std::sync::Mutex<Option<Error>>,
+    /// The units of the piece of work in progress (a strip of an image, [`Progress::begin`])
+    /// and those its tiles have reported done ([`Progress::tile_done`]).
+    piece: AtomicU64,
+    piece_done: AtomicU64,
+    /// When the progress function was last called: held while it is called, so that calls
+    /// come one at a time.
+    told: std::sync::Mutex<Option<std::time::Instant>>,
 }
+
+/// How often at most the progress function hears of tiles done within a strip.
+const TELL_EVERY: std::time::Duration = std::time::Duration::from_millis(100);
 
 impl Progress {
     /// A render of `total` units of work followed by `control`.
@@ -95,6 +106,9 @@ impl Progress {
             team: None,
             agreed_stop: AtomicBool::new(false),
             held: std::sync::Mutex::new(None),
+            piece: AtomicU64::new(0),
+            piece_done: AtomicU64::new(0),
+            told: std::sync::Mutex::new(None),
         }
     }
 
@@ -205,10 +219,46 @@ impl Progress {
         }
     }
 
+    /// A piece of work of `units` begins (a strip of an image), whose tiles report what they
+    /// have done as they end ([`Progress::tile_done`]) and which ends with
+    /// [`Progress::advance`] by the same units.
+    pub(crate) fn begin(&self, units: u64) {
+        self.piece_done.store(0, Ordering::Relaxed);
+        self.piece.store(units, Ordering::Relaxed);
+    }
+
+    /// A tile of the piece of work in progress has done `units` (pixels): where
+    /// [`TELL_EVERY`] has passed since the progress function was last called and no call is
+    /// under way, it hears the fraction done, the piece counted up to its units (a strip's
+    /// pixels, which super-sampling's second pass over them does not pass). Not with a team,
+    /// whose ranks hear of whole steps. A panic in the function unwinds as the render's error.
+    pub(crate) fn tile_done(&self, units: u64) {
+        if self.control.progress.is_none() || self.team.is_some() {
+            return;
+        }
+        let piece = self.piece_done.fetch_add(units, Ordering::Relaxed) + units;
+        let Ok(mut told) = self.told.try_lock() else {
+            return;
+        };
+        if told.is_some_and(|t| t.elapsed() < TELL_EVERY) {
+            return;
+        }
+        let done =
+            self.done.load(Ordering::Relaxed) + piece.min(self.piece.load(Ordering::Relaxed));
+        let told_now = crate::error::catch("the progress function", || {
+            self.tell_at(&mut told, done);
+            Ok(())
+        });
+        if let Err(e) = told_now {
+            crate::error::raise(e);
+        }
+    }
+
     /// Counts `units` more done and tells the progress function (called between pieces of
     /// work, never concurrently with itself); `Err(Cancelled)` where the render is to stop.
     pub(crate) fn advance(&self, units: u64) -> Result<()> {
         let done = self.done.fetch_add(units, Ordering::Relaxed) + units;
+        self.begin(0);
         self.tell(done);
         self.check()
     }
@@ -230,6 +280,13 @@ impl Progress {
 
     /// Tells the progress function the fraction `done` of the total; records a `false`.
     fn tell(&self, done: u64) {
+        let mut told = self.told.lock().unwrap_or_else(|p| p.into_inner());
+        self.tell_at(&mut told, done);
+    }
+
+    /// [`Progress::tell`] with the time of the last call held (`told`), set to now.
+    fn tell_at(&self, told: &mut Option<std::time::Instant>, done: u64) {
+        *told = Some(std::time::Instant::now());
         if let Some(f) = &self.control.progress {
             let fraction = if self.total == 0 {
                 1.0

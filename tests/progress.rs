@@ -1,6 +1,7 @@
 //! Progress and cancellation through the Rust API (`Library::set_render_control`,
 //! `docs/extensions.md`): the progress function hears every image's pixels and every
-//! voxelization's nodes, never decreasing, and 1 at the end, also where an output failed; a
+//! voxelization's nodes, never decreasing, and 1 at the end, also where an output failed, and
+//! hears the tiles of a strip as they end (a 0 answer stops the strip); a
 //! panicking progress function is an error, not a panic out of `end`; a cancel flag set from
 //! another thread stops a render that would otherwise take minutes, and its error counts the
 //! outputs that failed before it; the flag stops a single pixel's work within its rays; a
@@ -287,4 +288,58 @@ fn a_preview_wider_than_the_largest_side_is_refused() {
     assert_eq!(e.code, ErrorCode::BadValue);
     let side = vlib::limits::MAX_IMAGE_SIDE as u32;
     assert!(vl.render_preview(side, 1, 1.0).is_ok());
+}
+
+/// Within one strip of an image (a 64² image is one), the progress function hears the tiles
+/// done as they end, at most every 0.1 s: rising fractions between 0 and 1 while the render
+/// runs, then 1. A 0 answer to one of them stops the render there: `Cancelled`, with far
+/// fewer field calls than the whole image takes.
+#[test]
+fn progress_is_heard_within_a_strip_and_a_zero_answer_stops_it() {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    use std::time::{Duration, Instant};
+    // A ball whose field function takes 50 µs a call: about half a second of work in all.
+    let slow_ball = |vl: &mut Library, calls: Arc<AtomicU64>| {
+        vl.scene().unwrap();
+        vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+        vl.step_size(0.1, 1.0).unwrap();
+        vl.object().unwrap();
+        vl.function(Fields::O, move |s| {
+            calls.fetch_add(1, Ordering::Relaxed);
+            let t = Instant::now();
+            while t.elapsed() < Duration::from_micros(50) {}
+            let v = vlib::vlaux::sphere(s.position());
+            let _ = s.set(Fields::O, v * 0.1);
+        })
+        .unwrap();
+        vl.set(Fields::COLORS | Fields::KA, 1.0).unwrap();
+        vl.end().unwrap();
+    };
+    let dir = Dir::new("strip");
+    let calls = Arc::new(AtomicU64::new(0));
+    let (mut vl, heard) = recording(|_| true);
+    slow_ball(&mut vl, calls.clone());
+    vl.image(dir.0.join("a.ppm"), 1.0, 64, 64).unwrap();
+    vl.end().unwrap();
+    let heard = heard.lock().unwrap().clone();
+    let all = calls.load(Ordering::Relaxed);
+    let within: Vec<f32> = heard.iter().copied().filter(|&f| f < 1.0).collect();
+    assert!(within.len() >= 2, "{heard:?}");
+    assert!(within.iter().all(|&f| f > 0.0), "{heard:?}");
+    assert!(heard.windows(2).all(|w| w[0] <= w[1]), "{heard:?}");
+    assert_eq!(heard.last(), Some(&1.0));
+    // Stopped at the first fraction heard.
+    let stopped_calls = Arc::new(AtomicU64::new(0));
+    let (mut vl, heard) = recording(|f| f >= 1.0);
+    slow_ball(&mut vl, stopped_calls.clone());
+    vl.image(dir.0.join("b.ppm"), 1.0, 64, 64).unwrap();
+    let e = vl.end().unwrap_err();
+    assert_eq!(e.code, ErrorCode::Cancelled, "{}", e.message);
+    assert!(!dir.0.join("b.ppm").exists());
+    let stopped = stopped_calls.load(Ordering::Relaxed);
+    assert!(
+        stopped < all / 2,
+        "{stopped} field calls of {all}; heard {:?}",
+        heard.lock().unwrap()
+    );
 }

@@ -239,6 +239,7 @@ fn render_in_strips(
         let row = width as usize;
         for y0 in (0..height).step_by(step as usize) {
             let y1 = (y0 + step).min(height);
+            progress.begin((y1 - y0) as u64 * width as u64);
             let (need_lo, need_hi) = if n > 1 {
                 (y0.saturating_sub(1), (y1 + 1).min(height))
             } else {

@@ -178,6 +178,7 @@ where
                     &out,
                 );
                 recycled.give(out);
+                progress.tile_done((tw * th) as u64);
                 Vec::new()
             })?
             .into_iter()
