@@ -407,6 +407,16 @@ fn info(path: &Path) -> Res<()> {
     say(format_args!("voxel width: {} byte(s)", d.raw().width()))?;
     say(format_args!("a, b:        {a} {b}"))?;
     say(format_args!("raw values:  {lo} … {hi}"))?;
+    if d.raw().width() == 2 && a.min(b) < 0.0 && hi >= 32768.0 {
+        // Signed data written as they are: −1024 reads as 64 512.
+        say(format_args!(
+            "note:        16-bit voxels are unsigned (0 … 65535), yet this window starts below 0 \
+             and voxels reach {hi}, as signed voxels written as they are would (-1024 reads as \
+             64512); if they are signed, convert the file: vlconvert raw {} OUT.vlb --skip 28 \
+             --type i16 --dims {nx} {ny} {nz} --window {a} {b}",
+            path.display()
+        ))?;
+    }
     match d.geometry() {
         Some(g) => {
             let [sx, sy, sz] = g.spacing();

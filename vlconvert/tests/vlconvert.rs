@@ -151,6 +151,72 @@ fn info_describes_a_file_and_refuses_a_malformed_one() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+/// A `.vlb` whose 16-bit voxels are signed values written as they are (as numpy's int16 bytes
+/// would be: the format's voxels are unsigned) is described with a note that says so and how
+/// to convert it; the conversion it names gives the values their window meant. A file of
+/// unsigned voxels over the same window gets no note.
+#[test]
+fn info_notes_signed_voxels_in_a_16_bit_file() {
+    let d = tmp("signed");
+    let hu: [i16; 4] = [-1024, -1000, 0, 3071];
+    let write = |name: &str, voxels: &[u8]| {
+        let mut bytes = b"VLB1".to_vec();
+        for v in [4u32, 1, 1, 2] {
+            bytes.extend(v.to_le_bytes());
+        }
+        for v in [-1024f32, 3071.0] {
+            bytes.extend(v.to_le_bytes());
+        }
+        bytes.extend(voxels);
+        let f = d.join(name);
+        std::fs::write(&f, bytes).unwrap();
+        f
+    };
+    let signed: Vec<u8> = hu.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let f = write("signed.vlb", &signed);
+    let o = run(&["info", s(&f)]);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("64512"), "{text}");
+    assert!(
+        text.contains("note:") && text.contains("--type i16"),
+        "{text}"
+    );
+    // The conversion the note names.
+    let out = d.join("fixed.vlb");
+    let args = [
+        "raw",
+        s(&f),
+        s(&out),
+        "--skip",
+        "28",
+        "--type",
+        "i16",
+        "--dims",
+        "4",
+        "1",
+        "1",
+        "--window",
+        "-1024",
+        "3071",
+    ];
+    assert!(run(&args).status.success());
+    let v = Dataset::load(&out).unwrap();
+    for (i, h) in hu.iter().enumerate() {
+        let want = (*h as f64 + 1024.0) / 4095.0;
+        let got = v.node(i, 0, 0) as f64;
+        assert!((got - want).abs() < 1e-4, "{h}: {got} against {want}");
+    }
+    // Unsigned voxels 0 … 4095 over that window: no note.
+    let unsigned: Vec<u8> = [0u16, 24, 1024, 4095]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let o = run(&["info", s(&write("unsigned.vlb", &unsigned))]);
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("note:"));
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 /// Standard output closed by its reader (`vlconvert info f | head -1`) ends the report
 /// quietly with success, and a conversion still writes its file; any other failure to write
 /// the report (a full device) is an error with exit code 1.
