@@ -90,7 +90,7 @@ fn layout(h: &NiftiHeader) -> Res<([usize; 3], Type, u64)> {
             "dim[0] = {ndim}: the number of dimensions must be 1 to 7"
         ));
     }
-    let dim: Vec<i64> = (1..=ndim as usize)
+    let mut dim: Vec<i64> = (1..=ndim as usize)
         .map(|i| h.dim[i] as i16 as i64)
         .collect();
     if let Some(i) = dim.iter().position(|&d| d < 1) {
@@ -100,7 +100,11 @@ fn layout(h: &NiftiHeader) -> Res<([usize; 3], Type, u64)> {
             dim[i]
         ));
     }
-    if dim.len() < 3 || dim[3..].iter().any(|&d| d != 1) {
+    // A 1- or 2-D image is a volume one node deep along the axes it lacks.
+    while dim.len() < 3 {
+        dim.push(1);
+    }
+    if dim[3..].iter().any(|&d| d != 1) {
         return Err(format!(
             "a {}-dimensional volume {dim:?}; only 3D volumes convert",
             dim.len()

@@ -20,6 +20,12 @@ fn gzip(bytes: &[u8]) -> Vec<u8> {
     enc.finish().unwrap()
 }
 
+/// nibabel's 2-D image (dim[0] = 2) converts to a volume one node deep, with nibabel's values.
+#[test]
+fn a_2d_image_is_a_volume_one_node_deep() {
+    converts_like_the_writer("nifti", "nifti/int16_2d.nii", [5, 4, 1], 2, true);
+}
+
 /// nibabel's files with voxels away from byte 352 (after 48 bytes of padding; 16 bytes into a
 /// pair's `.img`) convert to nibabel's values, gzipped too (`.nii.gz`, `.img.gz`).
 #[test]
