@@ -679,7 +679,8 @@ void vlChildNormal(vlint child, vlfloat *n);
  scene's `vlEnd` renders its images and volumes, `f` is called with `misc` and the fraction
  done, in [0, 1] and never decreasing (as an image's tiles end, at most every 0.1 s, after
  each strip of image rows and each slab of voxelized nodes, and with 1 at the end, also
- where an output failed), on one of the
+ where an output failed), while other rendering threads may be calling the scene's field
+ functions, on one of the
  library's rendering threads (the thread that called `vlEnd` waits meanwhile), one call at
  a time. Returning 0 cancels the render: its `vlEnd` records `VL_CANCELLED` and writes no
  file of the output it was making. Inside `f` only `vlCancel`, `vlSample`, `vlError` and

@@ -46,7 +46,8 @@ impl CancelFlag {
 /// A progress function: called with the fraction of a scene's outputs done, in [0, 1],
 /// never decreasing, as an image's tiles end (at most every 0.1 s), between pieces of work (a
 /// strip of image rows, a slab of voxelized nodes) and with 1 at the end (also where an output
-/// failed); returning `false` cancels the
+/// failed), while other rendering threads may be calling field functions; returning `false`
+/// cancels the
 /// render. It is called on one of the library's rendering threads (the one that called the
 /// scene's `end` or `render_preview` waits meanwhile), one call at a time.
 pub type ProgressFn = Arc<dyn Fn(f32) -> bool + Send + Sync>;
@@ -83,13 +84,22 @@ pub(crate) struct Progress {
     /// With a team: an error this rank met between steps, for the next step (or
     /// [`Progress::settle`]) to fail every rank with ([`Progress::hold`]).
     held: std::sync::Mutex<Option<Error>>,
-    /// The units of the piece of work in progress (a strip of an image, [`Progress::begin`])
-    /// and those its tiles have reported done ([`Progress::tile_done`]).
+    /// The units of the piece of work in progress (a strip of an image, [`Progress::begin`]),
+    /// the work its tiles do (pixels traced, over every pass) and the work they have reported
+    /// done ([`Progress::tile_done`]).
     piece: AtomicU64,
+    piece_work: AtomicU64,
     piece_done: AtomicU64,
-    /// When the progress function was last called: held while it is called, so that calls
-    /// come one at a time.
-    told: std::sync::Mutex<Option<std::time::Instant>>,
+    /// The last call of the progress function: held while it is called, so that calls come
+    /// one at a time.
+    told: std::sync::Mutex<Told>,
+}
+
+/// When the progress function was last called, and the fraction it heard.
+#[derive(Default)]
+struct Told {
+    at: Option<std::time::Instant>,
+    fraction: f32,
 }
 
 /// How often at most the progress function hears of tiles done within a strip.
@@ -107,8 +117,9 @@ impl Progress {
             agreed_stop: AtomicBool::new(false),
             held: std::sync::Mutex::new(None),
             piece: AtomicU64::new(0),
+            piece_work: AtomicU64::new(0),
             piece_done: AtomicU64::new(0),
-            told: std::sync::Mutex::new(None),
+            told: std::sync::Mutex::new(Told::default()),
         }
     }
 
@@ -219,37 +230,50 @@ impl Progress {
         }
     }
 
-    /// A piece of work of `units` begins (a strip of an image), whose tiles report what they
-    /// have done as they end ([`Progress::tile_done`]) and which ends with
-    /// [`Progress::advance`] by the same units.
-    pub(crate) fn begin(&self, units: u64) {
+    /// A piece of work of `units` begins (a strip of an image), whose tiles do `work` (the
+    /// pixels they trace, over every pass) and report it as they end ([`Progress::tile_done`]);
+    /// it ends with [`Progress::advance`] by `units`.
+    pub(crate) fn begin(&self, units: u64, work: u64) {
         self.piece_done.store(0, Ordering::Relaxed);
+        self.piece_work.store(work, Ordering::Relaxed);
         self.piece.store(units, Ordering::Relaxed);
     }
 
-    /// A tile of the piece of work in progress has done `units` (pixels): where
+    /// A tile of the piece of work in progress has done `work` (pixels traced): where
     /// [`TELL_EVERY`] has passed since the progress function was last called and no call is
-    /// under way, it hears the fraction done, the piece counted up to its units (a strip's
-    /// pixels, which super-sampling's second pass over them does not pass). Not with a team,
-    /// whose ranks hear of whole steps. A panic in the function unwinds as the render's error.
-    pub(crate) fn tile_done(&self, units: u64) {
-        if self.control.progress.is_none() || self.team.is_some() {
+    /// under way, it hears the fraction done, the piece counted in proportion to its work
+    /// done and short of its end by one unit (which [`Progress::advance`] reports). Not with
+    /// a team, whose ranks hear of whole steps, nor once the render is to stop. A panic in the
+    /// function unwinds as the render's error.
+    pub(crate) fn tile_done(&self, work: u64) {
+        if self.control.progress.is_none() || self.team.is_some() || self.cancelled() {
             return;
         }
-        let piece = self.piece_done.fetch_add(units, Ordering::Relaxed) + units;
-        let Ok(mut told) = self.told.try_lock() else {
-            return;
+        self.piece_done.fetch_add(work, Ordering::Relaxed);
+        let mut told = match self.told.try_lock() {
+            Ok(t) => t,
+            Err(std::sync::TryLockError::Poisoned(p)) => p.into_inner(),
+            Err(std::sync::TryLockError::WouldBlock) => return,
         };
-        if told.is_some_and(|t| t.elapsed() < TELL_EVERY) {
+        if told.at.is_some_and(|t| t.elapsed() < TELL_EVERY) {
             return;
         }
-        let done =
-            self.done.load(Ordering::Relaxed) + piece.min(self.piece.load(Ordering::Relaxed));
+        let (units, all) = (
+            self.piece.load(Ordering::Relaxed),
+            self.piece_work.load(Ordering::Relaxed),
+        );
+        if units == 0 || all == 0 {
+            return;
+        }
+        let piece = self.piece_done.load(Ordering::Relaxed).min(all);
+        let within = (piece as u128 * units as u128 / all as u128) as u64;
+        let done = self.done.load(Ordering::Relaxed) + within.min(units - 1);
         let told_now = crate::error::catch("the progress function", || {
             self.tell_at(&mut told, done);
             Ok(())
         });
         if let Err(e) = told_now {
+            drop(told);
             crate::error::raise(e);
         }
     }
@@ -258,7 +282,7 @@ impl Progress {
     /// work, never concurrently with itself); `Err(Cancelled)` where the render is to stop.
     pub(crate) fn advance(&self, units: u64) -> Result<()> {
         let done = self.done.fetch_add(units, Ordering::Relaxed) + units;
-        self.begin(0);
+        self.begin(0, 0);
         self.tell(done);
         self.check()
     }
@@ -284,15 +308,19 @@ impl Progress {
         self.tell_at(&mut told, done);
     }
 
-    /// [`Progress::tell`] with the time of the last call held (`told`), set to now.
-    fn tell_at(&self, told: &mut Option<std::time::Instant>, done: u64) {
-        *told = Some(std::time::Instant::now());
+    /// [`Progress::tell`] with the last call held (`told`): the fraction never below the
+    /// last one told (an output that failed leaves its part of the total uncounted, which its
+    /// tiles may have told), the call's time now.
+    fn tell_at(&self, told: &mut Told, done: u64) {
+        told.at = Some(std::time::Instant::now());
         if let Some(f) = &self.control.progress {
             let fraction = if self.total == 0 {
                 1.0
             } else {
                 (done.min(self.total) as f64 / self.total as f64) as f32
             };
+            let fraction = fraction.max(told.fraction);
+            told.fraction = fraction;
             // A panic in the function is the render's (caught where the render's are).
             if !f(fraction) {
                 self.stopped.store(true, Ordering::Relaxed);

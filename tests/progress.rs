@@ -292,17 +292,24 @@ fn a_preview_wider_than_the_largest_side_is_refused() {
 
 /// Within one strip of an image (a 64² image is one), the progress function hears the tiles
 /// done as they end, at most every 0.1 s: rising fractions between 0 and 1 while the render
-/// runs, then 1. A 0 answer to one of them stops the render there: `Cancelled`, with far
-/// fewer field calls than the whole image takes.
+/// runs, then 1; with super-sampling too, whose second pass over the strip is counted (no 1
+/// before the end). A 0 answer to one of them stops the render there: `Cancelled`, with far
+/// fewer field calls than the whole image takes. On a pool of two threads, so that the
+/// render's wall time (about a quarter of a second) does not depend on the machine's cores.
 #[test]
 fn progress_is_heard_within_a_strip_and_a_zero_answer_stops_it() {
     use std::sync::atomic::{AtomicU64, Ordering};
     use std::time::{Duration, Instant};
+    let two = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
     // A ball whose field function takes 50 µs a call: about half a second of work in all.
-    let slow_ball = |vl: &mut Library, calls: Arc<AtomicU64>| {
+    let slow_ball = |vl: &mut Library, calls: Arc<AtomicU64>, super_sample: i32| {
         vl.scene().unwrap();
         vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
         vl.step_size(0.1, 1.0).unwrap();
+        vl.super_sample(super_sample).unwrap();
         vl.object().unwrap();
         vl.function(Fields::O, move |s| {
             calls.fetch_add(1, Ordering::Relaxed);
@@ -316,24 +323,32 @@ fn progress_is_heard_within_a_strip_and_a_zero_answer_stops_it() {
         vl.end().unwrap();
     };
     let dir = Dir::new("strip");
-    let calls = Arc::new(AtomicU64::new(0));
-    let (mut vl, heard) = recording(|_| true);
-    slow_ball(&mut vl, calls.clone());
-    vl.image(dir.0.join("a.ppm"), 1.0, 64, 64).unwrap();
-    vl.end().unwrap();
-    let heard = heard.lock().unwrap().clone();
-    let all = calls.load(Ordering::Relaxed);
-    let within: Vec<f32> = heard.iter().copied().filter(|&f| f < 1.0).collect();
-    assert!(within.len() >= 2, "{heard:?}");
-    assert!(within.iter().all(|&f| f > 0.0), "{heard:?}");
-    assert!(heard.windows(2).all(|w| w[0] <= w[1]), "{heard:?}");
-    assert_eq!(heard.last(), Some(&1.0));
+    let mut all = 0;
+    for super_sample in [1, 2] {
+        let calls = Arc::new(AtomicU64::new(0));
+        let (mut vl, heard) = recording(|_| true);
+        slow_ball(&mut vl, calls.clone(), super_sample);
+        vl.image(dir.0.join("a.ppm"), 1.0, 64, 64).unwrap();
+        two.install(|| vl.end()).unwrap();
+        let heard = heard.lock().unwrap().clone();
+        let (last, before) = heard.split_last().unwrap();
+        assert_eq!(*last, 1.0, "{heard:?}");
+        assert!(
+            before.len() >= 2,
+            "super-sampling {super_sample}: {heard:?}"
+        );
+        assert!(before.iter().all(|&f| f > 0.0 && f < 1.0), "{heard:?}");
+        assert!(heard.windows(2).all(|w| w[0] <= w[1]), "{heard:?}");
+        if super_sample == 1 {
+            all = calls.load(Ordering::Relaxed);
+        }
+    }
     // Stopped at the first fraction heard.
     let stopped_calls = Arc::new(AtomicU64::new(0));
     let (mut vl, heard) = recording(|f| f >= 1.0);
-    slow_ball(&mut vl, stopped_calls.clone());
+    slow_ball(&mut vl, stopped_calls.clone(), 1);
     vl.image(dir.0.join("b.ppm"), 1.0, 64, 64).unwrap();
-    let e = vl.end().unwrap_err();
+    let e = two.install(|| vl.end()).unwrap_err();
     assert_eq!(e.code, ErrorCode::Cancelled, "{}", e.message);
     assert!(!dir.0.join("b.ppm").exists());
     let stopped = stopped_calls.load(Ordering::Relaxed);

@@ -259,8 +259,8 @@ fn transmittance_never_increases_along_a_ray() {
 }
 
 /// A normal function that writes a NaN or an infinity hands the next one no normal, (0, 0, 0),
-/// as where the gradient vanishes: no NaN or infinity reaches a user's function. The pixels
-/// stay finite, and equal those of a chain whose first function writes (0, 0, 0) itself.
+/// as where the gradient vanishes: no NaN or infinity reaches a user's function, and the
+/// pixels stay finite. A first function writing a finite normal passes it on as it is.
 #[test]
 fn normal_functions_never_see_a_nan_or_an_infinity() {
     use std::sync::atomic::{AtomicUsize, Ordering};

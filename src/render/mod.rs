@@ -239,7 +239,6 @@ fn render_in_strips(
         let row = width as usize;
         for y0 in (0..height).step_by(step as usize) {
             let y1 = (y0 + step).min(height);
-            progress.begin((y1 - y0) as u64 * width as u64);
             let (need_lo, need_hi) = if n > 1 {
                 (y0.saturating_sub(1), (y1 + 1).min(height))
             } else {
@@ -255,6 +254,11 @@ fn render_in_strips(
                 lo = need_lo;
                 hi = need_lo;
             }
+            // The strip's pixels, and the work of its passes: the rows traced afresh, and
+            // with super-sampling the strip's pixels again.
+            let units = (y1 - y0) as u64 * width as u64;
+            let traced = (need_hi - hi) as u64 * width as u64;
+            progress.begin(units, traced + if n > 1 { units } else { 0 });
             let fresh = first_pass(hi..need_hi)?;
             if n == 1 {
                 // One ray a pixel: the first pass is the strip, handed on as it is.
@@ -329,7 +333,6 @@ fn render_in_strips(
                 }
                 recycled.give(refined);
             }
-            let units = (y1 - y0) as u64 * width as u64;
             progress.hold(crate::error::catch("the progress function", || {
                 progress.advance(units)
             }))?;

@@ -206,8 +206,9 @@ fn outside_is_the_two_sided_bounds_test() {
 }
 
 /// `skip_until`'s answers hold along the ray, whether the questions come sample by sample or
-/// far apart (each past the blocks the last answer covered, as the callers ask) (the packet march asks after runs it passed over itself, where the walk moves to
-/// the question's block at once), with and without a horizon: `Ok(exit)` where the blocks
+/// far apart, as the packet march asks after runs it passed over itself (where the walk moves
+/// to the question's block at once), each past the blocks the last answer covered, as the
+/// callers ask, with and without a horizon: `Ok(exit)` where the blocks
 /// from the question to `exit` are all empty, `Err(until)` where those up to `until` are all
 /// occupied. Checked at points of the ray between, in random grids and directions, by the
 /// block each point lies in (points within 10⁻⁹ of a block face, where rounding may place

@@ -320,7 +320,7 @@ impl<'a> Packets<'a> {
             let f = |v: &Lanes| f64_of(v) as f32;
             // The lanes' colours in f32: a lit sample's colour is at most the brightest
             // channel's radiance times kd + ks, plus the brightest ambient term (colours,
-            // cosines and powers at most 1). Past `MAX_LIT` (NaN too) the scalar march's f64
+            // cosines and powers at most 1). Past `MAX_LIT` (or NaN) the scalar march's f64
             // lights the samples, which no sum of up to 2³² colours in f32 could.
             let brightest = |v: &[Lanes; 3]| v.iter().map(|x| f64_of(x).abs()).fold(0.0, f64::max);
             let ks = h.ks.as_ref().map_or(0.0, |k| f64_of(k).abs());
@@ -703,28 +703,6 @@ impl<'a> Packets<'a> {
 fn finish<const N: usize>(col: &[[f32; N]; 3], t: &[f32; N], i: usize, background: DVec3) -> Pixel {
     let c = DVec3::new(col[0][i] as f64, col[1][i] as f64, col[2][i] as f64);
     pixel(c + t[i] as f64 * background, t[i] as f64)
-}
-
-/// The largest colour a lit sample may have in the lanes' f32 lighting ([`Light32::Lit`]): its
-/// weighted sum over 2³² samples stays far below `f32::MAX` (2¹²⁸).
-const MAX_LIT: f64 = (1u128 << 64) as f64;
-
-/// The power of two that brings `largest` (a matrix's largest entry in magnitude) into [1, 2);
-/// 1 where it is 0 or not finite.
-fn unit_scale(largest: f64) -> f64 {
-    if largest > 0.0 && largest.is_finite() {
-        // (f64's exponent of a normal number; a subnormal's is below −1022, scaled in two.)
-        let e = largest.log2().floor().clamp(-1000.0, 1000.0) as i32;
-        let s = 2f64.powi(-e);
-        // (log2's rounding may leave it just outside: one step more.)
-        match largest * s {
-            x if x >= 2.0 => s * 0.5,
-            x if x < 1.0 => s * 2.0,
-            _ => s,
-        }
-    } else {
-        1.0
-    }
 }
 
 /// A lane's ray: its cursor, its pixel (in the tile), and how many of its next runs are taken

@@ -1,7 +1,8 @@
 //! The lighting of a packet's samples, in either width: the object-space gradient (the
 //! trilinear interpolation of central differences, [`Packets::gradient`]), the headlight's
 //! Phong terms ([`Packets::lit`]), the opacity correction's common powers ([`transmit_lanes`]) and
-//! the colour's finiteness test ([`finite`]), written once over [`Simd`]; the lane-by-lane
+//! the colour's finiteness test ([`finite`]), written once over [`Simd`]; the bounds within
+//! which the lanes light in f32 ([`MAX_LIT`], [`unit_scale`]); the lane-by-lane
 //! scalar fallbacks for the rare samples they do not take; and the hand-over of the other
 //! powers to [`power`](mod@super::power). Not here: the reads of the
 //! differences' nodes and voxels ([`nodes`]).
@@ -266,4 +267,27 @@ pub(super) fn lanes_mask(bits: u32) -> __m256 {
     let b = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
     let m = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(bits as i32), b), b);
     _mm256_castsi256_ps(m)
+}
+
+/// The largest colour a lit sample may have in the lanes' f32 lighting ([`Light32::Lit`]): its
+/// weighted sum over 2³² samples stays far below `f32::MAX` (2¹²⁸).
+pub(super) const MAX_LIT: f64 = (1u128 << 64) as f64;
+
+/// The power of two that brings `largest` (a matrix's largest entry in magnitude) into [1, 2);
+/// 1 where it is 0 or not finite.
+pub(super) fn unit_scale(largest: f64) -> f64 {
+    if largest > 0.0 && largest.is_finite() {
+        // (The exponent, clamped so that 2^−e is finite: a matrix whose largest entry is
+        // below 2⁻¹⁰⁰⁰, which no f32 scene gives, is scaled short of [1, 2).)
+        let e = largest.log2().floor().clamp(-1000.0, 1000.0) as i32;
+        let s = 2f64.powi(-e);
+        // (log2's rounding may leave it just outside: one step more.)
+        match largest * s {
+            x if x >= 2.0 => s * 0.5,
+            x if x < 1.0 => s * 2.0,
+            _ => s,
+        }
+    } else {
+        1.0
+    }
 }
