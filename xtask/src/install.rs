@@ -4,19 +4,27 @@
 //! archive, both headers and `vlib.pc`, whose `Libs.private` is what rustc reports for the archive
 //! in this build. Installed libraries are stripped (`strip --strip-unneeded` for the shared one,
 //! `--strip-debug` for the archive, which keeps the symbol table a linker needs). Every file and
-//! link is made beside its destination and renamed over it, so a program using an installed
-//! `libvlib.so` never sees it half written. It sets no rpath and runs no `ldconfig`: how programs
-//! find the library is the system's business (docs/install.md). `--features` are passed to the
-//! build; `--from-stage` builds nothing and installs what an earlier `--destdir` run staged
-//! (root installing what a user built). The command line is [`crate::parse_install`]'s; the
-//! pkg-config text is [`crate::pc`]'s.
+//! link is first made beside its destination, and only when all of them are made are they
+//! renamed over their destinations ([`Install`]), so a program using an installed `libvlib.so`
+//! never sees it half written and an error while copying installs nothing. It sets no rpath and
+//! runs no `ldconfig`: how programs find the library is the system's business
+//! (docs/install.md). `--features` are passed to the build; `--from-stage` builds nothing and
+//! installs what an earlier `--destdir` run staged (root installing what a user built), following
+//! no link below the stage. The command line is [`crate::parse_install`]'s; the pkg-config text
+//! is [`crate::pc`]'s.
 
 use crate::pc::{self, PcFile};
 use crate::InstallOptions;
 use serde_json::Value;
-use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
+use std::ffi::OsStr;
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
+use std::os::unix::fs::{MetadataExt, OpenOptionsExt, PermissionsExt};
+use std::path::{Component, Path, PathBuf};
 use std::process::{Command, Stdio};
+
+#[cfg(test)]
+mod tests;
 
 /// The ELF systems whose linkers take `-soname` (the list of `capi/build.rs`).
 const ELF_SONAME: bool = cfg!(any(
@@ -83,36 +91,38 @@ pub fn install(o: &InstallOptions) -> Result<(), String> {
         std::fs::create_dir_all(dir).map_err(|e| format!("create {}: {e}", dir.display()))?;
     }
 
+    let mut install = Install::default();
     if o.types.shared {
         let full = format!("libvlib.so.{major}.{minor}.{patch}");
         let soname = format!("libvlib.so.{major}");
-        put(
-            &built.shared,
+        install.copy(
+            &open_source(None, &built.shared, false)?,
             &lib.join(&full),
             0o755,
             Some("--strip-unneeded"),
         )?;
         for name in [&soname, "libvlib.so"] {
-            link(&full, &lib.join(name))?;
+            install.link(&full, &lib.join(name))?;
         }
     }
     if o.types.archive {
-        put(
-            &built.archive,
+        install.copy(
+            &open_source(None, &built.archive, false)?,
             &lib.join("libvlib.a"),
             0o644,
             Some("--strip-debug"),
         )?;
     }
     for header in HEADERS {
-        put(
-            &root.join("include").join(header),
+        install.copy(
+            &open_source(None, &root.join("include").join(header), false)?,
             &include.join(header),
             0o644,
             None,
         )?;
     }
-    write(&pkgconfig.join("vlib.pc"), pc_text.as_bytes())?;
+    install.write(&pkgconfig.join("vlib.pc"), pc_text.as_bytes())?;
+    install.commit()?;
     if o.types.shared {
         loader_note(&libdir, &format!("libvlib.so.{major}"));
     }
@@ -128,14 +138,21 @@ fn loader_note(libdir: &Path, soname: &str) {
     );
 }
 
+/// The largest `vlib.pc` `--from-stage` reads (the real one is under 1 KiB).
+const PC_MAX: u64 = 64 * 1024;
+
 /// `--from-stage`: installs what an earlier run with `--destdir stage` and the same prefix and
 /// directories staged, building nothing (so root can install what a user built): the headers,
-/// `vlib.pc`, the archive and the shared library found there, their links made anew. Every
-/// file and link is put in place by rename as above, so it is a new inode owned by whoever runs
-/// this, with the mode set here (0755 for the shared library, 0644 otherwise); directories that
-/// exist are left as they are and missing ones are created. The stage's `vlib.pc` must name the
-/// prefix, and only regular files are copied (a link in the stage where a file belongs is
-/// refused rather than followed).
+/// `vlib.pc`, the archive and the shared library found there, their links made anew. Nothing
+/// below `stage` is followed: each directory on the way to the files is opened with `O_NOFOLLOW`
+/// from the one above it (a link or `..` there is refused), and each file is checked before and
+/// after it is opened (`O_NOFOLLOW | O_NONBLOCK`) to be a regular file with no other hard link,
+/// so neither a link nor a hard link to a file the stage's owner cannot read is copied, and no
+/// FIFO or device is waited on or opened. `vlib.pc` (at most [`PC_MAX`] bytes) must name the
+/// prefix. All sources are opened and checked before anything is written; then [`Install`]
+/// puts them in place, each a new inode owned by whoever runs this, with the mode set here
+/// (0755 for the shared library, 0644 otherwise). Directories that exist are left as they are
+/// and missing ones are created.
 fn install_staged(o: &InstallOptions, stage: &Path) -> Result<(), String> {
     let libdir = o.prefix.join(&o.libdir);
     let includedir = o.prefix.join(&o.includedir);
@@ -144,32 +161,56 @@ fn install_staged(o: &InstallOptions, stage: &Path) -> Result<(), String> {
         staged(Some(stage), &includedir),
     );
     let from_pc = from_lib.join("pkgconfig/vlib.pc");
-    let pc_text = std::fs::read_to_string(&from_pc).map_err(|e| {
-        format!(
-            "{}: {e} (stage with `cargo xtask install --destdir {}` and the same --prefix, \
+    let below_stage = |dir: &Path| dir.strip_prefix("/").unwrap_or(dir).to_path_buf();
+    // Where there is no vlib.pc, how to stage one.
+    let missing = |e: String| match std::fs::symlink_metadata(&from_pc) {
+        Ok(_) => e,
+        Err(_) => format!(
+            "{e} (stage with `cargo xtask install --destdir {}` and the same --prefix, \
              --libdir and --includedir first)",
-            from_pc.display(),
             stage.display()
-        )
-    })?;
+        ),
+    };
+    let root = File::options()
+        .read(true)
+        .custom_flags(libc::O_DIRECTORY | libc::O_NONBLOCK)
+        .open(stage)
+        .map_err(|e| missing(format!("{}: {e}", stage.display())))?;
+    let lib = open_stage_dir(&root, stage, &below_stage(&libdir)).map_err(missing)?;
+    let pkgconfig = open_stage_dir(&lib, &from_lib, Path::new("pkgconfig")).map_err(missing)?;
+    let include = open_stage_dir(&root, stage, &below_stage(&includedir))?;
+
+    let pc_source = open_source(Some(&pkgconfig), &from_pc, true).map_err(missing)?;
+    if pc_source.meta.len() > PC_MAX {
+        return Err(format!(
+            "{} is larger than {PC_MAX} bytes",
+            from_pc.display()
+        ));
+    }
+    let mut pc_text = String::new();
+    (&pc_source.file)
+        .take(PC_MAX + 1)
+        .read_to_string(&mut pc_text)
+        .map_err(|e| format!("read {}: {e}", from_pc.display()))?;
+    if pc_text.len() as u64 > PC_MAX {
+        return Err(format!(
+            "{} is larger than {PC_MAX} bytes",
+            from_pc.display()
+        ));
+    }
     let prefix_line = format!("prefix={}", pc::prefix_value(&o.prefix)?);
-    if pc_text.lines().next() != Some(prefix_line.as_str()) {
+    let first_line = pc_text.lines().next().unwrap_or("");
+    if first_line != prefix_line {
         return Err(format!(
             "{} was staged for another prefix than {} (its first line: {:?})",
             from_pc.display(),
             o.prefix.display(),
-            pc_text.lines().next().unwrap_or("")
+            first_line.chars().take(200).collect::<String>()
         ));
     }
-    let regular = |path: &Path| -> Result<(), String> {
-        match std::fs::symlink_metadata(path) {
-            Ok(m) if m.is_file() => Ok(()),
-            Ok(_) => Err(format!("{} is not a regular file", path.display())),
-            Err(e) => Err(format!("{}: {e}", path.display())),
-        }
-    };
-    // The libraries and links the stage holds: files first, so that links are made to files
-    // already in place.
+
+    // The libraries and links the stage holds. The names are listed by path; what is copied is
+    // opened from `lib`, and a link's target is only a name for the link made anew.
     let mut files = Vec::new();
     let mut links = Vec::new();
     let entries =
@@ -194,49 +235,159 @@ fn install_staged(o: &InstallOptions, stage: &Path) -> Result<(), String> {
                 .to_string();
             links.push((name, target));
         } else {
-            regular(&path)?;
-            files.push(name);
+            files.push((name, open_source(Some(&lib), &path, true)?));
         }
     }
     if files.is_empty() {
         return Err(format!("{} holds no libvlib", from_lib.display()));
     }
-    files.sort();
+    files.sort_by(|a, b| a.0.cmp(&b.0));
     links.sort();
-    for header in HEADERS {
-        regular(&from_include.join(header))?;
-    }
-    regular(&from_pc)?;
+    let headers = HEADERS
+        .iter()
+        .map(|h| open_source(Some(&include), &from_include.join(h), true))
+        .collect::<Result<Vec<_>, _>>()?;
 
     let pkgconfig = libdir.join("pkgconfig");
     for dir in [&libdir, &includedir, &pkgconfig] {
         std::fs::create_dir_all(dir).map_err(|e| format!("create {}: {e}", dir.display()))?;
     }
-    for name in &files {
+    let mut install = Install::default();
+    for (name, source) in &files {
         let mode = if name == "libvlib.a" { 0o644 } else { 0o755 };
-        put(&from_lib.join(name), &libdir.join(name), mode, None)?;
+        install.copy(source, &libdir.join(name), mode, None)?;
     }
     for (name, target) in &links {
-        link(target, &libdir.join(name))?;
+        install.link(target, &libdir.join(name))?;
     }
-    for header in HEADERS {
-        put(
-            &from_include.join(header),
-            &includedir.join(header),
-            0o644,
-            None,
-        )?;
+    for (header, source) in HEADERS.iter().zip(&headers) {
+        install.copy(source, &includedir.join(header), 0o644, None)?;
     }
-    put(&from_pc, &pkgconfig.join("vlib.pc"), 0o644, None)?;
+    install.write(&pkgconfig.join("vlib.pc"), pc_text.as_bytes())?;
+    install.commit()?;
     // The SONAME is the shortest of the names with a version, `libvlib.so.<major>`.
-    let versioned = links.iter().map(|(name, _)| name).chain(&files);
+    let versioned = links.iter().map(|(name, _)| name);
     if let Some(soname) = versioned
+        .chain(files.iter().map(|(name, _)| name))
         .filter(|n| n.starts_with("libvlib.so."))
         .min_by_key(|n| n.len())
     {
         loader_note(&libdir, soname);
     }
     Ok(())
+}
+
+/// The flags of every open of a source: a link is not followed (the open fails) and a FIFO or
+/// device does not block it (a regular file's reads ignore `O_NONBLOCK`).
+const SOURCE_FLAGS: i32 = libc::O_NOFOLLOW | libc::O_NONBLOCK;
+
+/// Opens `name` in the directory `dir`, or the path `name` itself without `dir`, read-only with
+/// [`SOURCE_FLAGS`] and `flags`.
+fn open_nofollow(dir: Option<&File>, name: &Path, flags: i32) -> std::io::Result<File> {
+    use std::os::fd::{AsRawFd, FromRawFd};
+    use std::os::unix::ffi::OsStrExt;
+    let Some(dir) = dir else {
+        return File::options()
+            .read(true)
+            .custom_flags(SOURCE_FLAGS | flags)
+            .open(name);
+    };
+    let c_name = std::ffi::CString::new(name.as_os_str().as_bytes())
+        .map_err(|_| std::io::Error::from(std::io::ErrorKind::InvalidInput))?;
+    let flags = libc::O_RDONLY | libc::O_CLOEXEC | SOURCE_FLAGS | flags;
+    // SAFETY: `c_name` is a NUL-terminated string and `dir` an open descriptor, both alive for
+    // the call; a descriptor openat returns is new and owned by nothing else.
+    let fd = unsafe { libc::openat(dir.as_raw_fd(), c_name.as_ptr(), flags) };
+    if fd < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    // SAFETY: see above.
+    Ok(unsafe { File::from_raw_fd(fd) })
+}
+
+/// Why `path` of the stage could not be opened: what stands there, or the error.
+fn refusal(path: &Path, e: std::io::Error) -> String {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => format!(
+            "{} is a symbolic link, which is not followed",
+            path.display()
+        ),
+        _ => format!("{}: {e}", path.display()),
+    }
+}
+
+/// The directory `rel` below `dir` (whose path is `shown`), each component opened with
+/// `O_NOFOLLOW | O_DIRECTORY` from the one before it.
+fn open_stage_dir(dir: &File, shown: &Path, rel: &Path) -> Result<File, String> {
+    let mut shown = shown.to_path_buf();
+    let mut dir = dir
+        .try_clone()
+        .map_err(|e| format!("{}: {e}", shown.display()))?;
+    for component in rel.components() {
+        match component {
+            Component::Normal(name) => {
+                shown.push(name);
+                dir = open_nofollow(Some(&dir), Path::new(name), libc::O_DIRECTORY)
+                    .map_err(|e| refusal(&shown, e))?;
+            }
+            Component::CurDir | Component::RootDir => {}
+            Component::ParentDir | Component::Prefix(_) => {
+                return Err(format!(
+                    "{}: a staged path with `..` is refused",
+                    shown.join(rel).display()
+                ))
+            }
+        }
+    }
+    Ok(dir)
+}
+
+/// A file to copy, open, and what `fstat` said of it when it was opened.
+struct Source {
+    file: File,
+    path: PathBuf,
+    meta: std::fs::Metadata,
+}
+
+/// Opens the regular file `path` to copy it: by its name in `dir` where given (`path` is then
+/// only shown), else by `path`, with [`SOURCE_FLAGS`]. It is checked before it is opened (so
+/// a FIFO or device is not opened) and after (the file opened is the one checked); with
+/// `only_name`, it must have no other hard link (a file of a stage, which `--destdir` wrote).
+fn open_source(dir: Option<&File>, path: &Path, only_name: bool) -> Result<Source, String> {
+    let check = |meta: &std::fs::Metadata| {
+        if meta.file_type().is_symlink() {
+            Err(refusal(path, std::io::ErrorKind::InvalidInput.into()))
+        } else if !meta.is_file() {
+            Err(format!("{} is not a regular file", path.display()))
+        } else if only_name && meta.nlink() != 1 {
+            Err(format!(
+                "{} has {} hard links: a staged file must have no other name",
+                path.display(),
+                meta.nlink()
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    let before = std::fs::symlink_metadata(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    check(&before)?;
+    let name = match dir {
+        Some(_) => Path::new(path.file_name().unwrap_or(OsStr::new(""))),
+        None => path,
+    };
+    let file = open_nofollow(dir, name, 0).map_err(|e| refusal(path, e))?;
+    let meta = file
+        .metadata()
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    check(&meta)?;
+    if (meta.dev(), meta.ino()) != (before.dev(), before.ino()) {
+        return Err(format!("{} changed while it was opened", path.display()));
+    }
+    Ok(Source {
+        file,
+        path: path.to_path_buf(),
+        meta,
+    })
 }
 
 /// The workspace root: this package lives in `xtask/` under it.
@@ -382,43 +533,117 @@ fn beside(to: &Path) -> PathBuf {
     to.with_file_name(format!(".{name}.xtask-{}", std::process::id()))
 }
 
-/// Copies the regular file `from` to `to` with permissions `mode`, stripped with `strip <flag>`
-/// when asked. The copy is a new file, made with mode 0600 and given `mode` once written (it
-/// never has the source's mode, which could hold set-id bits), then renamed over `to`. `from`
-/// must be a regular file: a symbolic link there is refused, not followed.
-fn put(from: &Path, to: &Path, mode: u32, strip: Option<&str>) -> Result<(), String> {
-    use std::os::unix::fs::{MetadataExt, OpenOptionsExt, PermissionsExt};
-    let tmp = beside(to);
-    let result = (|| {
+/// An install in two steps: [`copy`](Install::copy), [`write`](Install::write) and
+/// [`link`](Install::link) make each file or link beside its destination, and
+/// [`commit`](Install::commit) renames them over their destinations, files first, links last.
+/// An install dropped uncommitted (an error on the way) removes its temporaries, leaving the
+/// destinations as they were; an error while renaming (rare: each rename stays in one
+/// directory) stops there and removes the temporaries not yet renamed.
+#[derive(Default)]
+struct Install {
+    /// The temporaries that exist, to remove if the install stops.
+    made: Vec<PathBuf>,
+    /// Temporary, destination, and what is said when it is in place.
+    files: Vec<(PathBuf, PathBuf, String)>,
+    links: Vec<(PathBuf, PathBuf, String)>,
+}
+
+impl Install {
+    /// A new file of mode 0600 beside `to`, to be removed unless renamed.
+    fn create(&mut self, to: &Path) -> Result<(PathBuf, File), String> {
+        let tmp = beside(to);
         let _ = std::fs::remove_file(&tmp);
-        let copy_err = |e: std::io::Error| format!("copy {}: {e}", from.display());
-        let mut source = std::fs::File::open(from).map_err(copy_err)?;
-        let opened = source.metadata().map_err(copy_err)?;
-        let entry = std::fs::symlink_metadata(from).map_err(copy_err)?;
-        if !entry.is_file() || (entry.dev(), entry.ino()) != (opened.dev(), opened.ino()) {
-            return Err(format!("{} is not a regular file", from.display()));
-        }
-        let mut copy = std::fs::OpenOptions::new()
+        let file = File::options()
             .write(true)
             .create_new(true)
             .mode(0o600)
             .open(&tmp)
             .map_err(|e| format!("create {}: {e}", tmp.display()))?;
-        std::io::copy(&mut source, &mut copy).map_err(copy_err)?;
+        self.made.push(tmp.clone());
+        Ok((tmp, file))
+    }
+
+    /// Copies `from` beside `to`, strips the copy with `strip <flag>` when asked and gives it
+    /// `mode` (never the source's mode, which could hold set-id bits). The copy must have the
+    /// size `from` had when opened, and `from` must still have that size and modification time.
+    fn copy(
+        &mut self,
+        from: &Source,
+        to: &Path,
+        mode: u32,
+        strip: Option<&str>,
+    ) -> Result<(), String> {
+        let (tmp, mut copy) = self.create(to)?;
+        let copy_err = |e: std::io::Error| format!("copy {}: {e}", from.path.display());
+        let copied = std::io::copy(&mut &from.file, &mut copy).map_err(copy_err)?;
+        let after = from.file.metadata().map_err(copy_err)?;
+        let stamp = |m: &std::fs::Metadata| (m.len(), m.mtime(), m.mtime_nsec());
+        if copied != from.meta.len() || stamp(&after) != stamp(&from.meta) {
+            return Err(format!(
+                "{} changed while it was copied",
+                from.path.display()
+            ));
+        }
+        copy.sync_all()
+            .map_err(|e| format!("write {}: {e}", tmp.display()))?;
         drop(copy);
         if let Some(flag) = strip {
             run_strip(flag, &tmp)?;
         }
-        std::fs::set_permissions(&tmp, std::fs::Permissions::from_mode(mode))
-            .map_err(|e| format!("set the mode of {}: {e}", tmp.display()))?;
-        std::fs::rename(&tmp, to).map_err(|e| format!("install {}: {e}", to.display()))
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    } else {
-        println!("installed {}", to.display());
+        set_mode(&tmp, mode)?;
+        self.files
+            .push((tmp, to.to_path_buf(), to.display().to_string()));
+        Ok(())
     }
-    result
+
+    /// Writes `bytes` beside `to`, mode 0644.
+    fn write(&mut self, to: &Path, bytes: &[u8]) -> Result<(), String> {
+        use std::io::Write;
+        let (tmp, mut file) = self.create(to)?;
+        file.write_all(bytes)
+            .and_then(|()| file.sync_all())
+            .map_err(|e| format!("write {}: {e}", tmp.display()))?;
+        set_mode(&tmp, 0o644)?;
+        self.files
+            .push((tmp, to.to_path_buf(), to.display().to_string()));
+        Ok(())
+    }
+
+    /// A symbolic link to `target` (a name in the same directory) beside `at`.
+    fn link(&mut self, target: &str, at: &Path) -> Result<(), String> {
+        let tmp = beside(at);
+        let _ = std::fs::remove_file(&tmp);
+        std::os::unix::fs::symlink(target, &tmp)
+            .map_err(|e| format!("link {} -> {target}: {e}", tmp.display()))?;
+        self.made.push(tmp.clone());
+        let shown = format!("{} -> {target}", at.display());
+        self.links.push((tmp, at.to_path_buf(), shown));
+        Ok(())
+    }
+
+    /// Renames everything made over its destination, files first.
+    fn commit(mut self) -> Result<(), String> {
+        let renames: Vec<_> = self.files.drain(..).chain(self.links.drain(..)).collect();
+        for (tmp, to, shown) in renames {
+            std::fs::rename(&tmp, &to).map_err(|e| format!("install {}: {e}", to.display()))?;
+            self.made.retain(|t| *t != tmp);
+            println!("installed {shown}");
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Install {
+    fn drop(&mut self) {
+        for tmp in &self.made {
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
+}
+
+fn set_mode(path: &Path, mode: u32) -> Result<(), String> {
+    std::fs::set_permissions(path, std::fs::Permissions::from_mode(mode))
+        .map_err(|e| format!("set the mode of {}: {e}", path.display()))
 }
 
 fn run_strip(flag: &str, file: &Path) -> Result<(), String> {
@@ -442,265 +667,4 @@ fn run_strip(flag: &str, file: &Path) -> Result<(), String> {
         ));
     }
     Ok(())
-}
-
-/// Writes `bytes` to `to` (mode 0644).
-fn write(to: &Path, bytes: &[u8]) -> Result<(), String> {
-    use std::os::unix::fs::PermissionsExt;
-    let tmp = beside(to);
-    let result = (|| {
-        let _ = std::fs::remove_file(&tmp);
-        std::fs::write(&tmp, bytes).map_err(|e| format!("write {}: {e}", tmp.display()))?;
-        std::fs::set_permissions(&tmp, std::fs::Permissions::from_mode(0o644))
-            .map_err(|e| format!("set the mode of {}: {e}", tmp.display()))?;
-        std::fs::rename(&tmp, to).map_err(|e| format!("install {}: {e}", to.display()))
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    } else {
-        println!("installed {}", to.display());
-    }
-    result
-}
-
-/// Makes `at` a symbolic link to `target` (a name in the same directory), replacing what is there.
-fn link(target: &str, at: &Path) -> Result<(), String> {
-    let tmp = beside(at);
-    let _ = std::fs::remove_file(&tmp);
-    std::os::unix::fs::symlink(target, &tmp)
-        .and_then(|()| std::fs::rename(&tmp, at))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            format!("link {} -> {target}: {e}", at.display())
-        })?;
-    println!("installed {} -> {target}", at.display());
-    Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn versions_give_their_three_numbers() {
-        assert_eq!(numeric_version("0.1.0"), Ok((0, 1, 0)));
-        assert_eq!(numeric_version("12.3.45-rc.1+build.7"), Ok((12, 3, 45)));
-        assert!(numeric_version("1.2").is_err());
-        assert!(numeric_version("1.x.3").is_err());
-    }
-
-    #[test]
-    fn staging_puts_the_prefix_under_destdir() {
-        let p = Path::new("/usr/local/lib");
-        assert_eq!(staged(None, p), p);
-        assert_eq!(
-            staged(Some(Path::new("/tmp/stage")), p),
-            Path::new("/tmp/stage/usr/local/lib")
-        );
-    }
-
-    #[test]
-    fn files_and_links_replace_what_is_there() {
-        let dir = std::env::temp_dir().join(format!("xtask-put-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let (src, dst) = (dir.join("src"), dir.join("dst"));
-        std::fs::write(&src, b"new").unwrap();
-        std::fs::write(&dst, b"old").unwrap();
-        use std::os::unix::fs::{MetadataExt, PermissionsExt};
-        // The source's mode, set-user-ID bit included, is not copied.
-        std::fs::set_permissions(&src, std::fs::Permissions::from_mode(0o4755)).unwrap();
-        let old = std::fs::metadata(&dst).unwrap().ino();
-        put(&src, &dst, 0o640, None).unwrap();
-        assert_eq!(std::fs::read(&dst).unwrap(), b"new");
-        let meta = std::fs::metadata(&dst).unwrap();
-        assert_eq!(meta.permissions().mode() & 0o7777, 0o640);
-        assert_ne!(meta.ino(), old, "rewritten in place");
-        // A symbolic link as the source is refused, not followed.
-        std::os::unix::fs::symlink("src", dir.join("to-src")).unwrap();
-        let err = put(&dir.join("to-src"), &dir.join("x"), 0o644, None).unwrap_err();
-        assert!(err.ends_with("to-src is not a regular file"), "{err}");
-        std::fs::remove_file(dir.join("to-src")).unwrap();
-        link("dst", &dir.join("ln")).unwrap();
-        link("src", &dir.join("ln")).unwrap();
-        assert_eq!(
-            std::fs::read_link(dir.join("ln")).unwrap(),
-            Path::new("src")
-        );
-        write(&dir.join("w"), b"text").unwrap();
-        assert_eq!(std::fs::read(dir.join("w")).unwrap(), b"text");
-        // A failed copy leaves nothing behind, not even the temporary file.
-        assert!(put(&dir.join("missing"), &dir.join("x"), 0o644, None).is_err());
-        let mut names: Vec<String> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        names.sort();
-        assert_eq!(names, ["dst", "ln", "src", "w"]);
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[test]
-    fn features_reach_the_cargo_build() {
-        let root = Path::new("/w");
-        let args = |features: &[&str]| -> Vec<String> {
-            let features: Vec<String> = features.iter().map(|f| f.to_string()).collect();
-            build_args(root, "release", &features)
-                .into_iter()
-                .map(|a| a.into_string().unwrap())
-                .collect()
-        };
-        assert_eq!(
-            args(&[]).join(" "),
-            "rustc --package vlib-capi --lib --profile release --message-format json \
-             --manifest-path /w/Cargo.toml -- --print native-static-libs"
-        );
-        assert_eq!(
-            args(&["mpi", "capi"]).join(" "),
-            "rustc --package vlib-capi --lib --profile release --features mpi,capi \
-             --message-format json --manifest-path /w/Cargo.toml -- --print native-static-libs"
-        );
-    }
-
-    fn options(prefix: &Path, stage: &Path) -> InstallOptions {
-        InstallOptions {
-            prefix: prefix.to_path_buf(),
-            libdir: PathBuf::from("lib"),
-            includedir: PathBuf::from("include"),
-            destdir: None,
-            types: crate::LibraryTypes {
-                shared: true,
-                archive: true,
-            },
-            profile: "release".into(),
-            features: Vec::new(),
-            from_stage: Some(stage.to_path_buf()),
-        }
-    }
-
-    /// A stage as `--destdir stage` leaves it for `prefix`, the files holding `content`; owned
-    /// by another user where this process may give them away (as root).
-    fn make_stage(stage: &Path, prefix: &Path, content: &[u8]) {
-        let lib = staged(Some(stage), &prefix.join("lib"));
-        let include = staged(Some(stage), &prefix.join("include"));
-        std::fs::create_dir_all(lib.join("pkgconfig")).unwrap();
-        std::fs::create_dir_all(&include).unwrap();
-        let pc = format!("prefix={}\nexec_prefix=${{prefix}}\n", prefix.display());
-        let files = [
-            (lib.join("libvlib.so.0.1.0"), content),
-            (lib.join("libvlib.a"), content),
-            (include.join("vlib.h"), content),
-            (include.join("vlaux.h"), content),
-            (lib.join("pkgconfig/vlib.pc"), pc.as_bytes()),
-        ];
-        for (path, bytes) in files {
-            std::fs::write(&path, bytes).unwrap();
-            let _ = std::os::unix::fs::chown(&path, Some(65534), Some(65534));
-        }
-        for name in ["libvlib.so.0", "libvlib.so"] {
-            std::os::unix::fs::symlink("libvlib.so.0.1.0", lib.join(name)).unwrap();
-        }
-    }
-
-    #[test]
-    fn a_stage_is_installed_as_new_files_of_the_installer_in_existing_directories() {
-        use std::os::unix::fs::{MetadataExt, PermissionsExt};
-        let dir = std::env::temp_dir().join(format!("xtask-stage-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        let (stage, prefix) = (dir.join("stage"), dir.join("prefix"));
-        let lib = prefix.join("lib");
-        // An existing installation in directories of mode 0750: an old library, its links.
-        std::fs::create_dir_all(&lib).unwrap();
-        std::fs::set_permissions(&lib, std::fs::Permissions::from_mode(0o750)).unwrap();
-        std::fs::write(lib.join("libvlib.so.0.1.0"), b"old").unwrap();
-        std::os::unix::fs::symlink("libvlib.so.0.1.0", lib.join("libvlib.so.0")).unwrap();
-        let old = std::fs::metadata(lib.join("libvlib.so.0.1.0")).unwrap();
-        make_stage(&stage, &prefix, b"new");
-
-        install_staged(&options(&prefix, &stage), &stage).unwrap();
-        let me = std::fs::metadata(&dir).unwrap().uid();
-        let installed = std::fs::metadata(lib.join("libvlib.so.0.1.0")).unwrap();
-        assert_ne!(
-            installed.ino(),
-            old.ino(),
-            "the library was rewritten in place"
-        );
-        assert_eq!(
-            std::fs::metadata(&lib).unwrap().permissions().mode() & 0o777,
-            0o750
-        );
-        for (path, mode) in [
-            ("lib/libvlib.so.0.1.0", 0o755),
-            ("lib/libvlib.a", 0o644),
-            ("include/vlib.h", 0o644),
-            ("include/vlaux.h", 0o644),
-        ] {
-            let meta = std::fs::symlink_metadata(prefix.join(path)).unwrap();
-            assert!(meta.is_file(), "{path}");
-            assert_eq!(meta.permissions().mode() & 0o7777, mode, "{path}");
-            assert_eq!(meta.uid(), me, "{path}");
-            assert_eq!(std::fs::read(prefix.join(path)).unwrap(), b"new", "{path}");
-        }
-        let pc = std::fs::read_to_string(lib.join("pkgconfig/vlib.pc")).unwrap();
-        assert!(pc.starts_with(&format!("prefix={}\n", prefix.display())));
-        for name in ["libvlib.so.0", "libvlib.so"] {
-            assert_eq!(
-                std::fs::read_link(lib.join(name)).unwrap(),
-                Path::new("libvlib.so.0.1.0")
-            );
-        }
-        // Nothing else: no temporary file is left.
-        let mut names: Vec<String> = std::fs::read_dir(&lib)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        names.sort();
-        assert_eq!(
-            names,
-            [
-                "libvlib.a",
-                "libvlib.so",
-                "libvlib.so.0",
-                "libvlib.so.0.1.0",
-                "pkgconfig"
-            ]
-        );
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[test]
-    fn a_stage_for_another_prefix_or_with_foreign_links_is_refused() {
-        let dir = std::env::temp_dir().join(format!("xtask-badstage-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        let (stage, prefix) = (dir.join("stage"), dir.join("prefix"));
-        let other = dir.join("other");
-        let err = install_staged(&options(&prefix, &stage), &stage).unwrap_err();
-        assert!(
-            err.contains("stage with `cargo xtask install --destdir"),
-            "{err}"
-        );
-        // Staged for `other`, moved to where `prefix` would be staged: its vlib.pc says so.
-        make_stage(&stage, &other, b"new");
-        std::fs::rename(staged(Some(&stage), &other), staged(Some(&stage), &prefix)).unwrap();
-        let err = install_staged(&options(&prefix, &stage), &stage).unwrap_err();
-        assert!(err.contains("was staged for another prefix"), "{err}");
-        std::fs::remove_dir_all(&stage).unwrap();
-
-        // A link where the archive belongs is not followed; a link out of the directory is
-        // not made.
-        make_stage(&stage, &prefix, b"new");
-        let lib = staged(Some(&stage), &prefix.join("lib"));
-        std::fs::remove_file(lib.join("libvlib.a")).unwrap();
-        std::os::unix::fs::symlink("/etc/passwd", lib.join("libvlib.a")).unwrap();
-        let err = install_staged(&options(&prefix, &stage), &stage).unwrap_err();
-        assert!(err.contains("libvlib.a is not a regular file"), "{err}");
-        std::fs::remove_file(lib.join("libvlib.a")).unwrap();
-        std::fs::remove_file(lib.join("libvlib.so")).unwrap();
-        std::os::unix::fs::symlink("/etc/passwd", lib.join("libvlib.so")).unwrap();
-        let err = install_staged(&options(&prefix, &stage), &stage).unwrap_err();
-        assert!(err.contains("links outside the library's names"), "{err}");
-        // Nothing was installed by the refused runs.
-        assert!(!prefix.exists());
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
 }

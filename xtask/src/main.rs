@@ -1,7 +1,8 @@
 //! The workspace's task runner, `cargo xtask <task>` (an alias in `.cargo/config.toml`). It owns
 //! the command line of the tasks; the one task, `install`, lives in [`install`] (building and
-//! copying) and [`pc`] (the pkg-config file). It needs only cargo, a C toolchain's `strip` and
-//! the standard library; it is not part of the C library or of the published crates.
+//! copying) and [`pc`] (the pkg-config file). It needs only cargo, a C toolchain's `strip`, the
+//! standard library and `libc` (for `openat` and its flags); it is not part of the C library or
+//! of the published crates.
 
 mod install;
 mod pc;
