@@ -794,6 +794,55 @@ fn preintegrated_packets_are_the_scalar_march() {
     );
 }
 
+/// Where the pre-integrated packet march reads what the scalar march reads (16-bit voxels,
+/// whose values both take from the node values' interpolation, not 8-bit voxels
+/// interpolated in lanes) and lights nothing in lanes (the unshaded cases), its images are
+/// the scalar march's bit for bit: the lanes find the samples and read the values at them and
+/// at the middles and quarters of the slabs that follow a ray's last sample (in batches of a
+/// step's slabs, `simd::slabs`), and the scalar code composites the same slabs from the same
+/// values. A value read at the wrong point, or given to the wrong ray, changes pixels.
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn unlit_preintegrated_packets_of_node_values_are_the_scalar_march_bit_for_bit() {
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        eprintln!("no AVX2 and FMA: the packet march never runs here");
+        return;
+    }
+    let mut shown = 0;
+    for (n, case) in cases().iter().enumerate().filter(|(_, c)| !c.shaded) {
+        let case = Case {
+            optimise: Optimise {
+                preintegrate: true,
+                ..case.optimise
+            },
+            ..*case
+        };
+        let narrow = Case {
+            optimise: Optimise {
+                wide_lanes: false,
+                ..case.optimise
+            },
+            ..case
+        };
+        let scalar = render_made_as(&case, false, 1, true).0;
+        for (what, packets) in [
+            ("wide", render_made_as(&case, true, 1, true).0),
+            ("narrow", render_made_as(&narrow, true, 1, true).0),
+        ] {
+            let apart = packets
+                .iter()
+                .zip(&scalar)
+                .filter(|(p, s)| p.map(f32::to_bits) != s.map(f32::to_bits))
+                .count();
+            assert_eq!(apart, 0, "case {n}, {what}: {apart} pixels differ");
+        }
+        if scalar.iter().any(shows_volume) {
+            shown += 1;
+        }
+    }
+    assert!(shown >= 10, "{shown}");
+}
+
 /// The lit packet march (and the pre-integrated one, whose pieces the lanes light) at the
 /// extremes of legal scenes: objects of world size 10⁻³⁰ to 10³⁰, whose normal matrix (the
 /// inverse of the object's scale) squared would overflow or vanish in f32, and lights up to

@@ -166,9 +166,11 @@ fn document(
          in halves down to a quarter of the step where the data bends along it (128 × 128 \
          tables per object for the step, its half and its quarter, built by a scene's \
          first frame, the untimed warm-up, and kept for the frames timed below); without \
-         it, each segment is its midpoint sample. Both are traced by the packet march where the processor has AVX2 (for \
-         pre-integrated images, the samples, their values and the lighting in lanes, the \
-         slabs by scalar code). A ★ marks the Pareto front of both sweeps together.\n",
+         it, each segment is its midpoint sample. Both are traced by the packet march \
+         where the processor has AVX2 (for pre-integrated images, the samples, their \
+         values, the values at the slabs' middles and quarters and the lighting in lanes, \
+         the halving, the tables and the composite by scalar code). A ★ marks the Pareto \
+         front of both sweeps together.\n",
         RAMP.0,
         RAMP.1,
         REFERENCE_STEP,

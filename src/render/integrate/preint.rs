@@ -342,6 +342,34 @@ impl<'a> PreMarch<'a> {
         self.take_position(ray, c, i + 1, t, v, light)
     }
 
+    /// Where sample `i` of a ray (ray parameter `t`, value `v`) follows the last position
+    /// `ray` took (sample i − 1, or the start t0 for sample 0), takes it without compositing:
+    /// the slab from that position, returned as its ray parameter and value, is the caller's
+    /// to composite ([`PreMarch::slab_with`], where one of its values is above z). Else
+    /// `None`, and nothing changes: [`PreMarch::take`] takes the sample.
+    #[inline]
+    pub(in crate::render) fn follows(
+        &self,
+        ray: &mut PreRay<'a>,
+        i: u64,
+        t: f64,
+        v: f32,
+    ) -> Option<(f64, f32)> {
+        match ray.last {
+            Some((q, tq, vq)) if q == i => {
+                ray.last = Some((i + 1, t, v));
+                Some((tq, vq))
+            }
+            _ => None,
+        }
+    }
+
+    /// The zero test's bound: a slab whose two values are at most it adds nothing.
+    #[inline]
+    pub(in crate::render) fn z(&self) -> f32 {
+        self.z
+    }
+
     /// The end of the ray (its samples all taken or passed over, the ray not ended): the slabs
     /// to its end t1; its colour and transmittance.
     pub(in crate::render) fn finish(
@@ -431,26 +459,62 @@ impl<'a> PreMarch<'a> {
             Some([vm, vqa, vqb]) => (vm, [Some(vqa), Some(vqb)]),
             None => (self.value(c, m), [None, None]),
         };
+        self.slab_with(ray, c, (ta, va), (tb, vb), vm, quarters, light)
+    }
+
+    /// [`PreMarch::slab`] from ray parameter ta (value va) to tb (value vb), one of whose
+    /// values is above z, given the value `vm` at its middle and those at its quarters
+    /// (`None`: read where a test needs it), as a march that has read them in lanes gives
+    /// them (`simd::slabs`). Whether the ray ends there.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub(in crate::render) fn slab_with(
+        &self,
+        ray: &mut PreRay<'a>,
+        c: &Cursor,
+        a: (f64, f32),
+        b: (f64, f32),
+        vm: f32,
+        quarters: [Option<f32>; 2],
+        light: &mut impl PieceLighting,
+    ) -> bool {
+        let mut piece = |level, a, b| self.piece(ray, c, level, a, b, light);
+        self.pieces(c, a, b, vm, quarters, &mut piece)
+    }
+
+    /// The pieces of the slab from ray parameter ta (value va) to tb (value vb) of cursor
+    /// `c`'s ray, one of whose values is above z, front first, each given to `piece` as its
+    /// level (1/2^level of the step) and its ends (ray parameter, value), until `piece` says
+    /// the ray ends there: [`PreMarch::slab`]'s halving, given the value `vm` at its middle
+    /// and those at its quarters (`None`: read where a test needs it). Whether the ray ends.
+    #[inline]
+    fn pieces(
+        &self,
+        c: &Cursor,
+        (ta, va): (f64, f32),
+        (tb, vb): (f64, f32),
+        vm: f32,
+        quarters: [Option<f32>; 2],
+        piece: &mut impl FnMut(u32, (f64, f32), (f64, f32)) -> bool,
+    ) -> bool {
+        let z = self.z;
+        let m = 0.5 * (ta + tb);
+        let (qa, qb) = (0.5 * (ta + m), 0.5 * (m + tb));
         if !bends(va, vm, vb) {
-            return self.piece(ray, c, 0, (ta, va), (tb, vb), light);
+            return piece(0, (ta, va), (tb, vb));
         }
         // Each half: whole where its values are at most z or it is linear, else its quarters.
-        let half = |ray: &mut PreRay<'a>,
-                    light: &mut _,
-                    (ta, va): (f64, f32),
-                    (tq, vq): (f64, Option<f32>),
-                    (tb, vb): (f64, f32)| {
-            if va > z || vb > z {
-                let vq = vq.unwrap_or_else(|| self.value(c, tq));
-                if bends(va, vq, vb) {
-                    return self.piece(ray, c, 2, (ta, va), (tq, vq), light)
-                        || self.piece(ray, c, 2, (tq, vq), (tb, vb), light);
+        let mut half =
+            |(ta, va): (f64, f32), (tq, vq): (f64, Option<f32>), (tb, vb): (f64, f32)| {
+                if va > z || vb > z {
+                    let vq = vq.unwrap_or_else(|| self.value(c, tq));
+                    if bends(va, vq, vb) {
+                        return piece(2, (ta, va), (tq, vq)) || piece(2, (tq, vq), (tb, vb));
+                    }
                 }
-            }
-            self.piece(ray, c, 1, (ta, va), (tb, vb), light)
-        };
-        half(ray, light, (ta, va), (qa, quarters[0]), (m, vm))
-            || half(ray, light, (m, vm), (qb, quarters[1]), (tb, vb))
+                piece(1, (ta, va), (tb, vb))
+            };
+        half((ta, va), (qa, quarters[0]), (m, vm)) || half((m, vm), (qb, quarters[1]), (tb, vb))
     }
 
     /// The dataset's values at ray parameters `ts` of cursor `c`'s ray ([`PreMarch::value`]),
@@ -495,8 +559,9 @@ impl<'a> PreMarch<'a> {
             (obj.alpha(o as f64, len), rgb.map(|x| x as f64), 0.5)
         } else {
             // (Midpoints one step apart differ by the step to rounding: a relative 10⁻⁹ of κ
-            // changes α far below f32's resolution.)
-            let part = obj.step / (1u32 << level) as f64;
+            // changes α far below f32's resolution. 1/2^level is exact: the product is the
+            // quotient by 2^level.)
+            let part = obj.step * (1.0 / (1u32 << level) as f64);
             let [a, r, g, b, depth] = if (len - part).abs() <= part * 1e-9 {
                 pre.lookup(level, va, vb)
             } else {

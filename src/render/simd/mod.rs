@@ -127,6 +127,7 @@ mod power;
 mod preint;
 mod runs;
 mod shade;
+mod slabs;
 mod starts;
 mod step;
 mod tables;

@@ -4,8 +4,11 @@
 //! (the runs, the cell mask and runs on trust of [`runs`], as in the midpoint march), and the
 //! samples' object points, cells, nodes and trilinear values ([`Packets::values`], the
 //! midpoint march's arithmetic: the same values bit for bit from node values, a relative 10⁻⁷
-//! apart from 8-bit voxels). Each lane's slabs are then composited by the scalar march's own
-//! code ([`PreMarch::take`], [`PreMarch::finish`]: the tables, the halving where the data
+//! apart from 8-bit voxels). Where a lane's sample follows the last position its ray took
+//! and their slab can show something, the values at the slab's middle and quarters are read
+//! in lanes too, the step's slabs in batches ([`slabs`]). Each lane's slabs are then
+//! composited by the scalar march's own code ([`PreMarch::slab_with`] given those values,
+//! else [`PreMarch::take`]; [`PreMarch::finish`]: the tables, the halving where the data
 //! bends, the composite in f64), which reads the values of passed-over samples next to a
 //! taken one as the lanes read them (`integrate::preint::Bytes` from 8-bit voxels, else the
 //! trilinear interpolation of the node values), and does nothing more for a sample whose
@@ -25,8 +28,10 @@
 //! are the same for any thread count. Elsewhere the scalar code lights each piece at once.
 //!
 //! Not here: which samples the lanes take ([`runs`]), the reads of nodes and voxels
-//! ([`nodes`]), the slabs (`integrate::preint`), the tables (`render::preint`).
+//! ([`nodes`]), the batches' reads ([`slabs`]), the slabs (`integrate::preint`), the tables
+//! (`render::preint`).
 
+use super::slabs::LaneSlabs;
 use super::step::Sampled;
 use super::*;
 
@@ -97,14 +102,16 @@ impl<'a> Packets<'a> {
         light: &mut impl TileLight,
     ) -> Vec<Pixel> {
         let values = |st: &_, active, out: &mut _| self.values8(st, active, out);
+        let slabs = |slabs: &mut _| self.slabs8(slabs);
         let taken = |c: &mut _, run: &mut _, trusted: &mut _| self.next_taken_at8(c, run, trusted);
         // SAFETY: this function has the AVX2 and FMA `march_pre` asks for.
         unsafe {
             match self.packets() {
-                1 => self.march_pre::<W, 1, W, _>(pre, tile, out, light, values, taken),
-                4 => self.march_pre::<W, 4, { 4 * W }, _>(pre, tile, out, light, values, taken),
+                1 => self.march_pre::<W, 1, W, _>(pre, tile, out, light, values, slabs, taken),
+                4 => self
+                    .march_pre::<W, 4, { 4 * W }, _>(pre, tile, out, light, values, slabs, taken),
                 _ => self.march_pre::<W, PACKETS8, { PACKETS8 * W }, _>(
-                    pre, tile, out, light, values, taken,
+                    pre, tile, out, light, values, slabs, taken,
                 ),
             }
         }
@@ -120,13 +127,16 @@ impl<'a> Packets<'a> {
         light: &mut impl TileLight,
     ) -> Vec<Pixel> {
         let values = |st: &_, active, out: &mut _| self.values16(st, active, out);
+        let slabs = |slabs: &mut _| self.slabs16(slabs);
         let taken = |c: &mut _, run: &mut _, trusted: &mut _| self.next_taken_at16(c, run, trusted);
         // SAFETY: this function has AVX2 and FMA, which `march_pre` asks for.
         unsafe {
             match self.packets() {
-                1 => self.march_pre::<V, 1, V, _>(pre, tile, out, light, values, taken),
-                4 => self.march_pre::<V, 4, { 4 * V }, _>(pre, tile, out, light, values, taken),
-                _ => self.march_pre::<V, P, { P * V }, _>(pre, tile, out, light, values, taken),
+                1 => self.march_pre::<V, 1, V, _>(pre, tile, out, light, values, slabs, taken),
+                4 => self
+                    .march_pre::<V, 4, { 4 * V }, _>(pre, tile, out, light, values, slabs, taken),
+                _ => self
+                    .march_pre::<V, P, { P * V }, _>(pre, tile, out, light, values, slabs, taken),
             }
         }
     }
@@ -136,15 +146,20 @@ impl<'a> Packets<'a> {
     /// next bit; else its ray's next run with one, `next_taken`, which also says the run's
     /// first segment's number; else the tile's next ray), evaluates the values of every
     /// packet's samples in lanes (`values`), then hands each lane's sample to its ray's
-    /// [`PreRay`] in lane order. A ray ends where its slabs' transmittance falls below the
-    /// termination bound, or after its last sample, with the slabs to its interval's end.
-    /// Each ray is its own cursor and [`PreRay`], so which lane or packet carries it changes
-    /// nothing in its pixel.
+    /// [`PreRay`] in lane order: a sample that follows its ray's last one with a slab that can
+    /// show something into a batch of [`LaneSlabs`] (`P` batches hold a step's slabs), whose
+    /// middles' and quarters' values `in_lanes` reads before the slabs are composited in the
+    /// batch's order; any other by [`PreMarch::take`]. A ray has at most one slab in a step,
+    /// so its slabs are composited in their order. A ray ends where its slabs' transmittance
+    /// falls below the termination bound, or after its last sample, with the slabs to its
+    /// interval's end. Each ray is its own cursor and [`PreRay`], so which lane or packet
+    /// carries it changes nothing in its pixel.
     ///
     /// # Safety
     /// The caller must have AVX2 and FMA (for [`Packets::next_ray`]). Always inlined, so
     /// that the steps inline into the caller's target features.
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     unsafe fn march_pre<const N: usize, const P: usize, const L: usize, T: TileLight>(
         &self,
         pre: &PreMarch<'a>,
@@ -152,6 +167,7 @@ impl<'a> Packets<'a> {
         mut out: Vec<Pixel>,
         light: &mut T,
         mut values: impl FnMut(&LaneState<N>, u32, &mut [f32; N]),
+        mut in_lanes: impl FnMut(&mut LaneSlabs<N>),
         next_taken: impl Fn(&mut Cursor, &mut Run16, &mut u32) -> (u32, u64),
     ) -> Vec<Pixel> {
         const { assert!(N == 8 || N == 16) };
@@ -171,6 +187,8 @@ impl<'a> Packets<'a> {
         let mut index = [0u64; L];
         let mut st: [LaneState<N>; P] = std::array::from_fn(|_| LaneState::default());
         let mut vals = [[0f32; N]; P];
+        let mut batches: [LaneSlabs<N>; P] = std::array::from_fn(|_| LaneSlabs::default());
+        let z = pre.z();
         loop {
             let mut active = 0u64;
             for i in 0..L {
@@ -232,21 +250,50 @@ impl<'a> Packets<'a> {
                     values(st, a, &mut vals[h]);
                 }
             }
-            // Each lane's slabs, by the scalar code.
-            while active != 0 {
-                let i = active.trailing_zeros() as usize % L;
-                active &= active - 1;
+            // Each lane's slabs: one that follows its ray's last position and can show
+            // something into a batch of slabs (`P` batches hold a step's), the others by the
+            // scalar code.
+            let mut rest = active;
+            while rest != 0 {
+                let i = rest.trailing_zeros() as usize % L;
+                rest &= rest - 1;
                 let (h, l) = (i / N, i % N);
                 let (Some(lane), Some(ray)) = (lanes[i].as_ref(), rays[i].as_mut()) else {
                     continue;
                 };
-                let ends = pre.take(ray, &lane.cursor, index[i], st[h].mid[l], vals[h][l], light);
-                if ends {
+                let (t, v) = (st[h].mid[l], vals[h][l]);
+                if let Some((ta, va)) = pre.follows(ray, index[i], t, v) {
+                    if va > z || v > z {
+                        let batch = batches.iter_mut().find(|b| b.n < N).expect("room");
+                        batch.push(i, (&st[h], l), (ta, va), (t, v));
+                    }
+                    continue;
+                }
+                if pre.take(ray, &lane.cursor, index[i], t, v, light) {
                     light.done(ray, lane.px, &mut out, background);
                     lanes[i] = None;
                     rays[i] = None;
                     keeps[i] = 0;
                 }
+            }
+            // The batches' values in lanes, then each slab's pieces by the scalar code.
+            for batch in batches.iter_mut().take_while(|b| b.n > 0) {
+                in_lanes(batch);
+                for k in 0..batch.n {
+                    let i = batch.from[k];
+                    let (Some(lane), Some(ray)) = (lanes[i].as_ref(), rays[i].as_mut()) else {
+                        continue;
+                    };
+                    let (a, b, vm, [qa, qb]) = batch.slab(k);
+                    let quarters = [Some(qa), Some(qb)];
+                    if pre.slab_with(ray, &lane.cursor, a, b, vm, quarters, light) {
+                        light.done(ray, lane.px, &mut out, background);
+                        lanes[i] = None;
+                        rays[i] = None;
+                        keeps[i] = 0;
+                    }
+                }
+                batch.n = 0;
             }
         }
         light.end(&mut out, background);
@@ -330,7 +377,7 @@ impl<'a> Packets<'a> {
         active: u32,
         out: &mut [f32; N],
     ) {
-        *out = match self.sample(s, st, active) {
+        *out = match self.sample(s, st, &st.mid, active) {
             Some(Sampled { pass, v, .. }) => {
                 let mut vals = [0f32; N];
                 s.st(&mut vals, s.keep(s.of_bits(pass), v));

@@ -62,7 +62,7 @@ impl Packets<'_> {
             nodes,
             rows,
             v,
-        }) = self.sample(s, st, live)
+        }) = self.sample(s, st, &st.mid, live)
         else {
             return 0;
         };
@@ -130,7 +130,8 @@ impl Packets<'_> {
         shown & s.bits(s.lt(t, s.splat(self.stop)))
     }
 
-    /// The samples of the lanes in `live` (at `st.mid`): their object points (f64, then
+    /// The samples of the lanes in `live` at ray parameters `mid` (`st.mid`, or other points
+    /// of the lanes' rays): their object points (f64, then
     /// rounded to f32 as `ray_point`), cells ([`Packets::cells`]), the lanes among them
     /// inside the dataset (`Dataset::covers`; NaN is outside), their eight nodes (and the
     /// central rows of voxels where the voxels are read) and trilinear values, normalised
@@ -141,14 +142,15 @@ impl Packets<'_> {
         &self,
         s: S,
         st: &LaneState<N>,
+        mid: &[f64; N],
         live: u32,
     ) -> Option<Sampled<S, N>> {
         let zero = s.zero();
         let mut p = [zero; 3];
         for (axis, pa) in p.iter_mut().enumerate() {
             let (o, d) = (&st.ro[axis], &st.rd[axis]);
-            let lo = s.add_d(s.ld_d(o, 0), s.mul_d(s.ld_d(&st.mid, 0), s.ld_d(d, 0)));
-            let hi = s.add_d(s.ld_d(o, 1), s.mul_d(s.ld_d(&st.mid, 1), s.ld_d(d, 1)));
+            let lo = s.add_d(s.ld_d(o, 0), s.mul_d(s.ld_d(mid, 0), s.ld_d(d, 0)));
+            let hi = s.add_d(s.ld_d(o, 1), s.mul_d(s.ld_d(mid, 1), s.ld_d(d, 1)));
             *pa = s.narrow(lo, hi);
         }
         let (f, base, interior) = self.cells(s, &p);
