@@ -104,10 +104,10 @@ impl Packets<'_> {
     /// (`PreMarch::slab`'s f64 operations for the points, [`Packets::sample`]'s reads).
     #[inline(always)]
     fn slabs_in_lanes<S: Simd<N>, const N: usize>(&self, s: S, slabs: &mut LaneSlabs<N>) {
-        let live = u32::MAX >> (32 - slabs.n);
         if slabs.n == 0 {
             return;
         }
+        let live = u32::MAX >> (32 - slabs.n);
         let (mut m, mut qa, mut qb) = ([0f64; N], [0f64; N], [0f64; N]);
         let half = s.splat_d(0.5);
         for h in 0..2 {
