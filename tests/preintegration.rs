@@ -236,6 +236,18 @@ fn balls(skip_empty: bool, step: f32, packets: bool) -> Vec<u8> {
 
 /// [`balls`] on a pool of `threads` threads (0: rayon's default).
 fn balls_on(skip_empty: bool, step: f32, threads: usize, packets: bool) -> Vec<u8> {
+    balls_and(skip_empty, step, threads, packets, (true, false))
+}
+
+/// [`balls_on`], pre-integrated as `preintegrate` says, with a second object where `second`:
+/// a clear box (opacity 0) over the left half of the balls.
+fn balls_and(
+    skip_empty: bool,
+    step: f32,
+    threads: usize,
+    packets: bool,
+    (preintegrate, second): (bool, bool),
+) -> Vec<u8> {
     let mut vl = Library::new();
     let data = two_balls::two_balls(32);
     vl.add_dataset(DatasetId(1), data).unwrap();
@@ -250,7 +262,7 @@ fn balls_on(skip_empty: bool, step: f32, threads: usize, packets: bool) -> Vec<u
     colour_ramp(&mut vl, 0.3, 0.8);
     vl.scene().unwrap();
     vl.set_optimise(Optimise {
-        preintegrate: true,
+        preintegrate,
         skip_empty,
         packets,
         ..Optimise::default()
@@ -273,6 +285,13 @@ fn balls_on(skip_empty: bool, step: f32, threads: usize, packets: bool) -> Vec<u
     vl.set(Fields::KA, 0.3).unwrap();
     vl.set(Fields::KD, 0.7).unwrap();
     vl.end().unwrap();
+    if second {
+        vl.object().unwrap();
+        vl.translate(-0.6, -0.6, -0.6).unwrap();
+        vl.scale(0.6, 1.2, 1.2).unwrap();
+        vl.set(Fields::O, 0.0).unwrap();
+        vl.end().unwrap();
+    }
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -316,5 +335,115 @@ fn pre_integrated_bytes_do_not_depend_on_the_thread_count() {
                 "packets {packets}: {threads} threads differ from one"
             );
         }
+    }
+}
+
+/// [`band`]'s image: a volume whose value steps between 0.1 and 0.9 after node `edge` of 64
+/// along depth (from 0.1 to 0.9 front to back, or the other way where `falling`), seen
+/// head-on through an opacity band (0 up to 0.2 and from 0.6, 1 at 0.4), pre-integrated at
+/// step `step` with empty-space skipping as given; the pixels' bits and the centre's
+/// transmittance.
+fn band(falling: bool, edge: usize, step: f32, skip_empty: bool, packets: bool) -> (Vec<u32>, f32) {
+    let nz = 64usize;
+    let (low, high) = (6554u16, 58982u16);
+    let voxels: Vec<u16> = (0..8 * 8 * nz)
+        .map(|i| {
+            if (i / 64 <= edge) != falling {
+                low
+            } else {
+                high
+            }
+        })
+        .collect();
+    let mut vl = Library::new();
+    let data = Dataset::new([8, 8, nz], Voxels::U16(voxels), 0.0, 65535.0).unwrap();
+    vl.add_dataset(DatasetId(1), data).unwrap();
+    let rows = [0.0, 0.0, 0.2, 0.0, 0.4, 1.0, 0.6, 0.0, 1.0, 0.0];
+    vl.mapping(MappingId(1), MappingType::Ramp, 5, 1, &rows)
+        .unwrap();
+    let white = [0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0];
+    vl.mapping(MappingId(2), MappingType::Ramp, 2, 3, &white)
+        .unwrap();
+    vl.scene().unwrap();
+    vl.set_optimise(Optimise {
+        preintegrate: true,
+        skip_empty,
+        packets,
+        ..Optimise::default()
+    })
+    .unwrap();
+    vl.camera(&Camera {
+        eye: [0.0, 0.0, -100.0],
+        at: [0.0, 0.0, 0.0],
+        up: [0.0, 1.0, 0.0],
+        fov: 20.0,
+    })
+    .unwrap();
+    vl.background(0.0, 0.0, 0.0).unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.step_size(step, 1.0).unwrap();
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, 0.0).unwrap();
+    vl.scale(400.0, 400.0, (nz - 1) as f32).unwrap();
+    vl.dataset(Fields::F, DatasetId(1)).unwrap();
+    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
+    for (k, field) in [Fields::R, Fields::G, Fields::B].into_iter().enumerate() {
+        vl.map(field, Fields::F, MappingId(2), k as i32 + 1)
+            .unwrap();
+    }
+    vl.set(Fields::KA, 1.0).unwrap();
+    vl.end().unwrap();
+    let image = vl.render_preview(3, 3, 1.0).unwrap();
+    let bits = image.pixels.iter().flatten().map(|x| x.to_bits()).collect();
+    (bits, image.transmittance[4])
+}
+
+#[test]
+fn skipping_keeps_the_slabs_that_cross_an_opacity_band() {
+    // Both sides of the step have opacity 0 (0.1 below the band, 0.9 above it), so a grid of
+    // opacity would call the high side empty and pass over its samples; but the slab from the
+    // last sample on one side to the first on the other crosses the band, whose opacity it
+    // integrates. Skipping may pass over a sample only where its value is at most the zero
+    // test's bound (0.2): the same image with and without it, in both marches, and the band
+    // seen (the slab across the step is more than a sample's 0.8 of value long in 2 voxels:
+    // it takes the band's opacity over part of its length).
+    for falling in [false, true] {
+        for step in [2.0f32, 4.0] {
+            for edge in [27usize, 29, 31] {
+                for packets in [true, false] {
+                    let what =
+                        format!("falling {falling}, step {step}, edge {edge}, packets {packets}");
+                    let (on, t_on) = band(falling, edge, step, true, packets);
+                    let (off, t_off) = band(falling, edge, step, false, packets);
+                    assert!(t_off < 0.99, "{what}: the band is seen ({t_off})");
+                    assert!(
+                        on == off,
+                        "{what}: skipping changed a pixel ({t_on} against {t_off})"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_scene_of_two_objects_takes_midpoint_samples() {
+    // Pre-integration is for a volume rendered alone: where a second object (here a clear box
+    // over half of the balls) is in the scene, every ray is composited by midpoint samples,
+    // with or without the switch (were the rays that meet one object alone pre-integrated,
+    // the box's edge would show as a seam), in both marches.
+    for packets in [true, false] {
+        let midpoint = balls_and(true, 0.05, 0, packets, (false, true));
+        assert!(midpoint.iter().any(|&b| b > 40), "the balls are visible");
+        assert!(
+            balls_and(true, 0.05, 0, packets, (true, true)) == midpoint,
+            "packets {packets}: pre-integrated with a second object"
+        );
+        // Alone, the switch changes the image.
+        assert!(
+            balls_and(true, 0.05, 0, packets, (true, false))
+                != balls_and(true, 0.05, 0, packets, (false, false)),
+            "packets {packets}: pre-integration alone changed nothing"
+        );
     }
 }

@@ -1,6 +1,7 @@
 //! The skip grid of one object: its blocks (one brick of the finest dataset feeding opacity
 //! each), which of them are empty by the interval evaluation of the opacity program over the
-//! datasets' brick ranges, the chessboard distance map over them and the shell of occupied
+//! datasets' brick ranges (for a pre-integrated object, by those ranges against the zero
+//! test's bound), the chessboard distance map over them and the shell of occupied
 //! blocks. Owns the grid's construction and layout; the walk along a ray (`walk`), the passing
 //! boxes (`passing`) and the entry map (`entry`) read it.
 
@@ -433,9 +434,18 @@ fn opacity_range(prefix: &[Instr], data_ranges: &[(f32, f32)]) -> (f32, f32) {
 
 impl SkipGrid {
     /// The grid for an object whose opacity is decided by `prefix` (its program up to the last
-    /// instruction that may write opacity), over the boundary box [box_min, box_max]. `None`
-    /// when no dataset feeds the opacity or no block is provably empty.
-    pub(crate) fn build(prefix: &[Instr], box_min: DVec3, box_max: DVec3) -> Option<SkipGrid> {
+    /// instruction that may write opacity), over the boundary box [box_min, box_max]: a block
+    /// is empty where its opacity is provably 0, or, with a `bound` z, where every dataset's
+    /// value there is provably at most z (a pre-integrated object, whose slabs read values: a
+    /// slab between a value above an opacity band and one below it crosses the band, though
+    /// both ends have opacity 0). `None` when no dataset feeds the opacity or no block is
+    /// provably empty.
+    pub(crate) fn build(
+        prefix: &[Instr],
+        box_min: DVec3,
+        box_max: DVec3,
+        bound: Option<f32>,
+    ) -> Option<SkipGrid> {
         // A spatial transfer function moves points anywhere: no block bound holds after it.
         if prefix.iter().any(|i| matches!(i, Instr::Spatial { .. })) {
             return None;
@@ -555,7 +565,10 @@ impl SkipGrid {
                                     .iter()
                                     .map(|&(a, b)| (f32::from_bits(a), f32::from_bits(b)))
                                     .collect();
-                                let e = opacity_range(prefix, &ranges).1 <= 0.0;
+                                let e = match bound {
+                                    Some(z) => ranges.iter().all(|&(_, b)| b <= z),
+                                    None => opacity_range(prefix, &ranges).1 <= 0.0,
+                                };
                                 memo.insert(key.clone(), e);
                                 e
                             }

@@ -107,6 +107,7 @@ impl CObj {
         o: &ObjectDesc,
         datasets: &Arc<crate::model::program::Datasets>,
         optimise: crate::model::scene::Optimise,
+        alone: bool,
         cache: &ObjectCache,
     ) -> CObj {
         let to_world = o.matrix();
@@ -158,6 +159,7 @@ impl CObj {
             .and_then(Lean::direct_shading)
             .filter(|_| {
                 optimise.preintegrate
+                    && alone
                     && r.render_type == RenderType::Dvr
                     && o.normals.is_empty()
                     && kappa.is_finite()
@@ -185,9 +187,16 @@ impl CObj {
             refract: r.toggle(Feature::Refract),
             reflect_background: r.toggle(Feature::ReflectBackground),
             recursion: r.recursion,
-            skip: crate::pool::once(&cache.grid, || {
-                SkipGrid::build(&o.program[..o_prefix], box_min, box_max).map(Arc::new)
-            })
+            skip: match (&preint, lean.as_ref().and_then(Lean::value_head)) {
+                // Pre-integrated: a block is empty only where its values are at most the
+                // zero test's bound, which every sample the march passes over must be.
+                (Some(_), Some((_, z))) => crate::pool::once(&cache.value_grid, || {
+                    SkipGrid::build(&o.program[..o_prefix], box_min, box_max, Some(z)).map(Arc::new)
+                }),
+                _ => crate::pool::once(&cache.grid, || {
+                    SkipGrid::build(&o.program[..o_prefix], box_min, box_max, None).map(Arc::new)
+                }),
+            }
             .clone(),
             o_prefix,
             f_dataset,
@@ -353,6 +362,8 @@ fn compile_children(
 #[derive(Default)]
 pub(super) struct ObjectCache {
     grid: std::sync::OnceLock<Option<Arc<SkipGrid>>>,
+    /// The grid by the values' bound, for the object pre-integrated (`SkipGrid::build`).
+    value_grid: std::sync::OnceLock<Option<Arc<SkipGrid>>>,
     preint: std::sync::Mutex<Option<(u64, Arc<PreIntegrated>)>>,
 }
 
@@ -457,7 +468,18 @@ impl Compiled {
             .objects
             .iter()
             .enumerate()
-            .map(|(i, o)| CObj::new(o, &desc.datasets, desc.settings.optimise, &caches.cell(i)))
+            .map(|(i, o)| {
+                // Pre-integration is for an object rendered alone: with others, a ray that meets
+                // several is composited by midpoint samples, which would leave seams.
+                let alone = desc.objects.len() == 1;
+                CObj::new(
+                    o,
+                    &desc.datasets,
+                    desc.settings.optimise,
+                    alone,
+                    &caches.cell(i),
+                )
+            })
             .collect();
         let plan = Plan {
             shadows: !desc.lights.is_empty()
