@@ -50,14 +50,31 @@ fn scene(step: f32, preintegrate: bool, packets: bool) -> Library {
 /// [`scene`] with node k along depth holding the voxel `voxel(k)` (normalised by the linear
 /// ramp's top voxel), the packet march on or off.
 fn scene_of(step: f32, preintegrate: bool, packets: bool, voxel: impl Fn(usize) -> u16) -> Library {
+    scene_with(step, preintegrate, packets, voxel, &O_ROWS)
+}
+
+/// [`scene_of`] through the opacity table of `rows` (input, opacity pairs).
+fn scene_with(
+    step: f32,
+    preintegrate: bool,
+    packets: bool,
+    voxel: impl Fn(usize) -> u16,
+    rows: &[f32],
+) -> Library {
     let mut vl = Library::new();
     let per = 65535 / (NZ - 1) as u16;
     let raw: Vec<u16> = (0..4 * 4 * NZ).map(|i| voxel(i / 16)).collect();
     let top = per as f32 * (NZ - 1) as f32;
     let data = Dataset::new([4, 4, NZ], Voxels::U16(raw), 0.0, top).unwrap();
     vl.add_dataset(DatasetId(1), data).unwrap();
-    vl.mapping(MappingId(1), MappingType::Ramp, 2, 1, &O_ROWS)
-        .unwrap();
+    vl.mapping(
+        MappingId(1),
+        MappingType::Ramp,
+        rows.len() as i32 / 2,
+        1,
+        rows,
+    )
+    .unwrap();
     colour_ramp(&mut vl, 0.25, 1.0);
     vl.scene().unwrap();
     vl.set_optimise(Optimise {
@@ -222,6 +239,40 @@ fn a_constant_value_keeps_the_exact_opacity_of_a_constant_medium() {
                 assert!(
                     (p[k] as f64 - want).abs() < 2e-6,
                     "step {step}, pre-integration {pre}, packets {packets}: {p:?} vs {want}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_nearly_constant_value_keeps_the_opacity_of_a_constant_medium() {
+    // An opacity that rises from 0 to 0.2 between F = 0.506 and 0.5065 (narrower than a
+    // table cell, 1/127) and stays 0.2; every node at F ≈ 0.508, just above the rise, one
+    // voxel in two a unit higher (a 16-bit scan's noise). Every slab's values lie above the
+    // rise, so the pixel is the constant medium's c·(1 − 0.8^DEPTH); the tables' nodes
+    // around 0.508 (0.5039 and 0.5118) straddle the rise, and their interpolation gave a
+    // slab of two values a unit apart about half the opacity. The tolerance: the colour
+    // ramp's change over the noise (its slope 1.1 times 2·10⁻⁵) and f32 roundings.
+    let rows = [0.0, 0.0, 0.506, 0.0, 0.5065, 0.2, 1.0, 0.2];
+    let per = 65535 / (NZ - 1) as u16;
+    let top = per as f64 * (NZ - 1) as f64;
+    let voxel = (0.508 * top) as u16;
+    let v = voxel as f64 / top;
+    let alpha = 1.0 - 0.8f64.powf(DEPTH / REFERENCE as f64);
+    let c = colour(v);
+    for step in [0.37f32, 1.0, 2.9] {
+        for packets in [true, false] {
+            let noisy = |k: usize| voxel + (k % 2) as u16;
+            let img = scene_with(step, true, packets, noisy, &rows)
+                .render_preview(3, 3, 1.0)
+                .unwrap();
+            let p = img.pixel(1, 1);
+            for k in 0..3 {
+                let want = c[k] * alpha;
+                assert!(
+                    (p[k] as f64 - want).abs() < 1e-4,
+                    "step {step}, packets {packets}: {p:?} vs {want}"
                 );
             }
         }

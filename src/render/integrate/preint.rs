@@ -551,9 +551,11 @@ impl<'a> PreMarch<'a> {
             return false;
         }
         // The slab's α, mean colour and the fraction of its length where it is lit.
-        let (alpha, rgb, at) = if va == vb {
-            // A constant medium: the midpoint march's sample, bit for bit.
-            let (o, Some(rgb)) = shading.opacity_colour(va) else {
+        let (alpha, rgb, at) = if (vb - va).abs() <= NEARLY_CONSTANT {
+            // A constant medium (the midpoint march's sample, bit for bit), or one whose two
+            // values are as good as equal: the sample at their mean.
+            let v = if va == vb { va } else { 0.5 * (va + vb) };
+            let (o, Some(rgb)) = shading.opacity_colour(v) else {
                 return false;
             };
             (obj.alpha(o as f64, len), rgb.map(|x| x as f64), 0.5)
@@ -582,6 +584,14 @@ impl<'a> PreMarch<'a> {
         light.composite(self, ray, c, alpha, DVec3::from_array(rgb), ta + at * len)
     }
 }
+
+/// A slab whose two values differ by at most this (1/64 of a table cell's width of value,
+/// some 12 units of a 16-bit voxel over the full range) is the constant medium of their mean.
+/// The tables are exact on their diagonal (a constant value) but interpolate between the
+/// nodes around it: where the transfer functions change within that cell (a rise narrower
+/// than a cell), a slab of nearly equal values would take a blend of the two sides, though
+/// its values lie on one.
+const NEARLY_CONSTANT: f32 = 1.0 / (64 * (crate::render::preint::TABLE_NODES - 1)) as f32;
 
 /// Whether the data bends along a slab of values `va` at its front, `vm` at its middle and
 /// `vb` at its back: the middle off the mean of the ends by more than [`REFINE_TOLERANCE`].
