@@ -192,16 +192,9 @@ fn table(shading: &DirectShading, kappa: f64) -> Vec<Slab> {
 }
 
 /// The [`Slab`] of a constant value (transfer-function values `cell`) over `kappa` reference
-/// lengths: α = 1 − t and its depth ∫₀¹ s·k·e^(−k·s) ds = (1 − t)/k − t for k = −ln t.
+/// lengths: [`absorbed`] of its optical depth k = −ln t.
 fn constant(cell: &Cell, kappa: f64) -> Slab {
-    let t = transmit_ln(cell.ln_t, kappa, 1.0);
-    let a = 1.0 - t;
-    let k = -(cell.ln_t * kappa);
-    let depth = if a > 0.0 && k.is_finite() {
-        a / k - t
-    } else {
-        0.0
-    };
+    let (a, depth) = absorbed(-(cell.ln_t * kappa));
     [
         a as f32,
         (a * cell.rgb[0]) as f32,
@@ -209,6 +202,28 @@ fn constant(cell: &Cell, kappa: f64) -> Slab {
         (a * cell.rgb[2]) as f32,
         depth as f32,
     ]
+}
+
+/// The α, 1 − e^(−k), of a constant medium of optical depth k (+∞ where it is opaque) and its
+/// depth ∫₀¹ s·k·e^(−k·s) ds = (1 − (1 + k)·e^(−k))/k (over α, where it is lit), without the
+/// cancellation of those differences at small k, which made the depth of a nearly clear
+/// medium noise (its ratio to α −27 or 8·10³ at k = 10⁻¹⁵, not ½): α by `exp_m1`, the depth
+/// below k = 10⁻³ by its series k/2 − k²/3 + k³/8 (the next term, k⁴/30, under 10⁻¹⁰ of
+/// it). An opaque medium is lit at its front (depth 0), a clear one (k = 0) adds nothing.
+pub(super) fn absorbed(k: f64) -> (f64, f64) {
+    if k.is_nan() || k <= 0.0 {
+        return (0.0, 0.0);
+    }
+    if k == f64::INFINITY {
+        return (1.0, 0.0);
+    }
+    let a = -(-k).exp_m1();
+    let depth = if k < 1e-3 {
+        k * (0.5 - k * (1.0 / 3.0 - k * 0.125))
+    } else {
+        (a - k * (-k).exp()) / k
+    };
+    (a, depth)
 }
 
 /// The transmittance `exp(ln_t·κ/m)` of a sub-slab `κ/m` reference lengths long through a

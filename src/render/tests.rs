@@ -2141,3 +2141,54 @@ fn absurd_sample_counts_are_refused() {
     let e = build(1e-9).check_work().unwrap_err();
     assert_eq!(e.code, ErrorCode::BadValue);
 }
+
+/// `preint::absorbed`: a constant medium's α and depth against the closed forms, from nearly
+/// clear to opaque. The depth's reference is ∫₀¹ s·k·e^(−k·s) ds by the composite midpoint rule
+/// in f64 over 10⁵ steps (relative error about k²/(24·10¹⁰), under 10⁻⁹ for k ≤ 10), α's
+/// is 1 − e^(−k) where that does not cancel (k ≥ 10⁻³) and its series to k⁴ below. The depth over α,
+/// where a piece is lit, tends to ½ as the medium clears (k/2 over k).
+#[test]
+fn a_constant_medium_is_lit_at_its_depth_however_clear() {
+    use crate::render::preint::absorbed;
+    let depth_of = |k: f64| {
+        let n = 100_000;
+        (0..n)
+            .map(|i| {
+                let s = (i as f64 + 0.5) / n as f64;
+                s * k * (-k * s).exp()
+            })
+            .sum::<f64>()
+            / n as f64
+    };
+    for k in [
+        1e-300, 1e-30, 1e-15, 1e-9, 1e-6, 9.99e-4, 1e-3, 0.01, 0.5, 1.0, 4.0, 10.0,
+    ] {
+        let (a, depth) = absorbed(k);
+        let want_a = if k >= 1e-3 {
+            1.0 - (-k).exp()
+        } else {
+            k * (1.0 - k * (0.5 - k * (1.0 / 6.0 - k / 24.0)))
+        };
+        assert!(
+            (a - want_a).abs() <= 1e-12 * want_a,
+            "k {k}: α {a} against {want_a}"
+        );
+        let want = depth_of(k);
+        assert!(
+            (depth - want).abs() <= 1e-9 * want,
+            "k {k}: depth {depth} against {want}"
+        );
+        let at = depth / a;
+        assert!((0.0..=0.5).contains(&at), "k {k}: lit at {at}");
+        if k <= 1e-6 {
+            assert!((at - 0.5).abs() < 1e-6, "k {k}: lit at {at}");
+        }
+    }
+    assert_eq!(absorbed(0.0), (0.0, 0.0));
+    assert_eq!(absorbed(-0.0), (0.0, 0.0));
+    assert_eq!(absorbed(f64::INFINITY), (1.0, 0.0));
+    assert_eq!(absorbed(f64::NAN), (0.0, 0.0));
+    let (a, depth) = absorbed(700.0);
+    assert_eq!(a, 1.0);
+    assert!((depth - 1.0 / 700.0).abs() < 1e-15, "{depth}");
+}
