@@ -10,7 +10,7 @@
 //! arithmetic (segments located once for several outputs, segment pairs) are the renderer's.
 
 use crate::error::{err, ErrorCode, Result};
-use crate::num::clamp_fields;
+use crate::num::{clamp_fields, try_with_capacity};
 use crate::types::MappingType;
 
 /// The largest number of rows a mapping may have.
@@ -74,7 +74,9 @@ pub(crate) fn segment_value(seg: &[f64], dv: f64, j: usize) -> f32 {
 
 impl Mapping {
     /// Validates a table of `points` rows `(a, b_1, …, b_outputs)`: every value finite and in
-    /// [0, 1], the a strictly increasing, and the table exactly `points * (outputs + 1)` long.
+    /// [0, 1], the a strictly increasing, and the table exactly `points * (outputs + 1)` long
+    /// (else `BadValue`). The rows and the ramp's segments are allocated fallibly: `NoMemory`
+    /// where they do not fit.
     pub fn new(kind: MappingType, points: i32, outputs: i32, table: &[f32]) -> Result<Mapping> {
         if points < 1 || points as usize > MAX_POINTS {
             return err(
@@ -111,8 +113,10 @@ impl Mapping {
                 ),
             );
         }
-        let mut a = Vec::with_capacity(n);
-        let mut b = Vec::with_capacity(n * k);
+        // The rows and the ramp's segments grow with points × outputs (about 1.3 GiB at the
+        // largest sizes): allocated fallibly, a failure is `NoMemory` and nothing is kept.
+        let mut a = try_with_capacity(n, "vlMapping's input points")?;
+        let mut b = try_with_capacity(n * k, "vlMapping's outputs")?;
         for row in table.chunks_exact(k + 1) {
             if let Some(&last) = a.last() {
                 if row[0] <= last {
@@ -128,7 +132,7 @@ impl Mapping {
             a.push(row[0]);
             b.extend_from_slice(&row[1..]);
         }
-        let mut segments = Vec::with_capacity((n - 1) * (1 + 2 * k));
+        let mut segments = try_with_capacity((n - 1) * (1 + 2 * k), "vlMapping's ramp segments")?;
         for i in 1..n {
             segments.push(a[i - 1] as f64);
             for j in 0..k {
