@@ -2,7 +2,8 @@
 //! grids, the tiles, voxelization) runs on it rather than on rayon's global pool.
 //!
 //! It is built on first use with rayon's defaults (`RAYON_NUM_THREADS`, else one thread a core,
-//! so the thread count is what rayon's global pool would have) and kept for later renders. A
+//! so the thread count is what rayon's global pool would have), stacks of 8 MiB ([`STACK`]),
+//! and kept for later renders. A
 //! process that forked after the pool was made has none of its threads, so a pool made by
 //! another process is left alone and a new one built. A failure to start the threads is an
 //! error of the render that needed them (`VL_NOMEMORY`), and the next render tries again. Work
@@ -12,6 +13,12 @@
 
 use crate::error::{Error, ErrorCode, Result};
 use std::sync::{Arc, Mutex};
+
+/// The stack of each of the pool's threads, which run the user's field and progress
+/// functions: a C program's main thread usually has 8 MiB (Linux's default `ulimit -s`),
+/// against the 2 MiB of a thread Rust starts, and a function that runs on the one should run
+/// on the other. Address space only: pages are used as the stack grows into them.
+const STACK: usize = 8 << 20;
 
 /// The pool and the process that built it.
 static POOL: Mutex<Option<(u32, Arc<rayon::ThreadPool>)>> = Mutex::new(None);
@@ -38,6 +45,7 @@ fn pool() -> Result<Arc<rayon::ThreadPool>> {
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .thread_name(|i| format!("vlib-{i}"))
+        .stack_size(STACK)
         .build()
         .map_err(|e| {
             Error::new(

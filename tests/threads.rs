@@ -31,3 +31,30 @@ fn figure2_bytes_do_not_depend_on_the_thread_count() {
         "RAYON_NUM_THREADS=1 and =2 differ"
     );
 }
+
+/// The library's rendering threads have the stack a C program's main thread usually has
+/// (8 MiB): a field function that keeps 4 MiB on its stack runs there as it would on the main
+/// thread (a thread Rust starts has 2 MiB, where it overflowed and aborted the process).
+#[test]
+fn a_field_function_may_use_megabytes_of_stack() {
+    use vlib::{Fields, Library};
+    let mut vl = Library::new();
+    vl.scene().unwrap();
+    vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+    vl.step_size(0.25, 1.0).unwrap();
+    vl.object().unwrap();
+    vl.function(Fields::O, |s| {
+        let big = [1u8; 4 << 20];
+        let big = std::hint::black_box(&big);
+        let v = vlib::vlaux::sphere(s.position()) * big[big.len() / 2] as f32;
+        let _ = s.set(Fields::O, v * 0.1);
+    })
+    .unwrap();
+    vl.set(Fields::COLORS | Fields::KA, 1.0).unwrap();
+    vl.end().unwrap();
+    let image = vl.render_preview(8, 8, 1.0).unwrap();
+    assert!(
+        image.transmittance.iter().any(|&t| t < 0.99),
+        "the ball is seen"
+    );
+}
