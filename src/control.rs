@@ -321,8 +321,9 @@ impl Progress {
             };
             let fraction = fraction.max(told.fraction);
             told.fraction = fraction;
-            // A panic in the function is the render's (caught where the render's are).
-            if !f(fraction) {
+            // A panic in the function is the render's (caught where the render's are). Its
+            // answer to 1 is not asked for: every output is done, nothing is left to stop.
+            if !f(fraction) && fraction < 1.0 {
                 self.stopped.store(true, Ordering::Relaxed);
             }
         }

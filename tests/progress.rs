@@ -86,6 +86,28 @@ fn progress_counts_pixels_and_nodes_and_ends_at_one() {
     assert!(dir.0.join("a.ppm").is_file() && dir.0.join("v_o.vlb").is_file());
 }
 
+/// The answer to the final 1 is not asked for: every output is done, and a 0 then (a cancel
+/// button pressed as the render ends) neither discards the last output nor fails the scene.
+#[test]
+fn a_zero_answer_to_the_final_one_discards_nothing() {
+    let dir = Dir::new("final");
+    let (mut vl, heard) = recording(|f| f < 1.0);
+    ball(&mut vl, 0.05);
+    vl.image(dir.0.join("a.ppm"), 1.0, 30, 20).unwrap();
+    vl.volume(
+        dir.0.join("v"),
+        Fields::O,
+        [0.0; 3],
+        [1.0; 3],
+        [10, 10, 10],
+        1,
+    )
+    .unwrap();
+    vl.end().unwrap();
+    assert_eq!(heard.lock().unwrap().last(), Some(&1.0));
+    assert!(dir.0.join("a.ppm").is_file() && dir.0.join("v_o.vlb").is_file());
+}
+
 /// An image that cannot be written (its path is a directory) fails the scene with
 /// `VL_IOERROR`; the others are written, and the progress function still hears 1.
 #[test]

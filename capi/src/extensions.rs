@@ -67,7 +67,8 @@ impl CProgress {
 /// functions, on one of the
 /// library's rendering threads (the thread that called `vlEnd` waits meanwhile), one call at
 /// a time. Returning 0 cancels the render: its `vlEnd` records `VL_CANCELLED` and writes no
-/// file of the output it was making. Inside `f` only `vlCancel`, `vlSample`, `vlError` and
+/// file of the output it was making (the answer to the final 1 is not asked for: every output
+/// is done). Inside `f` only `vlCancel`, `vlSample`, `vlError` and
 /// `vlErrorString` are legal. NULL removes the function. Legal at library and scene scope;
 /// kept until the library's final `vlEnd`.
 #[no_mangle]
