@@ -295,16 +295,23 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 
 /// Writes the geometry sidecar of the dataset file `path` (atomically), or, for a dataset
 /// without geometry, removes one an earlier file left, so that the sidecar always describes
-/// the file beside it.
+/// the file beside it. A sidecar whose name is too long for the file system (a dataset file's
+/// name within 5 bytes of the limit) cannot exist: there is none to remove.
 pub(crate) fn write_sidecar(
     path: &Path,
     geometry: Option<(&crate::data::Geometry, [usize; 3])>,
 ) -> Result<()> {
     let sidecar = crate::data::Geometry::sidecar(path);
+    let absent = |e: &std::io::Error| {
+        matches!(
+            e.kind(),
+            std::io::ErrorKind::NotFound | std::io::ErrorKind::InvalidFilename
+        )
+    };
     match geometry {
         Some((g, dims)) => write_atomic(&sidecar, g.to_text(dims).as_bytes()),
         None => match fs::remove_file(&sidecar) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::new(
+            Err(e) if !absent(&e) => Err(Error::new(
                 ErrorCode::IoError,
                 format!("{}: {e}", sidecar.display()),
             )),

@@ -313,3 +313,24 @@ fn the_png_writer_keeps_the_first_error() {
     assert_eq!(e.kind(), ErrorKind::StorageFull, "the first one");
     assert_eq!(e.to_string(), "StorageFull");
 }
+
+/// A dataset file whose name is within 5 bytes of the file system's 255 has no sidecar to
+/// remove (the sidecar's name, 5 bytes longer, cannot exist): writing a dataset without
+/// geometry there succeeds, as with a shorter name (it was `VL_IOERROR`, from the removal's
+/// ENAMETOOLONG).
+#[test]
+fn a_dataset_name_near_the_limit_has_no_sidecar_to_remove() {
+    let dir = std::env::temp_dir().join(format!("vlib-sidecar-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for len in [250usize, 255] {
+        let name = format!("{}.vlb", "a".repeat(len - 4));
+        let path = dir.join(&name);
+        std::fs::write(&path, b"x").unwrap();
+        assert!(
+            super::files::write_sidecar(&path, None).is_ok(),
+            "a {len}-byte name"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
