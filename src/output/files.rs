@@ -32,12 +32,18 @@ pub(crate) fn file_name(path: &Path) -> Option<&std::ffi::OsStr> {
 
 /// The file a write to `path` replaces: `path` itself, or, where `path` is a symbolic link, the
 /// file the chain of links ends at (which need not exist yet), so that the link stays a link
-/// and its target is updated.
+/// and its target is updated. A link is followed as the kernel's `protected_symlinks` rule
+/// follows one, which resolving the links here would otherwise bypass: in a sticky directory
+/// that anyone may write (`/tmp`), only a link owned by this process's user or by the
+/// directory's owner; another user's link there is `PermissionDenied`, and nothing is written
+/// through it (a link planted in `/tmp` at the name of an output would have had the library
+/// replace whatever file it named).
 fn destination(path: &Path) -> std::io::Result<PathBuf> {
     let mut p = path.to_path_buf();
     for _ in 0..MAX_LINKS {
         match fs::symlink_metadata(&p) {
             Ok(m) if m.file_type().is_symlink() => {
+                refuse_foreign_link(&p, &m)?;
                 let target = fs::read_link(&p)?;
                 if file_name(&target).is_none() {
                     return Err(std::io::Error::other(format!(
@@ -55,6 +61,35 @@ fn destination(path: &Path) -> std::io::Result<PathBuf> {
         }
     }
     Err(std::io::Error::other("too many levels of symbolic links"))
+}
+
+/// `PermissionDenied` where the link `link` (its metadata `m`) lies in a sticky directory
+/// that anyone may write and is owned neither by this process's effective user nor by the
+/// directory's owner (see [`destination`]).
+fn refuse_foreign_link(link: &Path, m: &fs::Metadata) -> std::io::Result<()> {
+    use std::os::unix::fs::MetadataExt;
+    let dir = match link.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let d = fs::metadata(dir)?;
+    // (Sticky, and writable by others.)
+    if d.mode() & 0o1002 != 0o1002 {
+        return Ok(());
+    }
+    // SAFETY: geteuid has no preconditions and cannot fail.
+    let euid = unsafe { libc::geteuid() };
+    if m.uid() == euid || m.uid() == d.uid() {
+        return Ok(());
+    }
+    Err(std::io::Error::new(
+        std::io::ErrorKind::PermissionDenied,
+        format!(
+            "the link {} belongs to another user in a sticky directory anyone may write, and \
+             is not followed",
+            link.display()
+        ),
+    ))
 }
 
 /// A name for a temporary file: `.vl-` and 16 hexadecimal digits that no other process or call

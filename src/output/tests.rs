@@ -334,3 +334,50 @@ fn a_dataset_name_near_the_limit_has_no_sidecar_to_remove() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// In a sticky directory anyone may write (as `/tmp`), a link owned by another user is not
+/// followed (the kernel's `protected_symlinks` rule, which resolving links in the library
+/// would otherwise bypass): the write is `VL_IOERROR` and the file the link names is left as
+/// it was; a link of this process's user there is followed (its target written), and another
+/// user's link in a directory that is not sticky is followed too. Giving a link to another
+/// user needs root: elsewhere that part is skipped.
+#[test]
+fn another_users_link_in_a_sticky_directory_is_not_followed() {
+    use std::os::unix::fs::{lchown, symlink, PermissionsExt};
+    let root = std::env::temp_dir().join(format!("vlib-sticky-{}", std::process::id()));
+    let _ = fs::remove_dir_all(&root);
+    let (sticky, plain, victims) = (root.join("sticky"), root.join("plain"), root.join("v"));
+    for d in [&sticky, &plain, &victims] {
+        fs::create_dir_all(d).unwrap();
+    }
+    fs::set_permissions(&sticky, fs::Permissions::from_mode(0o1777)).unwrap();
+    let victim = victims.join("victim.txt");
+    fs::write(&victim, b"keep").unwrap();
+    // Our own link in the sticky directory: followed.
+    symlink(&victim, sticky.join("own.ppm")).unwrap();
+    write_atomic(&sticky.join("own.ppm"), b"new").unwrap();
+    assert_eq!(fs::read(&victim).unwrap(), b"new");
+    fs::write(&victim, b"keep").unwrap();
+    // Another user's (nobody's) link there: refused, the victim kept.
+    let foreign = sticky.join("foreign.ppm");
+    symlink(&victim, &foreign).unwrap();
+    if lchown(&foreign, Some(65534), Some(65534)).is_err() {
+        eprintln!("not root: another user's link cannot be made here");
+        fs::remove_dir_all(&root).unwrap();
+        return;
+    }
+    let e = write_atomic(&foreign, b"planted").unwrap_err();
+    assert_eq!(e.code, ErrorCode::IoError, "{e}");
+    assert_eq!(fs::read(&victim).unwrap(), b"keep");
+    assert!(fs::symlink_metadata(&foreign)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    // The same link in a directory that is not sticky: followed.
+    let elsewhere = plain.join("foreign.ppm");
+    symlink(&victim, &elsewhere).unwrap();
+    lchown(&elsewhere, Some(65534), Some(65534)).unwrap();
+    write_atomic(&elsewhere, b"fine").unwrap();
+    assert_eq!(fs::read(&victim).unwrap(), b"fine");
+    fs::remove_dir_all(&root).unwrap();
+}
