@@ -21,7 +21,7 @@
 
 use crate::errors;
 use crate::sample;
-use std::ffi::{CStr, OsStr};
+use std::ffi::OsStr;
 use std::os::raw::c_char;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
@@ -302,7 +302,13 @@ pub(crate) unsafe fn read_floats<const N: usize>(
     Ok(out)
 }
 
-/// A C string as a path; any bytes are accepted (paths need not be UTF-8).
+/// The longest path a command accepts, in bytes (1 MiB): far beyond any system's `PATH_MAX`,
+/// so no name a file system takes is refused, while the copies a command makes of a name (its
+/// extension in lower case, error messages) stay small.
+pub(crate) const MAX_PATH_BYTES: usize = 1 << 20;
+
+/// A C string as a path; any bytes are accepted (paths need not be UTF-8). A string longer than
+/// [`MAX_PATH_BYTES`] is `BadFile`, found by reading at most one byte past the bound.
 ///
 /// # Safety
 /// `s` must be NULL or a NUL-terminated string that outlives the returned reference.
@@ -310,9 +316,21 @@ pub(crate) unsafe fn c_path<'a>(name: &str, arg: &str, s: *const c_char) -> Resu
     if s.is_null() {
         return Err(null(name, arg));
     }
-    // SAFETY: non-NULL and NUL-terminated by the caller's contract, which also bounds the
-    // lifetime `'a`.
-    let bytes = unsafe { CStr::from_ptr(s) }.to_bytes();
+    let mut len = 0;
+    // SAFETY: non-NULL and NUL-terminated by the caller's contract: every byte up to the NUL
+    // is readable, and the scan stops there.
+    while unsafe { *s.add(len) } != 0 {
+        if len == MAX_PATH_BYTES {
+            return Err(Error::new(
+                ErrorCode::BadFile,
+                format!("{name}: {arg} is longer than {MAX_PATH_BYTES} bytes"),
+            ));
+        }
+        len += 1;
+    }
+    // SAFETY: the `len` bytes before the NUL, readable as above; the caller's contract bounds
+    // the lifetime `'a`.
+    let bytes = unsafe { std::slice::from_raw_parts(s.cast::<u8>(), len) };
     os_str(name, bytes).map(Path::new)
 }
 

@@ -56,3 +56,91 @@ fn a_caught_panic_prints_nothing() {
         "the host's hook ran:\n{err}"
     );
 }
+
+/// A path `len` bytes long under a directory that does not exist, ending in `.ppm`.
+fn long_path(len: usize) -> std::ffi::CString {
+    let mut p = b"/vlib-no-such-directory/".to_vec();
+    p.resize(len - 4, b'a');
+    p.extend_from_slice(b".ppm");
+    std::ffi::CString::new(p).expect("no NUL")
+}
+
+/// A path longer than `MAX_PATH_BYTES` is `VL_BADFILE` at every command that takes one and
+/// changes nothing; one of exactly the bound, or a long but legal one (5000 bytes), passes the
+/// check and fails later, when the file is opened.
+#[test]
+fn a_path_longer_than_the_bound_is_bad_file_and_a_long_one_is_not() {
+    use crate::tests::common::{drain, serial};
+    use crate::types::{VL_BADFILE, VL_IOERROR, VL_O};
+    let _serial = serial();
+    *lock_state() = None;
+    drain();
+    let huge = long_path(MAX_PATH_BYTES + 1);
+    let bound = long_path(MAX_PATH_BYTES);
+    let long = long_path(5000);
+    crate::vlInit();
+    // SAFETY: NUL-terminated strings that outlive the calls.
+    unsafe {
+        let before = state_fingerprint();
+        crate::vlLoad(1, huge.as_ptr());
+        assert_eq!(drain(), vec![VL_BADFILE], "vlLoad of a huge name");
+        assert!(
+            errors::last_error_message().is_some_and(|m| m.contains("longer than 1048576 bytes"))
+        );
+        assert_eq!(
+            state_fingerprint(),
+            before,
+            "a refused vlLoad changes nothing"
+        );
+        for ok in [&bound, &long] {
+            crate::vlLoad(1, ok.as_ptr());
+            assert_eq!(drain(), vec![VL_IOERROR], "vlLoad of a long name opens it");
+        }
+
+        crate::vlScene();
+        let before = state_fingerprint();
+        crate::vlImage(huge.as_ptr(), 1.0, 2, 2);
+        assert_eq!(drain(), vec![VL_BADFILE], "vlImage of a huge name");
+        crate::vlVolume(
+            huge.as_ptr(),
+            VL_O,
+            0.0,
+            0.0,
+            0.0,
+            1.0,
+            1.0,
+            1.0,
+            2,
+            2,
+            2,
+            1,
+        );
+        assert_eq!(drain(), vec![VL_BADFILE], "vlVolume of a huge prefix");
+        assert_eq!(
+            state_fingerprint(),
+            before,
+            "refused outputs change nothing"
+        );
+        crate::vlImage(long.as_ptr(), 1.0, 2, 2);
+        crate::vlVolume(
+            long.as_ptr(),
+            VL_O,
+            0.0,
+            0.0,
+            0.0,
+            1.0,
+            1.0,
+            1.0,
+            2,
+            2,
+            2,
+            1,
+        );
+        assert_eq!(drain(), Vec::<i32>::new(), "long names are accepted");
+        crate::vlEnd(); // the scene: its outputs cannot be written
+        assert!(drain().iter().all(|&e| e == VL_IOERROR));
+    }
+    crate::vlEnd();
+    drain();
+    assert!(lock_state().is_none());
+}
