@@ -153,16 +153,18 @@ pub unsafe extern "C" fn vlRenderBuffer(
     ffi_boundary(VL_FALSE, || {
         const NAME: &str = "vlRenderBuffer";
         let state = state_outside_render(NAME)?;
-        let lib: &Library = match state.as_ref() {
-            Some(lib) if lib.scope() == vlib_core::Scope::Scene => lib,
-            _ => {
-                return Err(Error::new(
-                    ErrorCode::BadScope,
-                    format!("{NAME}: at scene scope (outside objects) only"),
-                ))
-            }
+        let scope = || {
+            Error::new(
+                ErrorCode::BadScope,
+                format!("{NAME}: at scene scope (outside objects) only"),
+            )
         };
-        let format = PixelFormat::from_raw(format)?;
+        let lib: &Library = state.as_ref().ok_or_else(scope)?;
+        if lib.scope() != vlib_core::Scope::Scene {
+            fail_the_team(lib);
+            return Err(scope());
+        }
+        let format = PixelFormat::from_raw(format).inspect_err(|_| fail_the_team(lib))?;
         let side = |v: vlint| u32::try_from(v).ok().filter(|&v| v >= 1);
         let checked = match (buf.is_null(), side(width), side(height)) {
             (true, _, _) => Err(null(NAME, "buf")),
@@ -175,14 +177,7 @@ pub unsafe extern "C" fn vlRenderBuffer(
         let (w, h) = match checked {
             Ok(size) => size,
             Err(e) => {
-                // With a team, the other ranks wait in the render's first agreement: this
-                // rank takes part in it with a buffer that fails it, so every rank fails.
-                #[cfg(feature = "mpi")]
-                if lib.team().is_some() {
-                    let mark = crate::errors::mark();
-                    let _ = lib.render_into(1, 1, 1.0, format, &mut []);
-                    crate::mpi::share_errors(lib, mark);
-                }
+                fail_the_team(lib);
                 return Err(e);
             }
         };
@@ -205,6 +200,21 @@ pub unsafe extern "C" fn vlRenderBuffer(
         rendered?;
         Ok(VL_TRUE)
     })
+}
+
+/// Where `lib` renders with a team (an MPI job) and this rank refuses its `vlRenderBuffer`
+/// before the render (a scope, format, buffer or size the C layer checks), the other ranks
+/// wait in the render's first agreement: this rank takes part in it with a buffer that fails
+/// it, so every rank fails instead. Without a team, nothing.
+fn fail_the_team(lib: &Library) {
+    #[cfg(feature = "mpi")]
+    if lib.team().is_some() {
+        let mark = crate::errors::mark();
+        let _ = lib.render_into(1, 1, 1.0, PixelFormat::Rgb8, &mut []);
+        crate::mpi::share_errors(lib, mark);
+    }
+    #[cfg(not(feature = "mpi"))]
+    let _ = lib;
 }
 
 /// Extension. Chooses how the gradients of dataset fields, which light their samples, are

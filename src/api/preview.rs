@@ -30,17 +30,23 @@ impl Library {
         aspect: f32,
         backdrop: Backdrop,
     ) -> Result<Image> {
-        let desc = self.open_scene("render")?;
-        check_size("render", width, height, aspect)?;
+        // (With a team, a rank whose arguments or scope are refused takes part in the first
+        // agreement with its error, so every rank fails instead of the others waiting.)
+        let desc = self
+            .open_scene("render")
+            .and_then(|desc| check_size("render", width, height, aspect).map(|()| desc));
+        if let (Err(e), None) = (&desc, &self.team) {
+            return Err(e.clone());
+        }
         crate::pool::install(|| {
             let progress =
                 crate::control::Progress::new(&self.control, width as u64 * height as u64)
                     .with_team(self.team.as_ref());
             // (With a team, a rank that cannot compile the scene fails every rank.)
-            let scene = crate::team::agree(
-                progress.team(),
-                crate::error::catch("compiling the scene", || self.compile(&desc)),
-            )?;
+            let compiled = desc.and_then(|desc| {
+                crate::error::catch("compiling the scene", || self.compile(&desc))
+            });
+            let scene = crate::team::agree(progress.team(), compiled)?;
             crate::render::render_image(&scene, (width, height, aspect), backdrop, &progress)
         })
     }
@@ -67,31 +73,33 @@ impl Library {
         format: PixelFormat,
         buffer: &mut [u8],
     ) -> Result<()> {
-        let desc = self.open_scene("render_into")?;
-        check_size("render_into", width, height, aspect)?;
         let needed = format.image_bytes(width, height);
-        // (With a team, checked with the compile below: a rank whose buffer is short fails
-        // every rank.)
-        let fits = needed.filter(|&n| n <= buffer.len()).ok_or_else(|| {
-            crate::error::Error::new(
-                ErrorCode::BadValue,
-                format!(
-                    "render_into: a {width}x{height} image of {format:?} takes {} bytes, the \
-                     buffer has {}",
-                    needed.map_or("more than usize::MAX".into(), |n| n.to_string()),
-                    buffer.len()
-                ),
-            )
+        // (With a team, checked with the compile below: a rank whose scope, sizes or buffer
+        // are refused fails every rank, instead of the others waiting for it.)
+        let fits = self.open_scene("render_into").and_then(|desc| {
+            check_size("render_into", width, height, aspect)?;
+            let bytes = needed.filter(|&n| n <= buffer.len()).ok_or_else(|| {
+                crate::error::Error::new(
+                    ErrorCode::BadValue,
+                    format!(
+                        "render_into: a {width}x{height} image of {format:?} takes {} bytes, \
+                         the buffer has {}",
+                        needed.map_or("more than usize::MAX".into(), |n| n.to_string()),
+                        buffer.len()
+                    ),
+                )
+            })?;
+            Ok((desc, bytes))
         });
-        if self.team.is_none() {
-            fits.clone()?;
+        if let (Err(e), None) = (&fits, &self.team) {
+            return Err(e.clone());
         }
         crate::pool::install(|| {
             let progress =
                 crate::control::Progress::new(&self.control, width as u64 * height as u64)
                     .with_team(self.team.as_ref());
             // (With a team, a rank that cannot compile the scene fails every rank.)
-            let compiled = fits.and_then(|bytes| {
+            let compiled = fits.and_then(|(desc, bytes)| {
                 let scene = crate::error::catch("compiling the scene", || self.compile(&desc))?;
                 Ok((bytes, scene))
             });

@@ -468,3 +468,33 @@ fn a_rank_whose_buffer_is_short_fails_render_into_on_every_rank() {
     assert_eq!(results[0], (Err((ErrorCode::BadValue, true)), true));
     assert_eq!(results[1], (Err((ErrorCode::BadValue, false)), true));
 }
+
+#[test]
+fn a_rank_whose_arguments_are_refused_fails_every_rank() {
+    // Rank 1 asks for a view plane of aspect −1 (refused before any render): it takes part in
+    // the first agreement with that error, so both ranks fail with `BadValue` instead of rank
+    // 0 waiting for it in the render; the same for `render` with a side of 0; the next render
+    // goes through on both.
+    let results = on_ranks_within(2, |team| {
+        let rank = team.rank();
+        let vl = constant_medium(team, usize::MAX);
+        let format = crate::PixelFormat::Rgb8;
+        let mut buffer = vec![0u8; format.image_bytes(8, 8).unwrap()];
+        let aspect = if rank == 1 { -1.0 } else { 1.0 };
+        let into = vl.render_into(8, 8, aspect, format, &mut buffer);
+        let side = if rank == 1 { 0 } else { 8 };
+        let image = vl.render(side, 8, 1.0, crate::Backdrop::Background);
+        let next = vl.render_into(8, 8, 1.0, format, &mut buffer);
+        (
+            into.map_err(|e| e.code),
+            image.map(|_| ()).map_err(|e| e.code),
+            next.is_ok(),
+        )
+    });
+    for r in &results {
+        assert_eq!(
+            *r,
+            (Err(ErrorCode::BadValue), Err(ErrorCode::BadValue), true)
+        );
+    }
+}
