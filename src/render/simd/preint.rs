@@ -355,7 +355,7 @@ impl<'a> Packets<'a> {
     fn values8(&self, st: &LaneState<W>, active: u32, out: &mut [f32; W]) {
         // SAFETY: this function has AVX2 and FMA.
         let s = unsafe { Avx2::new() };
-        self.values(s, st, active, out)
+        self.values(s, st, &st.mid, active, out)
     }
 
     /// [`Packets::values`] in sixteen lanes ([`Packets::new`]).
@@ -363,21 +363,23 @@ impl<'a> Packets<'a> {
     fn values16(&self, st: &LaneState<V>, active: u32, out: &mut [f32; V]) {
         // SAFETY: this function has every feature `Avx512` stands for.
         let s = unsafe { Avx512::new() };
-        self.values(s, st, active, out)
+        self.values(s, st, &st.mid, active, out)
     }
 
-    /// The dataset's values at the samples of the `active` lanes (at `st.mid`) into `out`:
-    /// [`Packets::sample`]'s, as [`Packets::step`] reads them; 0 outside the dataset (as
-    /// `Dataset::trilinear` gives). Other lanes' values are 0.
+    /// The dataset's values at ray parameters `mid` of the `active` lanes' rays (`st.mid`: their
+    /// samples; or other points of them, as `slabs` reads) into `out`: [`Packets::sample`]'s,
+    /// as [`Packets::step`] reads them; 0 outside the dataset (as `Dataset::trilinear` gives).
+    /// Other lanes' values are 0.
     #[inline(always)]
-    fn values<S: Simd<N>, const N: usize>(
+    pub(super) fn values<S: Simd<N>, const N: usize>(
         &self,
         s: S,
         st: &LaneState<N>,
+        mid: &[f64; N],
         active: u32,
         out: &mut [f32; N],
     ) {
-        *out = match self.sample(s, st, &st.mid, active) {
+        *out = match self.sample(s, st, mid, active) {
             Some(Sampled { pass, v, .. }) => {
                 let mut vals = [0f32; N];
                 s.st(&mut vals, s.keep(s.of_bits(pass), v));

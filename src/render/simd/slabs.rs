@@ -3,7 +3,7 @@
 //! (`PreMarch::follows`: the common case, a run's consecutive samples) and the slab between
 //! the two can show something, the slab goes into a batch of the step's slabs, and the
 //! values at the middles and the quarters of a batch's slabs are read together in lanes, the
-//! sample's own reads ([`Packets::sample`]) at those points of the slabs' rays: the scalar
+//! sample's own reads ([`Packets::values`]) at those points of the slabs' rays: the scalar
 //! `PreMarch::value`'s bits. The rest (the halving tests, the tables, the composite in f64,
 //! the lighting) is the scalar code's, `PreMarch::slab_with` given those values: the pieces
 //! composited are those of the scalar march, bit for bit. (The tables are not read in lanes:
@@ -13,7 +13,6 @@
 //! tables (`render::preint`), the pieces' compositing and lighting (`integrate::preint`,
 //! [`preint`]).
 
-use super::step::Sampled;
 use super::*;
 
 /// A batch of slabs of a step of the pre-integrated packet march, one a lane: in lane k < `n`,
@@ -101,7 +100,7 @@ impl Packets<'_> {
     }
 
     /// The values at the middles and the quarters of the `slabs.n` slabs of `slabs`
-    /// (`PreMarch::slab`'s f64 operations for the points, [`Packets::sample`]'s reads).
+    /// (`PreMarch::slab`'s f64 operations for the points, [`Packets::values`]' reads).
     #[inline(always)]
     fn slabs_in_lanes<S: Simd<N>, const N: usize>(&self, s: S, slabs: &mut LaneSlabs<N>) {
         if slabs.n == 0 {
@@ -119,14 +118,7 @@ impl Packets<'_> {
         }
         // (A loop, not a closure, which would not have the caller's target features.)
         for (out, at) in slabs.values.iter_mut().zip([&m, &qa, &qb]) {
-            *out = match self.sample(s, &slabs.rays, at, live) {
-                Some(Sampled { pass, v, .. }) => {
-                    let mut vals = [0f32; N];
-                    s.st(&mut vals, s.keep(s.of_bits(pass), v));
-                    vals
-                }
-                None => [0f32; N],
-            };
+            self.values(s, &slabs.rays, at, live, out);
         }
     }
 }
