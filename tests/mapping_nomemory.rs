@@ -9,6 +9,9 @@
 
 #![cfg(all(target_os = "linux", target_pointer_width = "64"))]
 
+#[path = "common/status.rs"]
+mod status;
+
 use std::process::Command;
 use vlib::{ErrorCode, Library, MappingId, MappingType};
 
@@ -44,17 +47,7 @@ fn limit_address_space(bytes: u64) {
 
 /// The address space this process has mapped (`VmSize`), in bytes.
 fn mapped() -> u64 {
-    let status = std::fs::read_to_string("/proc/self/status").expect("read /proc/self/status");
-    let line = status
-        .lines()
-        .find(|l| l.starts_with("VmSize:"))
-        .expect("VmSize");
-    let kib: u64 = line
-        .split_whitespace()
-        .nth(1)
-        .and_then(|v| v.parse().ok())
-        .expect("a number of kB");
-    kib * 1024
+    status::status_bytes("VmSize")
 }
 
 /// In the child: a library holding a small mapping, the largest mapping declared under the

@@ -6,22 +6,15 @@
 //! grow the peak by at most twice that (the output held whole for the encoder, a strip of
 //! about 2²⁰ pixels at 32 bytes each, and for PNG the compressed stream, small here).
 
+#[path = "common/status.rs"]
+mod status;
+
 use std::process::Command;
 use vlib::{Camera, Fields, Library};
 
 /// The peak resident size of this process, in bytes.
 fn peak() -> u64 {
-    let status = std::fs::read_to_string("/proc/self/status").expect("read /proc/self/status");
-    let line = status
-        .lines()
-        .find(|l| l.starts_with("VmHWM:"))
-        .expect("VmHWM");
-    let kib: u64 = line
-        .split_whitespace()
-        .nth(1)
-        .and_then(|v| v.parse().ok())
-        .expect("a number of kB");
-    kib * 1024
+    status::status_bytes("VmHWM")
 }
 
 /// Renders a sphere of radius a quarter of the view to `path` at `side × side`.

@@ -423,25 +423,12 @@ fn band(falling: bool, edge: usize, step: f32, skip_empty: bool, packets: bool) 
         ..Optimise::default()
     })
     .unwrap();
-    vl.camera(&Camera {
-        eye: [0.0, 0.0, -100.0],
-        at: [0.0, 0.0, 0.0],
-        up: [0.0, 1.0, 0.0],
-        fov: 20.0,
-    })
-    .unwrap();
+    head_on(&mut vl);
     vl.background(0.0, 0.0, 0.0).unwrap();
     vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
     vl.step_size(step, 1.0).unwrap();
-    vl.object().unwrap();
-    vl.translate(-0.5, -0.5, 0.0).unwrap();
-    vl.scale(400.0, 400.0, (nz - 1) as f32).unwrap();
-    vl.dataset(Fields::F, DatasetId(1)).unwrap();
-    vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
-    for (k, field) in [Fields::R, Fields::G, Fields::B].into_iter().enumerate() {
-        vl.map(field, Fields::F, MappingId(2), k as i32 + 1)
-            .unwrap();
-    }
+    slab_object(&mut vl, (nz - 1) as f32);
+    direct_shading(&mut vl);
     vl.set(Fields::KA, 1.0).unwrap();
     vl.end().unwrap();
     let image = vl.render_preview(3, 3, 1.0).unwrap();
