@@ -98,23 +98,27 @@ fn a_path_longer_than_the_bound_is_bad_file_and_a_long_one_is_not() {
         }
 
         crate::vlScene();
+        // A 2³ voxelization of the opacity with `prefix`.
+        let volume = |prefix: &std::ffi::CString| {
+            crate::vlVolume(
+                prefix.as_ptr(),
+                VL_O,
+                0.0,
+                0.0,
+                0.0,
+                1.0,
+                1.0,
+                1.0,
+                2,
+                2,
+                2,
+                1,
+            )
+        };
         let before = state_fingerprint();
         crate::vlImage(huge.as_ptr(), 1.0, 2, 2);
         assert_eq!(drain(), vec![VL_BADFILE], "vlImage of a huge name");
-        crate::vlVolume(
-            huge.as_ptr(),
-            VL_O,
-            0.0,
-            0.0,
-            0.0,
-            1.0,
-            1.0,
-            1.0,
-            2,
-            2,
-            2,
-            1,
-        );
+        volume(&huge);
         assert_eq!(drain(), vec![VL_BADFILE], "vlVolume of a huge prefix");
         assert_eq!(
             state_fingerprint(),
@@ -122,20 +126,7 @@ fn a_path_longer_than_the_bound_is_bad_file_and_a_long_one_is_not() {
             "refused outputs change nothing"
         );
         crate::vlImage(long.as_ptr(), 1.0, 2, 2);
-        crate::vlVolume(
-            long.as_ptr(),
-            VL_O,
-            0.0,
-            0.0,
-            0.0,
-            1.0,
-            1.0,
-            1.0,
-            2,
-            2,
-            2,
-            1,
-        );
+        volume(&long);
         assert_eq!(drain(), Vec::<i32>::new(), "long names are accepted");
         crate::vlEnd(); // the scene: its outputs cannot be written
         assert!(drain().iter().all(|&e| e == VL_IOERROR));
