@@ -115,16 +115,15 @@ impl PreIntegrated {
         // ⌈|span|·(n − 1)⌉ sub-slabs, at most n − 1 (the span is at most 1); a constant slab is
         // one.
         let m = ((span.abs() * (TABLE_NODES - 1) as f64).ceil() as usize).clamp(1, TABLE_NODES - 1);
-        let cells: Vec<(f64, [f64; 3])> = (0..m)
-            .map(|s| {
-                let v = vf + span * ((s as f64 + 0.5) / m as f64);
-                let c = Cell::at(&self.shading, v as f32);
-                (transmit_ln(c.ln_t, kappa, m as f64), c.rgb)
-            })
-            .collect();
+        // (Each sub-slab read as the composite reaches it: none past an opaque one, and no
+        // buffer of them.)
         composite(
             m,
-            cells.iter().enumerate().map(|(s, (t, rgb))| (s, *t, rgb)),
+            (0..m).map(|s| {
+                let v = vf + span * ((s as f64 + 0.5) / m as f64);
+                let c = Cell::at(&self.shading, v as f32);
+                (s, transmit_ln(c.ln_t, kappa, m as f64), c.rgb)
+            }),
         )
     }
 }
@@ -175,7 +174,7 @@ fn table(shading: &DirectShading, kappa: f64) -> Vec<Slab> {
                 let cells = i.max(lo)..j.min(hi);
                 composite(
                     d,
-                    cells.map(|c| (c - i, trans[d * (n - 1) + c], &mids[c].rgb)),
+                    cells.map(|c| (c - i, trans[d * (n - 1) + c], mids[c].rgb)),
                 )
             } else {
                 // Down: cells i − 1 … j in decreasing order (cell c is sub-slab i − 1 − c).
@@ -183,7 +182,7 @@ fn table(shading: &DirectShading, kappa: f64) -> Vec<Slab> {
                 let cells = (j.max(lo)..i.min(hi)).rev();
                 composite(
                     d,
-                    cells.map(|c| (i - 1 - c, trans[d * (n - 1) + c], &mids[c].rgb)),
+                    cells.map(|c| (i - 1 - c, trans[d * (n - 1) + c], mids[c].rgb)),
                 )
             };
         }
@@ -248,7 +247,7 @@ pub(super) type Slab = [f32; 5];
 /// (transmittance 1: they add nothing); those after the transmittance reaches 0 add nothing
 /// either and are not read.
 #[inline]
-fn composite<'a>(m: usize, cells: impl Iterator<Item = (usize, f64, &'a [f64; 3])>) -> Slab {
+fn composite(m: usize, cells: impl Iterator<Item = (usize, f64, [f64; 3])>) -> Slab {
     let mut t = 1.0f64;
     let mut col = [0.0f64; 4];
     let inv = 1.0 / m as f64;
