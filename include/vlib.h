@@ -367,6 +367,28 @@ typedef vlfloat vlvector[3];
 #define VL_GRADIENT_CUBIC 1
 
 /*
+ Extension: the major version of the library this header belongs to (the number in the
+ shared library's SONAME, `libvlib.so.<major>`).
+ */
+#define VLIB_VERSION_MAJOR 0
+
+/*
+ Extension: the minor version of the library this header belongs to (0 ... 999).
+ */
+#define VLIB_VERSION_MINOR 1
+
+/*
+ Extension: the patch version of the library this header belongs to (0 ... 999).
+ */
+#define VLIB_VERSION_PATCH 0
+
+/*
+ Extension: the version of the library this header belongs to as one number,
+ major * 1000000 + minor * 1000 + patch, the encoding `vlVersion` returns.
+ */
+#define VLIB_VERSION 1000
+
+/*
  The specular exponent that the field value 1 stands for.
  */
 #define VL_MAXSPECULAR 128.0
@@ -744,6 +766,16 @@ vlint vlRenderBuffer(void *buf,
  finite.
  */
 void vlGradientFilter(vlint type, vlfloat b, vlfloat c);
+
+/*
+ Extension. The version of the running library, major * 1000000 + minor * 1000 + patch:
+ the encoding of `VLIB_VERSION`, which holds the version of the header a program was
+ compiled with, so `vlVersion() == VLIB_VERSION` when the program runs with the library
+ of its header. Legal at any time and from any thread (before `vlInit`, after the final
+ `vlEnd`, while a scene renders, in field and progress functions); it needs no state and
+ records no error.
+ */
+vlint vlVersion(void);
 
 /* Field value encoding a specular exponent e. */
 #define VLSPECULAR(e) ((vlfloat)(e) / VL_MAXSPECULAR)

@@ -77,9 +77,10 @@ pub const COMMAND_COUNT: usize = COMMANDS.len();
 
 /// The C names of the extensions (`extensions`: functions beyond the commands, declared after
 /// them in `vlib.h`), in header order.
-pub const EXTENSIONS: [&str; 4] = [
+pub const EXTENSIONS: [&str; 5] = [
     "vlProgress",
     "vlCancel",
     "vlRenderBuffer",
     "vlGradientFilter",
+    "vlVersion",
 ];

@@ -6,13 +6,17 @@
 //! - `vlCancel` stops the render in progress, from any thread.
 //! - `vlRenderBuffer` renders the open scene into the caller's memory.
 //! - `vlGradientFilter` chooses how the gradients of dataset fields are reconstructed.
+//! - `vlVersion` returns the version of the running library (`VLIB_VERSION`'s encoding).
 //!
 //! The core's [`vlib_core::RenderControl`] and [`Library::render_into`] do the work; this
 //! module holds the C forms: the process's cancel flag, the wrapper of the C progress
-//! function, and the checks of the buffer's pointer, size and format.
+//! function, the checks of the buffer's pointer, size and format, and the version number
+//! (the constants of `types`, compiled in).
 
 use crate::ffi::{ffi_boundary, null, rendering, state_outside_render, Rendering};
-use crate::types::{vlfloat, vlint, VL_FALSE, VL_GRADIENT_CUBIC, VL_GRADIENT_NODES, VL_TRUE};
+use crate::types::{
+    vlfloat, vlint, VLIB_VERSION, VL_FALSE, VL_GRADIENT_CUBIC, VL_GRADIENT_NODES, VL_TRUE,
+};
 use std::os::raw::{c_ulong, c_void};
 use std::sync::{Arc, OnceLock};
 use vlib_core::{
@@ -252,4 +256,15 @@ pub extern "C" fn vlGradientFilter(r#type: vlint, b: vlfloat, c: vlfloat) {
         };
         lib.gradient_filter(gradient)
     })
+}
+
+/// Extension. The version of the running library, major * 1000000 + minor * 1000 + patch:
+/// the encoding of `VLIB_VERSION`, which holds the version of the header a program was
+/// compiled with, so `vlVersion() == VLIB_VERSION` when the program runs with the library
+/// of its header. Legal at any time and from any thread (before `vlInit`, after the final
+/// `vlEnd`, while a scene renders, in field and progress functions); it needs no state and
+/// records no error.
+#[no_mangle]
+pub extern "C" fn vlVersion() -> vlint {
+    ffi_boundary(VLIB_VERSION, || Ok(VLIB_VERSION))
 }

@@ -70,7 +70,7 @@ for_each_command!(reexport);
 pub use commands::{COMMANDS, COMMAND_COUNT, EXTENSIONS};
 
 // The extensions (after the commands in `vlib.h`).
-pub use extensions::{vlCancel, vlGradientFilter, vlProgress, vlRenderBuffer};
+pub use extensions::{vlCancel, vlGradientFilter, vlProgress, vlRenderBuffer, vlVersion};
 
 // vlaux (`vlaux.h`).
 pub use vlaux::{

@@ -1,8 +1,9 @@
 //! The C types and constants of `vlib.h`.
 //!
 //! Everything here is written as a literal so that cbindgen can copy it into the header; a
-//! compile-time assertion next to each group ties the literal to the core's value, so the C
-//! numbers can never drift from the Rust ones. This module owns no behaviour.
+//! compile-time assertion next to each group ties the literal to the core's value (the
+//! version numbers: to the package version of `Cargo.toml`), so the C numbers can never drift
+//! from the Rust ones. This module owns no behaviour.
 
 #![allow(non_camel_case_types)]
 
@@ -202,6 +203,22 @@ pub const VL_GRADIENT_NODES: vlint = 0;
 pub const VL_GRADIENT_CUBIC: vlint = 1;
 
 // ---------------------------------------------------------------------------------------------
+// Version (extension: `vlVersion`; docs/extensions.md). The package version of `Cargo.toml`,
+// written out (cbindgen cannot evaluate `env!`) and checked against it below, with
+// `VLIB_VERSION` its encoding.
+
+/// Extension: the major version of the library this header belongs to (the number in the
+/// shared library's SONAME, `libvlib.so.<major>`).
+pub const VLIB_VERSION_MAJOR: vlint = 0;
+/// Extension: the minor version of the library this header belongs to (0 ... 999).
+pub const VLIB_VERSION_MINOR: vlint = 1;
+/// Extension: the patch version of the library this header belongs to (0 ... 999).
+pub const VLIB_VERSION_PATCH: vlint = 0;
+/// Extension: the version of the library this header belongs to as one number,
+/// major * 1000000 + minor * 1000 + patch, the encoding `vlVersion` returns.
+pub const VLIB_VERSION: vlint = 1000;
+
+// ---------------------------------------------------------------------------------------------
 // Normalisation of the specular exponent and the refraction index
 
 /// The specular exponent that the field value 1 stands for.
@@ -322,6 +339,35 @@ mod checks {
     const _: () = assert!(ErrorCode::ALL.len() == 19);
     const _: () = assert!(VL_MAXSPECULAR == MAX_SPECULAR);
     const _: () = assert!(VL_MAXREFRACTION == MAX_REFRACTION);
+
+    /// The decimal number `s` (a part of the package version).
+    const fn number(s: &str) -> i64 {
+        let s = s.as_bytes();
+        assert!(!s.is_empty());
+        let (mut n, mut i) = (0, 0);
+        while i < s.len() {
+            assert!(s[i].is_ascii_digit());
+            n = n * 10 + (s[i] - b'0') as i64;
+            i += 1;
+        }
+        n
+    }
+
+    // The version constants are the package's (another version in `Cargo.toml` fails the build
+    // here until they follow it), and the encoding keeps the three apart.
+    same! {
+        VLIB_VERSION_MAJOR => number(env!("CARGO_PKG_VERSION_MAJOR")),
+        VLIB_VERSION_MINOR => number(env!("CARGO_PKG_VERSION_MINOR")),
+        VLIB_VERSION_PATCH => number(env!("CARGO_PKG_VERSION_PATCH")),
+    }
+    const _: () = assert!(VLIB_VERSION_MINOR >= 0 && VLIB_VERSION_MINOR < 1000);
+    const _: () = assert!(VLIB_VERSION_PATCH >= 0 && VLIB_VERSION_PATCH < 1000);
+    const _: () = assert!(
+        VLIB_VERSION as i64
+            == VLIB_VERSION_MAJOR as i64 * 1_000_000
+                + VLIB_VERSION_MINOR as i64 * 1_000
+                + VLIB_VERSION_PATCH as i64
+    );
 }
 
 #[cfg(test)]

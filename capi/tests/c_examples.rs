@@ -273,6 +273,28 @@ fn cvg_program_passes() {
     assert!(stdout.contains("0 failure(s)"), "{stdout}");
 }
 
+/// The version program checks the header's version macros against each other and
+/// `vlVersion()` against `VLIB_VERSION` in every state of the library itself (exit status);
+/// its first line shows both, which are the package version of `Cargo.toml` and its encoding.
+#[test]
+fn version_program_passes() {
+    let (_dir, stdout) = build_and_run("capi/tests/c/version.c");
+    assert!(stdout.contains("0 failure(s)"), "{stdout}");
+    let parts = [
+        env!("CARGO_PKG_VERSION_MAJOR"),
+        env!("CARGO_PKG_VERSION_MINOR"),
+        env!("CARGO_PKG_VERSION_PATCH"),
+    ];
+    let encoded = parts.iter().fold(0u64, |n, part| {
+        n * 1000 + part.parse::<u64>().expect("a number")
+    });
+    let line = format!(
+        "vlib.h {} ({encoded}), the library {encoded}\n",
+        parts.join(".")
+    );
+    assert!(stdout.starts_with(&line), "want {line:?}:\n{stdout}");
+}
+
 /// Fraction of pixels differing from the top-left corner's colour, and the luminance of those.
 fn foreground(img: &Ppm) -> (f64, Vec<f64>) {
     let bg = img.pixel(0, 0);
