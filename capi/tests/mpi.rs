@@ -1,8 +1,10 @@
 //! The MPI build of the C library (docs/mpi.md), with Open MPI's `mpicc` and `mpirun`: unchanged
 //! C programs, started as `mpirun -np 2`, write the bytes one process of the plain library
 //! writes (images, super-sampled images, voxelizations), rank 0 alone writing them; with one
-//! rank, or without `mpirun`, the MPI build is the plain library. Run by `.ci/run` (it needs
-//! Open MPI): `cargo test --release -p vlib-capi --features mpi --test mpi`.
+//! rank, or without `mpirun`, the MPI build is the plain library; a `vlRenderBuffer` call one
+//! rank refuses fails on every rank, and the next goes on (`refused.c`, under a time limit). Run
+//! by `.ci/run` (it needs Open MPI): `cargo test --release -p vlib-capi --features mpi --test
+//! mpi`.
 //!
 //! The MPI library is built with `--features mpi` and copied out of `target/<profile>/`
 //! before the plain one is built there (both are `libvlib.so`).
@@ -12,8 +14,9 @@ mod common;
 use common::{TempDir, SONAME};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, ExitStatus, Stdio};
 use std::sync::OnceLock;
+use std::time::{Duration, Instant};
 
 /// The MPI build of `libvlib.so` (and its SONAME link) in a directory of its own.
 fn mpi_library() -> &'static Path {
@@ -51,9 +54,16 @@ fn compile_mpi(source: &str, dir: &Path) -> PathBuf {
     exe
 }
 
-/// Runs `exe` in `cwd` with the MPI library: under `mpirun -np <ranks>` (one thread a rank),
-/// or directly for `None`. Extra environment: `env`.
-fn run_mpi(exe: &Path, cwd: &Path, args: &[String], ranks: Option<u32>, env: &[(&str, &str)]) {
+/// The command that runs `exe` in `cwd` with the MPI library: under `mpirun -np <ranks>` (one
+/// thread a rank; `mpirun_args` before the program), or directly for `None`. Extra
+/// environment: `env`.
+fn mpi_command(
+    exe: &Path,
+    cwd: &Path,
+    ranks: Option<u32>,
+    mpirun_args: &[&str],
+    env: &[(&str, &str)],
+) -> Command {
     let lib = mpi_library().to_string_lossy().into_owned();
     let mut cmd = match ranks {
         Some(n) => {
@@ -66,16 +76,22 @@ fn run_mpi(exe: &Path, cwd: &Path, args: &[String], ranks: Option<u32>, env: &[(
             for (k, _) in env {
                 c.args(["-x", k]);
             }
-            c.arg(exe);
+            c.args(mpirun_args).arg(exe);
             c
         }
         None => Command::new(exe),
     };
-    cmd.args(args)
-        .current_dir(cwd)
+    cmd.current_dir(cwd)
         .env("LD_LIBRARY_PATH", &lib)
         .env("RAYON_NUM_THREADS", "1")
         .envs(env.iter().copied());
+    cmd
+}
+
+/// Runs `exe` in `cwd` with the MPI library, as [`mpi_command`] (`ranks`, `env`) makes it.
+fn run_mpi(exe: &Path, cwd: &Path, args: &[String], ranks: Option<u32>, env: &[(&str, &str)]) {
+    let mut cmd = mpi_command(exe, cwd, ranks, &[], env);
+    cmd.args(args);
     let out = cmd.output().expect("run mpirun (Open MPI's openmpi-bin)");
     assert!(
         out.status.success(),
@@ -214,4 +230,161 @@ fn one_rank_or_no_launcher_is_the_plain_library() {
         // Without a team of several ranks there is nothing to report.
         assert_eq!(busy, None, "{ranks:?} ranks");
     }
+}
+
+/// How long `mpirun` may run `refused.c`: its `--timeout` ends the job after this (a rank left
+/// waiting for another waits forever), and the test kills `mpirun` itself if it is still
+/// running half a minute later.
+const LIMIT: Duration = Duration::from_secs(60);
+
+/// What a run under `mpirun` gave: its exit status (`None` when it had to be killed), its
+/// standard output and error.
+struct Run {
+    status: Option<ExitStatus>,
+    stdout: String,
+    stderr: String,
+}
+
+/// Runs `exe` in `cwd` under `mpirun -np <ranks>` with the MPI library, ended after [`LIMIT`].
+fn run_mpi_within(exe: &Path, cwd: &Path, ranks: u32) -> Run {
+    let logs = TempDir::new("mpi-logs");
+    let (out, err) = (logs.path().join("stdout"), logs.path().join("stderr"));
+    let create = |p: &Path| std::fs::File::create(p).expect("create a log");
+    let limit = LIMIT.as_secs().to_string();
+    let mut cmd = mpi_command(exe, cwd, Some(ranks), &["--timeout", &limit], &[]);
+    cmd.stdin(Stdio::null())
+        .stdout(create(&out))
+        .stderr(create(&err));
+    let mut child = cmd.spawn().expect("run mpirun (Open MPI's openmpi-bin)");
+    let wait_until = |child: &mut std::process::Child, deadline: Instant| loop {
+        if let Some(status) = child.try_wait().expect("wait for mpirun") {
+            return Some(status);
+        }
+        if Instant::now() > deadline {
+            return None;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let status = wait_until(&mut child, Instant::now() + LIMIT + Duration::from_secs(30));
+    if status.is_none() {
+        // SIGTERM: mpirun passes it on to the ranks (each in a process group of its own) and
+        // ends; SIGKILL if it has not ten seconds later.
+        let _ = Command::new("kill")
+            .args(["-TERM", &child.id().to_string()])
+            .status();
+        if wait_until(&mut child, Instant::now() + Duration::from_secs(10)).is_none() {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+    let read =
+        |p: &Path| String::from_utf8_lossy(&std::fs::read(p).unwrap_or_default()).into_owned();
+    Run {
+        status,
+        stdout: read(&out),
+        stderr: read(&err),
+    }
+}
+
+/// The lines `refused.c` prints, "<step> rank <r>: <result> <codes>", by step and rank: the
+/// call's result (1 for `VL_TRUE`) and the codes `vlError` reported after it.
+fn call_lines(stdout: &str) -> BTreeMap<(String, u32), (u32, Vec<i32>)> {
+    let mut calls = BTreeMap::new();
+    for line in stdout.lines() {
+        let Some((head, tail)) = line.split_once(": ") else {
+            continue;
+        };
+        let Some((step, rank)) = head.split_once(" rank ") else {
+            continue;
+        };
+        let (Ok(rank), Some((result, codes))) = (rank.parse(), tail.split_once(' ')) else {
+            continue;
+        };
+        let codes = match codes {
+            "none" => Vec::new(),
+            _ => codes
+                .split(',')
+                .map(|c| c.parse().expect("a code"))
+                .collect(),
+        };
+        let result = result.parse().expect("a result");
+        let old = calls.insert((step.to_string(), rank), (result, codes));
+        assert!(old.is_none(), "{step} on rank {rank} twice:\n{stdout}");
+    }
+    calls
+}
+
+/// `refused.c`'s steps: a call rank 1 alone refuses, the code rank 1 records for it (one
+/// process's: `VL_NULLPOINTER`, `VL_BADENUM`, `VL_BADVALUE`, `VL_BADSCOPE`) and the code rank 0
+/// records. Where the C layer refuses a NULL buffer or an unknown format, rank 1 takes part in
+/// the render's first agreement with an empty buffer (`fail_the_team`), so rank 0 records that
+/// buffer's `VL_BADVALUE`, not rank 1's code.
+const REFUSALS: [(&str, i32, i32); 6] = [
+    ("null", 5, 2),
+    ("format", 4, 2),
+    ("width", 2, 2),
+    ("aspect", 2, 2),
+    ("short", 2, 2),
+    ("scope", 1, 1),
+];
+
+#[test]
+fn a_render_call_one_rank_refuses_fails_on_every_rank_and_the_next_renders() {
+    // Rank 1 refuses a vlRenderBuffer call that rank 0 makes validly (the C layer's checks: a
+    // NULL buffer, an unknown format, a width of 0, the scope; the core's: an aspect of -1, a
+    // buffer one byte short): both ranks return VL_FALSE, each with the one error REFUSALS
+    // gives, rather than rank 0 waiting for rank 1 for ever (mpirun's --timeout ends such a
+    // run), and the valid render after each gives both ranks the bytes one process renders.
+    let source = "capi/tests/mpi/refused.c";
+    let plain = plain_outputs(source);
+    let bin = TempDir::new("mpi-bin");
+    let exe = compile_mpi(source, bin.path());
+    let cwd = TempDir::new("mpi-run");
+    let run = run_mpi_within(&exe, cwd.path(), 2);
+    let report = format!("stdout:\n{}\nstderr:\n{}", run.stdout, run.stderr);
+    let status = run.status.unwrap_or_else(|| {
+        panic!("{source}: mpirun still ran {LIMIT:?} + 30 s on, killed:\n{report}")
+    });
+    assert!(
+        status.success(),
+        "{source} under mpirun -np 2 exited with {status} (a timeout ends it after \
+         {LIMIT:?}):\n{report}"
+    );
+    let calls = call_lines(&run.stdout);
+    let mut renders = vec!["first".to_string()];
+    for (step, refusing, other) in REFUSALS {
+        for (rank, code) in [(0, other), (1, refusing)] {
+            assert_eq!(
+                calls.get(&(step.to_string(), rank)),
+                Some(&(0, vec![code])),
+                "{step} on rank {rank}: VL_FALSE and the code {code} expected\n{report}"
+            );
+        }
+        renders.push(format!("after-{step}"));
+    }
+    for step in &renders {
+        for rank in 0..2 {
+            assert_eq!(
+                calls.get(&(step.clone(), rank)),
+                Some(&(1, Vec::new())),
+                "{step} on rank {rank}: rendered without an error expected\n{report}"
+            );
+        }
+    }
+    // Every valid render wrote its buffer: each rank's is one process's.
+    let got = outputs(cwd.path(), &[]);
+    let mut expected = Vec::new();
+    for step in &renders {
+        let name = format!("{step}.r0.ppm");
+        let bytes = plain
+            .get(&name)
+            .unwrap_or_else(|| panic!("one process wrote no {name}"));
+        for rank in 0..2 {
+            let name = format!("{step}.r{rank}.ppm");
+            assert!(got.get(&name) == Some(bytes), "{name} differs\n{report}");
+            expected.push(name);
+        }
+    }
+    expected.sort();
+    assert_eq!(got.keys().cloned().collect::<Vec<_>>(), expected);
 }
