@@ -165,24 +165,19 @@ pub unsafe extern "C" fn vlRenderBuffer(
         };
         let lib: &Library = state.as_ref().ok_or_else(scope)?;
         if lib.scope() != vlib_core::Scope::Scene {
-            fail_the_team(lib);
-            return Err(scope());
+            return Err(fail_the_team(lib, scope()));
         }
-        let format = PixelFormat::from_raw(format).inspect_err(|_| fail_the_team(lib))?;
+        let format = PixelFormat::from_raw(format).map_err(|e| fail_the_team(lib, e))?;
         let side = |v: vlint| u32::try_from(v).ok().filter(|&v| v >= 1);
-        let checked = match (buf.is_null(), side(width), side(height)) {
-            (true, _, _) => Err(null(NAME, "buf")),
-            (false, Some(w), Some(h)) => Ok((w, h)),
-            _ => Err(Error::new(
-                ErrorCode::BadValue,
-                format!("{NAME}: size {width}x{height}"),
-            )),
-        };
-        let (w, h) = match checked {
-            Ok(size) => size,
-            Err(e) => {
-                fail_the_team(lib);
-                return Err(e);
+        let (w, h) = match (buf.is_null(), side(width), side(height)) {
+            (true, _, _) => return Err(fail_the_team(lib, null(NAME, "buf"))),
+            (false, Some(w), Some(h)) => (w, h),
+            _ => {
+                let e = Error::new(
+                    ErrorCode::BadValue,
+                    format!("{NAME}: size {width}x{height}"),
+                );
+                return Err(fail_the_team(lib, e));
             }
         };
         // Only the image's bytes are handed on (a `bytes` too small is the core's error).
@@ -206,19 +201,23 @@ pub unsafe extern "C" fn vlRenderBuffer(
     })
 }
 
-/// Where `lib` renders with a team (an MPI job) and this rank refuses its `vlRenderBuffer`
-/// before the render (a scope, format, buffer or size the C layer checks), the other ranks
-/// wait in the render's first agreement: this rank takes part in it with a buffer that fails
-/// it, so every rank fails instead. Without a team, nothing.
-fn fail_the_team(lib: &Library) {
+/// The error of a `vlRenderBuffer` this rank refuses before the render (a scope, format,
+/// buffer or size the C layer checks), `e`. Where `lib` renders with a team (an MPI job), the
+/// other ranks wait in the render's first agreement and then share the errors recorded: this
+/// rank takes part in both with `e` ([`Library::refuse_render`]), so every rank fails with the
+/// error of the first rank that refused, which is what this rank's call then reports. Without
+/// a team, `e`.
+fn fail_the_team(lib: &Library, e: Error) -> Error {
     #[cfg(feature = "mpi")]
     if lib.team().is_some() {
         let mark = crate::errors::mark();
-        let _ = lib.render_into(1, 1, 1.0, PixelFormat::Rgb8, &mut []);
+        let e = lib.refuse_render(e);
         crate::mpi::share_errors(lib, mark);
+        return e;
     }
     #[cfg(not(feature = "mpi"))]
     let _ = lib;
+    e
 }
 
 /// Extension. Chooses how the gradients of dataset fields, which light their samples, are

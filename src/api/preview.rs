@@ -10,7 +10,7 @@
 
 use super::library::{positive, Library, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE};
 use crate::api::scope::Scope;
-use crate::error::{err, ErrorCode, Result};
+use crate::error::{err, Error, ErrorCode, Result};
 use crate::model::scene::SceneDesc;
 use crate::render::{Backdrop, Image, PixelFormat};
 
@@ -196,6 +196,19 @@ impl Library {
     /// The team renders are split over ([`Library::set_team`]).
     pub fn team(&self) -> Option<&crate::team::Team> {
         self.team.as_ref()
+    }
+
+    /// Where this library renders with a team, a render call this rank refused before it
+    /// reached [`Library::render`] or [`Library::render_into`] (a C layer's checks of its
+    /// arguments) takes part in the render's first agreement with its error `error`, as those
+    /// functions do with their own refusals, so that every rank's call fails with the error of
+    /// the first rank that refused instead of the others waiting; the error this rank's call
+    /// reports. Without a team, `error`. For the C interface's `vlRenderBuffer`.
+    #[doc(hidden)]
+    pub fn refuse_render(&self, error: Error) -> Error {
+        crate::team::agree(self.team.as_ref(), Err::<(), _>(error.clone()))
+            .err()
+            .unwrap_or(error)
     }
 
     /// A textual snapshot of the whole state, for tests that check a refused call changed

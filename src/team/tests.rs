@@ -470,6 +470,44 @@ fn a_rank_whose_buffer_is_short_fails_render_into_on_every_rank() {
 }
 
 #[test]
+fn a_call_refused_before_the_library_fails_every_rank_with_its_error() {
+    // Rank 1's render call is refused before it reaches the library (as the C layer refuses a
+    // NULL buffer): `refuse_render` takes part in the first agreement with that error, so
+    // rank 0's render fails with rank 1's code, not some other; where both refuse, both report
+    // rank 0's error; the next render goes through on both.
+    let results = on_ranks_within(2, |team| {
+        let rank = team.rank();
+        let vl = constant_medium(team, usize::MAX);
+        let format = crate::PixelFormat::Rgb8;
+        let mut buffer = vec![0u8; format.image_bytes(8, 8).unwrap()];
+        let null = || Error::new(ErrorCode::NullPointer, "buf is NULL");
+        let one = if rank == 1 {
+            Err(vl.refuse_render(null()))
+        } else {
+            vl.render_into(8, 8, 1.0, format, &mut buffer)
+        };
+        let own = Error::new(ErrorCode::BadEnum, format!("rank {rank}'s format"));
+        let both = vl.refuse_render(own);
+        let next = vl.render_into(8, 8, 1.0, format, &mut buffer);
+        (
+            one.map_err(|e| e.code),
+            both.code,
+            both.message,
+            next.is_ok(),
+        )
+    });
+    for (rank, (one, both, message, next)) in results.into_iter().enumerate() {
+        assert_eq!(one, Err(ErrorCode::NullPointer), "rank {rank}");
+        assert_eq!(both, ErrorCode::BadEnum, "rank {rank}");
+        assert!(
+            message.starts_with("rank 0's format"),
+            "rank {rank}: {message}"
+        );
+        assert!(next, "rank {rank}");
+    }
+}
+
+#[test]
 fn a_rank_whose_arguments_are_refused_fails_every_rank() {
     // Rank 1 asks for a view plane of aspect −1 (refused before any render): it takes part in
     // the first agreement with that error, so both ranks fail with `BadValue` instead of rank
