@@ -142,7 +142,7 @@ impl Library {
             )
         })?;
         let dims = d.dims();
-        let a = g.affine;
+        let a = g.affine();
         // Column c of A, scaled by the node count along axis c less one (at least one).
         let col = |c: usize| {
             let n = dims[c].saturating_sub(1).max(1) as f64;

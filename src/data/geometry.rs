@@ -25,25 +25,33 @@ use crate::error::{Error, ErrorCode, Result};
 use std::path::{Path, PathBuf};
 
 /// A dataset's physical placement: node (i, j, k) at `affine · (i, j, k, 1)`, millimetres, RAS.
+///
+/// Made only by [`Geometry::new`] and [`Geometry::axis_aligned`], which accept what a sidecar
+/// may hold (finite numbers, axes that are not degenerate): every `Geometry` a dataset carries
+/// is one [`crate::Dataset::save`] can write and [`crate::Dataset::load`] reads back.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Geometry {
     /// The rows of [A | t].
-    pub affine: [[f64; 4]; 3],
+    affine: [[f64; 4]; 3],
 }
 
 /// The first line of a geometry sidecar.
 const MAGIC_LINE: &str = "vlib-geometry 1";
 
 impl Geometry {
-    /// Spacing `s` along each axis and origin `o`, axes along x, y, z.
-    pub fn axis_aligned(s: [f64; 3], o: [f64; 3]) -> Geometry {
-        Geometry {
-            affine: [
-                [s[0], 0.0, 0.0, o[0]],
-                [0.0, s[1], 0.0, o[1]],
-                [0.0, 0.0, s[2], o[2]],
-            ],
-        }
+    /// Spacing `s` along each axis and origin `o`, axes along x, y, z: [`Geometry::new`] of
+    /// that affine, so `BadValue` for a number that is not finite or a spacing of 0.
+    pub fn axis_aligned(s: [f64; 3], o: [f64; 3]) -> Result<Geometry> {
+        Geometry::new([
+            [s[0], 0.0, 0.0, o[0]],
+            [0.0, s[1], 0.0, o[1]],
+            [0.0, 0.0, s[2], o[2]],
+        ])
+    }
+
+    /// The rows of [A | t]: node (i, j, k) lies at A · (i, j, k) + t.
+    pub fn affine(&self) -> [[f64; 4]; 3] {
+        self.affine
     }
 
     /// A geometry whose numbers are finite and whose A is invertible (|det A| > 0, relative to

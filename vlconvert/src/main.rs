@@ -422,7 +422,7 @@ fn info(path: &Path) -> Res<()> {
             let [sx, sy, sz] = g.spacing();
             say(format_args!("spacing:     {sx} x {sy} x {sz} mm"))?;
             say(format_args!("node 0 at:   {:?} (RAS, mm)", g.origin()))?;
-            for row in &g.affine {
+            for row in &g.affine() {
                 say(format_args!("affine row:  {row:?}"))?;
             }
             Ok(())

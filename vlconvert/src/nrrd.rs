@@ -134,7 +134,7 @@ fn geometry(field: &dyn Fn(&[&str]) -> Option<String>) -> Result<Option<vlib::Ge
             .collect::<Result<_, _>>()
             .map_err(|_| format!("spacings {sp:?}"))?;
         let s = [s.first(), s.get(1), s.get(2)].map(|v| v.copied().unwrap_or(1.0));
-        return vlib::Geometry::new(vlib::Geometry::axis_aligned(s, [0.0; 3]).affine)
+        return vlib::Geometry::axis_aligned(s, [0.0; 3])
             .map(Some)
             .map_err(|e| e.message);
     }

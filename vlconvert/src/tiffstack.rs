@@ -693,7 +693,7 @@ fn geometry(stack: &Stack, given: &[f64], input: &Path) -> Res<Option<vlib::Geom
             return Ok(None);
         }
     };
-    let g = vlib::Geometry::new(vlib::Geometry::axis_aligned(s, [0.0; 3]).affine)
+    let g = vlib::Geometry::axis_aligned(s, [0.0; 3])
         .map_err(|e| format!("spacing {s:?}: {}", e.message))?;
     note(
         "TIFF does not say how its axes lie in the body: the sidecar's axes are the stack's \

@@ -129,7 +129,7 @@ fn the_sidecar_is_the_writers_placement() {
         let (v, _) = convert(&["dicom", s(&fixture(series)), s(&out)], &out);
         let g = v.geometry().expect("a placement");
         let want = numbers(&format!("{series}.affine.txt"));
-        for (r, (got_row, want_row)) in g.affine.iter().zip(&want).enumerate() {
+        for (r, (got_row, want_row)) in g.affine().iter().zip(&want).enumerate() {
             for (c, (got, w)) in got_row.iter().zip(want_row).enumerate() {
                 assert!((got - w).abs() <= 1e-9, "{series} [{r}][{c}]: {got} vs {w}");
             }
@@ -140,7 +140,7 @@ fn the_sidecar_is_the_writers_placement() {
             let info = text(&o.stdout);
             assert!(info.contains("spacing:     0.6"), "{info}");
             assert!(
-                info.contains(&format!("affine row:  {:?}", g.affine[1])),
+                info.contains(&format!("affine row:  {:?}", g.affine()[1])),
                 "{info}"
             );
         }

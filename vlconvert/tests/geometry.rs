@@ -63,7 +63,7 @@ fn the_sidecar_is_the_writers_affine() {
         let d = Dataset::load(&out).unwrap();
         let g = d.geometry().expect("a geometry");
         let want = writers_affine(stem);
-        for (r, (got_row, want_row)) in g.affine.iter().zip(&want).enumerate() {
+        for (r, (got_row, want_row)) in g.affine().iter().zip(&want).enumerate() {
             for (c, (got, w)) in got_row.iter().zip(want_row).enumerate() {
                 assert!(
                     (got - w).abs() <= 1e-5 * w.abs().max(1.0),

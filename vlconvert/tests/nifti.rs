@@ -218,9 +218,9 @@ fn a_qform_quaternion_that_is_no_rotation_is_no_placement() {
     // pixdim 1, 2, 3 (nibabel's affine), about x by 180°: x kept, y and z reversed; the
     // columns orthogonal.
     let want = [[1.0, 0.0, 0.0], [0.0, -2.0, 0.0], [0.0, 0.0, -3.0]];
-    for (row, want) in g.affine.iter().zip(want) {
+    for (row, want) in g.affine().iter().zip(want) {
         for (got, want) in row[..3].iter().zip(want) {
-            assert!((got - want).abs() < 1e-9, "{:?}", g.affine);
+            assert!((got - want).abs() < 1e-9, "{:?}", g.affine());
         }
     }
     std::fs::remove_dir_all(&d).unwrap();

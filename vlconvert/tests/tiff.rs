@@ -197,7 +197,7 @@ fn the_sidecar_has_the_files_spacing() {
         let (v, o) = convert(&input, &out, &["tiff"]);
         let want = numbers(&format!("{name}.spacing.txt"));
         let g = v.geometry().expect("a sidecar");
-        for (r, (row, spacing)) in g.affine.iter().zip(&want).enumerate() {
+        for (r, (row, spacing)) in g.affine().iter().zip(&want).enumerate() {
             for (c, &got) in row.iter().enumerate() {
                 let w = if r == c { *spacing } else { 0.0 };
                 assert!(

@@ -669,7 +669,7 @@ fn metaimage_placements_that_cannot_be_made_are_notes() {
                     [0.0, -d[1], 0.0, 0.0],
                     [0.0, 0.0, d[2], 0.0],
                 ];
-                assert_eq!(g.affine, want);
+                assert_eq!(g.affine(), want);
             }
         }
     }

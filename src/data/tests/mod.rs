@@ -1,13 +1,15 @@
 //! Tests of the datasets module: here the grid itself (node values, normalisation) and the
 //! helpers every test file shares (a seeded generator, a linear field, random 8-bit grids); the
-//! file format, the filters, the trilinear paths, the lanes, the brick ranges and the cell masks
-//! in the files of those names. The plain versions the specialised paths must agree with bit
-//! for bit (oracles) live in these files, not in the module.
+//! file format, the placement (geometry), the filters, the trilinear paths, the lanes, the
+//! brick ranges and the cell masks in the files of those names. The plain versions the
+//! specialised paths must agree with bit for bit (oracles) live in these files, not in the
+//! module.
 
 mod bricks;
 mod cells;
 mod filter;
 mod format;
+mod geometry;
 mod gradient;
 mod lanes;
 mod trilinear;
