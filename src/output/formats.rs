@@ -9,7 +9,7 @@
 
 use super::files::AtomicFile;
 use crate::error::{err, Error, ErrorCode, Result};
-use crate::num::try_with_capacity;
+use crate::num::{try_vec, try_with_capacity};
 use crate::render::PixelFormat;
 use std::io::Write;
 use std::path::Path;
@@ -281,12 +281,21 @@ impl crate::render::Image {
     /// Writes the image atomically in the format its file name asks for (`docs/images.md`):
     /// RGB formats hold its colour (for an image rendered against a transparent backdrop,
     /// its light over black); RGBA formats its colour straight and alpha (1 for an image
-    /// rendered against the background: opaque).
+    /// rendered against the background: opaque). The file's bytes (3 to 12 a pixel) are
+    /// made first, before anything is written: where they cannot be allocated it is
+    /// `NoMemory`, and no file, temporary or partial, is left.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         let format = ImageFormat::from_path(path)?;
-        let f = AtomicFile::create(path)?;
-        let bytes = self.to_bytes(format.pixels);
-        encode_into(f, format, self.width, self.height, &bytes)
+        let len = format.pixels.image_bytes(self.width, self.height);
+        let mut bytes = try_vec(len.unwrap_or(usize::MAX), 0u8, "the image's pixels")?;
+        self.put_bytes(format.pixels, &mut bytes);
+        encode_into(
+            AtomicFile::create(path)?,
+            format,
+            self.width,
+            self.height,
+            &bytes,
+        )
     }
 }

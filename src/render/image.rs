@@ -210,8 +210,16 @@ impl Image {
     /// The pixels in `format` ([`PixelFormat`]: what a render into a buffer of that format
     /// gives, and what the image files hold), in the machine's byte order.
     pub fn to_bytes(&self, format: PixelFormat) -> Vec<u8> {
+        let mut out = vec![0u8; self.pixels.len() * format.pixel_bytes()];
+        self.put_bytes(format, &mut out);
+        out
+    }
+
+    /// Writes the pixels in `format` into `out`, one pixel after the other (`out` holds
+    /// [`PixelFormat::pixel_bytes`] bytes for each): the bytes of [`Image::to_bytes`], into a
+    /// buffer the caller allocated (`Image::save`'s, allocated fallibly).
+    pub(crate) fn put_bytes(&self, format: PixelFormat, out: &mut [u8]) {
         let n = format.pixel_bytes();
-        let mut out = vec![0u8; self.pixels.len() * n];
         for ((p, &t), dst) in self
             .pixels
             .iter()
@@ -220,7 +228,6 @@ impl Image {
         {
             format.put(*p, t, self.backdrop, dst);
         }
-        out
     }
 
     /// 8-bit RGB, each channel `round(255·v)`.
