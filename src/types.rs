@@ -94,9 +94,11 @@ impl Fields {
         self.0
     }
 
-    /// The index of the only field in the set, if it has exactly one.
+    /// The index of the only field in the set, if it has exactly one: `None` for an empty set,
+    /// several fields, or a bit that names no field.
     pub fn single_index(self) -> Option<usize> {
-        (self.0.count_ones() == 1).then(|| self.0.trailing_zeros() as usize)
+        (self.0.count_ones() == 1 && self.0 & !Fields::ALL.0 == 0)
+            .then(|| self.0.trailing_zeros() as usize)
     }
 
     /// Whether the set contains field number `index`.
@@ -109,9 +111,17 @@ impl Fields {
         self.0 & other.0 != 0
     }
 
-    /// The set with only field number `index`.
+    /// The set with only field number `index` (0 = opacity … 9 = geometry).
+    ///
+    /// # Panics
+    ///
+    /// If `index` is not below [`FIELD_COUNT`], as indexing the ten fields with it would.
     pub fn from_index(index: usize) -> Fields {
-        assert!(index < FIELD_COUNT);
+        assert!(
+            index < FIELD_COUNT,
+            "Fields::from_index: {index} is no field index (0 … {})",
+            FIELD_COUNT - 1
+        );
         Fields(1 << index)
     }
 

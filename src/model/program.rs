@@ -284,7 +284,12 @@ impl<'a> Sample<'a> {
         self.role
     }
 
-    /// The current value of field number `index` (0 = opacity … 9 = geometry).
+    /// The current value of field number `index` (0 = opacity … 9 = geometry); for a field
+    /// named by its mask, [`Sample::field`].
+    ///
+    /// # Panics
+    ///
+    /// If `index` is not below [`FIELD_COUNT`], as indexing [`Sample::values`] with it would.
     pub fn value(&self, index: usize) -> f32 {
         self.fields[index]
     }
@@ -294,7 +299,8 @@ impl<'a> Sample<'a> {
         self.fields
     }
 
-    /// `vlField`: the current value of one field, named by a single-bit mask.
+    /// `vlField`: the current value of one field, named by a single-bit mask; `BadField` for
+    /// a mask that names no field, several, or has a bit that names none.
     pub fn field(&self, field: Fields) -> Result<f32> {
         match field.single_index() {
             Some(i) => Ok(self.fields[i]),
@@ -304,10 +310,21 @@ impl<'a> Sample<'a> {
 
     /// `vlSet` inside a field function: writes `value` (clamped to [0, 1], NaN → 0) to the fields
     /// of `fields` that the running function's `vlFunction` call named; others are left alone.
+    /// `BadField` (and nothing written) for an empty mask or one with a bit that names no
+    /// field, as `Library::set` gives.
     pub fn set(&mut self, fields: Fields, value: f32) -> Result<()> {
         self.may_set()?;
         if fields == Fields::NONE {
             return err(ErrorCode::BadField, "vlSet: empty field mask");
+        }
+        if fields.bits() & !Fields::ALL.bits() != 0 {
+            return err(
+                ErrorCode::BadField,
+                format!(
+                    "vlSet: field mask {:#x} has bits that name no field",
+                    fields.bits()
+                ),
+            );
         }
         self.write(fields & self.mask, value);
         Ok(())

@@ -20,6 +20,27 @@ fn field_masks_validate() {
     assert_eq!(Fields::ALL.indices().count(), FIELD_COUNT);
 }
 
+/// `single_index` names a field only for a set of exactly one of the ten: a single bit above
+/// them (1 << 10, 1 << 20, 1 << 31) is no field, so `validate_single` and `Sample::field` refuse
+/// it instead of reading past the fields. `from_index` panics with its own message past them.
+#[test]
+fn a_single_bit_that_names_no_field_has_no_index() {
+    for bit in [10, 20, 31] {
+        let f = Fields::from_bits_unchecked(1 << bit);
+        assert_eq!(f.single_index(), None, "bit {bit}");
+        assert_eq!(f.validate_single().unwrap_err().code, ErrorCode::BadField);
+    }
+    for i in 0..FIELD_COUNT {
+        assert_eq!(Fields::from_bits_unchecked(1 << i).single_index(), Some(i));
+        assert_eq!(Fields::from_index(i).bits(), 1 << i);
+    }
+    assert_eq!(Fields::NONE.single_index(), None);
+    assert_eq!((Fields::O | Fields::F).single_index(), None);
+    let past = std::panic::catch_unwind(|| Fields::from_index(FIELD_COUNT)).unwrap_err();
+    let message = past.downcast_ref::<String>().map_or("", |s| s.as_str());
+    assert_eq!(message, "Fields::from_index: 10 is no field index (0 … 9)");
+}
+
 #[test]
 fn enums_validate() {
     for (i, t) in RenderType::ALL.iter().enumerate() {

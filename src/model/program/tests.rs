@@ -101,6 +101,37 @@ fn map_reads_source_field() {
     assert_eq!(s.value(6), 0.3);
 }
 
+/// A mask with a bit that names no field is `BadField` for `vlField` and `vlSet` inside a
+/// field function, as for `Library::set` and the C layer: the read does not index past the ten
+/// fields and the write changes nothing, even where the mask also names fields.
+#[test]
+fn masks_with_bits_that_name_no_field_are_bad_fields() {
+    let mut s = Sample::new([0.5; 3], [0.0; 3]);
+    s.mask = Fields::ALL;
+    s.fields = [0.25; FIELD_COUNT];
+    for bit in [10, 20, 31] {
+        let f = Fields::from_bits_unchecked(1 << bit);
+        assert_eq!(s.field(f).unwrap_err().code, ErrorCode::BadField, "{bit}");
+        assert_eq!(
+            s.set(f, 1.0).unwrap_err().code,
+            ErrorCode::BadField,
+            "{bit}"
+        );
+        let both = f | Fields::O;
+        assert_eq!(s.set(both, 1.0).unwrap_err().code, ErrorCode::BadField);
+        assert_eq!(
+            s.values(),
+            [0.25; FIELD_COUNT],
+            "bit {bit}: a refused vlSet wrote"
+        );
+    }
+    assert_eq!(s.field(Fields::KS).unwrap(), 0.25);
+    s.set(Fields::O | Fields::F, 2.0).unwrap();
+    let mut want = [0.25; FIELD_COUNT];
+    (want[0], want[9]) = (1.0, 1.0);
+    assert_eq!(s.values(), want);
+}
+
 #[test]
 fn normal_role_cannot_write() {
     let mut s = Sample::new([0.5; 3], [0.0; 3]);
