@@ -22,7 +22,8 @@
 //! - Hostile sizes: before a page is decoded, its strips or tiles must lie inside the file and
 //!   be able to hold the page, and each tile its tile (at most 1 byte a byte uncompressed, 64
 //!   PackBits, 1032 Deflate, 3641 LZW): no page allocates more than its file's bytes can decode
-//!   to.
+//!   to. A page directory's tags are read under limits of the file's size (`directory_limits`):
+//!   a tag counting more values than the file holds is an error, not an allocation.
 
 use crate::progress::{Progress, Unit};
 use crate::volume::{Source, Type};
@@ -115,6 +116,9 @@ fn tiff_error(e: ::tiff::TiffError) -> String {
         ::tiff::TiffError::IoError(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
             "the file ends before its data does (cut short?)".into()
         }
+        ::tiff::TiffError::LimitsExceeded => "a tag of its page directory counts more values \
+            than the file holds (or over 256 MiB of them)"
+            .into(),
         e => e.to_string(),
     }
 }
@@ -329,7 +333,13 @@ fn decode<R: Read + Seek>(d: &mut Decoder<R>, page: &Page, out: &mut Vec<u8>) ->
             }
         }};
     }
-    match d.read_image().map_err(tiff_error)? {
+    let image = match d.read_image() {
+        Err(::tiff::TiffError::LimitsExceeded) => {
+            return Err("its data decodes to more than 3641 times the file's bytes".into())
+        }
+        image => image.map_err(tiff_error)?,
+    };
+    match image {
         DecodingResult::U8(v) => rows!(v),
         DecodingResult::U16(v) => rows!(v),
         DecodingResult::U32(v) => rows!(v),
@@ -345,17 +355,48 @@ fn decode<R: Read + Seek>(d: &mut Decoder<R>, page: &Page, out: &mut Vec<u8>) ->
     Ok(())
 }
 
+/// The `tiff` crate's limits while it reads page directories of a file of `len` bytes: a
+/// tag's values take at most 32 bytes of memory (one value) for each byte of the file, and
+/// never more than the crate's default of 256 MiB (under which it reads the first directory).
+fn directory_limits(len: u64) -> Limits {
+    let mut limits = Limits::default();
+    let bound = usize::try_from(len.saturating_mul(32)).unwrap_or(usize::MAX);
+    limits.decoding_buffer_size = limits.decoding_buffer_size.min(bound);
+    limits.intermediate_buffer_size = limits.intermediate_buffer_size.min(bound);
+    limits
+}
+
+/// Its limits while it decodes a page `inspect` has checked: the page, at most the file's bytes
+/// at the largest expansion of a compression that converts (LZW's 3641), in chunks of at most
+/// the file's bytes. No directory is read under them.
+fn page_limits(len: u64) -> Limits {
+    let mut limits = Limits::default();
+    let size = |n: u64| usize::try_from(n).unwrap_or(usize::MAX);
+    limits.decoding_buffer_size = size(len.saturating_mul(3641));
+    limits.intermediate_buffer_size = size(len);
+    limits
+}
+
+/// Decodes the current page of a file of `len` bytes under [`page_limits`], then puts back
+/// [`directory_limits`] for the next page's directory.
+fn decode_in<R: Read + Seek>(
+    d: Decoder<R>,
+    page: &Page,
+    out: &mut Vec<u8>,
+    len: u64,
+) -> (Decoder<R>, Res<()>) {
+    let mut d = d.with_limits(page_limits(len));
+    let done = decode(&mut d, page, out);
+    (d.with_limits(directory_limits(len)), done)
+}
+
 /// A decoder for the regular file `path`, and its length.
 fn open(path: &Path) -> Res<(Decoder<BufReader<File>>, u64)> {
     let at = |e: String| format!("{}: {e}", path.display());
     let (f, meta) = crate::volume::open_regular(path)?;
-    let mut limits = Limits::default();
-    // Each page's size is checked against its data before it is decoded (`inspect`).
-    limits.decoding_buffer_size = usize::MAX;
-    limits.intermediate_buffer_size = usize::MAX;
     let d = Decoder::new(BufReader::new(f))
         .map_err(|e| at(tiff_error(e)))?
-        .with_limits(limits);
+        .with_limits(directory_limits(meta.len()));
     Ok((d, meta.len()))
 }
 
@@ -458,7 +499,9 @@ fn read_file(path: &Path) -> Res<Stack> {
             d.next_image()
                 .map_err(|e| at(format!("page {}: {}", k + 1, tiff_error(e))))?;
         }
-        decode(&mut d, page, &mut bytes).map_err(|e| at(format!("page {}: {e}", k + 1)))?;
+        let done;
+        (d, done) = decode_in(d, page, &mut bytes, len);
+        done.map_err(|e| at(format!("page {}: {e}", k + 1)))?;
         bar.advance(1);
     }
     bar.finish();
@@ -629,7 +672,7 @@ fn read_folder(dir: &Path) -> Res<(Stack, Vec<PathBuf>)> {
             }
             Some(_) => {}
         }
-        decode(&mut d, &page, &mut bytes).map_err(at)?;
+        decode_in(d, &page, &mut bytes, len).1.map_err(at)?;
         bar.advance(1);
     }
     bar.finish();

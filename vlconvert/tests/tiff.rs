@@ -416,6 +416,51 @@ fn hostile_sizes_are_refused() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+/// The offset of page `k`'s (from 1) directory entry for `tag` in the little-endian classic
+/// TIFF `b`, walking the page chain.
+fn entry_of(b: &[u8], k: usize, tag: u16) -> usize {
+    let u32_at = |at: usize| u32::from_le_bytes(b[at..at + 4].try_into().unwrap()) as usize;
+    let mut ifd = u32_at(4);
+    for _ in 1..k {
+        let n = u16::from_le_bytes([b[ifd], b[ifd + 1]]) as usize;
+        ifd = u32_at(ifd + 2 + 12 * n);
+    }
+    let n = u16::from_le_bytes([b[ifd], b[ifd + 1]]) as usize;
+    (0..n)
+        .map(|e| ifd + 2 + 12 * e)
+        .find(|&at| u16::from_le_bytes([b[at], b[at + 1]]) == tag)
+        .unwrap()
+}
+
+/// A tag whose value count is far beyond the file (2³¹ StripByteCounts, BitsPerSamples or StripOffsets:
+/// tifffile's 3-page fixture with the count patched) is refused with exit 1, naming the file
+/// (and page after the first), instead of the process aborting on the allocation.
+#[test]
+fn a_tag_counting_more_values_than_the_file_holds_is_refused() {
+    let d = tmp("tag-count");
+    let good = std::fs::read(fixture("uint64.tif")).unwrap();
+    for (k, tag) in [(2, 279), (3, 279), (1, 279), (2, 258), (2, 273)] {
+        let mut b = good.clone();
+        let at = entry_of(&b, k, tag);
+        b[at + 4..at + 8].copy_from_slice(&(1u32 << 31).to_le_bytes());
+        let p = d.join(format!("count{k}_{tag}.tif"));
+        std::fs::write(&p, b).unwrap();
+        // (The first page's directory is read as the file is opened.)
+        let page = if k > 1 {
+            format!("page {k}: ")
+        } else {
+            String::new()
+        };
+        refused(
+            &p,
+            &[&format!(
+                "{page}a tag of its page directory counts more values than the file holds"
+            )],
+        );
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 /// An ImageJ stack with one page directory whose description counts its slices (as ImageJ
 /// writes stacks over 4 GiB; here the tifffile fixture with its page chain cut after page 1,
 /// which tifffile reads as the same 3 slices) converts to the writer's values; slices that
