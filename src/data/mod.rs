@@ -287,9 +287,15 @@ impl Dataset {
     /// The normalised value of node (i, j, k): from the node values where they have been
     /// made, else from its voxel (the same number: the values are the voxels' normalisations),
     /// so that a read of a few nodes does not make all of them.
+    ///
+    /// # Panics
+    ///
+    /// If the node lies outside the grid (i ≥ nx, j ≥ ny or k ≥ nz), as indexing a slice past
+    /// its end does: a coordinate past its axis never reads another node.
     #[inline]
+    #[track_caller]
     pub fn node(&self, i: usize, j: usize, k: usize) -> f32 {
-        let at = self.node_index([i, j, k]);
+        let at = self.node_in_grid([i, j, k], "node");
         match self.values.get() {
             Some(v) => v[at],
             None => normaliser(self.a, self.b)(self.raw.get(at)),
@@ -300,6 +306,17 @@ impl Dataset {
     #[inline(always)]
     pub(crate) fn node_index(&self, [i, j, k]: [usize; 3]) -> usize {
         i + self.dims[0] * (j + self.dims[1] * k)
+    }
+
+    /// [`Dataset::node_index`] of a node of the grid; a panic naming `what` (the public
+    /// method called) and the node for one outside it.
+    #[inline]
+    #[track_caller]
+    fn node_in_grid(&self, node: [usize; 3], what: &str) -> usize {
+        if node.iter().zip(&self.dims).any(|(c, n)| c >= n) {
+            outside_the_grid(what, node, self.dims);
+        }
+        self.node_index(node)
     }
 
     /// The normalised node values, x fastest: made on first use (in parallel), then kept.
@@ -376,9 +393,22 @@ impl Dataset {
     }
 
     /// The raw value of node (i, j, k) before normalisation.
+    ///
+    /// # Panics
+    ///
+    /// If the node lies outside the grid, as [`Dataset::node`] does.
+    #[track_caller]
     pub fn raw_node(&self, i: usize, j: usize, k: usize) -> f64 {
-        self.raw.get(self.node_index([i, j, k]))
+        self.raw.get(self.node_in_grid([i, j, k], "raw_node"))
     }
+}
+
+/// The panic of a node read outside the grid ([`Dataset::node`], [`Dataset::raw_node`]).
+#[cold]
+#[inline(never)]
+#[track_caller]
+fn outside_the_grid(what: &str, [i, j, k]: [usize; 3], [nx, ny, nz]: [usize; 3]) -> ! {
+    panic!("Dataset::{what}: node ({i}, {j}, {k}) lies outside the {nx}×{ny}×{nz} grid")
 }
 
 /// `cell.get_or_init(init)` for an `init` that may fail: its error is returned and the cell

@@ -65,6 +65,53 @@ fn random_u8(dims: [usize; 3], seed: u64) -> Dataset {
     Dataset::new(dims, Voxels::U8(raw), 10.0, 240.0).unwrap()
 }
 
+/// `node` and `raw_node` read the node they name, and for a node outside the grid (one
+/// coordinate past its axis, where i + nx·(j + ny·k) would name another node, or all of them)
+/// panic with a message naming the call, the node and the grid, never reading another node.
+#[test]
+fn nodes_outside_the_grid_panic_instead_of_reading_another() {
+    let dims = [2, 3, 2];
+    let d = Dataset::new(
+        dims,
+        Voxels::U8((0..12).map(|v| 10 * v).collect()),
+        0.0,
+        255.0,
+    )
+    .unwrap();
+    for k in 0..2 {
+        for j in 0..3 {
+            for i in 0..2 {
+                let raw = 10 * (i + 2 * (j + 3 * k));
+                assert_eq!(d.raw_node(i, j, k), raw as f64);
+                assert_eq!(d.node(i, j, k), (raw as f64 / 255.0) as f32);
+            }
+        }
+    }
+    let outside = [
+        [2, 0, 0],
+        [0, 3, 0],
+        [1, 0, 2],
+        [usize::MAX, 0, 0],
+        [0, 0, usize::MAX],
+        [2, 3, 2],
+    ];
+    for [i, j, k] in outside {
+        let reads: [(&str, &dyn Fn() -> f64); 2] = [
+            ("node", &|| d.node(i, j, k) as f64),
+            ("raw_node", &|| d.raw_node(i, j, k)),
+        ];
+        for (what, read) in reads {
+            let panic = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
+                .expect_err(&format!("{what}({i}, {j}, {k}) read a node"));
+            let message = panic.downcast_ref::<String>().map_or("", |s| s.as_str());
+            assert_eq!(
+                message,
+                format!("Dataset::{what}: node ({i}, {j}, {k}) lies outside the 2×3×2 grid")
+            );
+        }
+    }
+}
+
 /// Node values are made on first use, by any number of threads the same, and a node read
 /// before then (from its voxel) is the node value made after: for 8- and 16-bit voxels,
 /// normalisations that increase, decrease and clamp, sizes below and above a thread's
