@@ -1291,7 +1291,7 @@ pub fn check_vlb(data: &[u8], scratch: Option<&Path>) {
             assert_eq!(d.to_vlb_bytes().unwrap(), data, "re-encoding differs");
             assert!(d.values().iter().all(|v| (0.0..=1.0).contains(v)));
             for kind in Interpolation::ALL {
-                let f = vlib::Filter::new(*kind, (0.0, 0.5));
+                let f = vlib::Filter::new(*kind, (0.0, 0.5)).expect("finite B, C");
                 for p in [
                     [0.0; 3],
                     [0.5; 3],

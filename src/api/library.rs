@@ -587,7 +587,7 @@ impl Library {
 
     pub(super) fn filter(&self) -> Filter {
         let r = &self.settings().render;
-        Filter::new(r.interpolation, r.cubic)
+        Filter::of_settings(r.interpolation, r.cubic)
     }
 
     /// `vlSample` outside sample scope: dataset `id`'s normalised value at dataset coordinates

@@ -16,6 +16,7 @@
 //! module's.
 
 use super::{CellGradients, Dataset};
+use crate::error::{err, ErrorCode, Result};
 use crate::types::Interpolation;
 
 /// An interpolation filter with its parameters.
@@ -37,8 +38,24 @@ pub enum Filter {
 }
 
 impl Filter {
-    /// The filter for an interpolation type and the cubic parameters in force.
-    pub fn new(kind: Interpolation, cubic: (f32, f32)) -> Filter {
+    /// The filter for an interpolation type and the cubic parameters (B, C) in force:
+    /// `BadValue` where B or C is not finite (whatever the type, as `vlCubicFilter` refuses
+    /// them before any interpolation is chosen).
+    pub fn new(kind: Interpolation, cubic: (f32, f32)) -> Result<Filter> {
+        if !(cubic.0.is_finite() && cubic.1.is_finite()) {
+            return err(
+                ErrorCode::BadValue,
+                format!(
+                    "cubic filter B = {}, C = {}: both must be finite",
+                    cubic.0, cubic.1
+                ),
+            );
+        }
+        Ok(Filter::of_settings(kind, cubic))
+    }
+
+    /// [`Filter::new`] of a library's settings, whose B and C `vlCubicFilter` has checked.
+    pub(crate) fn of_settings(kind: Interpolation, cubic: (f32, f32)) -> Filter {
         match kind {
             Interpolation::Nearest => Filter::Nearest,
             Interpolation::Trilinear => Filter::Trilinear,
@@ -48,6 +65,13 @@ impl Filter {
             },
         }
     }
+}
+
+/// Whether B and C of a BC-spline are both finite: a filter of others reads 0 everywhere
+/// ([`Dataset::sample`], [`Dataset::gradient`]), where its weights would make NaN.
+#[inline]
+pub(crate) fn bc_finite(b: f32, c: f32) -> bool {
+    b.is_finite() && c.is_finite()
 }
 
 /// The largest sum of |weights| of the BC-spline filter along one axis, over all positions: a
@@ -121,8 +145,9 @@ impl Dataset {
         u.max(0.0).min(last)
     }
 
-    /// The interpolated normalised value at object coordinates `p` (0 where the dataset does
-    /// not [cover](Dataset::covers) `p`).
+    /// The interpolated normalised value at object coordinates `p`, in [0, 1]: 0 where the
+    /// dataset does not [cover](Dataset::covers) `p`, and 0 everywhere under a
+    /// [`Filter::Cubic`] whose B or C is not finite (one [`Filter::new`] refuses).
     #[inline]
     pub fn sample(&self, p: [f32; 3], filter: Filter) -> f32 {
         if filter == Filter::Trilinear {
@@ -133,7 +158,11 @@ impl Dataset {
 
     #[inline(never)]
     fn sample_generic(&self, p: [f32; 3], filter: Filter) -> f32 {
-        if !self.covers(p) {
+        let finite = match filter {
+            Filter::Cubic { b, c } => bc_finite(b, c),
+            _ => true,
+        };
+        if !self.covers(p) || !finite {
             return 0.0;
         }
         let u = [
@@ -252,8 +281,9 @@ impl Dataset {
     }
 
     /// The gradient of the normalised field with respect to object coordinates at `p`, from
-    /// node gradients interpolated with `filter` (0 where the dataset does not
-    /// [cover](Dataset::covers) `p`).
+    /// node gradients interpolated with `filter`: 0 where the dataset does not
+    /// [cover](Dataset::covers) `p`, and 0 everywhere under a [`Filter::Cubic`] whose B or C
+    /// is not finite (whose values [`Dataset::sample`] gives as 0).
     #[inline]
     pub fn gradient(&self, p: [f32; 3], filter: Filter) -> [f64; 3] {
         self.gradient_cached(p, filter, &mut CellGradients::default())
@@ -280,7 +310,11 @@ impl Dataset {
     #[inline(never)]
     pub(super) fn gradient_generic(&self, p: [f32; 3], filter: Filter) -> [f64; 3] {
         // (The interior paths never see such a point: its clamped cell lies on a face.)
-        if !self.covers(p) {
+        let finite = match filter {
+            Filter::Cubic { b, c } => bc_finite(b, c),
+            _ => true,
+        };
+        if !self.covers(p) || !finite {
             return [0.0; 3];
         }
         let u = [

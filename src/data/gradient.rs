@@ -20,7 +20,7 @@
 //! value filters, the paper's gradient paths and their caches (`filter`, `trilinear`), or which
 //! render path calls which (`render`).
 
-use super::filter::bc_kernel;
+use super::filter::{bc_finite, bc_kernel};
 use super::{CellGradients, Dataset, Filter};
 
 /// How a dataset field's gradient (its samples' normals) is reconstructed from the nodes
@@ -121,7 +121,9 @@ impl AxisTaps {
 impl Dataset {
     /// The gradient of the normalised field with respect to object coordinates at `p` under
     /// gradient filter `gradient`, `filter` being the dataset's value filter (which
-    /// [`GradientFilter::Nodes`] interpolates the node differences with).
+    /// [`GradientFilter::Nodes`] interpolates the node differences with). A
+    /// [`GradientFilter::Cubic`] whose B or C is not finite (one `vlGradientFilter` refuses)
+    /// gives 0 everywhere, as [`Dataset::gradient`] does under such a [`Filter::Cubic`].
     #[inline]
     pub fn gradient_with(&self, p: [f32; 3], filter: Filter, gradient: GradientFilter) -> [f64; 3] {
         self.gradient_by(p, filter, gradient, &mut CellGradients::default())
@@ -139,6 +141,7 @@ impl Dataset {
     ) -> [f64; 3] {
         match gradient {
             GradientFilter::Nodes => self.gradient_cached(p, filter, cache),
+            GradientFilter::Cubic { b, c } if !bc_finite(b, c) => [0.0; 3],
             GradientFilter::Cubic { b, c } => self.cubic_gradient(p, b as f64, c as f64),
         }
     }

@@ -214,7 +214,7 @@ impl CObj {
             preint,
             env: SampleEnv {
                 datasets: datasets.clone(),
-                filter: Filter::new(r.interpolation, r.cubic),
+                filter: Filter::of_settings(r.interpolation, r.cubic),
                 children: Arc::new(compile_children(o, to_object, datasets)),
             },
             program: o.program.clone(),
@@ -347,7 +347,7 @@ fn compile_children(
                 box_max: DVec3::splat(0.5) + b * 0.5,
                 env: SampleEnv {
                     datasets: datasets.clone(),
-                    filter: Filter::new(r.interpolation, r.cubic),
+                    filter: Filter::of_settings(r.interpolation, r.cubic),
                     children: Arc::new(compile_children(c, world_to_child, datasets)),
                 },
             }

@@ -209,3 +209,77 @@ fn a_dataset_is_zero_outside_its_cube() {
         }
     }
 }
+
+/// `Filter::new` refuses a B or C that is not finite with `BadValue`, whatever the
+/// interpolation (as `vlCubicFilter` does), and builds the filter of finite ones.
+#[test]
+fn filters_of_parameters_that_are_not_finite_are_refused() {
+    use crate::types::Interpolation;
+    for kind in Interpolation::ALL.iter().copied() {
+        for cubic in [
+            (f32::NAN, 0.0),
+            (0.0, f32::NAN),
+            (f32::INFINITY, 0.5),
+            (1.0, f32::NEG_INFINITY),
+        ] {
+            let e = Filter::new(kind, cubic).unwrap_err();
+            assert_eq!(e.code, ErrorCode::BadValue, "{kind:?} {cubic:?}");
+        }
+    }
+    let built = |kind| Filter::new(kind, (1.0, -0.25)).unwrap();
+    assert_eq!(built(Interpolation::Nearest), Filter::Nearest);
+    assert_eq!(built(Interpolation::Trilinear), Filter::Trilinear);
+    assert_eq!(
+        built(Interpolation::Tricubic),
+        Filter::Cubic { b: 1.0, c: -0.25 }
+    );
+}
+
+/// A `Filter::Cubic` or `GradientFilter::Cubic` whose B or C is not finite (built directly,
+/// past `Filter::new`) reads 0 everywhere, value and gradient, instead of NaN: inside the
+/// cube, on its faces and in its interior (where the fast paths run). The largest finite
+/// parameters give finite values in [0, 1] and finite gradients.
+#[test]
+fn cubic_filters_of_parameters_that_are_not_finite_read_zero() {
+    use crate::data::GradientFilter;
+    let d = random_u8([9, 8, 7], 5);
+    let mut rng = Lcg(17);
+    let mut points: Vec<[f32; 3]> = vec![[0.5; 3], [0.0; 3], [1.0, 0.5, 0.0], [0.31, 0.62, 0.47]];
+    points.extend((0..200).map(|_| std::array::from_fn(|_| rng.next() as f32)));
+    let bad = [
+        (f32::NAN, 0.0),
+        (0.0, f32::NAN),
+        (f32::INFINITY, 0.0),
+        (0.0, f32::NEG_INFINITY),
+    ];
+    for p in &points {
+        for (b, c) in bad {
+            let f = Filter::Cubic { b, c };
+            assert_eq!(d.sample(*p, f).to_bits(), 0, "{p:?} B = {b}, C = {c}");
+            assert_eq!(d.gradient(*p, f), [0.0; 3], "{p:?} B = {b}, C = {c}");
+            for value in [Filter::Trilinear, Filter::Cubic { b: 0.0, c: 0.5 }, f] {
+                let g = d.gradient_with(*p, value, GradientFilter::Cubic { b, c });
+                assert_eq!(g, [0.0; 3], "{p:?} {value:?} B = {b}, C = {c}");
+            }
+            assert_eq!(d.gradient_with(*p, f, GradientFilter::Nodes), [0.0; 3]);
+        }
+        for (b, c) in [
+            (f32::MAX, f32::MAX),
+            (-f32::MAX, f32::MAX),
+            (f32::MAX, -f32::MAX),
+        ] {
+            let v = d.sample(*p, Filter::Cubic { b, c });
+            assert!((0.0..=1.0).contains(&v), "{p:?} B = {b}, C = {c}: {v}");
+            let grads = [
+                d.gradient(*p, Filter::Cubic { b, c }),
+                d.gradient_with(*p, Filter::Trilinear, GradientFilter::Cubic { b, c }),
+            ];
+            for g in grads {
+                assert!(
+                    g.iter().all(|x| x.is_finite()),
+                    "{p:?} B = {b}, C = {c}: {g:?}"
+                );
+            }
+        }
+    }
+}
