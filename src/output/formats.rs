@@ -281,12 +281,18 @@ impl crate::render::Image {
     /// Writes the image atomically in the format its file name asks for (`docs/images.md`):
     /// RGB formats hold its colour (for an image rendered against a transparent backdrop,
     /// its light over black); RGBA formats its colour straight and alpha (1 for an image
-    /// rendered against the background: opaque). The file's bytes (3 to 12 a pixel) are
-    /// made first, before anything is written: where they cannot be allocated it is
-    /// `NoMemory`, and no file, temporary or partial, is left.
+    /// rendered against the background: opaque). A name of no format is `BadFile`; an image
+    /// [`Image::check`] refuses (a side of 0, a `pixels` or `transmittance` of another length
+    /// than `width × height`) is `BadValue`. The file's bytes (3 to 12 a pixel) are made
+    /// first, before anything is written: where they cannot be allocated it is `NoMemory`.
+    /// Whatever fails, no file, temporary or partial, is left, and an existing file is kept.
+    ///
+    /// [`Image::check`]: crate::Image::check
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         let format = ImageFormat::from_path(path)?;
+        self.check()
+            .map_err(|e| Error::new(e.code, format!("{}: {}", path.display(), e.message)))?;
         let len = format.pixels.image_bytes(self.width, self.height);
         let mut bytes = try_vec(len.unwrap_or(usize::MAX), 0u8, "the image's pixels")?;
         self.put_bytes(format.pixels, &mut bytes);

@@ -178,6 +178,58 @@ fn an_output_link_updates_its_target() {
     fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `Image::save` of an image `Image::check` refuses (lengths that disagree with the size, a
+/// side of 0) is `BadValue` in every format, and nothing is written: no file, no temporary, an
+/// existing file kept. (A 4 × 4 image of 3 pixels panicked in the encoder; one of 2 pixels
+/// without transmittance was saved as a black transparent `.rgba.png`; a 0 × 0 image was
+/// `Internal` as a PNG and a 0 × 0 PPM.)
+#[test]
+fn images_that_disagree_with_themselves_are_not_saved() {
+    use crate::render::{Backdrop, Image};
+    let dir = scratch("disagree");
+    fs::write(dir.join("kept.png"), b"old").unwrap();
+    let image = |width, height, pixels: usize, transmittance: usize| Image {
+        width,
+        height,
+        pixels: vec![[0.5; 3]; pixels],
+        transmittance: vec![0.0; transmittance],
+        backdrop: Backdrop::Background,
+    };
+    for (bad, why) in [
+        (
+            image(4, 4, 3, 3),
+            "3 pixels and 3 transmittance values for a 4x4 image",
+        ),
+        (
+            image(2, 1, 2, 0),
+            "2 pixels and 0 transmittance values for a 2x1 image",
+        ),
+        (image(0, 0, 0, 0), "size 0x0"),
+        (image(0, 3, 0, 0), "size 0x3"),
+        (image(5, 0, 0, 0), "size 5x0"),
+    ] {
+        for name in [
+            "x.ppm",
+            "x.rgb16.ppm",
+            "x.png",
+            "x.rgb16.png",
+            "x.rgba.png",
+            "x.rgba16.png",
+            "x.pfm",
+            "kept.png",
+        ] {
+            let p = dir.join(name);
+            let e = bad.save(&p).unwrap_err();
+            assert_eq!(e.code, ErrorCode::BadValue, "{name}: {}", e.message);
+            let head = format!("{}: Image: {why}", p.display());
+            assert!(e.message.starts_with(&head), "{name}: {}", e.message);
+        }
+    }
+    assert_eq!(names(&dir), ["kept.png"]);
+    assert_eq!(fs::read(dir.join("kept.png")).unwrap(), b"old");
+    fs::remove_dir_all(&dir).unwrap();
+}
+
 /// An existing output without write permission, or one that is not a regular file, is kept
 /// and the write reported as an I/O error; a replaced file keeps its permissions.
 #[test]

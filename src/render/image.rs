@@ -6,7 +6,7 @@
 //! does) and writes no file (the output layer does).
 
 use super::{render_strips, Compiled, Progress};
-use crate::error::Result;
+use crate::error::{err, ErrorCode, Result};
 use rayon::prelude::*;
 
 /// Renders the compiled scene ([`render_strips`]) against the backdrop of `format` into
@@ -158,6 +158,12 @@ fn put_all<const C: usize, const B: usize>(out: &mut [u8], channels: [[u8; B]; C
 
 /// A rendered image: linear RGB in [0, 1] and the transmittance of each pixel's primary
 /// ray, row-major, top row first (`docs/images.md`).
+///
+/// Its fields are public, so an image built or changed by hand can disagree with itself (a
+/// `pixels` or `transmittance` of another length than `width × height`): [`Image::check`]
+/// tells it, [`Image::save`] refuses such an image with `BadValue`, and the conversions
+/// (`to_bytes`, `to_rgb8` …) and accessors (`pixel`, `alpha`) panic on it, as slice indexing
+/// does, rather than return the pixels of another image.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
     /// Width in pixels.
@@ -171,17 +177,26 @@ pub struct Image {
     /// The transmittance `T` of each pixel's primary ray, in [0, 1]: the weight of what lies
     /// behind the scene (the background) in the pixel, 0 where the ray ends in opaque matter
     /// or early termination; with super-sampling the mean over the pixel's rays.
+    /// `width * height` values, one a pixel.
     pub transmittance: Vec<f32>,
     /// What the rays show where they leave the scene.
     pub backdrop: Backdrop,
 }
 
 impl Image {
-    /// An image of the colours `pixels` (`width * height` of them, row-major, top row first;
-    /// panics on another count), opaque: against the background, transmittance 0 (for images
-    /// made by other means than a render, such as a closed form to compare a render with).
+    /// An image of the colours `pixels` (`width * height` of them, row-major, top row first),
+    /// opaque: against the background, transmittance 0 (for images made by other means than
+    /// a render, such as a closed form to compare a render with).
+    ///
+    /// # Panics
+    ///
+    /// Where `pixels` does not hold `width * height` colours.
     pub fn from_rgb(width: u32, height: u32, pixels: Vec<[f32; 3]>) -> Image {
-        assert_eq!(pixels.len(), width as usize * height as usize);
+        assert!(
+            pixels.len() as u64 == width as u64 * height as u64,
+            "Image::from_rgb: {} pixels for a {width}x{height} image",
+            pixels.len()
+        );
         Image {
             width,
             height,
@@ -191,25 +206,95 @@ impl Image {
         }
     }
 
-    /// The colour at column `x`, row `y` (row 0 at the top).
-    pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
-        self.pixels[self.index(x, y)]
+    /// `BadValue` unless the image is one the library renders and writes: each side 1 …
+    /// [`MAX_IMAGE_SIDE`], at most [`MAX_IMAGE_PIXELS`] pixels, and `pixels` and
+    /// `transmittance` each `width × height` long. [`Image::save`] checks it before it
+    /// writes anything.
+    ///
+    /// [`MAX_IMAGE_SIDE`]: crate::limits::MAX_IMAGE_SIDE
+    /// [`MAX_IMAGE_PIXELS`]: crate::limits::MAX_IMAGE_PIXELS
+    pub fn check(&self) -> Result<()> {
+        use crate::limits::{MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE};
+        if let Some(why) = self.lengths_disagree() {
+            return err(ErrorCode::BadValue, format!("Image: {why}"));
+        }
+        let (w, h) = (self.width, self.height);
+        let side = 1..=MAX_IMAGE_SIDE as u32;
+        if !side.contains(&w) || !side.contains(&h) || w as u64 * h as u64 > MAX_IMAGE_PIXELS {
+            return err(
+                ErrorCode::BadValue,
+                format!(
+                    "Image: size {w}x{h} (each side 1 … {MAX_IMAGE_SIDE}, at most \
+                     {MAX_IMAGE_PIXELS} pixels)"
+                ),
+            );
+        }
+        Ok(())
     }
 
-    /// The index of the pixel at column `x`, row `y`.
-    fn index(&self, x: u32, y: u32) -> usize {
+    /// What is wrong with the lengths of `pixels` and `transmittance`, if either is not
+    /// `width × height`.
+    fn lengths_disagree(&self) -> Option<String> {
+        let n = self.width as u64 * self.height as u64;
+        let (p, t) = (self.pixels.len(), self.transmittance.len());
+        (p as u64 != n || t as u64 != n).then(|| {
+            format!(
+                "{p} pixels and {t} transmittance values for a {}x{} image ({n} of each)",
+                self.width, self.height
+            )
+        })
+    }
+
+    /// Panics, naming the conversion `what`, where the lengths of `pixels` and
+    /// `transmittance` are not `width × height`.
+    fn assert_lengths(&self, what: &str) {
+        if let Some(why) = self.lengths_disagree() {
+            panic!("Image::{what}: {why}");
+        }
+    }
+
+    /// The colour at column `x`, row `y` (row 0 at the top).
+    ///
+    /// # Panics
+    ///
+    /// Where `x` or `y` lies outside the image (`x ≥ width` or `y ≥ height`), or `pixels` is
+    /// shorter than `width × height`.
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
+        self.pixels[self.index(x, y, "pixel")]
+    }
+
+    /// The index of the pixel at column `x`, row `y`; panics, naming the accessor `what`,
+    /// where it lies outside the image.
+    fn index(&self, x: u32, y: u32, what: &str) -> usize {
+        assert!(
+            x < self.width && y < self.height,
+            "Image::{what}: ({x}, {y}) is outside the {}x{} image",
+            self.width,
+            self.height
+        );
         y as usize * self.width as usize + x as usize
     }
 
     /// The alpha at column `x`, row `y`: `1 − T` for a transparent backdrop, 1 (opaque) for
     /// the background.
+    ///
+    /// # Panics
+    ///
+    /// Where `x` or `y` lies outside the image (`x ≥ width` or `y ≥ height`), or
+    /// `transmittance` is shorter than `width × height`.
     pub fn alpha(&self, x: u32, y: u32) -> f32 {
-        alpha(self.transmittance[self.index(x, y)], self.backdrop)
+        alpha(self.transmittance[self.index(x, y, "alpha")], self.backdrop)
     }
 
     /// The pixels in `format` ([`PixelFormat`]: what a render into a buffer of that format
     /// gives, and what the image files hold), in the machine's byte order.
+    ///
+    /// # Panics
+    ///
+    /// Where `pixels` or `transmittance` is not `width × height` long ([`Image::check`]
+    /// tells it without panicking). The same holds for every `to_*` conversion.
     pub fn to_bytes(&self, format: PixelFormat) -> Vec<u8> {
+        self.assert_lengths("to_bytes");
         let mut out = vec![0u8; self.pixels.len() * format.pixel_bytes()];
         self.put_bytes(format, &mut out);
         out
@@ -217,9 +302,12 @@ impl Image {
 
     /// Writes the pixels in `format` into `out`, one pixel after the other (`out` holds
     /// [`PixelFormat::pixel_bytes`] bytes for each): the bytes of [`Image::to_bytes`], into a
-    /// buffer the caller allocated (`Image::save`'s, allocated fallibly).
+    /// buffer the caller allocated (`Image::save`'s, allocated fallibly). For an image whose
+    /// lengths agree ([`Image::check`]).
     pub(crate) fn put_bytes(&self, format: PixelFormat, out: &mut [u8]) {
         let n = format.pixel_bytes();
+        debug_assert!(self.lengths_disagree().is_none());
+        debug_assert_eq!(out.len(), self.pixels.len() * n);
         for ((p, &t), dst) in self
             .pixels
             .iter()
@@ -230,29 +318,37 @@ impl Image {
         }
     }
 
-    /// 8-bit RGB, each channel `round(255·v)`.
+    /// 8-bit RGB, each channel `round(255·v)`. Panics as [`Image::to_bytes`] does.
     pub fn to_rgb8(&self) -> Vec<u8> {
+        self.assert_lengths("to_rgb8");
         self.pixels.iter().flat_map(|p| p.map(to_u8)).collect()
     }
 
     /// 16-bit RGB: `round(65535·v)`, the 16-bit value whose rounding to 8 bits
-    /// (`round(v16 / 257)`) is the 8-bit value (`docs/images.md`).
+    /// (`round(v16 / 257)`) is the 8-bit value (`docs/images.md`). Panics as
+    /// [`Image::to_bytes`] does.
     pub fn to_rgb16(&self) -> Vec<u16> {
+        self.assert_lengths("to_rgb16");
         self.pixels.iter().flat_map(|p| p.map(to_u16)).collect()
     }
 
-    /// 8-bit RGBA, straight colour (colour / alpha) and alpha, as a PNG holds it.
+    /// 8-bit RGBA, straight colour (colour / alpha) and alpha, as a PNG holds it. Panics as
+    /// [`Image::to_bytes`] does.
     pub fn to_rgba8(&self) -> Vec<u8> {
+        self.assert_lengths("to_rgba8");
         self.to_bytes(PixelFormat::Rgba8)
     }
 
-    /// 16-bit RGBA, straight colour (colour / alpha) and alpha, as a PNG holds it.
+    /// 16-bit RGBA, straight colour (colour / alpha) and alpha, as a PNG holds it. Panics as
+    /// [`Image::to_bytes`] does.
     pub fn to_rgba16(&self) -> Vec<u16> {
+        self.assert_lengths("to_rgba16");
         self.rgba(to_u16, |c, a| to_u16(straight(c, a)))
     }
 
-    /// Float RGBA: premultiplied colour and alpha.
+    /// Float RGBA: premultiplied colour and alpha. Panics as [`Image::to_bytes`] does.
     pub fn to_rgba_f32(&self) -> Vec<f32> {
+        self.assert_lengths("to_rgba_f32");
         self.rgba(clean, |c, _| clean(c))
     }
 

@@ -159,3 +159,126 @@ fn formats_from_raw() {
         assert_eq!(e.code, crate::error::ErrorCode::BadEnum);
     }
 }
+
+/// The message of the panic `f` raises (nothing where it returns).
+fn panic_message<R>(f: impl FnOnce() -> R) -> Option<String> {
+    let p = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).err()?;
+    Some(
+        p.downcast_ref::<String>()
+            .cloned()
+            .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_default(),
+    )
+}
+
+/// An image whose `pixels` or `transmittance` is not `width × height` long, or whose size the
+/// library does not render, is `BadValue` for `check`; every conversion of an image whose
+/// lengths disagree panics, naming itself and the lengths, instead of converting another
+/// image (a 2 × 1 image without transmittance gave 8 zero bytes from `to_rgba8`).
+#[test]
+fn check_refuses_images_that_disagree_with_themselves() {
+    use crate::error::ErrorCode;
+    let image = |width, height, pixels: usize, transmittance: usize| Image {
+        width,
+        height,
+        pixels: vec![[0.5; 3]; pixels],
+        transmittance: vec![0.0; transmittance],
+        backdrop: Backdrop::Background,
+    };
+    for (bad, why) in [
+        (
+            image(4, 4, 3, 3),
+            "3 pixels and 3 transmittance values for a 4x4 image (16 of each)",
+        ),
+        (
+            image(2, 1, 2, 0),
+            "2 pixels and 0 transmittance values for a 2x1 image (2 of each)",
+        ),
+        (
+            image(2, 1, 3, 2),
+            "3 pixels and 2 transmittance values for a 2x1 image (2 of each)",
+        ),
+        (
+            image(0, 3, 0, 3),
+            "0 pixels and 3 transmittance values for a 0x3 image (0 of each)",
+        ),
+    ] {
+        let e = bad.check().unwrap_err();
+        assert_eq!(e.code, ErrorCode::BadValue, "{why}");
+        assert_eq!(e.message, format!("Image: {why}"));
+        for (name, f) in [
+            (
+                "to_bytes",
+                &(|i: &Image| drop(i.to_bytes(PixelFormat::Rgb16))) as &dyn Fn(&Image),
+            ),
+            ("to_rgb8", &|i: &Image| drop(i.to_rgb8())),
+            ("to_rgb16", &|i: &Image| drop(i.to_rgb16())),
+            ("to_rgba8", &|i: &Image| drop(i.to_rgba8())),
+            ("to_rgba16", &|i: &Image| drop(i.to_rgba16())),
+            ("to_rgba_f32", &|i: &Image| drop(i.to_rgba_f32())),
+        ] {
+            assert_eq!(
+                panic_message(|| f(&bad)).as_deref(),
+                Some(&*format!("Image::{name}: {why}"))
+            );
+        }
+    }
+    // Lengths that agree with a size the library does not render (zeroed memory: mapped, not
+    // touched).
+    let image = |width, height, n: usize| Image {
+        width,
+        height,
+        pixels: vec![[0.0; 3]; n],
+        transmittance: vec![0.0; n],
+        backdrop: Backdrop::Background,
+    };
+    for (w, h) in [
+        (0, 0),
+        (0, 5),
+        (7, 0),
+        (32769, 1),
+        (1, 32769),
+        (16385, 16384),
+    ] {
+        let n = w as usize * h as usize;
+        let e = image(w, h, n).check().unwrap_err();
+        assert_eq!(e.code, ErrorCode::BadValue, "{w}x{h}");
+        assert_eq!(
+            e.message,
+            format!("Image: size {w}x{h} (each side 1 … 32768, at most 268435456 pixels)")
+        );
+    }
+    for (w, h) in [(1, 1), (3, 2), (32768, 1), (1, 32768), (16384, 16384)] {
+        let n = w as usize * h as usize;
+        assert!(image(w, h, n).check().is_ok(), "{w}x{h}");
+    }
+}
+
+/// `pixel` and `alpha` outside the image panic with the coordinates and the size, where
+/// `pixel(2, 0)` of a 2 × 2 image gave pixel (0, 1) and `alpha` panicked only past the end.
+#[test]
+fn pixels_outside_the_image_panic() {
+    let image = Image {
+        width: 2,
+        height: 2,
+        pixels: vec![[0.1; 3], [0.2; 3], [0.3; 3], [0.4; 3]],
+        transmittance: vec![0.5, 0.25, 0.75, 1.0],
+        backdrop: Backdrop::Transparent,
+    };
+    assert_eq!(image.pixel(1, 1), [0.4; 3]);
+    assert_eq!(image.pixel(0, 1), [0.3; 3]);
+    assert_eq!(image.alpha(0, 1), 0.25);
+    for (x, y) in [(2, 0), (0, 2), (2, 1), (5, 5), (u32::MAX, 0), (0, u32::MAX)] {
+        for (name, f) in [
+            ("pixel", &(|| _ = image.pixel(x, y)) as &dyn Fn()),
+            ("alpha", &|| _ = image.alpha(x, y)),
+        ] {
+            assert_eq!(
+                panic_message(f).as_deref(),
+                Some(&*format!(
+                    "Image::{name}: ({x}, {y}) is outside the 2x2 image"
+                )),
+            );
+        }
+    }
+}
