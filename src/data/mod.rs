@@ -180,11 +180,14 @@ impl Dataset {
         self
     }
 
-    /// A dataset from raw voxels (x fastest, then y, then z) and normalisation a, b.
+    /// A dataset from raw voxels (x fastest, then y, then z) and normalisation a, b. Refused,
+    /// with the codes `vlLoad` gives a file of the same header: `BadDimensions` for a
+    /// dimension of 0 or more than [`MAX_VOXELS`] voxels, `BadRange` for an a or b that is not
+    /// finite or a = b; and `BadValue` for voxels fewer or more than the dimensions call for.
     pub fn new(dims: [usize; 3], raw: Voxels, a: f32, b: f32) -> Result<Dataset> {
         if dims.contains(&0) {
             return err(
-                ErrorCode::BadValue,
+                ErrorCode::BadDimensions,
                 format!("dataset dimensions {dims:?} contain 0"),
             );
         }
@@ -192,20 +195,27 @@ impl Dataset {
             .iter()
             .try_fold(1u64, |acc, &d| acc.checked_mul(d as u64));
         match n {
-            Some(n) if n <= MAX_VOXELS && n as usize == raw.len() => {}
+            Some(n) if n <= MAX_VOXELS => {
+                if n != raw.len() as u64 {
+                    return err(
+                        ErrorCode::BadValue,
+                        format!(
+                            "dataset dimensions {dims:?} call for {n} voxels, not {}",
+                            raw.len()
+                        ),
+                    );
+                }
+            }
             _ => {
                 return err(
-                    ErrorCode::BadValue,
-                    format!(
-                        "dataset dimensions {dims:?} do not match {} voxels",
-                        raw.len()
-                    ),
+                    ErrorCode::BadDimensions,
+                    format!("dataset dimensions {dims:?} exceed {MAX_VOXELS} voxels"),
                 )
             }
         }
         if !a.is_finite() || !b.is_finite() || a == b {
             return err(
-                ErrorCode::BadValue,
+                ErrorCode::BadRange,
                 format!("dataset normalisation a = {a}, b = {b}: both finite and different"),
             );
         }

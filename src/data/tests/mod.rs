@@ -65,6 +65,53 @@ fn random_u8(dims: [usize; 3], seed: u64) -> Dataset {
     Dataset::new(dims, Voxels::U8(raw), 10.0, 240.0).unwrap()
 }
 
+/// `Dataset::new` refuses what `vlLoad` refuses in a header with the same codes (a dimension
+/// of 0 or more than 2³² voxels `BadDimensions`, a normalisation that is not finite or has
+/// a = b `BadRange`), and voxels that disagree with the dimensions with `BadValue`.
+#[test]
+fn new_datasets_are_refused_with_the_codes_of_their_fault() {
+    let u8s = |n: usize| Voxels::U8(vec![7; n]);
+    let refused = |dims: [usize; 3], raw: Voxels, a: f32, b: f32| {
+        Dataset::new(dims, raw, a, b).map(|_| ()).unwrap_err().code
+    };
+    for dims in [[0, 2, 2], [2, 0, 2], [2, 2, 0], [0, 0, 0]] {
+        assert_eq!(
+            refused(dims, u8s(0), 0.0, 1.0),
+            ErrorCode::BadDimensions,
+            "{dims:?}"
+        );
+    }
+    let big = 1 << 16;
+    for dims in [[big, big, 2], [usize::MAX, 2, 1], [big + 1, big, 1]] {
+        assert_eq!(
+            refused(dims, u8s(1), 0.0, 1.0),
+            ErrorCode::BadDimensions,
+            "{dims:?}"
+        );
+    }
+    for (a, b) in [
+        (1.0, 1.0),
+        (f32::NAN, 1.0),
+        (0.0, f32::INFINITY),
+        (f32::NEG_INFINITY, 0.0),
+    ] {
+        assert_eq!(
+            refused([2, 2, 1], u8s(4), a, b),
+            ErrorCode::BadRange,
+            "{a} {b}"
+        );
+    }
+    for n in [3, 5] {
+        assert_eq!(
+            refused([2, 2, 1], u8s(n), 0.0, 1.0),
+            ErrorCode::BadValue,
+            "{n}"
+        );
+    }
+    let fits = Dataset::new([2, 2, 1], u8s(4), 255.0, 0.0).unwrap();
+    assert_eq!((fits.dims(), fits.range()), ([2, 2, 1], (255.0, 0.0)));
+}
+
 /// `node` and `raw_node` read the node they name, and for a node outside the grid (one
 /// coordinate past its axis, where i + nx·(j + ny·k) would name another node, or all of them)
 /// panic with a message naming the call, the node and the grid, never reading another node.
