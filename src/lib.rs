@@ -71,8 +71,29 @@ pub use types::{
 };
 
 /// The library's limits on what a call may ask for (`docs/commands.md`,
-/// `docs/dev/robustness.md`): larger requests are refused (with `VL_BADVALUE`, or
-/// `VL_NOMEMORY` for sizes, as each constant says).
+/// `docs/dev/robustness.md`). A larger request is refused, changing nothing, with this code:
+///
+/// - [`MAX_IMAGE_SIDE`](limits::MAX_IMAGE_SIDE), an image's width or height: `BadValue`
+///   (`vlImage`, [`Library::render`], [`Library::render_into`], `vlRenderBuffer`).
+/// - [`MAX_IMAGE_PIXELS`](limits::MAX_IMAGE_PIXELS), an image's pixels: `NoMemory` from
+///   `vlImage` ([`Library::image`]), the code `docs/commands.md` gives that command for an
+///   image too large to allocate when its scene closes; `BadValue` from the renders to
+///   memory ([`Library::render`], [`Library::render_into`], `vlRenderBuffer`), which check it
+///   with the other limits of their size arguments and render a strip at a time
+///   (`docs/extensions.md`). Both codes are the C API's documented ones.
+/// - [`MAX_SUPER_SAMPLE`](limits::MAX_SUPER_SAMPLE): `BadValue` (`vlSuperSample`).
+/// - [`MAX_RECURSION`](limits::MAX_RECURSION): `BadValue` (`vlRecursion`).
+/// - [`MAX_SURFACES`](limits::MAX_SURFACES), iso-surfaces in force: `BadValue` (`vlSurface`).
+/// - [`MAX_DEPTH`](limits::MAX_DEPTH), objects nested: `BadValue` (`vlObject`).
+/// - [`MAX_VOLUME_NODES`](limits::MAX_VOLUME_NODES), a voxelization's nodes: `NoMemory`
+///   (`vlVolume`, as `docs/commands.md` gives it).
+/// - [`MAX_VOXELS`](limits::MAX_VOXELS), a dataset's voxels: `BadDimensions` (`vlLoad`,
+///   [`Dataset::load`], [`Dataset::from_vlb_bytes`], [`Dataset::new`]).
+/// - [`MAX_POINTS`](limits::MAX_POINTS) and [`MAX_OUTPUTS`](limits::MAX_OUTPUTS), a transfer
+///   function's rows and outputs: `BadValue` (`vlMapping`).
+/// - [`MAX_SAMPLES_PER_RAY`](limits::MAX_SAMPLES_PER_RAY), the samples of a ray through one
+///   object: `BadValue`, from the render (a scene's `vlEnd`, [`Library::render`],
+///   `vlRenderBuffer`) before any pixel.
 pub mod limits {
     pub use crate::api::library::{
         MAX_DEPTH, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_RECURSION, MAX_SUPER_SAMPLE, MAX_SURFACES,

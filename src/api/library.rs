@@ -35,7 +35,7 @@ pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
 pub const MAX_SUPER_SAMPLE: i32 = 16;
 /// The largest recursion depth.
 pub const MAX_RECURSION: i32 = 64;
-/// The most iso-surfaces in force at once.
+/// The most iso-surfaces in force at once (`vlSurface`).
 pub const MAX_SURFACES: usize = 64;
 /// The deepest nesting of objects.
 pub const MAX_DEPTH: usize = 64;
@@ -460,7 +460,8 @@ impl Library {
     }
 
     /// `vlSurface`: adds an iso-surface of `field` at `threshold` (in [0, 1]) to the surfaces
-    /// later objects capture for DSR; any number, on any fields.
+    /// later objects capture for DSR, on any fields: up to [`MAX_SURFACES`] (64) in force at
+    /// once, one more is `BadValue`.
     pub fn surface(&mut self, field: Fields, threshold: f32) -> Result<()> {
         self.check(Command::Surface)?;
         let index = field.validate_single()?;
