@@ -50,7 +50,7 @@ pub fn format(path: &Path) -> Result<Format, String> {
         // gzip: look inside (a .nii.gz).
         let mut inner = Vec::new();
         let (f, _) = crate::volume::open_regular(path)?;
-        let _ = flate2::read::MultiGzDecoder::new(f)
+        let _ = crate::gunzip::Gunzip::new(f)
             .take(512)
             .read_to_end(&mut inner);
         if is_nifti(&inner) {

@@ -41,6 +41,7 @@ use vlib::{Dataset, Voxels};
 
 mod detect;
 mod dicom;
+mod gunzip;
 mod metaimage;
 mod nifti;
 mod nrrd;

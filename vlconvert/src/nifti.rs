@@ -2,14 +2,15 @@
 //! header whose voxels are in an image file beside it (`.hdr` + `.img`, magic `ni1`; a name
 //! ending in `.gz` is gzipped). This module owns reading them: every file is opened by
 //! `volume::open_regular` (a FIFO, a device or a directory is refused without waiting), a gzip
-//! stream is read to its end (a checksum that does not match, or a stream cut short, is an
-//! error), the 348-byte header is parsed by the `nifti` crate, and the voxels are taken at the
+//! stream is read to its end (`gunzip`: a checksum that does not match, or a stream cut short,
+//! is an error; bytes after it are said in a note), the 348-byte header is parsed by the `nifti` crate, and the voxels are taken at the
 //! header's `vox_offset` (a whole number of bytes, at 348 or after in a single file, inside the
 //! data; bytes after the voxels are said in a note). It owns what the header says of the values
 //! (`dim`, `datatype`, byte order, `scl_slope` / `scl_inter`) and of their placement (the sform,
 //! else the qform, else the voxel sizes; a qform quaternion that is no rotation is no
 //! placement), before the conversion every volume shares (`volume`).
 
+use crate::gunzip::Gunzip;
 use crate::progress::{Progress, Reading, Unit};
 use crate::volume::{self, Source, Type};
 use nifti::{Endianness, NiftiHeader, NiftiType};
@@ -38,10 +39,40 @@ fn read_error(gz: bool) -> impl Fn(std::io::Error) -> String {
     }
 }
 
+/// A file's bytes as they are read: as stored, or decompressed (gzip, member by member).
+enum Stream {
+    Plain(BufReader<Reading<std::fs::File>>),
+    Gz(Gunzip<BufReader<Reading<std::fs::File>>>),
+}
+
+impl Read for Stream {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        match self {
+            Stream::Plain(r) => r.read(out),
+            Stream::Gz(r) => r.read(out),
+        }
+    }
+}
+
+impl Stream {
+    /// Once read to its end, a note of the bytes after a gzip stream of the file `path`.
+    fn note_trailing(&self, path: &Path) {
+        if let Stream::Gz(g) = self {
+            if g.trailing() > 0 {
+                eprintln!(
+                    "vlconvert: note: {} has {} bytes after its gzip stream (ignored)",
+                    path.display(),
+                    g.trailing()
+                );
+            }
+        }
+    }
+}
+
 /// The bytes of the regular file `path` as a stream, decompressed where it is gzipped (told by
 /// its first bytes where `by_magic`, else by a name ending in `.gz`), the file's bytes counted
 /// on a progress line; and whether it is gzipped.
-fn stream(path: &Path, by_magic: bool) -> Res<(Box<dyn Read>, bool)> {
+fn stream(path: &Path, by_magic: bool) -> Res<(Stream, bool)> {
     let (f, meta) = volume::open_regular(path)?;
     let name = path.file_name().unwrap_or_default().to_string_lossy();
     let bar = Progress::new(format!("reading {name}"), meta.len(), Unit::Bytes);
@@ -54,9 +85,9 @@ fn stream(path: &Path, by_magic: bool) -> Res<(Box<dyn Read>, bool)> {
         name.ends_with(".gz")
     };
     Ok(if gz {
-        (Box::new(flate2::read::MultiGzDecoder::new(r)), true)
+        (Stream::Gz(Gunzip::new(r)), true)
     } else {
-        (Box::new(r), false)
+        (Stream::Plain(r), false)
     })
 }
 
@@ -282,7 +313,7 @@ fn geometry(h: &NiftiHeader) -> Res<vlib::Geometry> {
 pub fn convert(input: &Path, output: &Path, window: &super::Window) -> Res<()> {
     let at = |e: String| format!("{}: {e}", input.display());
     let (mut r, gz) = stream(input, true)?;
-    let h = header(&mut *r, gz).map_err(at)?;
+    let h = header(&mut r, gz).map_err(at)?;
     let single = &h.magic == b"n+1\0";
     let (dims, ty, len) = layout(&h).map_err(at)?;
     let start = vox_offset(&h, single).map_err(at)?;
@@ -297,16 +328,19 @@ pub fn convert(input: &Path, output: &Path, window: &super::Window) -> Res<()> {
     }
     let what = format!("{dims:?} of {ty:?}");
     let (file, data, extra) = if single {
-        let (data, extra) = voxels(&mut *r, gz, (HEADER_LEN, start, len), &what).map_err(at)?;
+        let (data, extra) = voxels(&mut r, gz, (HEADER_LEN, start, len), &what).map_err(at)?;
+        r.note_trailing(input);
         (input.to_path_buf(), data, extra)
     } else {
         // The rest of the header's file (its extensions), to its end: a gzip stream is checked.
         std::io::copy(&mut r, &mut std::io::sink()).map_err(|e| at(read_error(gz)(e)))?;
+        r.note_trailing(input);
         drop(r);
         let img = image_file(input).map_err(at)?;
         let (mut r, gz) = stream(&img, false)?;
-        let (data, extra) = voxels(&mut *r, gz, (0, start, len), &what)
+        let (data, extra) = voxels(&mut r, gz, (0, start, len), &what)
             .map_err(|e| format!("{}: {e}", img.display()))?;
+        r.note_trailing(&img);
         (img, data, extra)
     };
     if extra > 0 {

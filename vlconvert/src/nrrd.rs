@@ -11,8 +11,10 @@
 //! `float` no finite number beyond its range, and the first value that breaks this is refused by
 //! value and index; `byte skip` skips bytes of the text (as teem reads it), −1 raw data only.
 //! Data after the volume's (raw or gzip bytes, ascii values) is ignored with a note, and a gzip
-//! stream is read to its end, so that its checksums are checked.
+//! stream is read to its end (`gunzip`), so that its checksums are checked; bytes after its
+//! last member are a note too.
 
+use crate::gunzip::Gunzip;
 use crate::progress::{Progress, Reading, Unit};
 use crate::volume::{inflate_rest, read_regular, Source, Type};
 use std::path::{Path, PathBuf};
@@ -311,8 +313,16 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
             // (its checksums checked), what follows the volume counted, not kept.
             let keep = need as u64 + skip;
             let bar = Progress::new(format!("decompressing {}", name(path)), keep, Unit::Bytes);
-            let mut inflate = Reading::new(flate2::read::MultiGzDecoder::new(data), bar);
-            let after = inflate_rest(&mut inflate, &mut out, keep).map_err(bad)?;
+            let mut gz = Gunzip::new(data);
+            let after = inflate_rest(&mut Reading::new(&mut gz, bar), &mut out, keep);
+            let after = after.map_err(bad)?;
+            if gz.trailing() > 0 {
+                eprintln!(
+                    "vlconvert: note: {} has {} bytes after its gzip stream (ignored)",
+                    data_path.display(),
+                    gz.trailing()
+                );
+            }
             let (bytes, _) = raw(&out)?;
             (bytes, big, (after, "bytes"))
         }

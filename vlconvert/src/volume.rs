@@ -387,7 +387,7 @@ pub fn gzip_error(e: std::io::Error) -> String {
     }
 }
 
-/// Reads the gzip stream `r` (a decoder of one or more members) to its end: into `out` until
+/// Reads the gzip stream `r` (`gunzip`'s decoder of one or more members) to its end: into `out` until
 /// `out` holds `keep` bytes, then the bytes after those, counted and dropped, so that every
 /// member's checksum and length are checked. Returns that count.
 pub fn inflate_rest(r: &mut impl Read, out: &mut Vec<u8>, keep: u64) -> Result<u64, String> {

@@ -1,6 +1,6 @@
 //! NIfTI-1 reading beyond the plain single file: voxels at the header's `vox_offset` (nibabel's
 //! fixtures: a single file with padding, a `.hdr` / `.img` pair), offsets that are none, gzip
-//! streams that are corrupt or cut short, inputs that are not regular files (refused without
+//! streams that are corrupt or cut short, followed by other bytes or in two members, inputs that are not regular files (refused without
 //! waiting, for every reader that opens a file by its name), and a qform quaternion that is no
 //! rotation. Malformed headers are nibabel's files with the field patched in the test: nibabel
 //! writes none of them.
@@ -135,6 +135,54 @@ fn corrupt_or_cut_gzip_streams_and_folders_are_refused_in_words() {
         err.contains(&format!("{}: is a directory", d.display())),
         "{err}"
     );
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Bytes after a gzip stream that start no other member (nibabel's `.nii.gz` followed by 512
+/// zero bytes or by text; nibabel's gzipped pair with 100 zero bytes after its `.img.gz`) are
+/// ignored with a note counting them, as zlib's gzread and `gzip -d` ignore them, and a stream
+/// of two members (Python's gzip module) is read whole: each converts, with its subcommand and
+/// without, to the bytes of the plain file (`int16_ct.nii`, `uint8_pair.hdr`).
+#[test]
+fn bytes_after_a_gzip_stream_are_a_note_and_members_are_joined() {
+    let d = tmp("nifti-gzip-after");
+    let (want, got) = (d.join("want.vlb"), d.join("got.vlb"));
+    for (file, plain, note) in [
+        ("int16_ct.nii.gz", "int16_ct.nii", None),
+        ("int16_ct_zeros.nii.gz", "int16_ct.nii", Some(("", 512))),
+        ("int16_ct_junk.nii.gz", "int16_ct.nii", Some(("", 18))),
+        ("int16_ct_members.nii.gz", "int16_ct.nii", None),
+        (
+            "uint8_pair_gz.hdr.gz",
+            "uint8_pair.hdr",
+            Some(("uint8_pair_gz.img.gz", 100)),
+        ),
+    ] {
+        let input = fixture(&format!("nifti/{file}"));
+        let o = run(&["nifti", s(&fixture(&format!("nifti/{plain}"))), s(&want)]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        for sub in [&["nifti"][..], &[]] {
+            let o = run(&[sub, &[s(&input), s(&got)]].concat());
+            let err = text(&o.stderr);
+            assert!(o.status.success(), "{file} {sub:?}: {err}");
+            assert_eq!(
+                std::fs::read(&got).unwrap(),
+                std::fs::read(&want).unwrap(),
+                "{file}"
+            );
+            match note {
+                Some((named, n)) => {
+                    let named = if named.is_empty() { file } else { named };
+                    let says = format!(
+                        "{} has {n} bytes after its gzip stream (ignored)",
+                        fixture(&format!("nifti/{named}")).display()
+                    );
+                    assert!(err.contains(&says), "{file}: {err}");
+                }
+                None => assert!(!err.contains("after its gzip stream"), "{file}: {err}"),
+            }
+        }
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }
 

@@ -206,7 +206,8 @@ fn split(name: &str) -> (Vec<u8>, Vec<u8>) {
 }
 
 /// Data after the volume's (raw: 6 bytes more; gzip: 10 more bytes compressed with it) converts
-/// with a note; a gzip stream whose checksum does not match is refused (exit 1).
+/// with a note, and so does a newline after the gzip stream; a stream of two members is read
+/// whole; a gzip stream whose checksum does not match is refused (exit 1).
 #[test]
 fn nrrd_data_after_the_volume_is_a_note_and_gzip_is_checked() {
     let d = tmp("nrrd-after");
@@ -245,6 +246,28 @@ fn nrrd_data_after_the_volume_is_a_note_and_gzip_is_checked() {
         assert!(run(&["nrrd", s(&fixture(fixture_name)), s(&fix)])
             .status
             .success());
+        assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&fix).unwrap());
+    }
+    // Python's gzip module's shapes of the data: pynrrd's file with a newline after its
+    // stream (a note), and the volume in two members (read whole).
+    let fix = d.join("fixture.vlb");
+    assert!(
+        run(&["nrrd", s(&fixture("nrrd/uint16_gzip.nrrd")), s(&fix)])
+            .status
+            .success()
+    );
+    for (name, note) in [
+        ("nrrd/uint16_gzip_newline.nrrd", true),
+        ("nrrd/uint16_gzip_members.nrrd", false),
+    ] {
+        let o = run(&[s(&fixture(name)), s(&out)]);
+        let err = text(&o.stderr);
+        assert!(o.status.success(), "{name}: {err}");
+        let says = format!(
+            "{} has 1 bytes after its gzip stream (ignored)",
+            fixture(name).display()
+        );
+        assert_eq!(err.contains(&says), note, "{name}: {err}");
         assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&fix).unwrap());
     }
     let mut crc = gz.clone();
