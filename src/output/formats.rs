@@ -250,7 +250,9 @@ pub(crate) fn encode_into(
 /// `.ppm`, `.png`, `.rgb.png` ...; a name that asks for other pixels is `BadFile`: those are
 /// written by [`crate::Image::save`]) and writes them atomically, straight into the file: no
 /// copy of the pixels is made (nor of the PNG's compressed stream).
-/// A slice that is not `3 · width · height` bytes long is `BadValue`.
+/// A side of 0 (an image of no pixels, which no format is asked to hold, as no render makes
+/// one) and a slice that is not `3 · width · height` bytes long are `BadValue`; nothing is
+/// written then.
 pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
     let format = ImageFormat::from_path(path)?;
     if format.pixels != PixelFormat::Rgb8 {
@@ -261,6 +263,15 @@ pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(
                  Image::save",
                 path.display(),
                 format.pixels
+            ),
+        );
+    }
+    if width == 0 || height == 0 {
+        return err(
+            ErrorCode::BadValue,
+            format!(
+                "{}: size {width}x{height} (each side at least 1)",
+                path.display()
             ),
         );
     }

@@ -230,6 +230,29 @@ fn images_that_disagree_with_themselves_are_not_saved() {
     fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `write_image` of an image with a side of 0 is `BadValue` in every format it writes, and
+/// nothing is written: no file, no temporary, an existing file kept. (A 0 × 0 PNG was
+/// `Internal`, "PNG encoding failed: Zero width not allowed", and a 0 × 0 PPM was written.)
+#[test]
+fn empty_images_are_not_written() {
+    let dir = scratch("empty");
+    fs::write(dir.join("kept.ppm"), b"old").unwrap();
+    for (w, h) in [(0, 0), (0, 3), (4, 0)] {
+        for name in ["x.ppm", "x.rgb8.ppm", "x.png", "x.rgb.png", "kept.ppm"] {
+            let p = dir.join(name);
+            let e = write_image(&p, w, h, &[]).unwrap_err();
+            assert_eq!(e.code, ErrorCode::BadValue, "{name}: {}", e.message);
+            assert_eq!(
+                e.message,
+                format!("{}: size {w}x{h} (each side at least 1)", p.display())
+            );
+        }
+    }
+    assert_eq!(names(&dir), ["kept.ppm"]);
+    assert_eq!(fs::read(dir.join("kept.ppm")).unwrap(), b"old");
+    fs::remove_dir_all(&dir).unwrap();
+}
+
 /// An existing output without write permission, or one that is not a regular file, is kept
 /// and the write reported as an I/O error; a replaced file keeps its permissions.
 #[test]
