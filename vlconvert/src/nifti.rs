@@ -3,12 +3,14 @@
 //! ending in `.gz` is gzipped). This module owns reading them: every file is opened by
 //! `volume::open_regular` (a FIFO, a device or a directory is refused without waiting), a gzip
 //! stream is read to its end (`gunzip`: a checksum that does not match, or a stream cut short,
-//! is an error; bytes after it are said in a note), the 348-byte header is parsed by the `nifti` crate, and the voxels are taken at the
-//! header's `vox_offset` (a whole number of bytes, at 348 or after in a single file, inside the
-//! data; bytes after the voxels are said in a note). It owns what the header says of the values
+//! is an error; bytes after it are said in a note), the 348-byte header is parsed by the
+//! `nifti` crate, and the voxels are taken at the header's `vox_offset` (a whole number of
+//! bytes, at 348 or after in a single file, inside the data; bytes after the voxels are said in
+//! a note). It owns what the header says of the values
 //! (`dim`, `datatype`, byte order, `scl_slope` / `scl_inter`) and of their placement (the sform,
 //! else the qform, else the voxel sizes; a qform quaternion that is no rotation is no
-//! placement), before the conversion every volume shares (`volume`).
+//! placement, a negative qform voxel size is taken as its absolute value), before the
+//! conversion every volume shares (`volume`).
 
 use crate::gunzip::Gunzip;
 use crate::progress::{Progress, Reading, Unit};
@@ -243,8 +245,9 @@ fn image_file(hdr: &Path) -> Res<PathBuf> {
 /// is set, else the qform (quaternion, pixdim, qfac), else the voxel sizes alone (NIfTI's
 /// "method 1"); units other than millimetres (xyzt_units) are converted. A quaternion whose
 /// b² + c² + d² exceeds 1 by more than rounding ([`QUATERNION_SLACK`]) is refused: it is no
-/// rotation (nibabel refuses it too).
-fn geometry(h: &NiftiHeader) -> Res<vlib::Geometry> {
+/// rotation (nibabel refuses it too). A negative qform voxel size (pixdim[1 … 3]) is taken as
+/// its absolute value, as nibabel takes it (qfac alone mirrors an axis), and said to `note`.
+fn geometry(h: &NiftiHeader, note: impl Fn(String)) -> Res<vlib::Geometry> {
     let unit = match h.xyzt_units & 7 {
         1 => 1000.0, // metres
         3 => 0.001,  // micrometres
@@ -287,7 +290,15 @@ fn geometry(h: &NiftiHeader) -> Res<vlib::Geometry> {
             ],
         ];
         let qfac = if p(0) < 0.0 { -1.0 } else { 1.0 };
-        let s = [p(1), p(2), qfac * p(3)];
+        for i in (1..=3).filter(|&i| p(i) < 0.0) {
+            note(format!(
+                "qform pixdim[{i}] = {}: a voxel size is not negative, so its absolute value \
+                 {} is used, as nibabel uses it (only qfac, pixdim[0], mirrors an axis)",
+                p(i),
+                p(i).abs()
+            ));
+        }
+        let s = [p(1).abs(), p(2).abs(), qfac * p(3).abs()];
         // (The crate names qoffset_x … z quatern_x … z.)
         let off = [h.quatern_x as f64, h.quatern_y as f64, h.quatern_z as f64];
         let row = |i: usize| {
@@ -357,7 +368,8 @@ pub fn convert(input: &Path, output: &Path, window: &super::Window) -> Res<()> {
     };
     // A placement that cannot be made (voxel sizes of 0, say) is said, and the volume
     // converts without one.
-    let placement = match geometry(&h) {
+    let note = |e: String| eprintln!("vlconvert: note: {}: {e}", input.display());
+    let placement = match geometry(&h, note) {
         Ok(g) => Some(g),
         Err(e) => {
             eprintln!("vlconvert: note: {}: no placement: {e}", input.display());

@@ -387,9 +387,9 @@ pub fn gzip_error(e: std::io::Error) -> String {
     }
 }
 
-/// Reads the gzip stream `r` (`gunzip`'s decoder of one or more members) to its end: into `out` until
-/// `out` holds `keep` bytes, then the bytes after those, counted and dropped, so that every
-/// member's checksum and length are checked. Returns that count.
+/// Reads the gzip stream `r` (`gunzip`'s decoder of one or more members) to its end: into
+/// `out` until `out` holds `keep` bytes, then the bytes after those, counted and dropped, so
+/// that every member's checksum and length are checked. Returns that count.
 pub fn inflate_rest(r: &mut impl Read, out: &mut Vec<u8>, keep: u64) -> Result<u64, String> {
     let room = keep.saturating_sub(out.len() as u64);
     r.by_ref().take(room).read_to_end(out).map_err(gzip_error)?;

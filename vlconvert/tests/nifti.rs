@@ -1,9 +1,10 @@
 //! NIfTI-1 reading beyond the plain single file: voxels at the header's `vox_offset` (nibabel's
 //! fixtures: a single file with padding, a `.hdr` / `.img` pair), offsets that are none, gzip
-//! streams that are corrupt or cut short, followed by other bytes or in two members, inputs that are not regular files (refused without
-//! waiting, for every reader that opens a file by its name), and a qform quaternion that is no
-//! rotation. Malformed headers are nibabel's files with the field patched in the test: nibabel
-//! writes none of them.
+//! streams that are corrupt or cut short, followed by other bytes or in two members, inputs
+//! that are not regular files (refused without waiting, for every reader that opens a file by
+//! its name), a qform quaternion that is no rotation, and negative qform voxel sizes.
+//! Malformed headers are nibabel's files with the field patched in the test: nibabel writes
+//! none of them.
 
 mod common;
 
@@ -269,6 +270,43 @@ fn a_qform_quaternion_that_is_no_rotation_is_no_placement() {
     for (row, want) in g.affine().iter().zip(want) {
         for (got, want) in row[..3].iter().zip(want) {
             assert!((got - want).abs() < 1e-9, "{:?}", g.affine());
+        }
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// nibabel's `uint8_qform.nii` with pixdim[1] and pixdim[3] (bytes 80 and 88) negated: a
+/// negative voxel size mirrors no axis (only qfac does), so its absolute value is used, with a
+/// note for each, and the placement is nibabel's (which warns and does the same): the
+/// fixture's own affine.
+#[test]
+fn a_negative_qform_voxel_size_is_taken_as_its_absolute_value() {
+    let d = tmp("nifti-negative-pixdim");
+    let mut b = std::fs::read(fixture("nifti/uint8_qform.nii")).unwrap();
+    for at in [80, 88] {
+        let v = f32::from_le_bytes(b[at..at + 4].try_into().unwrap());
+        b[at..at + 4].copy_from_slice(&(-v).to_le_bytes());
+    }
+    let (f, out) = (d.join("q.nii"), d.join("q.vlb"));
+    std::fs::write(&f, b).unwrap();
+    let o = run(&["nifti", s(&f), s(&out)]);
+    let err = text(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    for says in [
+        "qform pixdim[1] = -1: a voxel size is not negative, so its absolute value 1 is used",
+        "qform pixdim[3] = -3: a voxel size is not negative, so its absolute value 3 is used",
+    ] {
+        assert!(err.contains(says), "{err}");
+    }
+    let text = std::fs::read_to_string(fixture("nifti/uint8_qform.affine.txt")).unwrap();
+    let want: Vec<Vec<f64>> = text
+        .lines()
+        .map(|l| l.split_whitespace().map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let g = Dataset::load(&out).unwrap().geometry().cloned().unwrap();
+    for (row, want) in g.affine().iter().zip(&want) {
+        for (got, want) in row.iter().zip(want) {
+            assert!((got - want).abs() < 1e-6, "{:?} vs {want:?}", g.affine());
         }
     }
     std::fs::remove_dir_all(&d).unwrap();
