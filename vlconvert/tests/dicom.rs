@@ -457,6 +457,46 @@ fn hostile_files_exit_1_without_allocating_what_they_declare() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+/// Bytes after a slice's last element that are no element in order (16 zero bytes, a line of
+/// text, in explicit and in implicit VR) are trailing data, as pydicom reads them: the series
+/// converts to the bytes of the unchanged one, with a note naming the file and the count.
+#[test]
+fn bytes_after_the_last_element_are_a_note() {
+    let d = tmp("trailing");
+    for (series, slice) in [("ct_oblique", "zz"), ("us8_implicit", "c1.dcm")] {
+        let want = d.join("want.vlb");
+        let (_, o) = convert(&["dicom", s(&fixture(series)), s(&want)], &want);
+        assert!(!text(&o.stderr).contains("after its last element"));
+        for tail in [&[0u8; 16][..], b"trailing text\n"] {
+            let copy = d.join(series);
+            let _ = std::fs::remove_dir_all(&copy);
+            std::fs::create_dir(&copy).unwrap();
+            for entry in std::fs::read_dir(fixture(series)).unwrap() {
+                let from = entry.unwrap().path();
+                std::fs::copy(&from, copy.join(from.file_name().unwrap())).unwrap();
+            }
+            let f = copy.join(slice);
+            let bytes = std::fs::read(&f).unwrap();
+            std::fs::write(&f, [&bytes[..], tail].concat()).unwrap();
+            let got = d.join("got.vlb");
+            let (_, o) = convert(&["dicom", s(&copy), s(&got)], &got);
+            let err = text(&o.stderr);
+            let says = format!(
+                "{} has {} bytes after its last element (ignored)",
+                f.display(),
+                tail.len()
+            );
+            assert!(err.contains(&says), "{series} {tail:?}: {err}");
+            assert_eq!(
+                std::fs::read(&got).unwrap(),
+                std::fs::read(&want).unwrap(),
+                "{series}"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 /// Slices with bytes changed at random places (a fixed sequence) convert or exit 1 with a
 /// message: never a panic, an abort or another exit code. One RLE slice with a byte of its
 /// run data changed (found so) makes the RLE decoder of dicom-transfer-syntax-registry 0.10

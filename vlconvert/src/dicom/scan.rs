@@ -2,7 +2,9 @@
 //! of the file meta group and the data set must lie inside the file (or inside the item that
 //! holds it), and sequences nest at most [`DEPTH`] deep. A parser allocates an element's
 //! value by the length its header declares; a file of a few bytes that declares 4 GiB is
-//! refused here, naming the element, before anything is allocated for it.
+//! refused here, naming the element, before anything is allocated for it. After the data
+//! set's pixel data (7FE0,0010), bytes that are no element in order are trailing data, where
+//! the data set ends (pydicom reads such files too).
 //!
 //! The walk reads element headers only (tag, VR, length) in the data set's encoding:
 //! explicit or implicit VR, little or big endian; a sequence of defined length in implicit
@@ -30,8 +32,9 @@ pub fn is_dicom(head: &[u8]) -> bool {
 }
 
 /// Checks the structure of the DICOM file `bytes` (preamble included); returns its transfer
-/// syntax UID.
-pub fn check(bytes: &[u8]) -> Result<String, String> {
+/// syntax UID and where its data set ends: the end of the file, or where trailing data after
+/// its pixel data begins (zero padding, other bytes: see [`Walk::dataset`]).
+pub fn check(bytes: &[u8]) -> Result<(String, usize), String> {
     if !is_dicom(bytes) {
         return Err("not a DICOM file (no DICM at byte 128)".into());
     }
@@ -61,13 +64,13 @@ pub fn check(bytes: &[u8]) -> Result<String, String> {
     }
     let ts = ts.ok_or("no TransferSyntaxUID (0002,0010) in the file meta information")?;
     match ts.as_str() {
-        DEFLATED => return Ok(ts),
+        DEFLATED => return Ok((ts, bytes.len())),
         IMPLICIT_LE => w.explicit = false,
         EXPLICIT_BE => w.big = true,
         _ => {}
     }
     w.dataset(Some(bytes.len()), 0)?;
-    Ok(ts)
+    Ok((ts, w.pos))
 }
 
 struct Walk<'a> {
@@ -146,7 +149,10 @@ impl Walk<'_> {
         }
     }
 
-    /// The elements of a data set up to byte `end` (`None`: up to its item delimiter).
+    /// The elements of a data set up to byte `end` (`None`: up to its item delimiter). In the
+    /// file's own data set (`depth` 0), an element after the pixel data (7FE0,0010) that is
+    /// not one (no element header, a tag not above the one before, a length past the end)
+    /// starts trailing data: the walk ends before it.
     fn dataset(&mut self, end: Option<usize>, depth: usize) -> Result<(), String> {
         if depth > DEPTH {
             return Err(format!(
@@ -154,7 +160,7 @@ impl Walk<'_> {
                 self.pos
             ));
         }
-        let limit = end.unwrap_or(self.b.len());
+        let mut pixels: Option<Tag> = None;
         loop {
             match end {
                 Some(e) if self.pos == e => return Ok(()),
@@ -163,46 +169,72 @@ impl Walk<'_> {
                 }
                 _ => {}
             }
-            let (tag, vr, len, header) = self.header()?;
-            if self.pos + header > limit {
-                return Err(format!(
-                    "element {tag} at byte {} overruns its item",
-                    self.pos
-                ));
-            }
-            if tag.group() == 0xFFFE {
-                if tag == Tag(0xFFFE, 0xE00D) && end.is_none() {
-                    self.pos += 8;
+            let at = self.pos;
+            match (self.element(end, depth), pixels) {
+                (Ok(None), _) => return Ok(()),
+                (Ok(Some(tag)), Some(before)) if tag <= before => {
+                    self.pos = at;
                     return Ok(());
                 }
-                return Err(format!("item tag {tag} out of place at byte {}", self.pos));
-            }
-            let start = self.pos + header;
-            if len == UNDEFINED {
-                self.pos = start;
-                if tag == Tag(0x7FE0, 0x0010) {
-                    self.fragments()?;
-                } else if vr == Some(VR::UN) {
-                    // A sequence of unknown VR: implicit VR little endian inside.
-                    let saved = (self.explicit, self.big);
-                    (self.explicit, self.big) = (false, false);
-                    self.sequence(None, depth + 1)?;
-                    (self.explicit, self.big) = saved;
-                } else {
-                    self.sequence(None, depth + 1)?;
+                (Ok(Some(tag)), _) => {
+                    if depth == 0 && (pixels.is_some() || tag == Tag(0x7FE0, 0x0010)) {
+                        pixels = Some(tag);
+                    }
                 }
-                continue;
-            }
-            if start + len as usize > limit {
-                return Err(self.overrun(tag, len, limit - start));
-            }
-            self.pos = start;
-            if self.is_sequence(tag, vr) {
-                self.sequence(Some(start + len as usize), depth + 1)?;
-            } else {
-                self.pos += len as usize;
+                (Err(_), Some(_)) => {
+                    self.pos = at;
+                    return Ok(());
+                }
+                (Err(e), None) => return Err(e),
             }
         }
+    }
+
+    /// The element at the current position, in a data set up to byte `end` (`None`: up to
+    /// its item delimiter, which ends it: `None`); its tag.
+    fn element(&mut self, end: Option<usize>, depth: usize) -> Result<Option<Tag>, String> {
+        let limit = end.unwrap_or(self.b.len());
+        let (tag, vr, len, header) = self.header()?;
+        if self.pos + header > limit {
+            return Err(format!(
+                "element {tag} at byte {} overruns its item",
+                self.pos
+            ));
+        }
+        if tag.group() == 0xFFFE {
+            if tag == Tag(0xFFFE, 0xE00D) && end.is_none() {
+                self.pos += 8;
+                return Ok(None);
+            }
+            return Err(format!("item tag {tag} out of place at byte {}", self.pos));
+        }
+        let start = self.pos + header;
+        if len == UNDEFINED {
+            self.pos = start;
+            if tag == Tag(0x7FE0, 0x0010) {
+                self.fragments()?;
+            } else if vr == Some(VR::UN) {
+                // A sequence of unknown VR: implicit VR little endian inside.
+                let saved = (self.explicit, self.big);
+                (self.explicit, self.big) = (false, false);
+                let walked = self.sequence(None, depth + 1);
+                (self.explicit, self.big) = saved;
+                walked?;
+            } else {
+                self.sequence(None, depth + 1)?;
+            }
+            return Ok(Some(tag));
+        }
+        if start + len as usize > limit {
+            return Err(self.overrun(tag, len, limit - start));
+        }
+        self.pos = start;
+        if self.is_sequence(tag, vr) {
+            self.sequence(Some(start + len as usize), depth + 1)?;
+        } else {
+            self.pos += len as usize;
+        }
+        Ok(Some(tag))
     }
 
     /// The items of a sequence up to byte `end` (`None`: up to its sequence delimiter).

@@ -96,9 +96,10 @@ fn ts_name(uid: &str) -> String {
     }
 }
 
-/// Parses the DICOM file `bytes` (its structure checked first), up to its pixel data or whole.
-fn parse(bytes: &[u8], whole: bool) -> Res<DefaultDicomObject> {
-    let ts = scan::check(bytes)?;
+/// Parses the DICOM file `bytes` (its structure checked first), up to its pixel data or whole
+/// (to the end of its pixel data); and the count of bytes after that, which are not parsed.
+fn parse(bytes: &[u8], whole: bool) -> Res<(DefaultDicomObject, usize)> {
+    let (ts, end) = scan::check(bytes)?;
     match TransferSyntaxRegistry.get(&ts) {
         Some(t) if t.can_decode_dataset() && ts != scan::DEFLATED => {}
         _ => {
@@ -113,9 +114,10 @@ fn parse(bytes: &[u8], whole: bool) -> Res<DefaultDicomObject> {
     if !whole {
         options = options.read_until(tags::PIXEL_DATA);
     }
-    guarded("the DICOM parser", || {
-        options.from_reader(&bytes[128..]).map_err(|e| chain(&e))
-    })
+    let obj = guarded("the DICOM parser", || {
+        options.from_reader(&bytes[128..end]).map_err(|e| chain(&e))
+    })?;
+    Ok((obj, bytes.len() - end))
 }
 
 /// An attribute's text, trimmed; `None` where absent or empty.
@@ -301,7 +303,13 @@ impl Slice {
     pub fn values(&self, ty: Type, rescale: bool, out: &mut Vec<u8>) -> Res<()> {
         let at = |e: String| format!("{}: {e}", self.path.display());
         let bytes = read_regular(&self.path, None)?;
-        let obj = parse(&bytes, true).map_err(at)?;
+        let (obj, trailing) = parse(&bytes, true).map_err(at)?;
+        if trailing > 0 {
+            eprintln!(
+                "vlconvert: note: {} has {trailing} bytes after its last element (ignored)",
+                self.path.display()
+            );
+        }
         if Slice::from(&self.path, &obj).as_ref() != Ok(self) {
             return Err(at("the file changed while it was read".into()));
         }
@@ -373,7 +381,7 @@ pub fn read(path: &Path) -> Res<Entry> {
         return Ok(Entry::NotDicom);
     }
     let bytes = read_regular(path, None)?;
-    let obj = parse(&bytes, false).map_err(at)?;
+    let (obj, _) = parse(&bytes, false).map_err(at)?;
     if obj.get(tags::ROWS).is_none() && obj.get(tags::COLUMNS).is_none() {
         let class = obj
             .meta()
