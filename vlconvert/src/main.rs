@@ -70,10 +70,10 @@ struct Cli {
 #[derive(clap::Args, Clone, Copy)]
 struct Norm {
     /// The voxel value that maps to 0 (default: 0).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     a: Option<f32>,
     /// The voxel value that maps to 1 (default: the largest voxel value of the output width).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     b: Option<f32>,
 }
 
@@ -81,17 +81,17 @@ struct Norm {
 #[derive(clap::Args, Clone)]
 struct Window {
     /// The data value that maps to 0 (default: the data's smallest value).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     a: Option<f64>,
     /// The data value that maps to 1 (default: the data's largest value).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     b: Option<f64>,
     /// Both ends at once (as a CT window: --window -1000 2000).
     #[arg(
         long,
         num_args = 2,
         value_names = ["A", "B"],
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         conflicts_with_all = ["a", "b"]
     )]
     window: Vec<f64>,

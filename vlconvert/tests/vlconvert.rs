@@ -7,7 +7,7 @@
 mod common;
 
 use common::{
-    assert_writers_values, converts_like_the_writer, fixture, normalised, run, s, tmp,
+    assert_writers_values, converts_like_the_writer, fixture, normalised, run, s, text, tmp,
     writers_values,
 };
 use std::path::Path;
@@ -275,6 +275,35 @@ fn command_line_errors_exit_2_and_help_exits_0() {
     let help = run(&["--help"]);
     assert_eq!(help.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&help.stdout).contains("nifti"));
+}
+
+/// Negative option values in exponent form (`-1e-3`, `-2.5e-3`) are values, not flags: `raw`
+/// takes them in `--window` and `--a`, `image` in `--a`, and the windows are those values.
+#[test]
+fn negative_values_with_exponents_are_values() {
+    let d = tmp("negative-exponents");
+    let raw = d.join("v.raw");
+    std::fs::write(&raw, [0u8, 1, 2, 3]).unwrap();
+    let out = d.join("v.vlb");
+    let dims = ["--dims", "2", "2", "1"];
+    for (args, (a, b)) in [
+        (&["--window", "-1e-3", "2.5"][..], (-1e-3, 2.5)),
+        (&["--a", "-2.5e-3"][..], (-2.5e-3, 3.0)),
+        (&["--b", "2.5E+0", "--a=-1E-3"][..], (-1e-3, 2.5)),
+    ] {
+        let o = run(&[&["raw", s(&raw), s(&out)][..], &dims, args].concat());
+        assert!(o.status.success(), "{args:?}: {}", text(&o.stderr));
+        assert_windowed(&Dataset::load(&out).unwrap(), &[0.0, 1.0, 2.0, 3.0], a, b);
+    }
+    let grey = d.join("g.png");
+    image::GrayImage::from_raw(2, 1, vec![0, 200])
+        .unwrap()
+        .save(&grey)
+        .unwrap();
+    let o = run(&["image", s(&grey), s(&out), "--a", "-2.5e-3", "--b", "1e2"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(Dataset::load(&out).unwrap().range(), (-2.5e-3, 100.0));
+    std::fs::remove_dir_all(&d).unwrap();
 }
 
 /// Converts the CT fixture `tests/fixtures/<file>` (whose values are in `<stem>.txt`) with
