@@ -171,8 +171,9 @@ fn directory_of(dest: &Path) -> (PathBuf, Option<fs::File>) {
 pub(crate) struct AtomicFile {
     /// The path the caller named (for messages).
     path: PathBuf,
-    /// That path made absolute when the write began (where that fits in `PATH_MAX`), for the
-    /// files that go beside it ([`AtomicFile::named`]).
+    /// The file the write replaces (the path, or where it is a link the file the links lead
+    /// to, [`destination`]), made absolute when the write began (where that fits in
+    /// `PATH_MAX`): for the files that go beside it ([`AtomicFile::named`]).
     named: PathBuf,
     /// The temporary and its directory, the destination's file name, the permissions of the
     /// file it replaces.
@@ -232,9 +233,9 @@ impl AtomicFile {
         };
         let (dir, open_dir) = directory_of(&dest);
         let (tmp, f) = create_temporary(&dir, temporary_name).map_err(io)?;
-        let named = match std::path::absolute(path) {
+        let named = match std::path::absolute(&dest) {
             Ok(abs) if abs.as_os_str().len() < 4095 => abs,
-            _ => path.to_path_buf(),
+            _ => dest.clone(),
         };
         Ok(AtomicFile {
             path: path.to_path_buf(),
@@ -253,9 +254,12 @@ impl AtomicFile {
         &self.path
     }
 
-    /// The path the caller named, as it was resolved when the write began (absolute where
-    /// that fits in `PATH_MAX`): for a file that goes beside this one (a `.vlb`'s sidecar,
-    /// [`write_sidecar`]), so that a working directory changed since does not move it.
+    /// The file this write replaces, as the path the caller named was resolved when the write
+    /// began: where that path is a symbolic link, the file the chain of links ends at (followed
+    /// under the rules of [`destination`]), and absolute where that fits in `PATH_MAX`. For a
+    /// file that goes beside this one (a `.vlb`'s sidecar, [`write_sidecar`]): beside the file
+    /// written, not beside a link to it, and where a working directory changed since does not
+    /// move it.
     pub(crate) fn named(&self) -> &Path {
         &self.named
     }
@@ -330,7 +334,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 
 /// Writes the geometry sidecar of the dataset file `path` (atomically), or, for a dataset
 /// without geometry, removes one an earlier file left, so that the sidecar always describes
-/// the file beside it. A sidecar whose name is too long for the file system (a dataset file's
+/// the file beside it. `path` is the dataset file as written ([`AtomicFile::named`]: a link's
+/// target, not the link), so the sidecar lies beside the file it describes; it is itself
+/// written as every file is ([`write_atomic`]: a link at its name is followed under the same
+/// rules), and a link at its name is removed, not followed. A sidecar whose name is too long for the file system (a dataset file's
 /// name within 5 bytes of the limit) cannot exist: there is none to remove.
 pub(crate) fn write_sidecar(
     path: &Path,

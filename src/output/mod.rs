@@ -34,7 +34,9 @@ impl crate::data::Dataset {
     /// Writes the dataset as a `.vlb` file, atomically (the format: [`Dataset::to_vlb_bytes`]),
     /// piece by piece: no copy of the voxels is made. Its geometry, if it has one, goes to the
     /// sidecar `path.geom` ([`crate::Geometry`]); a sidecar left there by an earlier file is
-    /// removed when it has none.
+    /// removed when it has none. Where `path` is a symbolic link, the file it leads to is
+    /// written ([`crate::write_atomic`]) and the sidecar is written or removed beside that
+    /// file, not beside the link.
     ///
     /// [`Dataset::to_vlb_bytes`]: crate::data::Dataset::to_vlb_bytes
     pub fn save(&self, path: &std::path::Path) -> Result<()> {
@@ -43,7 +45,8 @@ impl crate::data::Dataset {
         self.vlb_body(|bytes| file.write(bytes))?;
         // The old sidecar goes before the new file replaces the old one, and the new sidecar
         // comes after: whatever fails between, no file is described by another's geometry.
-        // (Both beside the path as it was resolved when the write began.)
+        // (Both beside the file written, as its path was resolved when the write began: a
+        // link's target, not the link.)
         let named = file.named().to_path_buf();
         files::write_sidecar(&named, None)?;
         file.commit()?;

@@ -204,7 +204,8 @@ fn write_files(scene: &Compiled, req: &VolumeRequest, progress: &Progress) -> Re
     for (_, file) in files {
         let Some(file) = file else { continue };
         // (A voxelization's nodes lie in the scene's world, not in millimetres: no geometry,
-        // and a sidecar an earlier file left is removed.)
+        // and a sidecar an earlier file left is removed, beside the file written: a link's
+        // target, not the link.)
         let path = file.named().to_path_buf();
         if let Err(e) =
             crate::output::files::write_sidecar(&path, None).and_then(|()| file.commit())
