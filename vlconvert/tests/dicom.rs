@@ -369,6 +369,34 @@ fn series_that_do_not_convert_are_refused_by_name() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+/// A slice missing from a series is named by the gap it leaves, the one furthest from the
+/// median gap: ct_tilt's slices lie 2.5 mm apart along the normal; without its third (t2), or
+/// its second (t1), the 5 mm gap is reported with the median 2.5 mm, not the first gap.
+#[test]
+fn a_missing_slice_is_named_by_its_gap() {
+    let d = tmp("missing");
+    for (gone, from, to) in [
+        ("t2.dcm", "t1.dcm", "t3.dcm"),
+        ("t1.dcm", "t0.dcm", "t2.dcm"),
+    ] {
+        let dir = d.join(gone);
+        std::fs::create_dir(&dir).unwrap();
+        for e in std::fs::read_dir(fixture("ct_tilt")).unwrap() {
+            let p = e.unwrap().path();
+            if p.file_name().unwrap() != gone {
+                std::fs::copy(&p, dir.join(p.file_name().unwrap())).unwrap();
+            }
+        }
+        let says = format!(
+            "from {} to {} is 5.0000 mm along the slice normal, but the median gap is 2.5000 mm",
+            dir.join(from).display(),
+            dir.join(to).display()
+        );
+        refused(&dir, &says, to);
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 /// `vlconvert dicom input` run with its address space limited to 1 GiB, far less than the
 /// sizes a hostile header declares: it must exit 1 with `says`, not abort on an allocation.
 fn refused_in_little_memory(input: &Path, says: &str) {

@@ -5,8 +5,9 @@
 //! further along the normal than node k; InstanceNumber orders the slices only where a
 //! position or the orientation is missing (and then there is no placement). Refused: slices
 //! of different sizes, orientations or pixel spacings, two slices at one position, gaps
-//! between slices that differ by more than [`gap_tolerance`] (a missing slice), and positions
-//! off the line through the first and last.
+//! between slices that differ by more than [`gap_tolerance`] (a missing slice: the error names
+//! the two slices of the gap furthest from the median gap), and positions off the line through
+//! the first and last.
 //!
 //! The placement, in DICOM's LPS patient coordinates, maps node (i, j, k) (column, row,
 //! slice) to P₀ + i·Δc·r + j·Δr·c + k·s: P₀ the first slice's position, r and c the row and
@@ -148,17 +149,25 @@ pub fn arrange(mut slices: Vec<Slice>) -> Res<Stack> {
         (t, n.map(|v| v * t))
     };
     let tol = gap_tolerance(step);
-    for w in slices.windows(2) {
-        let gap = d(&w[1]) - d(&w[0]);
-        if (gap - step).abs() > tol {
-            return Err(format!(
-                "the slices are not evenly spaced: from {} to {} is {gap:.4} mm along the \
-                 slice normal, but the mean gap is {step:.4} mm (a slice missing? the gaps may \
-                 differ by {tol:.4} mm)",
-                name(&w[0]),
-                name(&w[1])
-            ));
-        }
+    let gaps: Vec<f64> = slices.windows(2).map(|w| d(&w[1]) - d(&w[0])).collect();
+    if gaps.iter().any(|gap| (gap - step).abs() > tol) {
+        // The gap furthest from the median gap (of an even count, the lower middle one: a
+        // missing slice widens a gap) is the one to name.
+        let mut sorted = gaps.clone();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted[(sorted.len() - 1) / 2];
+        let far = |k: usize| (gaps[k] - median).abs();
+        let k = (0..gaps.len())
+            .max_by(|&i, &j| far(i).total_cmp(&far(j)).then(j.cmp(&i)))
+            .expect("a gap");
+        return Err(format!(
+            "the slices are not evenly spaced: from {} to {} is {:.4} mm along the slice \
+             normal, but the median gap is {median:.4} mm (a slice missing? the gaps may \
+             differ from their mean, {step:.4} mm, by {tol:.4} mm)",
+            name(&slices[k]),
+            name(&slices[k + 1]),
+            gaps[k]
+        ));
     }
     for (k, sl) in slices.iter().enumerate() {
         let p = sl.position.expect("a position");
