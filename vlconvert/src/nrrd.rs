@@ -222,7 +222,7 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
         [x, y] => [*x, *y, 1],
         _ => {
             return Err(bad(format!(
-                "a {dimension}-dimensional array {sizes:?}: only 2D and 3D volumes of one \\
+                "a {dimension}-dimensional array {sizes:?}: only 2D and 3D volumes of one \
                  value per voxel convert"
             )))
         }

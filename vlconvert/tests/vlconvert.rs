@@ -462,7 +462,8 @@ fn raw_volumes_of_every_type_keep_their_values() {
 }
 
 /// Every NRRD fixture (pynrrd: raw, gzip, big-endian, ascii, a detached header) converts to
-/// the writer's values; a truncated file and an unknown encoding are refused (exit 1).
+/// the writer's values; a truncated file, an unknown encoding and a fourth axis are refused
+/// (exit 1).
 #[test]
 fn nrrd_of_every_encoding_converts_to_the_writers_values() {
     for (file, width, exact) in [
@@ -490,6 +491,22 @@ fn nrrd_of_every_encoding_converts_to_the_writers_values() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("bzip2"));
     assert!(!d.join("a.vlb").exists() && !d.join("b.vlb").exists());
+    // pynrrd's volume with a fourth axis of size 1: refused in one sentence.
+    let text = String::from_utf8_lossy(&bytes)
+        .replace("dimension: 3", "dimension: 4")
+        .replace("sizes: 5 4 3", "sizes: 5 4 3 1");
+    let four = d.join("four.nrrd");
+    std::fs::write(&four, text.as_bytes()).unwrap();
+    let o = run(&["nrrd", s(&four), s(&d.join("b.vlb"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).ends_with(
+            "a 4-dimensional array [5, 4, 3, 1]: only 2D and 3D volumes of one value per voxel \
+             convert\n"
+        ),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     // Hostile headers exit 1 with a message, without a panic, an abort or a hang: sizes whose
     // product overflows, an ascii volume far larger than its file, a negative byte skip, an
     // axis of several values per voxel, a FIFO.
