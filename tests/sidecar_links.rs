@@ -2,7 +2,8 @@
 //! removed beside the file the link leads to, where the `.vlb` itself is written, not beside
 //! the link: a geometry saved through a link is the target's, and a stale sidecar beside the
 //! target (which would describe another grid, and fail its load) is removed. The same for the
-//! files of a voxelization (`vlVolume`) whose prefix names links.
+//! files of a voxelization (`vlVolume`) whose prefix names links. A dataset loaded through a
+//! link reads the sidecar beside the file the link leads to.
 
 use std::fs;
 use std::os::unix::fs::symlink;
@@ -65,9 +66,11 @@ fn a_sidecar_goes_beside_the_file_a_link_leads_to() {
     assert_eq!(names(&dir.join("real")), ["ct.vlb"]);
     assert_eq!(names(&dir.join("links")), ["ct.vlb"]);
     assert!(is_link(&link));
-    let loaded = Dataset::load(&real).unwrap();
-    assert_eq!(loaded, cube(2, None));
-    assert_eq!(loaded.geometry(), None);
+    for path in [&real, &link] {
+        let loaded = Dataset::load(path).unwrap();
+        assert_eq!(loaded, cube(2, None));
+        assert_eq!(loaded.geometry(), None);
+    }
 
     // With geometry, through the link: its sidecar is the target's.
     let g2 = Geometry::axis_aligned([1.0, 2.0, 3.0], [4.0, 5.0, 6.0]).unwrap();
@@ -80,6 +83,8 @@ fn a_sidecar_goes_beside_the_file_a_link_leads_to() {
         g2.to_text([2; 3])
     );
     assert_eq!(Dataset::load(&real).unwrap().geometry(), Some(&g2));
+    // Loaded through the link, the dataset has the sidecar beside the file it leads to.
+    assert_eq!(Dataset::load(&link).unwrap(), cube(2, Some(g2)));
     fs::remove_dir_all(&dir).unwrap();
 }
 

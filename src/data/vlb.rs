@@ -141,8 +141,12 @@ impl Dataset {
             Voxels::U16(v)
         };
         let d = Dataset::new(h.dims, raw, h.a, h.b)?;
-        // The physical placement, where a sidecar gives it (`geometry`).
-        let sidecar = super::Geometry::sidecar(path);
+        // The physical placement, where a sidecar gives it (`geometry`): beside the file the
+        // path leads to, where a dataset saved through a link has its sidecar written
+        // (`output::files`); beside the path where its links cannot be followed.
+        let sidecar = super::Geometry::sidecar(
+            &std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf()),
+        );
         let side_io = |e: std::io::Error| {
             Error::new(ErrorCode::IoError, format!("{}: {e}", sidecar.display()))
         };
