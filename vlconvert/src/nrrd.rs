@@ -3,8 +3,9 @@
 //! `ascii`), `data file`, `line skip`, `byte skip` — read as the format's specification
 //! (teem.sourceforge.net/nrrd/format.html) defines them, with the spellings of every type it
 //! allows. A 2D image converts as one slab. The geometry comes from `space`, `space
-//! directions` and `space origin` (turned into RAS; LPS, LAS and RAS spaces), or from
-//! `spacings` alone. Other encodings (`bzip2`, `hex`), detached data lists (`LIST`, `%d`
+//! directions` (one vector an axis) and `space origin` (turned into RAS; LPS, LAS and RAS
+//! spaces), or from `spacings` alone; directions of another count, or without a `space`, are
+//! no placement, with a note. Other encodings (`bzip2`, `hex`), detached data lists (`LIST`, `%d`
 //! patterns) and more than one value per voxel are refused by name.
 //!
 //! Ascii values are kept as written: an integer type takes whole numbers in its range only,
@@ -90,8 +91,13 @@ fn vector(v: &str) -> Option<Vec<f64>> {
     inner.split(',').map(|n| n.trim().parse().ok()).collect()
 }
 
-/// The geometry a header's fields give (`field` looks one up), in RAS millimetres.
-fn geometry(field: &dyn Fn(&[&str]) -> Option<String>) -> Result<Option<vlib::Geometry>, String> {
+/// The geometry a header's fields give (`field` looks one up) to an array of `axes` axes (2 or
+/// 3), in RAS millimetres: `space directions` (one vector an axis) in a named `space`, or
+/// `spacings`.
+fn geometry(
+    field: &dyn Fn(&[&str]) -> Option<String>,
+    axes: usize,
+) -> Result<Option<vlib::Geometry>, String> {
     // RAS from the space's own axes: flip the ones that point left or posterior.
     let flip = match field(&["space"]).as_deref() {
         Some("right-anterior-superior" | "RAS") => Some([1.0, 1.0, 1.0]),
@@ -100,6 +106,14 @@ fn geometry(field: &dyn Fn(&[&str]) -> Option<String>) -> Result<Option<vlib::Ge
         Some(other) => return Err(format!("space {other:?}: only RAS, LAS and LPS convert")),
         None => None,
     };
+    if let (None, Some(_)) = (flip, field(&["space directions"])) {
+        let said = field(&["space dimension"]).map_or(String::new(), |n| {
+            format!(" (space dimension {n} names no orientation in the body)")
+        });
+        return Err(format!(
+            "space directions without a space field{said}: only RAS, LAS and LPS spaces convert"
+        ));
+    }
     if let (Some(flip), Some(dirs)) = (flip, field(&["space directions"])) {
         let cols: Vec<Vec<f64>> = dirs
             .split_whitespace()
@@ -112,8 +126,11 @@ fn geometry(field: &dyn Fn(&[&str]) -> Option<String>) -> Result<Option<vlib::Ge
                 .ok_or_else(|| format!("space origin {o:?}"))?,
             None => vec![0.0; 3],
         };
-        if cols.len() != 3 && cols.len() != 2 {
-            return Err(format!("space directions {dirs:?}: 2 or 3 vectors"));
+        if cols.len() != axes {
+            return Err(format!(
+                "space directions {dirs:?}: {} vectors for {axes} axes (one an axis)",
+                cols.len()
+            ));
         }
         // A 2D image's third axis: the unit normal of its plane.
         // (Parallel directions give a zero axis, which the placement refuses as degenerate.)
@@ -185,12 +202,6 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
             .map(|(_, v)| v.as_str())
     };
     let bad = |what: String| format!("{}: {what}", path.display());
-    // A placement that cannot be made is said, and the volume converts without one.
-    let geometry =
-        geometry(&|names: &[&str]| field(names).map(str::to_string)).unwrap_or_else(|e| {
-            eprintln!("vlconvert: note: {}: no placement: {e}", path.display());
-            None
-        });
     let ty_name = field(&["type"]).ok_or_else(|| bad("no type field".into()))?;
     let ty = type_of(ty_name).ok_or_else(|| bad(format!("type {ty_name:?} does not convert")))?;
     let dimension: usize = field(&["dimension"])
@@ -230,6 +241,13 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
     if dims.contains(&0) {
         return Err(bad(format!("sizes {sizes:?}: every size must be positive")));
     }
+    // A placement that cannot be made is said, and the volume converts without one.
+    let axes = sizes.len();
+    let geometry = geometry(&|names: &[&str]| field(names).map(str::to_string), axes)
+        .unwrap_or_else(|e| {
+            eprintln!("vlconvert: note: {}: no placement: {e}", path.display());
+            None
+        });
     let big = match field(&["endian"]) {
         Some("big") => true,
         Some("little") | None => false,

@@ -75,6 +75,51 @@ fn the_sidecar_is_the_writers_affine() {
     }
 }
 
+/// pynrrd's `int16_lps.nrrd` with its placement fields changed: two space directions for its
+/// three axes, or `space dimension: 3` in place of its `space` (so no orientation in the body),
+/// convert without a placement and with a note saying why, instead of a third axis made up or
+/// a placement dropped unsaid.
+#[test]
+fn nrrd_placements_short_of_an_axis_or_a_space_are_notes() {
+    let good = std::fs::read(fixture("nrrd/int16_lps.nrrd")).unwrap();
+    let at = good.windows(2).position(|w| w == b"\n\n").unwrap() + 2;
+    let header = String::from_utf8(good[..at].to_vec()).unwrap();
+    let d = std::env::temp_dir().join(format!("vlib-geometry-nrrd-notes-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    for (from, to, says) in [
+        (
+            "space directions: (0.5,0,0) (0,0.75,0) (0,0,2.5)",
+            "space directions: (0.5,0,0) (0,0.75,0)",
+            "no placement: space directions \"(0.5,0,0) (0,0.75,0)\": 2 vectors for 3 axes",
+        ),
+        (
+            "space: left-posterior-superior",
+            "space dimension: 3",
+            "no placement: space directions without a space field (space dimension 3 names no \
+             orientation in the body)",
+        ),
+    ] {
+        assert!(header.contains(from));
+        let f = d.join("v.nrrd");
+        std::fs::write(
+            &f,
+            [header.replace(from, to).as_bytes(), &good[at..]].concat(),
+        )
+        .unwrap();
+        let out = d.join("v.vlb");
+        let o = Command::new(env!("CARGO_BIN_EXE_vlconvert"))
+            .arg(&f)
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{to}: {err}");
+        assert!(err.contains(says), "{to}: {err}");
+        assert!(Dataset::load(&out).unwrap().geometry().is_none(), "{to}");
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 /// The sidecar's text: round trip, and each malformed form refused with `BadFile`.
 #[test]
 fn sidecars_round_trip_and_refuse_malformed_text() {
