@@ -339,8 +339,16 @@ impl Source<'_> {
         };
         bar.finish();
         let (va, vb) = (voxel_units(a, c0, c1), voxel_units(b, c0, c1));
-        let dataset =
-            vlib::Dataset::new(self.dims, raw, va as f32, vb as f32).map_err(|e| e.to_string())?;
+        // The file holds a and b as f32: the window must survive the cast.
+        let (fa, fb) = (va as f32, vb as f32);
+        if !(fa.is_finite() && fb.is_finite() && fa != fb) {
+            return Err(format!(
+                "window {a} … {b}: a .vlb holds its ends as 32-bit floats in voxel units, where \
+                 they are {fa} … {fb}; they must be finite and different (the window is too \
+                 narrow or too wide for them)"
+            ));
+        }
+        let dataset = vlib::Dataset::new(self.dims, raw, fa, fb).map_err(|e| e.to_string())?;
         Ok(Converted {
             dataset,
             report: format!("{how}; window {a} … {b} (a, b = {va} {vb} in voxel units)"),

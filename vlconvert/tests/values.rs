@@ -283,3 +283,41 @@ fn nrrd_data_after_the_volume_is_a_note_and_gzip_is_checked() {
     assert!(!out.exists());
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// A window whose ends are one value, or not finite, once in the 32-bit floats a `.vlb` holds
+/// (1000 … 1000.00001, −1e39 … 1e39) is refused (exit 1, nothing written) naming the window
+/// as given and what it became; a window 32-bit floats tell apart converts.
+#[test]
+fn windows_a_vlb_cannot_hold_are_refused_naming_the_window() {
+    let d = tmp("window-f32");
+    let raw = d.join("v.raw");
+    std::fs::write(&raw, [0u8, 1, 2, 3]).unwrap();
+    let out = d.join("v.vlb");
+    let convert = |a: &str, b: &str| {
+        let dims = ["--dims", "2", "2", "1", "--window", a, b];
+        run(&[&["raw", s(&raw), s(&out)][..], &dims].concat())
+    };
+    for (a, b, says) in [
+        (
+            "1000",
+            "1000.00001",
+            "window 1000 … 1000.00001: a .vlb holds its ends as 32-bit floats in voxel units, \
+             where they are 1000 … 1000",
+        ),
+        (
+            "-1e39",
+            "1e39",
+            "where they are -inf … inf; they must be finite and different",
+        ),
+    ] {
+        let o = convert(a, b);
+        let err = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{a} {b}: {err}");
+        assert!(err.contains(says), "{a} {b}: {err}");
+        assert!(!out.exists(), "{a} {b}");
+    }
+    let o = convert("1000", "1000.5");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(Dataset::load(&out).unwrap().range(), (1000.0, 1000.5));
+    std::fs::remove_dir_all(&d).unwrap();
+}
