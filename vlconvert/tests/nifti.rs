@@ -2,7 +2,8 @@
 //! fixtures: a single file with padding, a `.hdr` / `.img` pair), offsets that are none, gzip
 //! streams that are corrupt or cut short, followed by other bytes or in two members, inputs
 //! that are not regular files (refused without waiting, for every reader that opens a file by
-//! its name), a qform quaternion that is no rotation, and negative qform voxel sizes.
+//! its name), a qform quaternion that is no rotation, negative qform voxel sizes, and one
+//! volume a file (axes beyond the third, NIfTI-2, a constant volume).
 //! Malformed headers are nibabel's files with the field patched in the test: nibabel writes
 //! none of them.
 
@@ -309,5 +310,55 @@ fn a_negative_qform_voxel_size_is_taken_as_its_absolute_value() {
             assert!((got - want).abs() < 1e-6, "{:?} vs {want:?}", g.affine());
         }
     }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// One volume a file (nibabel's files from `int16_ct.nii`'s values): a fourth axis of size 1
+/// converts to the 3-D file's bytes; a time axis of 2 and a 5-D vector image of 2 components
+/// are refused by their dimensions; NIfTI-2 is not read (by name with `nifti`, as no format
+/// without); a constant volume converts with every node 0.
+#[test]
+fn one_volume_a_file_of_nifti_1() {
+    let d = tmp("nifti-one-volume");
+    let (want, got) = (d.join("want.vlb"), d.join("got.vlb"));
+    assert!(run(&["nifti", s(&fixture("nifti/int16_ct.nii")), s(&want)])
+        .status
+        .success());
+    let o = run(&["nifti", s(&fixture("nifti/int16_ct_t1.nii")), s(&got)]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(std::fs::read(&got).unwrap(), std::fs::read(&want).unwrap());
+    let _ = std::fs::remove_file(&got);
+    for (sub, file, says) in [
+        (
+            "nifti",
+            "int16_ct_t2.nii",
+            "a 4-dimensional volume [5, 4, 3, 2]; only 3D volumes convert",
+        ),
+        (
+            "nifti",
+            "int16_ct_v2.nii",
+            "a 5-dimensional volume [5, 4, 3, 1, 2]; only 3D volumes convert",
+        ),
+        (
+            "nifti",
+            "int16_ct_nifti2.nii",
+            "not a NIfTI-1 header (no n+1 or ni1 magic at byte 344)",
+        ),
+        (
+            "convert",
+            "int16_ct_nifti2.nii",
+            "not a format vlconvert recognises",
+        ),
+    ] {
+        let o = run(&[sub, s(&fixture(&format!("nifti/{file}"))), s(&got)]);
+        let err = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{file}: {err}");
+        assert!(err.contains(says), "{file}: {err}");
+        assert!(!got.exists(), "{file}");
+    }
+    let o = run(&["nifti", s(&fixture("nifti/int16_constant.nii")), s(&got)]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v = Dataset::load(&got).unwrap();
+    assert!(common::normalised(&v).iter().all(|&n| n == 0.0));
     std::fs::remove_dir_all(&d).unwrap();
 }

@@ -641,6 +641,30 @@ fn metaimage_of_every_type_converts_to_the_writers_values() {
     converts_in_a_ct_window("metaimage", "metaimage/int16_ct.mha");
 }
 
+/// SimpleITK's 4-D images (`NDims = 4`): 5 x 4 x 3 x 1 converts to the writer's values
+/// without a placement (a note says so); 5 x 4 x 3 x 2 is refused by its dimensions.
+#[test]
+fn metaimage_of_four_dimensions_converts_when_one_volume() {
+    converts_like_the_writer("metaimage", "metaimage/int16_4d_1.mha", [5, 4, 3], 2, true);
+    let d = tmp("metaimage-4d");
+    let out = d.join("v.vlb");
+    let o = run(&[s(&fixture("metaimage/int16_4d_1.mha")), s(&out)]);
+    let err = text(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("no placement"), "{err}");
+    assert!(Dataset::load(&out).unwrap().geometry().is_none());
+    std::fs::remove_file(&out).unwrap();
+    let o = run(&[s(&fixture("metaimage/int16_4d_2.mha")), s(&out)]);
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("a 4-dimensional image [5, 4, 3, 2]: only 2D and 3D images convert"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 /// Big-endian elements (`ElementByteOrderMSB = True`) at the end of their data file
 /// (`HeaderSize = -1`, after bytes that are not data) keep their values.
 #[test]
