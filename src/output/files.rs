@@ -337,8 +337,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 /// the file beside it. `path` is the dataset file as written ([`AtomicFile::named`]: a link's
 /// target, not the link), so the sidecar lies beside the file it describes; it is itself
 /// written as every file is ([`write_atomic`]: a link at its name is followed under the same
-/// rules), and a link at its name is removed, not followed. A sidecar whose name is too long for the file system (a dataset file's
-/// name within 5 bytes of the limit) cannot exist: there is none to remove.
+/// rules), and a link at its name is removed, not followed. A sidecar whose name is too long
+/// for the file system (a dataset file's name within 5 bytes of the limit) cannot exist: there
+/// is none to remove.
 pub(crate) fn write_sidecar(
     path: &Path,
     geometry: Option<(&crate::data::Geometry, [usize; 3])>,
