@@ -24,13 +24,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
-/// The largest image side in pixels.
-pub const MAX_IMAGE_SIDE: i32 = 1 << 15;
-// (Every image the API accepts gets an entry map: its marks hold pixel columns and rows in 16
-// bits.)
-const _: () = assert!(MAX_IMAGE_SIDE as usize <= crate::accel::MAX_MAP_SIDE);
-/// The largest number of pixels of one image.
-pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
+pub use crate::render::{MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE};
 /// The largest super-sampling rate n (n×n samples per pixel).
 pub const MAX_SUPER_SAMPLE: i32 = 16;
 /// The largest recursion depth.

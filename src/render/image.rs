@@ -211,10 +211,10 @@ impl Image {
     /// `transmittance` each `width × height` long. [`Image::save`] checks it before it
     /// writes anything.
     ///
-    /// [`MAX_IMAGE_SIDE`]: crate::limits::MAX_IMAGE_SIDE
-    /// [`MAX_IMAGE_PIXELS`]: crate::limits::MAX_IMAGE_PIXELS
+    /// [`MAX_IMAGE_SIDE`]: super::MAX_IMAGE_SIDE
+    /// [`MAX_IMAGE_PIXELS`]: super::MAX_IMAGE_PIXELS
     pub fn check(&self) -> Result<()> {
-        use crate::limits::{MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE};
+        use super::{MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE};
         if let Some(why) = self.lengths_disagree() {
             return err(ErrorCode::BadValue, format!("Image: {why}"));
         }

@@ -104,6 +104,14 @@ fn strip_rows(width: u32, height: u32) -> u32 {
 /// grazing one too, so a thin, wide object at a fine step is measured by its width.
 pub const MAX_SAMPLES_PER_RAY: f64 = (1u64 << 32) as f64;
 
+/// The largest image side in pixels.
+pub const MAX_IMAGE_SIDE: i32 = 1 << 15;
+// (Every image the API accepts gets an entry map: its marks hold pixel columns and rows in 16
+// bits.)
+const _: () = assert!(MAX_IMAGE_SIDE as usize <= crate::accel::MAX_MAP_SIDE);
+/// The largest number of pixels of one image.
+pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
+
 /// Renders the compiled scene to an image of `width × height` pixels whose view plane has the
 /// given width / height `aspect`, against `backdrop` ([`render_strips`]), into memory.
 pub fn render_image(
