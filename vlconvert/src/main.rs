@@ -198,9 +198,20 @@ enum Cmd {
 
 type Res<T> = Result<T, String>;
 
-fn norm_for(norm: Norm, bytes: u32) -> (f32, f32) {
+/// The normalisation `norm` gives a dataset of `bytes`-byte voxels (its ends, by default 0
+/// and the width's largest value); an error naming `--a` and `--b` where an end is not a
+/// finite f32 (a number beyond ±3.4·10³⁸ reads as infinite) or the two are equal, before any
+/// file is written.
+fn norm_for(norm: Norm, bytes: u32) -> Res<(f32, f32)> {
     let max = if bytes == 1 { 255.0 } else { 65535.0 };
-    (norm.a.unwrap_or(0.0), norm.b.unwrap_or(max))
+    let (a, b) = (norm.a.unwrap_or(0.0), norm.b.unwrap_or(max));
+    if !a.is_finite() || !b.is_finite() || a == b {
+        return Err(format!(
+            "--a {a} and --b {b}: the ends of the normalisation must be finite (at most \
+             3.4e38 in size) and differ"
+        ));
+    }
+    Ok((a, b))
 }
 
 /// Writes a line to standard output. A reader that has gone away (a closed pipe, as in
@@ -368,7 +379,7 @@ fn image(input: &Path, output: &Path, norm: Norm) -> Res<()> {
         } else {
             with_suffix(output, &suffix)
         };
-        save(&build(dims, voxels, norm_for(norm, bytes))?, &path)?;
+        save(&build(dims, voxels, norm_for(norm, bytes)?)?, &path)?;
     }
     Ok(())
 }

@@ -303,6 +303,22 @@ fn negative_values_with_exponents_are_values() {
     let o = run(&["image", s(&grey), s(&out), "--a", "-2.5e-3", "--b", "1e2"]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     assert_eq!(Dataset::load(&out).unwrap().range(), (-2.5e-3, 100.0));
+    // Ends an f32 cannot hold (1e39 reads as infinite), or equal ends, are refused by name,
+    // and the file written before is kept.
+    for args in [
+        &["--a", "1e39"][..],
+        &["--a", "-2.5e-3", "--b", "-1e39"],
+        &["--a", "255"],
+    ] {
+        let o = run(&[&["image", s(&grey), s(&out)][..], args].concat());
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        let err = text(&o.stderr);
+        assert!(
+            err.contains("--a") && err.contains("must be finite"),
+            "{args:?}: {err}"
+        );
+        assert_eq!(Dataset::load(&out).unwrap().range(), (-2.5e-3, 100.0));
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }
 
