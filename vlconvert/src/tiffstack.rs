@@ -46,7 +46,7 @@ pub struct Args {
     input: PathBuf,
     output: PathBuf,
     /// Node spacing in millimetres (x, y, z), in place of what the files say.
-    #[arg(long, num_args = 3, value_names = ["SX", "SY", "SZ"])]
+    #[arg(long, num_args = 3, value_names = ["SX", "SY", "SZ"], allow_hyphen_values = true)]
     spacing: Vec<f64>,
     #[command(flatten)]
     window: super::Window,

@@ -241,17 +241,23 @@ fn the_sidecar_has_the_files_spacing() {
         );
         assert_eq!(v.geometry().unwrap().spacing(), [0.25, 0.75, 1.5], "{name}");
     }
-    let o = run(&[
-        "tiff",
-        s(&fixture("uint16_be.tif")),
-        s(&d.join("z.vlb")),
-        "--spacing",
-        "1",
-        "0",
-        "1",
-    ]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(text(&o.stderr).contains("--spacing"));
+    // A spacing of 0 or a negative one (with an exponent too, which is no option's name) is
+    // refused as such, not as a command line's error (exit 2).
+    for spacing in [["1", "0", "1"], ["1", "-1e-3", "1"]] {
+        let out = d.join("z.vlb");
+        let o = run(&[
+            &["tiff", s(&fixture("uint16_be.tif")), s(&out), "--spacing"][..],
+            &spacing,
+        ]
+        .concat());
+        assert_eq!(o.status.code(), Some(1), "{spacing:?}");
+        let err = text(&o.stderr);
+        assert!(
+            err.contains("--spacing") && err.contains("positive numbers"),
+            "{err}"
+        );
+        assert!(!out.exists());
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }
 
