@@ -18,20 +18,29 @@ use std::process::{Command, ExitStatus, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-/// The MPI build of `libvlib.so` (and its SONAME link) in a directory of its own.
+/// The MPI build of `libvlib.so` (and its SONAME link) in a directory of its own beside the
+/// profile's outputs, `target/<profile>/mpi-lib` (each run replaces its library, so runs leave
+/// no directories behind; a static's temporary directory would never be dropped): the library
+/// copied to a name of this process's, then renamed over the last one.
 fn mpi_library() -> &'static Path {
-    static DIR: OnceLock<TempDir> = OnceLock::new();
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
         let built = common::cargo_build(&["-p", "vlib-capi", "--lib", "--features", "mpi"]);
-        let dir = TempDir::new("mpi-lib");
-        std::fs::copy(built.join("libvlib.so"), dir.path().join("libvlib.so"))
-            .expect("copy the MPI libvlib.so");
-        std::os::unix::fs::symlink("libvlib.so", dir.path().join(SONAME)).expect("link");
+        let dir = built.join("mpi-lib");
+        std::fs::create_dir_all(&dir).expect("make target/<profile>/mpi-lib");
+        let part = dir.join(format!("libvlib.so.{}.part", std::process::id()));
+        std::fs::copy(built.join("libvlib.so"), &part).expect("copy the MPI libvlib.so");
+        std::fs::rename(&part, dir.join("libvlib.so")).expect("rename the MPI libvlib.so");
+        // (Another run may have made the link meanwhile.)
+        match std::os::unix::fs::symlink("libvlib.so", dir.join(SONAME)) {
+            Err(e) if e.kind() != std::io::ErrorKind::AlreadyExists => panic!("link: {e}"),
+            _ => {}
+        }
         // The plain library back in target/<profile>/ for the plain programs.
         common::ensure_libraries();
         dir
     })
-    .path()
+    .as_path()
 }
 
 /// `source` compiled with `mpicc` against the MPI library, into `dir`.
