@@ -9,8 +9,11 @@
 
 #![cfg(all(target_os = "linux", target_pointer_width = "64"))]
 
+#[path = "common/rlimit.rs"]
+mod rlimit;
 #[path = "common/status.rs"]
 mod status;
+use rlimit::limit_address_space;
 
 use std::process::Command;
 use vlib::{ErrorCode, Library, MappingId, MappingType};
@@ -18,32 +21,6 @@ use vlib::{ErrorCode, Library, MappingId, MappingType};
 const CHILD: &str = "VLIB_MAPPING_CHILD";
 const POINTS: usize = vlib::limits::MAX_POINTS;
 const OUTPUTS: usize = vlib::limits::MAX_OUTPUTS;
-
-/// `struct rlimit` on 64-bit Linux.
-#[repr(C)]
-struct Rlimit {
-    cur: u64,
-    max: u64,
-}
-
-/// `RLIMIT_AS` on Linux.
-const RLIMIT_AS: i32 = 9;
-
-extern "C" {
-    fn getrlimit(resource: i32, rlim: *mut Rlimit) -> i32;
-    fn setrlimit(resource: i32, rlim: *const Rlimit) -> i32;
-}
-
-/// Sets the soft address-space limit to `bytes`, keeping the hard one.
-fn limit_address_space(bytes: u64) {
-    let mut lim = Rlimit { cur: 0, max: 0 };
-    // SAFETY: `lim` is a valid `struct rlimit` for both calls.
-    unsafe {
-        assert_eq!(getrlimit(RLIMIT_AS, &mut lim), 0, "getrlimit");
-        lim.cur = bytes.min(lim.max);
-        assert_eq!(setrlimit(RLIMIT_AS, &lim), 0, "setrlimit");
-    }
-}
 
 /// The address space this process has mapped (`VmSize`), in bytes.
 fn mapped() -> u64 {
