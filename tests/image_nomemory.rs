@@ -9,10 +9,13 @@
 
 #![cfg(all(target_os = "linux", target_pointer_width = "64"))]
 
+#[path = "common/dirs.rs"]
+mod dirs;
 #[path = "common/rlimit.rs"]
 mod rlimit;
 #[path = "common/status.rs"]
 mod status;
+use dirs::names;
 use rlimit::limit_address_space;
 
 use std::path::{Path, PathBuf};
@@ -23,16 +26,6 @@ const CHILD: &str = "VLIB_IMAGE_CHILD";
 /// The directory the child writes in, from the parent.
 const DIR: &str = "VLIB_IMAGE_DIR";
 const SIDE: u32 = 8192;
-
-/// The names in `dir`, sorted.
-fn names(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
 
 /// In the child: a small save (which starts the library's threads, as the large one would),
 /// the large save under the limit, and a small save after it.

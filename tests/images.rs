@@ -8,7 +8,9 @@
 //! rendered over it (scalar and packet march), the in-memory renders are the files byte for
 //! byte, and the refusals of bad names, sizes and buffers.
 
-use std::path::{Path, PathBuf};
+#[path = "common/dirs.rs"]
+mod dirs;
+use std::path::Path;
 use vlib::{Backdrop, Camera, Dataset, ErrorCode, Fields, Library, PixelFormat, Voxels};
 use vlib::{DatasetId, MappingId};
 use zune_core::bytestream::ZCursor;
@@ -35,14 +37,6 @@ const BAND: f64 = 70.0;
 const LEFT: f64 = -200.0;
 /// The background of the RGB images.
 const BACKGROUND: [f32; 3] = [0.25, 0.5, 0.125];
-
-/// A fresh directory for one test.
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vlib-images-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// The library with the band scene open (at scene scope), over `background`.
 fn bands(background: [f32; 3]) -> Library {
@@ -220,7 +214,7 @@ fn pfm(path: &Path) -> (usize, usize, Vec<f32>) {
 /// rounding; straight colour, divided by alpha, within that over alpha).
 #[test]
 fn every_format_reads_back_as_the_closed_form() {
-    let dir = scratch("formats");
+    let dir = dirs::scratch("images", "formats");
     let names = [
         ("a.ppm", 3, 8),
         ("a.png", 3, 8),
@@ -292,7 +286,7 @@ fn every_format_reads_back_as_the_closed_form() {
 /// first row is the image's last, read here from the bytes themselves, for an odd height too.
 #[test]
 fn pfm_is_little_endian_bottom_up() {
-    let dir = scratch("pfm");
+    let dir = dirs::scratch("images", "pfm");
     for h in [H, 7] {
         let vl = bands(BACKGROUND);
         let image = vl.render_preview(W, h, W as f32 / h as f32).unwrap();
@@ -353,7 +347,7 @@ fn ball(n: i32) -> Library {
 /// and RGBA alike, decoded from the files; in an image of thousands of distinct values.
 #[test]
 fn eight_bits_are_sixteen_rounded() {
-    let dir = scratch("depths");
+    let dir = dirs::scratch("images", "depths");
     let mut vl = ball(2);
     for name in ["c.png", "c.rgb16.png", "c.rgba.png", "c.rgba16.png"] {
         vl.image(dir.join(name), 1.0, 64, 64).unwrap();
@@ -479,7 +473,7 @@ fn glass(background: [f32; 3]) -> Library {
 /// refinement depends on what the pixels are compared in, `docs/images.md`.)
 #[test]
 fn rgba_composited_over_a_background_is_the_render_over_it() {
-    let dir = scratch("over");
+    let dir = dirs::scratch("images", "over");
     type Scene<'a> = &'a dyn Fn([f32; 3]) -> Library;
     let scenes: [(&str, Scene); 5] = [
         ("bands", &bands),
@@ -547,7 +541,7 @@ fn the_scanned_scene_takes_the_packet_march() {
 /// as they were.
 #[test]
 fn in_memory_renders_are_the_files() {
-    let dir = scratch("memory");
+    let dir = dirs::scratch("images", "memory");
     let mut vl = ball(2);
     let (w, h) = (40u32, 30u32);
     let aspect = w as f32 / h as f32;
@@ -660,7 +654,7 @@ fn supersampling_refines_alpha() {
 /// (`BadScope`); `write_image` writes 8-bit RGB only.
 #[test]
 fn refusals() {
-    let dir = scratch("refusals");
+    let dir = dirs::scratch("images", "refusals");
     let mut vl = bands(BACKGROUND);
     for bad in ["x.jpg", "x.rgba.ppm", "x.rgb16.pfm", "x.exr", "x"] {
         let e = vl.image(dir.join(bad), 1.0, 4, 4).unwrap_err();

@@ -5,28 +5,13 @@
 //! files of a voxelization (`vlVolume`) whose prefix names links. A dataset loaded through a
 //! link reads the sidecar beside the file the link leads to.
 
+#[path = "common/dirs.rs"]
+mod dirs;
+use dirs::names;
 use std::fs;
 use std::os::unix::fs::symlink;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use vlib::{Dataset, Fields, Geometry, Library, Voxels};
-
-/// A fresh empty directory for one test.
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vlib-sidecar-links-{tag}-{}", std::process::id()));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// The names in `dir`, sorted.
-fn names(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
 
 /// Whether `p` is a symbolic link.
 fn is_link(p: &Path) -> bool {
@@ -51,7 +36,7 @@ fn cube(n: usize, geometry: Option<Geometry>) -> Dataset {
 /// target loaded without it). Nothing is made beside the link, which stays a link.
 #[test]
 fn a_sidecar_goes_beside_the_file_a_link_leads_to() {
-    let dir = scratch("relative");
+    let dir = dirs::scratch("sidecar-links", "relative");
     fs::create_dir(dir.join("real")).unwrap();
     fs::create_dir(dir.join("links")).unwrap();
     symlink("../real/ct.vlb", dir.join("links/ct.vlb")).unwrap();
@@ -93,7 +78,7 @@ fn a_sidecar_goes_beside_the_file_a_link_leads_to() {
 /// at its target).
 #[test]
 fn a_sidecar_follows_absolute_chained_and_dangling_links() {
-    let dir = scratch("chains");
+    let dir = dirs::scratch("sidecar-links", "chains");
     fs::create_dir(dir.join("real")).unwrap();
     fs::create_dir(dir.join("links")).unwrap();
     let real = dir.join("real/ct.vlb");
@@ -141,7 +126,7 @@ fn a_sidecar_follows_absolute_chained_and_dangling_links() {
 /// makes nothing beside the link.
 #[test]
 fn a_voxelization_through_a_link_removes_the_targets_stale_sidecar() {
-    let dir = scratch("volume");
+    let dir = dirs::scratch("sidecar-links", "volume");
     fs::create_dir(dir.join("real")).unwrap();
     fs::create_dir(dir.join("links")).unwrap();
     symlink("../real/v_o.vlb", dir.join("links/v_o.vlb")).unwrap();
