@@ -185,16 +185,10 @@ fn an_output_link_updates_its_target() {
 /// `Internal` as a PNG and a 0 × 0 PPM.)
 #[test]
 fn images_that_disagree_with_themselves_are_not_saved() {
-    use crate::render::{Backdrop, Image};
+    use crate::render::Image;
     let dir = scratch("disagree");
     fs::write(dir.join("kept.png"), b"old").unwrap();
-    let image = |width, height, pixels: usize, transmittance: usize| Image {
-        width,
-        height,
-        pixels: vec![[0.5; 3]; pixels],
-        transmittance: vec![0.0; transmittance],
-        backdrop: Backdrop::Background,
-    };
+    let image = Image::with_lengths;
     for (bad, why) in [
         (
             image(4, 4, 3, 3),

@@ -184,6 +184,25 @@ pub struct Image {
 }
 
 impl Image {
+    /// An image of `pixels` colours (0.5 grey) and `transmittance` values (0), whether or not
+    /// they agree with `width × height`, against the background: the image a caller who
+    /// builds one by hand may get wrong, for the tests of `check`, `save` and the conversions.
+    #[cfg(test)]
+    pub(crate) fn with_lengths(
+        width: u32,
+        height: u32,
+        pixels: usize,
+        transmittance: usize,
+    ) -> Image {
+        Image {
+            width,
+            height,
+            pixels: vec![[0.5; 3]; pixels],
+            transmittance: vec![0.0; transmittance],
+            backdrop: Backdrop::Background,
+        }
+    }
+
     /// An image of the colours `pixels` (`width * height` of them, row-major, top row first),
     /// opaque: against the background, transmittance 0 (for images made by other means than
     /// a render, such as a closed form to compare a render with).

@@ -178,13 +178,7 @@ fn panic_message<R>(f: impl FnOnce() -> R) -> Option<String> {
 #[test]
 fn check_refuses_images_that_disagree_with_themselves() {
     use crate::error::ErrorCode;
-    let image = |width, height, pixels: usize, transmittance: usize| Image {
-        width,
-        height,
-        pixels: vec![[0.5; 3]; pixels],
-        transmittance: vec![0.0; transmittance],
-        backdrop: Backdrop::Background,
-    };
+    let image = Image::with_lengths;
     for (bad, why) in [
         (
             image(4, 4, 3, 3),
