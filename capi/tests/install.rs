@@ -6,8 +6,10 @@
 //! against the prefix with `cc $(pkg-config --cflags --libs vlib)`, linked to the shared
 //! library, and statically: with `pkg-config --static` against a prefix holding only the
 //! archive, and naming `-l:libvlib.a` against the full one; all three programs write the image
-//! the build tree's figure2 writes. README's static link line names `Libs.private`. When cargo-c
-//! is installed (CI installs it), `cargo cinstall` is checked the same way.
+//! the build tree's figure2 writes. README's static link line names `Libs.private`. `cargo xtask
+//! uninstall` then removes every file of the prefix and leaves its directories. When cargo-c is
+//! installed (CI installs it), `cargo cinstall` is checked the same way, and uninstalled by
+//! `cargo xtask uninstall`.
 //!
 //! Needs binutils, pkg-config and, for the cargo-c half, cargo-c: `.ci/run` installs them;
 //! elsewhere a missing pkg-config or cargo-c skips its part with a message (under `CI` it fails).
@@ -74,6 +76,64 @@ fn xtask_install(prefix: &Path, extra: &[&str]) -> String {
         .env("CARGO_TARGET_DIR", target_dir())
         .current_dir(common::workspace_root());
     check_run(cmd, "cargo xtask install")
+}
+
+/// `cargo xtask uninstall --prefix <prefix> <extra>`, as [`xtask_install`] runs install; its
+/// status and output.
+fn xtask_uninstall(prefix: &Path, extra: &[&str]) -> std::process::Output {
+    let exe = common::cargo_build(&["-p", "xtask"]).join("xtask");
+    Command::new(exe)
+        .args(["uninstall", "--prefix"])
+        .arg(prefix)
+        .args(extra)
+        .output()
+        .expect("run xtask uninstall")
+}
+
+/// Every path under `dir`, relative to it, sorted; directories end in `/`.
+fn tree(dir: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut dirs = vec![dir.to_path_buf()];
+    while let Some(d) = dirs.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            let rel = path.strip_prefix(dir).unwrap().display().to_string();
+            if std::fs::symlink_metadata(&path).unwrap().is_dir() {
+                out.push(format!("{rel}/"));
+                dirs.push(path);
+            } else {
+                out.push(rel);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// `cargo xtask uninstall` removes every file and link of the install in `prefix` and leaves its
+/// directories; a dry run before it removes nothing, a second run says nothing is installed.
+fn check_uninstall(prefix: &Path) {
+    let before = tree(prefix);
+    let dry = xtask_uninstall(prefix, &["--dry-run"]);
+    assert!(dry.status.success(), "{dry:?}");
+    assert_eq!(tree(prefix), before, "a dry run removed something");
+    let out = xtask_uninstall(prefix, &[]);
+    let log = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        tree(prefix),
+        ["include/", "lib/", "lib/pkgconfig/"],
+        "{log}"
+    );
+    let removed = log.lines().filter(|l| l.starts_with("removed ")).count();
+    let files = before.iter().filter(|p| !p.ends_with('/')).count();
+    assert_eq!(removed, files, "{log}");
+    let again = xtask_uninstall(prefix, &[]);
+    assert!(!again.status.success());
+    assert!(
+        String::from_utf8_lossy(&again.stderr).contains("no vlib is installed under"),
+        "{again:?}"
+    );
 }
 
 /// The documented cargo-c commands (docs/install.md) with `--prefix <prefix> <extra>`: `cargo
@@ -375,6 +435,8 @@ fn xtask_install_gives_a_prefix_c_programs_build_against() {
         check_pkg_config(&archive_only, true);
         figure2_shared_and_static(&full, &archive_only);
     }
+    check_uninstall(&full);
+    check_uninstall(&archive_only);
 }
 
 #[test]
@@ -436,4 +498,7 @@ fn cargo_c_installs_the_same_prefix() {
         check_pkg_config(&archive_only, true);
         figure2_shared_and_static(&full, &archive_only);
     }
+    // What cargo-c installs, cargo xtask uninstall removes.
+    check_uninstall(&full);
+    check_uninstall(&archive_only);
 }

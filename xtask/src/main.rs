@@ -1,17 +1,20 @@
 //! The workspace's task runner, `cargo xtask <task>` (an alias in `.cargo/config.toml`). It owns
-//! the command line of the tasks; the one task, `install`, lives in [`install`] (building and
-//! copying) and [`pc`] (the pkg-config file). It needs only cargo, a C toolchain's `strip`, the
-//! standard library and `libc` (for `openat` and its flags); it is not part of the C library or
-//! of the published crates.
+//! the command line of the tasks: `install` lives in [`install`] (building and copying) and
+//! [`pc`] (the pkg-config file), `uninstall` in [`uninstall`]. It needs only cargo, a C
+//! toolchain's `strip`, the standard library and `libc` (for `openat` and its flags); it is not
+//! part of the C library or of the published crates.
 
 mod install;
 mod pc;
+mod uninstall;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 const USAGE: &str = "\
 usage: cargo xtask install [options]
+       cargo xtask uninstall [--prefix DIR] [--libdir DIR] [--includedir DIR] [--destdir DIR]
+                             [--dry-run]
 
 Builds the C library (package vlib-capi) and installs it into a prefix:
   <libdir>/libvlib.so.X.Y.Z, its links libvlib.so.X (the SONAME) and libvlib.so,
@@ -31,7 +34,13 @@ options:
   --from-stage DIR      build nothing: install what an earlier run with --destdir DIR and
                         the same --prefix, --libdir and --includedir staged there (run the
                         xtask binary as root this way to install what you built as yourself)
-  -h, --help            this text";
+  -h, --help            this text
+
+uninstall removes what install put under the prefix (the same --prefix, --libdir,
+--includedir and --destdir): libvlib.so.X.Y.Z of any version, the links to them,
+libvlib.a, vlib.h, vlaux.h and pkgconfig/vlib.pc. It removes nothing where one of them is
+not what install makes or vlib.pc names another prefix; directories are left.
+  --dry-run             list what would be removed, remove nothing";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -49,7 +58,10 @@ fn run(args: &[String]) -> Result<(), String> {
         Some("install") if !args[1..].iter().any(|a| a == "-h" || a == "--help") => {
             install::install(&parse_install(&args[1..])?)
         }
-        Some("install" | "-h" | "--help" | "help") => {
+        Some("uninstall") if !args[1..].iter().any(|a| a == "-h" || a == "--help") => {
+            uninstall::uninstall(&parse_uninstall(&args[1..])?)
+        }
+        Some("install" | "uninstall" | "-h" | "--help" | "help") => {
             println!("{USAGE}");
             Ok(())
         }
@@ -78,6 +90,66 @@ pub struct InstallOptions {
     pub features: Vec<String>,
     /// Install the files staged under this directory instead of building.
     pub from_stage: Option<PathBuf>,
+}
+
+/// The options of `uninstall`.
+#[derive(Debug, PartialEq, Eq)]
+pub struct UninstallOptions {
+    pub prefix: PathBuf,
+    pub libdir: PathBuf,
+    pub includedir: PathBuf,
+    pub destdir: Option<PathBuf>,
+    /// List what would be removed, remove nothing.
+    pub dry_run: bool,
+}
+
+fn parse_uninstall(args: &[String]) -> Result<UninstallOptions, String> {
+    let mut o = UninstallOptions {
+        prefix: PathBuf::from("/usr/local"),
+        libdir: PathBuf::from("lib"),
+        includedir: PathBuf::from("include"),
+        destdir: None,
+        dry_run: false,
+    };
+    let mut i = 0;
+    while i < args.len() {
+        let arg = &args[i];
+        if arg == "--dry-run" {
+            o.dry_run = true;
+            i += 1;
+            continue;
+        }
+        let (name, inline) = match arg.split_once('=') {
+            Some((n, v)) if n.starts_with("--") => (n, Some(v.to_string())),
+            _ => (arg.as_str(), None),
+        };
+        if !["--prefix", "--libdir", "--includedir", "--destdir"].contains(&name) {
+            return Err(format!("unknown option `{arg}` of uninstall\n\n{USAGE}"));
+        }
+        let value = match inline {
+            Some(v) => v,
+            None => {
+                i += 1;
+                args.get(i)
+                    .cloned()
+                    .ok_or_else(|| format!("{name} needs a value"))?
+            }
+        };
+        if value.is_empty() {
+            return Err(format!("{name} needs a non-empty value"));
+        }
+        let value = PathBuf::from(value);
+        match name {
+            "--prefix" => o.prefix = value,
+            "--libdir" => o.libdir = value,
+            "--includedir" => o.includedir = value,
+            _ => o.destdir = Some(value),
+        }
+        i += 1;
+    }
+    o.prefix = std::path::absolute(&o.prefix)
+        .map_err(|e| format!("--prefix {}: {e}", o.prefix.display()))?;
+    Ok(o)
 }
 
 fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
@@ -244,9 +316,9 @@ mod tests {
         assert!(err(&["--prefix"]).contains("--prefix needs a value"));
         assert!(err(&["--prefix="]).contains("non-empty"));
         assert!(err(&["--library-type", "rlib"]).contains("expected cdylib or staticlib"));
-        assert!(run(&["uninstall".into()])
+        assert!(run(&["remove".into()])
             .unwrap_err()
-            .contains("unknown task"));
+            .contains("unknown task `remove`"));
         assert!(run(&[]).unwrap_err().contains("no task"));
     }
 
@@ -280,6 +352,44 @@ mod tests {
                 "{err}"
             );
         }
+    }
+
+    fn parse_un(args: &[&str]) -> Result<UninstallOptions, String> {
+        parse_uninstall(&args.iter().map(|s| s.to_string()).collect::<Vec<_>>())
+    }
+
+    #[test]
+    fn uninstall_takes_the_install_directories_and_a_dry_run() {
+        let o = parse_un(&[]).unwrap();
+        assert_eq!(o.prefix, PathBuf::from("/usr/local"));
+        assert_eq!(o.libdir, PathBuf::from("lib"));
+        assert_eq!(o.includedir, PathBuf::from("include"));
+        assert_eq!(o.destdir, None);
+        assert!(!o.dry_run);
+        let o = parse_un(&[
+            "--prefix=/opt/v",
+            "--libdir",
+            "lib64",
+            "--includedir=inc",
+            "--destdir",
+            "/tmp/s",
+            "--dry-run",
+        ])
+        .unwrap();
+        assert_eq!(o.prefix, PathBuf::from("/opt/v"));
+        assert_eq!(o.libdir, PathBuf::from("lib64"));
+        assert_eq!(o.includedir, PathBuf::from("inc"));
+        assert_eq!(o.destdir, Some(PathBuf::from("/tmp/s")));
+        assert!(o.dry_run);
+        assert_eq!(
+            parse_un(&["--prefix", "here"]).unwrap().prefix,
+            std::env::current_dir().unwrap().join("here")
+        );
+        let err = |args: &[&str]| parse_un(args).unwrap_err();
+        assert!(err(&["--profile", "dev"]).contains("unknown option `--profile` of uninstall"));
+        assert!(err(&["--dry-run=yes"]).contains("unknown option `--dry-run=yes`"));
+        assert!(err(&["--prefix"]).contains("--prefix needs a value"));
+        assert!(err(&["--destdir="]).contains("non-empty"));
     }
 
     #[test]
