@@ -74,6 +74,26 @@ fn header_has_the_contract_macros_and_types() {
     ] {
         assert!(header.contains(needle), "include/vlib.h lacks `{needle}`");
     }
+    // The version macros are the package's version (as `capi/src/types.rs` checks), and
+    // `vlVersion` returns its encoding.
+    let part = |s: &str| s.parse::<u32>().expect("a version number");
+    let (major, minor, patch) = (
+        part(env!("CARGO_PKG_VERSION_MAJOR")),
+        part(env!("CARGO_PKG_VERSION_MINOR")),
+        part(env!("CARGO_PKG_VERSION_PATCH")),
+    );
+    for needle in [
+        format!("#define VLIB_VERSION_MAJOR {major}"),
+        format!("#define VLIB_VERSION_MINOR {minor}"),
+        format!("#define VLIB_VERSION_PATCH {patch}"),
+        format!(
+            "#define VLIB_VERSION {}",
+            major * 1_000_000 + minor * 1_000 + patch
+        ),
+        "vlint vlVersion(void);".to_string(),
+    ] {
+        assert!(header.contains(&needle), "include/vlib.h lacks `{needle}`");
+    }
     assert!(
         !header.contains("//"),
         "C89: no // comments in include/vlib.h"
