@@ -227,6 +227,13 @@ fn say(line: std::fmt::Arguments) -> Res<()> {
     }
 }
 
+/// `n` and the thing it counts, `noun` (given in the singular), in the plural but for 1:
+/// "1 byte", "0 bytes", "48 bytes".
+fn counted<N: std::fmt::Display + PartialEq + From<u8>>(n: N, noun: &str) -> String {
+    let s = if n == N::from(1) { "" } else { "s" };
+    format!("{n} {noun}{s}")
+}
+
 fn save(d: &Dataset, path: &Path) -> Res<()> {
     d.save(path).map_err(|e| e.to_string())?;
     let [nx, ny, nz] = d.dims();
@@ -295,16 +302,17 @@ fn raw(
         .ok_or("dimensions overflow")?;
     if len < need {
         return Err(format!(
-            "{}: {len} bytes, but {need} are needed for {dims:?} x {bytes} byte(s) + {skip}",
-            input.display()
+            "{}: {}, but {need} are needed for {dims:?} x {bytes} byte(s) + {skip}",
+            input.display(),
+            counted(len, "byte")
         ));
     }
     let data = volume::read_regular(input, Some(need))?;
     if len > need {
         eprintln!(
-            "vlconvert: note: {} has {} bytes after the volume (ignored)",
+            "vlconvert: note: {} has {} after the volume (ignored)",
             input.display(),
-            len - need
+            counted(len - need, "byte")
         );
     }
     let source = Source {

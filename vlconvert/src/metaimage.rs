@@ -292,14 +292,20 @@ fn elements(h: &Header, bytes: &[u8], from: usize, need: usize, name: &Path) -> 
             )
         }
         Some(-1) => len.checked_sub(need).ok_or_else(|| {
-            format!("{name}: {len} bytes, but {need} are needed for the data that ends it")
+            format!(
+                "{name}: {}, but {need} are needed for the data that ends it",
+                crate::counted(len, "byte")
+            )
         })?,
         Some(n) if n > 0 => usize::try_from(n).unwrap_or(usize::MAX),
         _ => from,
     };
-    let data = bytes
-        .get(from..)
-        .ok_or_else(|| format!("{name}: {len} bytes, but the data starts at byte {from}"))?;
+    let data = bytes.get(from..).ok_or_else(|| {
+        format!(
+            "{name}: {}, but the data starts at byte {from}",
+            crate::counted(len, "byte")
+        )
+    })?;
     let what = format!("{:?} x {:?}", h.dims, h.ty);
     let out = if h.compressed {
         let mut out = Vec::new();
@@ -312,8 +318,8 @@ fn elements(h: &Header, bytes: &[u8], from: usize, need: usize, name: &Path) -> 
         .map_err(|e| format!("{name}: compressed data from byte {from}: {e}"))?;
         if out.len() < need {
             return Err(format!(
-                "{name}: the data decompresses to {} bytes, but {need} are needed for {what}",
-                out.len()
+                "{name}: the data decompresses to {}, but {need} are needed for {what}",
+                crate::counted(out.len(), "byte")
             ));
         }
         if out.len() > need {
@@ -324,14 +330,14 @@ fn elements(h: &Header, bytes: &[u8], from: usize, need: usize, name: &Path) -> 
     } else {
         if data.len() < need {
             return Err(format!(
-                "{name}: {} bytes of data from byte {from}, but {need} are needed for {what}",
-                data.len()
+                "{name}: {} of data from byte {from}, but {need} are needed for {what}",
+                crate::counted(data.len(), "byte")
             ));
         }
         if data.len() > need {
             eprintln!(
-                "vlconvert: note: {name} has {} bytes after the data (ignored)",
-                data.len() - need
+                "vlconvert: note: {name} has {} after the data (ignored)",
+                crate::counted(data.len() - need, "byte")
             );
         }
         data[..need].to_vec()

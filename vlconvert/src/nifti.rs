@@ -62,9 +62,9 @@ impl Stream {
         if let Stream::Gz(g) = self {
             if g.trailing() > 0 {
                 eprintln!(
-                    "vlconvert: note: {} has {} bytes after its gzip stream (ignored)",
+                    "vlconvert: note: {} has {} after its gzip stream (ignored)",
                     path.display(),
-                    g.trailing()
+                    crate::counted(g.trailing(), "byte")
                 );
             }
         }
@@ -101,8 +101,8 @@ fn header(r: &mut dyn Read, gz: bool) -> Res<NiftiHeader> {
         .map_err(read_error(gz))?;
     if buf.len() < HEADER_LEN as usize {
         return Err(format!(
-            "{} bytes: the file ends inside the 348-byte NIfTI-1 header",
-            buf.len()
+            "{}: the file ends inside the 348-byte NIfTI-1 header",
+            crate::counted(buf.len(), "byte")
         ));
     }
     NiftiHeader::from_reader(buf.as_slice()).map_err(|e| match e {
@@ -199,8 +199,8 @@ fn voxels(
         std::io::copy(&mut Read::take(&mut *r, start - at), sink).map_err(read_error(gz))?;
     if at + skipped < start {
         return Err(format!(
-            "vox_offset {start} is past the end of the data ({} bytes)",
-            at + skipped
+            "vox_offset {start} is past the end of the data ({})",
+            crate::counted(at + skipped, "byte")
         ));
     }
     let mut data = Vec::new();
@@ -209,8 +209,8 @@ fn voxels(
         .map_err(read_error(gz))?;
     if (data.len() as u64) < len {
         return Err(format!(
-            "{} bytes of voxels from vox_offset {start}, {len} needed for {what}",
-            data.len()
+            "{} of voxels from vox_offset {start}, {len} needed for {what}",
+            crate::counted(data.len(), "byte")
         ));
     }
     let extra = std::io::copy(r, sink).map_err(read_error(gz))?;
@@ -356,8 +356,9 @@ pub fn convert(input: &Path, output: &Path, window: &super::Window) -> Res<()> {
     };
     if extra > 0 {
         eprintln!(
-            "vlconvert: note: {} has {extra} bytes after the voxels (ignored)",
-            file.display()
+            "vlconvert: note: {} has {} after the voxels (ignored)",
+            file.display(),
+            crate::counted(extra, "byte")
         );
     }
     // NIfTI-1: a slope of 0 means the values are unscaled.

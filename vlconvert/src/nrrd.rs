@@ -313,17 +313,18 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
         };
         if data.len() < need {
             return Err(bad(format!(
-                "{} bytes of data, {need} needed for {dims:?} of {ty_name}",
-                data.len()
+                "{} of data, {need} needed for {dims:?} of {ty_name}",
+                crate::counted(data.len(), "byte")
             )));
         }
         Ok((data[..need].to_vec(), (data.len() - need) as u64))
     };
-    // The volume's bytes, their byte order, and what follows them (a count and its noun).
+    // The volume's bytes, their byte order, and what follows them (a count and its noun, in
+    // the singular).
     let (bytes, big, extra) = match encoding {
         "raw" => {
             let (bytes, extra) = raw(data)?;
-            (bytes, big, (extra, "bytes"))
+            (bytes, big, (extra, "byte"))
         }
         "gzip" | "gz" => {
             let mut out = Vec::new();
@@ -336,25 +337,25 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
             let after = after.map_err(bad)?;
             if gz.trailing() > 0 {
                 eprintln!(
-                    "vlconvert: note: {} has {} bytes after its gzip stream (ignored)",
+                    "vlconvert: note: {} has {} after its gzip stream (ignored)",
                     data_path.display(),
-                    gz.trailing()
+                    crate::counted(gz.trailing(), "byte")
                 );
             }
             let (bytes, _) = raw(&out)?;
-            (bytes, big, (after, "bytes"))
+            (bytes, big, (after, "byte"))
         }
         "ascii" | "text" | "txt" => {
             // Byte skip counts bytes of the text, as teem reads it.
             let text = data.get(skip as usize..).ok_or_else(|| {
                 bad(format!(
-                    "byte skip {skip} is past the end of the data ({} bytes)",
-                    data.len()
+                    "byte skip {skip} is past the end of the data ({})",
+                    crate::counted(data.len(), "byte")
                 ))
             })?;
             let (bytes, extra) =
                 ascii(&String::from_utf8_lossy(text), ty, ty_name, n).map_err(bad)?;
-            (bytes, false, (extra as u64, "ascii values"))
+            (bytes, false, (extra as u64, "ascii value"))
         }
         e => {
             return Err(bad(format!(
@@ -364,8 +365,9 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
     };
     if let (count @ 1.., what) = extra {
         eprintln!(
-            "vlconvert: note: {} has {count} {what} after the data (ignored)",
-            data_path.display()
+            "vlconvert: note: {} has {} after the data (ignored)",
+            data_path.display(),
+            crate::counted(count, what)
         );
     }
     Ok(Nrrd {

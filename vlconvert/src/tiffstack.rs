@@ -287,7 +287,8 @@ fn inspect<R: Read + Seek>(d: &mut Decoder<R>, len: u64) -> Res<Page> {
     for (&at, &n) in offsets.iter().zip(&counts) {
         if at.checked_add(n).is_none_or(|end| end > len) {
             return Err(format!(
-                "data at bytes {at} … {at}+{n}, past the end of the file ({len} bytes)"
+                "data at bytes {at} … {at}+{n}, past the end of the file ({})",
+                crate::counted(len, "byte")
             ));
         }
         held = held.saturating_add(n);
@@ -300,15 +301,18 @@ fn inspect<R: Read + Seek>(d: &mut Decoder<R>, len: u64) -> Res<Page> {
         let tile = (tw as u64) * (th as u64) * (bits as u64 / 8);
         if let Some(&n) = counts.iter().find(|&&n| tile > n.saturating_mul(ratio)) {
             return Err(format!(
-                "tiles of {tw} x {th} pixels: {tile} bytes, more than a tile's {n} bytes of \
-                 data can hold"
+                "tiles of {tw} x {th} pixels: {}, more than a tile's {} of data can hold",
+                crate::counted(tile, "byte"),
+                crate::counted(n, "byte")
             ));
         }
     }
     if need > held.saturating_mul(ratio) {
         return Err(format!(
-            "{}: {need} bytes, more than its {held} bytes of data can hold",
-            page.describe()
+            "{}: {}, more than its {} of data can hold",
+            page.describe(),
+            crate::counted(need, "byte"),
+            crate::counted(held, "byte")
         ));
     }
     Ok(page)
@@ -425,8 +429,12 @@ fn same(first: &Page, page: &Page, k: usize) -> Res<()> {
 /// Room for `n` bytes, or an error saying how many.
 fn room(n: usize) -> Res<Vec<u8>> {
     let mut v = Vec::new();
-    v.try_reserve_exact(n)
-        .map_err(|_| format!("{n} bytes for the volume: not enough memory"))?;
+    v.try_reserve_exact(n).map_err(|_| {
+        format!(
+            "{} for the volume: not enough memory",
+            crate::counted(n, "byte")
+        )
+    })?;
     Ok(v)
 }
 
@@ -557,8 +565,9 @@ fn contiguous<R: Read + Seek>(
         .filter(|&end| end <= len)
         .ok_or_else(|| {
             at(format!(
-                "{says}: {images} slices of {slice} bytes from byte {start} pass the end of the \
-                 file ({len} bytes)"
+                "{says}: {images} slices of {} from byte {start} pass the end of the file ({})",
+                crate::counted(slice, "byte"),
+                crate::counted(len, "byte")
             ))
         })?;
     let total = (end - start) as usize;

@@ -267,8 +267,8 @@ impl Source<'_> {
         let need = self.len().saturating_mul(self.ty.bytes());
         if self.bytes.len() < need {
             return Err(format!(
-                "{} bytes of voxels, {need} needed for {:?} of {:?}",
-                self.bytes.len(),
+                "{} of voxels, {need} needed for {:?} of {:?}",
+                crate::counted(self.bytes.len(), "byte"),
                 self.dims,
                 self.ty
             ));

@@ -264,7 +264,7 @@ fn nrrd_data_after_the_volume_is_a_note_and_gzip_is_checked() {
         let err = text(&o.stderr);
         assert!(o.status.success(), "{name}: {err}");
         let says = format!(
-            "{} has 1 bytes after its gzip stream (ignored)",
+            "{} has 1 byte after its gzip stream (ignored)",
             fixture(name).display()
         );
         assert_eq!(err.contains(&says), note, "{name}: {err}");

@@ -101,8 +101,9 @@ impl Walk<'_> {
 
     fn overrun(&self, tag: Tag, len: u32, left: usize) -> String {
         format!(
-            "element {tag} at byte {} declares {len} bytes, but {left} remain",
-            self.pos
+            "element {tag} at byte {} declares {}, but {left} remain",
+            self.pos,
+            crate::counted(len, "byte")
         )
     }
 

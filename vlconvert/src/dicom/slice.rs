@@ -306,8 +306,9 @@ impl Slice {
         let (obj, trailing) = parse(&bytes, true).map_err(at)?;
         if trailing > 0 {
             eprintln!(
-                "vlconvert: note: {} has {trailing} bytes after its last element (ignored)",
-                self.path.display()
+                "vlconvert: note: {} has {} after its last element (ignored)",
+                self.path.display(),
+                crate::counted(trailing, "byte")
             );
         }
         if Slice::from(&self.path, &obj).as_ref() != Ok(self) {
@@ -323,8 +324,8 @@ impl Slice {
         let data = px.data();
         if data.len() < need {
             return Err(at(format!(
-                "{} bytes of pixel data, but Rows × Columns = {} × {} of {} bits need {need}",
-                data.len(),
+                "{} of pixel data, but Rows × Columns = {} × {} of {} bits need {need}",
+                crate::counted(data.len(), "byte"),
                 self.rows,
                 self.cols,
                 self.bits_allocated
