@@ -270,6 +270,14 @@ fn vl_sample_matches_direct_evaluation() {
             .code,
         vlib::ErrorCode::BadValue
     );
+    // Both wrong: the id, the first parameter, is reported (errors.md, which error when
+    // several apply).
+    assert_eq!(
+        vl.sample(DatasetId(4), f32::NAN, 0.5, 0.5)
+            .unwrap_err()
+            .code,
+        vlib::ErrorCode::BadId
+    );
 }
 
 #[test]

@@ -99,6 +99,14 @@ fn voxelizations_datasets_and_mappings_past_their_limits_are_refused() {
     refused(&mut vl, ErrorCode::NoMemory, "vlVolume nodes", |vl| {
         vl.volume("v", Fields::F, [0.0; 3], [1.0; 3], n, 1)
     });
+    // With a bad voxel width too: the node counts come first among the parameters, so their
+    // error is the one reported (errors.md, which error when several apply).
+    refused(
+        &mut vl,
+        ErrorCode::NoMemory,
+        "vlVolume nodes and bytes",
+        |vl| vl.volume("v", Fields::F, [0.0; 3], [1.0; 3], n, 3),
+    );
     let dims = [1 << 16, 1 << 16, 2];
     let e = Dataset::new(dims, Voxels::U8(vec![0; 8]), 0.0, 1.0).unwrap_err();
     assert_eq!(e.code, ErrorCode::BadDimensions, "{}", e.message);

@@ -309,12 +309,7 @@ impl Library {
         fields.validate()?;
         finite("vlVolume", &corner0)?;
         finite("vlVolume", &corner1)?;
-        if !(bytes == 1 || bytes == 2) {
-            return err(
-                ErrorCode::BadValue,
-                format!("vlVolume: {bytes} bytes per voxel (1 or 2)"),
-            );
-        }
+        // (In the order of the parameters: the node counts, then the voxel width.)
         for axis in 0..3 {
             let n = nodes[axis];
             if n < 1 || n as u64 > crate::data::MAX_VOXELS {
@@ -338,6 +333,12 @@ impl Library {
             return err(
                 ErrorCode::NoMemory,
                 format!("vlVolume: {total} nodes exceed {MAX_VOLUME_NODES}"),
+            );
+        }
+        if !(bytes == 1 || bytes == 2) {
+            return err(
+                ErrorCode::BadValue,
+                format!("vlVolume: {bytes} bytes per voxel (1 or 2)"),
             );
         }
         self.scene_mut()

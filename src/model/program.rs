@@ -97,15 +97,16 @@ pub(crate) fn sample_dataset(
     p: [f32; 3],
     filter: Filter,
 ) -> Result<f32> {
+    // (The id is the first parameter: an unknown one is reported before a bad point.)
+    let d = datasets
+        .get(&id)
+        .ok_or_else(|| Error::new(ErrorCode::BadId, format!("vlSample: no dataset {id}")))?;
     if p.iter().any(|v| !v.is_finite()) {
         return err(
             ErrorCode::BadValue,
             format!("vlSample: point {p:?} is not finite"),
         );
     }
-    let d = datasets
-        .get(&id)
-        .ok_or_else(|| Error::new(ErrorCode::BadId, format!("vlSample: no dataset {id}")))?;
     Ok(d.sample(p, filter))
 }
 
