@@ -211,8 +211,12 @@ pub struct Settings {
     pub optimise: Optimise,
 }
 
-/// Speed-ups that never change a pixel (beyond what early termination documents), switchable
-/// so that benchmarks can show what each is worth. All are on by default.
+/// Speed-ups of the render, switchable so that benchmarks can show what each is worth. Each
+/// field's documentation says what switching it changes: `skip_empty`, `wide_lanes` and
+/// `trust_whole_runs` change no pixel; `early_termination` changes a pixel by at most what
+/// `termination` allows; `packets` (and `lean_kernel`, which the packet march needs) may
+/// change the last bits of some pixels; `preintegrate` changes how a volume is sampled. All
+/// are on by default except `preintegrate`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Optimise {
     /// Skip blocks where opacity is provably 0.
@@ -226,7 +230,9 @@ pub struct Optimise {
     /// 1/512 (under half an 8-bit level); VTK's CPU ray caster stops at 255/32767 ≈ 1/128. In [0, 1); `set_optimise` refuses others.
     pub termination: f64,
     /// Evaluate programs of constants, datasets and transfer functions with the lean kernel
-    /// (the same values, bit for bit, computed faster; see `docs/performance.md`).
+    /// (the same values, bit for bit, computed faster; see `docs/performance.md`). The packet
+    /// march ([`Optimise::packets`]) runs only such programs, so with this off every ray takes
+    /// the scalar march, whose image may differ from the packet march's as `packets` says.
     pub lean_kernel: bool,
     /// Trace the primary rays of a scanned volume eight at a time in SIMD lanes (AVX2 and FMA,
     /// where the processor has them), or sixteen (`wide_lanes`); `docs/performance.md`
