@@ -17,7 +17,8 @@ use std::sync::Arc;
 
 /// A flag that stops renders: cloned to any thread, [`CancelFlag::cancel`] makes the render in
 /// progress (and every later one, until [`CancelFlag::reset`]) stop within a few thousand
-/// samples of each ray and fail with [`ErrorCode::Cancelled`], writing no file.
+/// samples of each ray and fail with [`ErrorCode::Cancelled`], writing no file of the output
+/// it was making: a scene's outputs finished before it are written, the rest are not.
 #[derive(Clone, Debug, Default)]
 pub struct CancelFlag(Arc<AtomicBool>);
 
@@ -49,7 +50,8 @@ impl CancelFlag {
 /// failed), while other rendering threads may be calling field functions; returning `false`
 /// cancels the
 /// render. It is called on one of the library's rendering threads (the one that called the
-/// scene's `end` or `render_preview` waits meanwhile), one call at a time.
+/// scene's `end`, `render`, `render_preview` or `render_into` waits meanwhile), one call at a
+/// time.
 pub type ProgressFn = Arc<dyn Fn(f32) -> bool + Send + Sync>;
 
 /// How a caller follows and stops renders (`Library::set_render_control`).
