@@ -162,8 +162,10 @@ fn put_all<const C: usize, const B: usize>(out: &mut [u8], channels: [[u8; B]; C
 /// Its fields are public, so an image built or changed by hand can disagree with itself (a
 /// `pixels` or `transmittance` of another length than `width × height`): [`Image::check`]
 /// tells it, [`Image::save`] refuses such an image with `BadValue`, and the conversions
-/// (`to_bytes`, `to_rgb8` …) and accessors (`pixel`, `alpha`) panic on it, as slice indexing
-/// does, rather than return the pixels of another image.
+/// (`to_bytes`, `to_rgb8` …) panic on it rather than return the pixels of another image.
+/// The accessors (`pixel`, `alpha`) check only their own pixel: they panic where it lies
+/// outside `width × height` or past the end of the vector they read, and otherwise return
+/// the value stored at its index `y · width + x`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
     /// Width in pixels.
@@ -276,8 +278,8 @@ impl Image {
     ///
     /// # Panics
     ///
-    /// Where `x` or `y` lies outside the image (`x ≥ width` or `y ≥ height`), or `pixels` is
-    /// shorter than `width × height`.
+    /// Where `x` or `y` lies outside the image (`x ≥ width` or `y ≥ height`), or the pixel's
+    /// index `y · width + x` lies past the end of `pixels`.
     pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
         self.pixels[self.index(x, y, "pixel")]
     }
@@ -299,8 +301,8 @@ impl Image {
     ///
     /// # Panics
     ///
-    /// Where `x` or `y` lies outside the image (`x ≥ width` or `y ≥ height`), or
-    /// `transmittance` is shorter than `width × height`.
+    /// Where `x` or `y` lies outside the image (`x ≥ width` or `y ≥ height`), or the pixel's
+    /// index `y · width + x` lies past the end of `transmittance` (for either backdrop).
     pub fn alpha(&self, x: u32, y: u32) -> f32 {
         alpha(self.transmittance[self.index(x, y, "alpha")], self.backdrop)
     }
