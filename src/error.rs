@@ -30,7 +30,8 @@ pub enum ErrorCode {
     NullPointer = 5,
     /// No mapping or dataset has this id (`VL_BADID`).
     BadId = 6,
-    /// The command is valid but this version does not implement it yet (`VL_UNSUPPORTED`).
+    /// Valid, but not implemented (`VL_UNSUPPORTED`): reserved, no command reports it
+    /// (`docs/errors.md`, `docs/compat.md`).
     Unsupported = 7,
     /// A file could not be read or written (`VL_IOERROR`).
     IoError = 8,

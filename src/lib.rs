@@ -93,7 +93,7 @@ pub use types::{
 ///   function's rows and outputs: `BadValue` (`vlMapping`).
 /// - [`MAX_SAMPLES_PER_RAY`](limits::MAX_SAMPLES_PER_RAY), the samples of a ray through one
 ///   object: `BadValue`, from the render (a scene's `vlEnd`, [`Library::render`],
-///   `vlRenderBuffer`) before any pixel.
+///   [`Library::render_into`], `vlRenderBuffer`) before any pixel.
 pub mod limits {
     pub use crate::api::library::{
         MAX_DEPTH, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_RECURSION, MAX_SUPER_SAMPLE, MAX_SURFACES,

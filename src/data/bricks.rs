@@ -82,7 +82,9 @@ fn widen<T: Copy + PartialOrd>(min: &mut [T], max: &mut [T], lo: &[T], hi: &[T])
 impl Dataset {
     /// Computes now what a render with `filter` would compute on first use and keep (the brick
     /// ranges its empty-space grids are built from), so that a first frame does not pay for it;
-    /// on the library's threads, so it fails only where they cannot be started (`NoMemory`).
+    /// on the library's threads. It fails only with `NoMemory`: where those threads cannot be
+    /// started, or the ranges (or their scratch rows) cannot be allocated; nothing is kept
+    /// then, and a later call or render tries again.
     pub fn precompute(&self, filter: Filter) -> crate::error::Result<()> {
         crate::pool::install(|| {
             self.try_bricks(filter)?;

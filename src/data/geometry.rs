@@ -1,9 +1,9 @@
 //! Where a dataset's nodes lie in physical space, carried beside its `.vlb` file (whose header
 //! the paper fixes) in a sidecar: `NAME.vlb.geom`, a few lines of text written by `vlconvert`
 //! from the source's own geometry (NIfTI's sform or qform, NRRD's space directions and origin),
-//! read by [`crate::Dataset::load`] when present: a sidecar that cannot be read or parsed
-//! makes the load fail with its reason (`VL_IOERROR`, `VL_BADFILE`), so keep it with its file
-//! or remove it.
+//! read by [`crate::Dataset::load`] when present: a sidecar that cannot be read, is larger
+//! than 64 KiB or does not parse makes the load fail with its reason (`VL_IOERROR`,
+//! `VL_BADVALUE`, `VL_BADFILE`), so keep it with its file or remove it.
 //!
 //! ```text
 //! vlib-geometry 1

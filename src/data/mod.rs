@@ -330,8 +330,12 @@ impl Dataset {
     }
 
     /// The normalised node values, x fastest: made on first use (in parallel), then kept.
-    /// Where they cannot be allocated this unwinds (with the error's message, printing
-    /// nothing) instead of aborting; [`Dataset::try_values`] reports it as `NoMemory`.
+    ///
+    /// # Panics
+    ///
+    /// Where they cannot be allocated: it unwinds, with the `NoMemory` [`Error`] as the
+    /// payload and printing nothing, instead of aborting; [`Dataset::try_values`] returns
+    /// that error instead.
     pub fn values(&self) -> &[f32] {
         or_unwind(self.try_values())
     }

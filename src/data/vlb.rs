@@ -86,6 +86,16 @@ impl Dataset {
     /// Reads a `.vlb` file: the header is checked against the file's length before the voxels
     /// are allocated (fallibly: `NoMemory` where they do not fit), and nothing is read past
     /// the end. The voxels are read straight into the dataset's buffer.
+    ///
+    /// Errors: `IoError` for a file that cannot be opened or read (a directory, a FIFO or a
+    /// device among them); the header's codes in the order `docs/errors.md` gives them
+    /// (`BadMagic`, `BadSize` for a header cut short, `BadDimensions`, `BadVoxelWidth`,
+    /// `BadRange`, then `BadSize` for a file longer or shorter than its header says). Where a
+    /// placement sidecar ([`Geometry::sidecar`](crate::Geometry::sidecar): the name with
+    /// `.geom` appended) lies beside the file (the file a link at `path` leads to), it is read
+    /// too: `IoError` where it cannot be read (or is not a regular file), `BadValue` where it
+    /// is larger than 64 KiB, `BadFile` where it does not parse or describes another grid
+    /// ([`Geometry::parse`](crate::Geometry::parse)).
     pub fn load(path: &Path) -> Result<Dataset> {
         let io =
             |e: std::io::Error| Error::new(ErrorCode::IoError, format!("{}: {e}", path.display()));

@@ -296,6 +296,7 @@ impl crate::render::Image {
     /// [`Image::check`] refuses (a side of 0, a `pixels` or `transmittance` of another length
     /// than `width × height`) is `BadValue`. The file's bytes (3 to 12 a pixel) are made
     /// first, before anything is written: where they cannot be allocated it is `NoMemory`.
+    /// A file that cannot be written is `IoError` (under [`crate::write_atomic`]'s rules).
     /// Whatever fails, no file, temporary or partial, is left, and an existing file is kept.
     ///
     /// [`Image::check`]: crate::Image::check
