@@ -54,8 +54,11 @@ impl Geometry {
         self.affine
     }
 
-    /// A geometry whose numbers are finite and whose A is invertible (|det A| > 0, relative to
-    /// its size), or `BadValue`.
+    /// A geometry whose numbers are finite and whose A is invertible, or `BadValue`: |det A|
+    /// must exceed 10⁻¹² times the product of A's columns' lengths (the spacings). Spacings so
+    /// far from 1 that their squares or that product leave f64's range (about 10⁻¹⁰⁰ or
+    /// 10¹⁰⁰ and beyond) fail the test too, as they would fail an object transform's
+    /// (`place_dataset`).
     pub fn new(affine: [[f64; 4]; 3]) -> Result<Geometry> {
         let g = Geometry { affine };
         let invalid =

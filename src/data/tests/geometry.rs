@@ -41,6 +41,18 @@ fn axis_aligned_refuses_what_a_sidecar_cannot_hold() {
     );
 }
 
+/// Spacings whose squares or whose product leave f64's range are refused with `BadValue` (as
+/// `Geometry::new` says), though A is invertible: the test of |det A| against the product of
+/// the spacings cannot be made there.
+#[test]
+fn spacings_beyond_f64s_range_are_refused() {
+    for s in [1e-200, 1e-110, 1e110, 1e200] {
+        let e = Geometry::axis_aligned([s; 3], [0.0; 3]).unwrap_err();
+        assert_eq!(e.code, ErrorCode::BadValue, "spacing {s}");
+        assert!(e.message.contains("degenerate"), "{}", e.message);
+    }
+}
+
 /// Geometries at the edges of what `new` accepts (tiny and huge spacings, a rotation,
 /// mirrored axes, far origins) are saved beside their dataset and load back equal.
 #[test]
