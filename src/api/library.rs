@@ -299,6 +299,9 @@ impl Library {
         bytes: i32,
     ) -> Result<()> {
         self.check(Command::Volume)?;
+        // (The field mask before the values, as the C layer converts it before this call: an
+        // empty prefix with an empty mask is `BadField` here too.)
+        fields.validate()?;
         let prefix = prefix.as_ref();
         if prefix.as_os_str().is_empty() || prefix.file_name().is_none() {
             return err(
@@ -306,7 +309,6 @@ impl Library {
                 format!("vlVolume: bad prefix {prefix:?}"),
             );
         }
-        fields.validate()?;
         finite("vlVolume", &corner0)?;
         finite("vlVolume", &corner1)?;
         // (In the order of the parameters: the node counts, then the voxel width.)
