@@ -140,3 +140,16 @@ fn sample_scope_commands_report_their_field_masks_before_their_indices_and_ids()
     let e = s.dataset(DatasetId(9), [f32::NAN; 3]).unwrap_err();
     assert_eq!(e.code, ErrorCode::BadId, "{}", e.message);
 }
+
+#[test]
+fn vl_directional_light_reports_its_direction_before_its_colour() {
+    let mut vl = scene();
+    // A zero direction with a colour of 2: both BadValue; the message names the direction.
+    let before = vl.fingerprint();
+    let e = vl
+        .directional_light([0.0; 3], [2.0, 0.5, 0.5], 1.0)
+        .unwrap_err();
+    assert_eq!(e.code, ErrorCode::BadValue);
+    assert!(e.message.contains("zero direction"), "{}", e.message);
+    assert_eq!(vl.fingerprint(), before);
+}

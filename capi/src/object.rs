@@ -117,8 +117,10 @@ pub unsafe extern "C" fn vlFunction(
 ) {
     ffi_boundary((), || {
         library(Command::Function, |lib| {
+            // (The mask, the first parameter, before the function pointer.)
+            let fields = Fields::from_raw(fields)?;
             let f = CField::new(f, misc).ok_or_else(|| null(Command::Function.name(), "f"))?;
-            lib.function_arc(Fields::from_raw(fields)?, f.into_core())
+            lib.function_arc(fields, f.into_core())
         })
     })
 }

@@ -418,13 +418,14 @@ impl Library {
     pub fn directional_light(&mut self, dir: [f32; 3], rgb: [f32; 3], i: f32) -> Result<()> {
         self.check(Command::DirectionalLight)?;
         finite("vlDirectionalLight", &dir)?;
-        colour("vlDirectionalLight", rgb)?;
-        intensity("vlDirectionalLight", i)?;
+        // (The direction, the first parameter, before the colour and the intensity.)
         let d = crate::model::scene::v3(dir);
         let len = d.length();
         if len.is_nan() || len <= 0.0 || !len.is_finite() {
             return err(ErrorCode::BadValue, "vlDirectionalLight: zero direction");
         }
+        colour("vlDirectionalLight", rgb)?;
+        intensity("vlDirectionalLight", i)?;
         self.scene_mut().lights.push(Light::Directional {
             to_light: -d / len,
             radiance: rgb.map(|c| c * i),

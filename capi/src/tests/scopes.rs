@@ -743,6 +743,12 @@ fn of_two_wrong_arguments_the_first_by_the_rule_is_reported() {
         // Object instructions: field masks, then ids, then indices.
         refused(
             Scope::Object,
+            "vlFunction(no fields, NULL)",
+            VL_BADFIELD,
+            || vlFunction(0, None, ptr::null_mut()),
+        );
+        refused(
+            Scope::Object,
             "vlDataset(no fields, no dataset 9)",
             VL_BADFIELD,
             || vlDataset(0, 9),
