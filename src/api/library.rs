@@ -250,8 +250,10 @@ impl Library {
     }
 
     /// `vlImage`: requests an image of the scene. The end of the file's name (any case) selects
-    /// the format: `.ppm`, `.png`, `.rgb16.png`, `.rgb16.ppm`, `.rgba.png`, `.rgba16.png`,
-    /// `.pfm` (`docs/images.md`); `aspect` is the view plane's width / height.
+    /// the format (`docs/images.md`):
+    /// `.ppm`, `.png`, `.rgb16.png`, `.rgb16.ppm`, `.rgba.png`, `.rgba16.png`, `.pfm`, and
+    /// the spelled-out 8-bit forms `.rgb.png`, `.rgb8.png`, `.rgba8.png`, `.rgb.ppm`,
+    /// `.rgb8.ppm`; `aspect` is the view plane's width / height.
     pub fn image(
         &mut self,
         path: impl AsRef<Path>,

@@ -141,13 +141,15 @@ pub struct Sample<'a> {
 
 impl Sample<'static> {
     /// A fresh sample at object point `p` and world point `world`, all fields 0, with no
-    /// datasets in reach.
+    /// datasets in reach, as a field function whose `vlFunction` named all ten fields sees it:
+    /// [`Sample::set`] writes every field it names. For calling a field function, or vlaux's
+    /// and `cvg`'s functions, outside a render (a test of one's own function, say).
     pub fn new(p: [f32; 3], world: [f64; 3]) -> Sample<'static> {
         Sample {
             p,
             world,
             fields: [0.0; FIELD_COUNT],
-            mask: Fields::NONE,
+            mask: Fields::ALL,
             role: SampleRole::Field,
             for_gradient: false,
             env: None,
@@ -170,7 +172,8 @@ impl<'a> Sample<'a> {
     }
 
     /// `vlSpatial`: moves the sample point (object space); later instructions see the new
-    /// point. Only a spatial transfer function may do this; a non-finite point is refused.
+    /// point. Only a spatial transfer function may do this (`BadScope` elsewhere); a
+    /// non-finite point is `BadValue`, and the point stays where it was.
     pub fn set_position(&mut self, p: [f32; 3]) -> Result<()> {
         if self.role != SampleRole::Spatial {
             return err(

@@ -132,6 +132,19 @@ fn masks_with_bits_that_name_no_field_are_bad_fields() {
     assert_eq!(s.values(), want);
 }
 
+/// A sample made by `Sample::new` is a field function's that named every field: `set` writes
+/// what it names (clamped), as inside a render.
+#[test]
+fn a_new_sample_takes_every_field_it_is_given() {
+    let mut s = Sample::new([0.5; 3], [0.0; 3]);
+    s.set(Fields::ALL, 0.7).unwrap();
+    assert_eq!(s.values(), [0.7; FIELD_COUNT]);
+    s.set(Fields::O | Fields::F, 2.0).unwrap();
+    assert_eq!(s.field(Fields::O).unwrap(), 1.0);
+    assert_eq!(s.field(Fields::F).unwrap(), 1.0);
+    assert_eq!(s.field(Fields::R).unwrap(), 0.7);
+}
+
 #[test]
 fn normal_role_cannot_write() {
     let mut s = Sample::new([0.5; 3], [0.0; 3]);
