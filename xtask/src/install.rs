@@ -391,14 +391,14 @@ fn open_source(dir: Option<&File>, path: &Path, only_name: bool) -> Result<Sourc
 }
 
 /// The workspace root: this package lives in `xtask/` under it.
-fn workspace_root() -> PathBuf {
+pub(crate) fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
         .expect("xtask has a parent")
         .to_path_buf()
 }
 
-fn cargo() -> Command {
+pub(crate) fn cargo() -> Command {
     Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()))
 }
 

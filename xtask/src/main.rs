@@ -1,11 +1,12 @@
 //! The workspace's task runner, `cargo xtask <task>` (an alias in `.cargo/config.toml`). It owns
 //! the command line of the tasks: `install` lives in [`install`] (building and copying) and
-//! [`pc`] (the pkg-config file), `uninstall` in [`uninstall`]. It needs only cargo, a C
-//! toolchain's `strip`, the standard library and `libc` (for `openat` and its flags); it is not
-//! part of the C library or of the published crates.
+//! [`pc`] (the pkg-config file), `uninstall` in [`uninstall`], `test` in [`suite`]. It needs
+//! only cargo, a C toolchain's `strip`, the standard library and `libc` (for `openat` and its
+//! flags); it is not part of the C library or of the published crates.
 
 mod install;
 mod pc;
+mod suite;
 mod uninstall;
 
 use std::path::PathBuf;
@@ -15,6 +16,7 @@ const USAGE: &str = "\
 usage: cargo xtask install [options]
        cargo xtask uninstall [--prefix DIR] [--libdir DIR] [--includedir DIR] [--destdir DIR]
                              [--dry-run]
+       cargo xtask test
 
 Builds the C library (package vlib-capi) and installs it into a prefix:
   <libdir>/libvlib.so.X.Y.Z, its links libvlib.so.X (the SONAME) and libvlib.so,
@@ -40,7 +42,11 @@ uninstall removes what install put under the prefix (the same --prefix, --libdir
 --includedir and --destdir): libvlib.so.X.Y.Z of any version, the links to them,
 libvlib.a, vlib.h, vlaux.h and pkgconfig/vlib.pc. It removes nothing where one of them is
 not what install makes or vlib.pc names another prefix; directories are left.
-  --dry-run             list what would be removed, remove nothing";
+  --dry-run             list what would be removed, remove nothing
+
+test runs every test: cargo test --release --workspace, then the MPI build's tests where
+Open MPI (mpicc, mpirun) and libclang are there or CI is set (else a note says they were
+skipped). It takes no options.";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -61,6 +67,15 @@ fn run(args: &[String]) -> Result<(), String> {
         Some("uninstall") if !args[1..].iter().any(|a| a == "-h" || a == "--help") => {
             uninstall::uninstall(&parse_uninstall(&args[1..])?)
         }
+        Some("test") if args.len() == 1 => suite::test(&install::workspace_root()),
+        Some("test") if args[1..].iter().all(|a| a == "-h" || a == "--help") => {
+            println!("{USAGE}");
+            Ok(())
+        }
+        Some("test") => Err(format!(
+            "test takes no options (`{}`)\n\n{USAGE}",
+            args[1..].join(" ")
+        )),
         Some("install" | "uninstall" | "-h" | "--help" | "help") => {
             println!("{USAGE}");
             Ok(())
@@ -390,6 +405,58 @@ mod tests {
         assert!(err(&["--dry-run=yes"]).contains("unknown option `--dry-run=yes`"));
         assert!(err(&["--prefix"]).contains("--prefix needs a value"));
         assert!(err(&["--destdir="]).contains("non-empty"));
+    }
+
+    #[test]
+    fn the_test_task_runs_the_mpi_tests_where_they_can_build_or_under_ci() {
+        use suite::{mpi_decision, Mpi};
+        assert_eq!(mpi_decision(true, false, false), Mpi::Run);
+        assert_eq!(mpi_decision(false, true, true), Mpi::Run);
+        assert!(matches!(mpi_decision(false, false, true), Mpi::Skip(w) if w.contains("mpicc")));
+        assert!(matches!(mpi_decision(false, true, false), Mpi::Skip(w) if w.contains("libclang")));
+        for name in [
+            "libclang.so",
+            "libclang.so.16",
+            "libclang-19.so.19",
+            "libclang-16.so.1",
+        ] {
+            assert!(suite::is_libclang(name), "{name}");
+        }
+        for name in [
+            "libclang-cpp.so.19",
+            "libclang_rt.asan.so",
+            "libclangBasic.a",
+            "clang.so",
+        ] {
+            assert!(!suite::is_libclang(name), "{name}");
+        }
+        assert!(run(&["test".into(), "--release".into()])
+            .unwrap_err()
+            .contains("test takes no options"));
+    }
+
+    /// README's two opening commands are the gallery and `cargo xtask test`, and `.ci/run` runs
+    /// that same test command (and no other cargo test).
+    #[test]
+    fn readme_and_ci_run_the_same_test_command() {
+        let root = install::workspace_root();
+        let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+        let block: Vec<&str> = readme
+            .split("```bash\n")
+            .nth(1)
+            .and_then(|b| b.split("```").next())
+            .expect("README opens with a bash block")
+            .lines()
+            .map(|l| l.split('#').next().unwrap().trim())
+            .collect();
+        assert_eq!(block, ["bash examples/gallery.sh", "cargo xtask test"]);
+        let ci = std::fs::read_to_string(root.join(".ci/run")).unwrap();
+        let tests: Vec<&str> = ci
+            .lines()
+            .map(str::trim)
+            .filter(|l| l.starts_with("cargo test") || l.starts_with("cargo xtask"))
+            .collect();
+        assert_eq!(tests, ["cargo xtask test"]);
     }
 
     #[test]
