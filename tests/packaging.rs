@@ -1,7 +1,7 @@
 //! The library as a dependency: a new Rust project that depends on `vlib-volume` (imported as
 //! `vlib`) gets no command-line dependencies (clap, nifti: they belong to the `vlconvert`
 //! package), and the published package holds the library's sources and docs, not the tests,
-//! fixtures, examples or benchmarks.
+//! fixtures, examples or benchmarks; the C library and the converter name its version.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -101,5 +101,22 @@ fn the_package_holds_the_sources_and_docs_only() {
             ]
             .contains(f);
         assert!(allowed, "{f} should not be published");
+    }
+}
+
+/// The C library and the converter depend on this package by path and by version (which
+/// `cargo package` needs), and the version they name is this package's: a new version of the
+/// workspace that left them at the old one would not package.
+#[test]
+fn the_packages_that_use_the_library_name_its_version() {
+    let want = format!("version = \"{}\"", env!("CARGO_PKG_VERSION"));
+    for manifest in ["capi/Cargo.toml", "vlconvert/Cargo.toml"] {
+        let text = std::fs::read_to_string(root().join(manifest)).unwrap();
+        let line = text
+            .lines()
+            .find(|l| l.contains("package = \"vlib-volume\""))
+            .unwrap_or_else(|| panic!("{manifest} does not depend on vlib-volume"));
+        assert!(line.contains(&want), "{manifest}: {line} (want {want})");
+        assert!(line.contains("path = \"..\""), "{manifest}: {line}");
     }
 }
