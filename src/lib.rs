@@ -17,7 +17,8 @@
 //! Everything else is internal, in layers that import downward only (`docs/dev/architecture.md`):
 //! `api` (the state machine) → `output` (the one place that writes files) → `render` (scene →
 //! immutable plan → pixels) → `accel` (empty-space skipping) → `model` (plain scene data and the
-//! object model) → `data` (datasets) → the base (`types`, `error`, `num`, `pool`, `control`).
+//! object model) → `data` (datasets) → the base (`types`, `error`, `num`, `pool`, `control`,
+//! `team`).
 //!
 //! ```no_run
 //! use vlib::{Camera, Fields, Library};

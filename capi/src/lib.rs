@@ -8,8 +8,11 @@
 //! Modules: [`types`] (the types and constants of the header), one module per API area holding
 //! the commands (`session`, `scene`, `data`, `object`, `sampling`), `commands` (the list of the
 //! commands, in header order), `ffi` (the panic boundary, the global state and scope dispatch,
-//! pointer helpers), `errors` (the `vlError` queue), `sample` (the thread-local sample scope),
-//! `callbacks` (C function pointers as core closures) and [`vlaux`] (vlaux, `vlaux.h`).
+//! pointer helpers), `extensions` (the functions after the commands: `vlProgress`, `vlCancel`,
+//! `vlRenderBuffer`, `vlGradientFilter`, `vlVersion`), `errors` (the `vlError` queue), `sample`
+//! (the thread-local sample scope), `callbacks` (C function pointers as core closures),
+//! [`vlaux`] (vlaux, `vlaux.h`) and, with the `mpi` feature, `mpi` (`vlInit` joining the job's
+//! ranks).
 //!
 //! ## Safety
 //! The exports that take pointers are `unsafe`: pointer arguments must be NULL or point to as

@@ -12,8 +12,11 @@
 //!
 //! - `vlb`: the `.vlb` file format ([`MAGIC`], [`HEADER_LEN`], parsing, loading, the bytes to
 //!   save; the file itself is written by the output layer, `Dataset::save`);
+//! - `geometry`: the placement a dataset carries ([`Geometry`]) and its `.vlb.geom` sidecar;
 //! - `filter`: the [`Filter`]s (nearest node, trilinear, the Mitchell–Netravali BC family of
 //!   tricubic filters) and the generic value and gradient paths;
+//! - `gradient`: the [`GradientFilter`]s (the paper's node differences, or the exact gradient of
+//!   a BC-spline by its derivative kernels);
 //! - `trilinear`: the specialised trilinear path the renderer's inner loops call (the cell in
 //!   SSE lanes, the cell's value, the interior gradient and its `CellGradients` cache);
 //! - `lanes`: the trilinear values of eight points at once (`Cells8`) for the batched march;

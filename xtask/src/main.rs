@@ -1,8 +1,9 @@
 //! The workspace's task runner, `cargo xtask <task>` (an alias in `.cargo/config.toml`). It owns
 //! the command line of the tasks: `install` lives in [`install`] (building and copying) and
 //! [`pc`] (the pkg-config file), `uninstall` in [`uninstall`], `test` in [`suite`]. It needs
-//! only cargo, a C toolchain's `strip`, the standard library and `libc` (for `openat` and its
-//! flags); it is not part of the C library or of the published crates.
+//! only cargo, a C toolchain's `strip`, the standard library, `serde_json` (for cargo's JSON
+//! messages) and `libc` (for `openat` and its flags); it is not part of the C library or of the
+//! published crates.
 
 mod install;
 mod pc;

@@ -1,3 +1,6 @@
+//! Unit tests of `scene`: the default sampling step, and which cameras are refused (only those
+//! whose eye and look-at point coincide).
+
 use super::*;
 
 #[test]

@@ -94,8 +94,8 @@
 //! opacity-correction exponent is not the step's common one takes its power in f64 lanes,
 //! which give `transmit_at_most_one`'s f32 bit for bit ([`power`](mod@power)).
 //!
-//! **Safety.** The crate's `unsafe` code is here and in the entry map's rasterisation
-//! (`crate::accel`): the gathers, the per-lane loads of nodes, the loads and stores of fixed-size
+//! **Safety.** The lanes' `unsafe` code is here and in the entry map's rasterisation
+//! (`crate::accel`; the rest of the crate's: `docs/dev/simd.md`): the gathers, the per-lane loads of nodes, the loads and stores of fixed-size
 //! arrays, the calls of `#[target_feature]` functions and the tokens' constructors. A [`Packets`]
 //! exists only after `is_x86_feature_detected!` found AVX2 and FMA, its `wide` flag is set only
 //! after [`detected`] found every AVX-512 feature, and a token is made only inside a function
@@ -110,9 +110,10 @@
 //! tile driver they share ([`Packets::march_tile`]), the lanes' state. Elsewhere: [`lanes`] (the
 //! tokens, their operations, loads and stores), [`starts`] (rays started four at a time),
 //! [`runs`] (which samples the lanes take), [`step`] (one sample a lane), [`preint`] (the
-//! pre-integrated lanes), [`nodes`] (node values
-//! and voxels), [`tables`] (opacity and colour), [`shade`] (gradient, lighting, opacity
-//! correction); the unit tests in `tests.rs`.
+//! pre-integrated lanes), [`slabs`] (the pre-integrated slabs' values in lanes), [`nodes`]
+//! (node values and voxels), [`tables`] (opacity and colour), [`shade`] (gradient, lighting,
+//! opacity correction), [`power`](mod@power) (the opacity correction's other powers); the unit
+//! tests in `tests.rs`.
 
 use super::*;
 use crate::data::{Filter, GradientFilter, Voxels, FACE_TOLERANCE};
