@@ -5,10 +5,10 @@
 //! and must finish with exit status 0, no memcheck errors, no definitely or indirectly lost
 //! bytes, and little still reachable at exit: every program ends with its final `vlEnd`, which
 //! frees every dataset, mapping, scene and error message vlib holds, so what remains reachable is
-//! the runtime's own (rayon's global thread pool and its registry, whose worker threads are never
-//! joined; the error queue's empty buffer), about 20 KiB whatever the program loaded or
-//! rendered. [`STILL_REACHABLE_MAX`] bounds it, so a library that kept its datasets after the
-//! final `vlEnd` fails here even though the memory is not "lost".
+//! the runtime's own (the library's rayon pool, `src/pool.rs`, and its registry, whose worker
+//! threads are never joined; the error queue's empty buffer), about 20 KiB whatever the program
+//! loaded or rendered. [`STILL_REACHABLE_MAX`] bounds it, so a library that kept its datasets
+//! after the final `vlEnd` fails here even though the memory is not "lost".
 //!
 //! The programs are compiled as c_examples.rs does (`cc -std=gnu89 <file> -Iinclude
 //! -Ltarget/<profile> -lvlib -lm`, plus `-g`), and run in fresh directories. Every program that
