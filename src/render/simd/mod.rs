@@ -95,8 +95,9 @@
 //! which give `transmit_at_most_one`'s f32 bit for bit ([`power`](mod@power)).
 //!
 //! **Safety.** The lanes' `unsafe` code is here and in the entry map's rasterisation
-//! (`crate::accel`; the rest of the crate's: `docs/dev/simd.md`): the gathers, the per-lane loads of nodes, the loads and stores of fixed-size
-//! arrays, the calls of `#[target_feature]` functions and the tokens' constructors. A [`Packets`]
+//! (`crate::accel`; the rest of the crate's: `docs/dev/simd.md`): the gathers, the per-lane
+//! loads of nodes, the loads and stores of fixed-size arrays, the calls of `#[target_feature]`
+//! functions and the tokens' constructors. A [`Packets`]
 //! exists only after `is_x86_feature_detected!` found AVX2 and FMA, its `wide` flag is set only
 //! after [`detected`] found every AVX-512 feature, and a token is made only inside a function
 //! with its features, so every intrinsic runs where the processor has it. Every node index is
