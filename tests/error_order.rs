@@ -5,30 +5,11 @@
 //! expects the code of the one the rule puts first, as the C interface reports it; the refused
 //! call changes nothing. (The C layer's own conversions are tested in `capi/src/tests/`.)
 
-use vlib::{DatasetId, ErrorCode, Fields, Library, MappingId, Sample};
+use vlib::{DatasetId, ErrorCode, Fields, MappingId, Sample};
 
-/// `call` is refused with `code` and leaves the library as it was.
-fn refused(
-    vl: &mut Library,
-    code: ErrorCode,
-    what: &str,
-    call: impl FnOnce(&mut Library) -> vlib::Result<()>,
-) {
-    let before = vl.fingerprint();
-    let e = call(vl).expect_err(what);
-    assert_eq!(e.code, code, "{what}: {}", e.message);
-    assert_eq!(
-        vl.fingerprint(),
-        before,
-        "{what}: the refused call changed the state"
-    );
-}
-
-fn scene() -> Library {
-    let mut vl = Library::new();
-    vl.scene().unwrap();
-    vl
-}
+#[path = "common/refused.rs"]
+mod refused;
+use refused::{refused, scene};
 
 #[test]
 fn vl_volume_reports_its_field_mask_before_its_prefix_and_values() {

@@ -5,28 +5,9 @@
 use vlib::limits::*;
 use vlib::{Backdrop, Camera, Dataset, ErrorCode, Fields, Library, MappingId, MappingType, Voxels};
 
-/// `call` is refused with `code` and leaves the library as it was.
-fn refused(
-    vl: &mut Library,
-    code: ErrorCode,
-    what: &str,
-    call: impl FnOnce(&mut Library) -> vlib::Result<()>,
-) {
-    let before = vl.fingerprint();
-    let e = call(vl).expect_err(what);
-    assert_eq!(e.code, code, "{what}: {}", e.message);
-    assert_eq!(
-        vl.fingerprint(),
-        before,
-        "{what}: a refused call changed the state"
-    );
-}
-
-fn scene() -> Library {
-    let mut vl = Library::new();
-    vl.scene().unwrap();
-    vl
-}
+#[path = "common/refused.rs"]
+mod refused;
+use refused::{refused, scene};
 
 #[test]
 fn surfaces_recursion_super_sampling_and_nesting_are_bad_values_past_their_limits() {
