@@ -119,6 +119,38 @@ pub struct UninstallOptions {
     pub dry_run: bool,
 }
 
+/// The option at `args[*i]`, one of `known`: its name and its value, given inline
+/// (`--name=value`) or as the next argument (`--name value`, which moves `*i` past it); the
+/// value must not be empty. `task` names the task in the message for an unknown option.
+fn option_value<'a>(
+    args: &'a [String],
+    i: &mut usize,
+    known: &[&str],
+    task: &str,
+) -> Result<(&'a str, String), String> {
+    let arg = &args[*i];
+    let (name, inline) = match arg.split_once('=') {
+        Some((n, v)) if n.starts_with("--") => (n, Some(v.to_string())),
+        _ => (arg.as_str(), None),
+    };
+    if !known.contains(&name) {
+        return Err(format!("unknown option `{arg}`{task}\n\n{USAGE}"));
+    }
+    let value = match inline {
+        Some(v) => v,
+        None => {
+            *i += 1;
+            args.get(*i)
+                .cloned()
+                .ok_or_else(|| format!("{name} needs a value"))?
+        }
+    };
+    if value.is_empty() {
+        return Err(format!("{name} needs a non-empty value"));
+    }
+    Ok((name, value))
+}
+
 fn parse_uninstall(args: &[String]) -> Result<UninstallOptions, String> {
     let mut o = UninstallOptions {
         prefix: PathBuf::from("/usr/local"),
@@ -135,25 +167,8 @@ fn parse_uninstall(args: &[String]) -> Result<UninstallOptions, String> {
             i += 1;
             continue;
         }
-        let (name, inline) = match arg.split_once('=') {
-            Some((n, v)) if n.starts_with("--") => (n, Some(v.to_string())),
-            _ => (arg.as_str(), None),
-        };
-        if !["--prefix", "--libdir", "--includedir", "--destdir"].contains(&name) {
-            return Err(format!("unknown option `{arg}` of uninstall\n\n{USAGE}"));
-        }
-        let value = match inline {
-            Some(v) => v,
-            None => {
-                i += 1;
-                args.get(i)
-                    .cloned()
-                    .ok_or_else(|| format!("{name} needs a value"))?
-            }
-        };
-        if value.is_empty() {
-            return Err(format!("{name} needs a non-empty value"));
-        }
+        let known = ["--prefix", "--libdir", "--includedir", "--destdir"];
+        let (name, value) = option_value(args, &mut i, &known, " of uninstall")?;
         let value = PathBuf::from(value);
         match name {
             "--prefix" => o.prefix = value,
@@ -181,12 +196,6 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
     let mut build_options = Vec::new();
     let mut i = 0;
     while i < args.len() {
-        let arg = &args[i];
-        // `--name value` or `--name=value`.
-        let (name, inline) = match arg.split_once('=') {
-            Some((n, v)) if n.starts_with("--") => (n, Some(v.to_string())),
-            _ => (arg.as_str(), None),
-        };
         let known = [
             "--prefix",
             "--libdir",
@@ -197,21 +206,7 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
             "--features",
             "--from-stage",
         ];
-        if !known.contains(&name) {
-            return Err(format!("unknown option `{arg}`\n\n{USAGE}"));
-        }
-        let value = match inline {
-            Some(v) => v,
-            None => {
-                i += 1;
-                args.get(i)
-                    .cloned()
-                    .ok_or_else(|| format!("{name} needs a value"))?
-            }
-        };
-        if value.is_empty() {
-            return Err(format!("{name} needs a non-empty value"));
-        }
+        let (name, value) = option_value(args, &mut i, &known, "")?;
         if ["--destdir", "--library-type", "--profile", "--features"].contains(&name) {
             build_options.push(name);
         }
