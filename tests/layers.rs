@@ -1,10 +1,11 @@
 //! The crate's layers import downward only (`docs/dev/architecture.md`): the state machine (`api`)
 //! → output (`output`) → the renderer (`render`) → empty-space skipping (`accel`) → the object
 //! model (`model`) → datasets (`data`) → the base types (`types`, `error`, `num`, `pool`,
-//! `control`, `team`). This reads every production source file under `src/` (unit tests excluded: they may
-//! reach any layer) and fails on a `crate::` path into a higher layer, whether in code or in a doc
-//! link, through a module or a name the crate root re-exports. Paths by `super::super::…` are not
-//! followed; the code reaches other layers by `crate::` paths.
+//! `control`, `team`). This reads every production source file under `src/` (unit tests
+//! excluded: they may reach any layer) and fails on a `crate::` path into a higher layer, whether
+//! in code or in a doc link, through a module or a name the crate root re-exports. Paths by
+//! `super::super::…` are not followed; the code reaches other layers by `crate::` paths. Also: no
+//! production file of the workspace (the core, the C layer, vlconvert, xtask) is over 800 lines.
 
 use std::path::{Path, PathBuf};
 
@@ -160,6 +161,26 @@ fn layers_import_downward_only() {
 }
 
 /// The check sees a path into a higher layer (so the test above can fail).
+/// No production source file of the workspace's packages is over 800 lines (unit tests, in
+/// `tests.rs` files and `tests/` directories, may be longer).
+#[test]
+fn production_files_are_at_most_800_lines() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut long = Vec::new();
+    for dir in ["src", "capi/src", "vlconvert/src", "xtask/src"] {
+        let mut files = Vec::new();
+        sources(&root.join(dir), &mut files);
+        for f in files {
+            let rel = f.strip_prefix(root.join(dir)).unwrap();
+            let lines = std::fs::read_to_string(&f).unwrap().lines().count();
+            if !is_test(rel) && lines > 800 {
+                long.push(format!("{dir}/{}: {lines} lines", rel.display()));
+            }
+        }
+    }
+    assert!(long.is_empty(), "over 800 lines: {long:?}");
+}
+
 #[test]
 fn an_upward_path_is_seen() {
     assert_eq!(

@@ -25,6 +25,7 @@
 //!   to. A page directory's tags are read under limits of the file's size (`directory_limits`):
 //!   a tag counting more values than the file holds is an error, not an allocation.
 
+use crate::counted;
 use crate::progress::{Progress, Unit};
 use crate::volume::{Source, Type};
 use ::tiff::decoder::{ChunkType, Decoder, DecodingResult, Limits};
@@ -288,7 +289,7 @@ fn inspect<R: Read + Seek>(d: &mut Decoder<R>, len: u64) -> Res<Page> {
         if at.checked_add(n).is_none_or(|end| end > len) {
             return Err(format!(
                 "data at bytes {at} … {at}+{n}, past the end of the file ({})",
-                crate::counted(len, "byte")
+                counted(len, "byte")
             ));
         }
         held = held.saturating_add(n);
@@ -302,8 +303,8 @@ fn inspect<R: Read + Seek>(d: &mut Decoder<R>, len: u64) -> Res<Page> {
         if let Some(&n) = counts.iter().find(|&&n| tile > n.saturating_mul(ratio)) {
             return Err(format!(
                 "tiles of {tw} x {th} pixels: {}, more than a tile's {} of data can hold",
-                crate::counted(tile, "byte"),
-                crate::counted(n, "byte")
+                counted(tile, "byte"),
+                counted(n, "byte")
             ));
         }
     }
@@ -311,8 +312,8 @@ fn inspect<R: Read + Seek>(d: &mut Decoder<R>, len: u64) -> Res<Page> {
         return Err(format!(
             "{}: {}, more than its {} of data can hold",
             page.describe(),
-            crate::counted(need, "byte"),
-            crate::counted(held, "byte")
+            counted(need, "byte"),
+            counted(held, "byte")
         ));
     }
     Ok(page)
@@ -429,12 +430,8 @@ fn same(first: &Page, page: &Page, k: usize) -> Res<()> {
 /// Room for `n` bytes, or an error saying how many.
 fn room(n: usize) -> Res<Vec<u8>> {
     let mut v = Vec::new();
-    v.try_reserve_exact(n).map_err(|_| {
-        format!(
-            "{} for the volume: not enough memory",
-            crate::counted(n, "byte")
-        )
-    })?;
+    let memory = |_| format!("{} for the volume: not enough memory", counted(n, "byte"));
+    v.try_reserve_exact(n).map_err(memory)?;
     Ok(v)
 }
 
@@ -566,8 +563,8 @@ fn contiguous<R: Read + Seek>(
         .ok_or_else(|| {
             at(format!(
                 "{says}: {images} slices of {} from byte {start} pass the end of the file ({})",
-                crate::counted(slice, "byte"),
-                crate::counted(len, "byte")
+                counted(slice, "byte"),
+                counted(len, "byte")
             ))
         })?;
     let total = (end - start) as usize;
