@@ -5,7 +5,8 @@
 //! excluded: they may reach any layer) and fails on a `crate::` path into a higher layer, whether
 //! in code or in a doc link, through a module or a name the crate root re-exports. Paths by
 //! `super::super::…` are not followed; the code reaches other layers by `crate::` paths. Also: no
-//! production file of the workspace (the core, the C layer, vlconvert, xtask) is over 800 lines.
+//! source file of the workspace (the core, the C layer, vlconvert, xtask) but a `tests.rs` is over
+//! 800 lines.
 
 use std::path::{Path, PathBuf};
 
@@ -161,10 +162,10 @@ fn layers_import_downward_only() {
 }
 
 /// The check sees a path into a higher layer (so the test above can fail).
-/// No production source file of the workspace's packages is over 800 lines (unit tests, in
-/// `tests.rs` files and `tests/` directories, may be longer).
+/// No source file of the workspace's packages is over 800 lines, but a module's `tests.rs`
+/// (the files of a `tests/` directory beside the code count: they are split, not grown).
 #[test]
-fn production_files_are_at_most_800_lines() {
+fn source_files_but_tests_rs_are_at_most_800_lines() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut long = Vec::new();
     for dir in ["src", "capi/src", "vlconvert/src", "xtask/src"] {
@@ -173,7 +174,7 @@ fn production_files_are_at_most_800_lines() {
         for f in files {
             let rel = f.strip_prefix(root.join(dir)).unwrap();
             let lines = std::fs::read_to_string(&f).unwrap().lines().count();
-            if !is_test(rel) && lines > 800 {
+            if rel.file_name().is_some_and(|n| n != "tests.rs") && lines > 800 {
                 long.push(format!("{dir}/{}: {lines} lines", rel.display()));
             }
         }

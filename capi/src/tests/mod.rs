@@ -2,5 +2,6 @@
 //! built only as `staticlib` and `cdylib`, so integration tests cannot link it as Rust).
 
 pub(crate) mod common;
+mod error_order;
 mod exports;
 mod scopes;
