@@ -267,6 +267,15 @@ fn parse_install(args: &[String]) -> Result<InstallOptions, String> {
     })
 }
 
+/// A new empty directory `xtask-<name>-<pid>` under the temporary directory, for one test.
+#[cfg(test)]
+fn test_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("xtask-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -21,13 +21,7 @@ fn staging_puts_the_prefix_under_destdir() {
     );
 }
 
-/// A new empty directory for a test.
-fn test_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("xtask-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use crate::test_dir;
 
 /// The names in `dir`, sorted.
 fn names(dir: &Path) -> Vec<String> {

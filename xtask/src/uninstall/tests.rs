@@ -4,12 +4,9 @@
 use super::*;
 use std::os::unix::fs::symlink;
 
-/// A new empty directory for a test.
+/// [`crate::test_dir`] with a name of these tests (`un-…`, apart from the install tests').
 fn test_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("xtask-un-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    crate::test_dir(&format!("un-{name}"))
 }
 
 /// Every path under `dir` (links not followed), relative to it, sorted; directories end in `/`.
