@@ -1,9 +1,10 @@
 //! The library's own thread pool: every parallel part of a render (compiling a scene, the skip
 //! grids, the tiles, voxelization) runs on it rather than on rayon's global pool.
 //!
-//! It is built on first use with rayon's defaults (`RAYON_NUM_THREADS`, else one thread a core,
-//! so the thread count is what rayon's global pool would have), stacks of 8 MiB ([`STACK`]),
-//! and kept for later renders. A
+//! It is built on first use with `RAYON_NUM_THREADS` threads, else one a core (what rayon's
+//! global pool would have), but at most [`THREADS_PER_CORE`] a core: rayon's idle threads
+//! look for work by spinning, so threads far beyond the cores only take the cores from the
+//! threads that work. Stacks of 8 MiB ([`STACK`]); the pool is kept for later renders. A
 //! process that forked after the pool was made has none of its threads, so a pool made by
 //! another process is left alone and a new one built. A failure to start the threads is an
 //! error of the render that needed them (`VL_NOMEMORY`), and the next render tries again. Work
@@ -19,6 +20,14 @@ use std::sync::{Arc, Mutex};
 /// against the 2 MiB of a thread Rust starts, and a function that runs on the one should run
 /// on the other. Address space only: pages are used as the stack grows into them.
 const STACK: usize = 8 << 20;
+
+/// The most threads the library's pool has for each core the process may use
+/// (`available_parallelism`), whatever `RAYON_NUM_THREADS` asks: a render's work is the
+/// processor's, so more threads than cores cannot shorten it, and rayon's idle threads spin
+/// looking for work, each look visiting every thread. On two cores, three 64² frames of the
+/// MNI brain took 5.7 s on 1000 threads, 24 s on 2000 and more than five minutes on 8000,
+/// against 0.13 s on two.
+const THREADS_PER_CORE: usize = 4;
 
 /// The pool and the process that built it.
 static POOL: Mutex<Option<(u32, Arc<rayon::ThreadPool>)>> = Mutex::new(None);
@@ -44,6 +53,7 @@ fn pool() -> Result<Arc<rayon::ThreadPool>> {
             .push(inherited);
     }
     let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(default_threads())
         .thread_name(|i| format!("vlib-{i}"))
         .stack_size(STACK)
         .build()
@@ -67,8 +77,8 @@ pub(crate) fn install<T: Send>(f: impl FnOnce() -> Result<T> + Send) -> Result<T
     pool()?.install(f)
 }
 
-/// The threads of the library's pool (of the pool that would be built: rayon's default,
-/// `RAYON_NUM_THREADS` or one a core). Used by teams, which the plain build makes only in tests.
+/// The threads of the library's pool (of the pool that would be built: [`default_threads`]).
+/// Used by teams, which the plain build makes only in tests.
 #[cfg_attr(not(any(test, feature = "mpi")), allow(dead_code))]
 pub(crate) fn threads() -> usize {
     match pool() {
@@ -92,14 +102,22 @@ pub(crate) fn width() -> usize {
     }
 }
 
-/// The threads a pool built with rayon's defaults has: `RAYON_NUM_THREADS` where it is a
-/// positive number, else one a core (at least one).
+/// The threads of the library's pool: `RAYON_NUM_THREADS` where it is a positive number (spaces
+/// around it allowed), else one a core (at least one), and at most [`THREADS_PER_CORE`] a core.
 fn default_threads() -> usize {
-    std::env::var("RAYON_NUM_THREADS")
-        .ok()
+    threads_for(
+        std::env::var("RAYON_NUM_THREADS").ok().as_deref(),
+        std::thread::available_parallelism().map_or(1, |n| n.get()),
+    )
+}
+
+/// [`default_threads`] for the variable's value `asked` on `cores` cores.
+fn threads_for(asked: Option<&str>, cores: usize) -> usize {
+    let cores = cores.max(1);
+    asked
         .and_then(|s| s.trim().parse::<usize>().ok())
         .filter(|&n| n > 0)
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .map_or(cores, |n| n.min(cores.saturating_mul(THREADS_PER_CORE)))
 }
 
 /// `cell`'s value, made by `make` where it has none yet: for a cache whose making runs parallel

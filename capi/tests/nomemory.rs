@@ -63,7 +63,7 @@ fn a_render_whose_threads_cannot_start_fails_and_the_next_recovers() {
         "ok   vlSample of node values",
         "ok   at the last node",
         "ok   leaves no thread of its own running",
-        "ok   a render whose 256 threads cannot start reports VL_NOMEMORY",
+        "ok   a render whose threads cannot start reports VL_NOMEMORY",
         "ok   the next render starts its threads and completes",
         "0 failure(s)",
     ] {

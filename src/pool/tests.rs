@@ -76,3 +76,37 @@ fn fill_writes_everything_on_the_callers_thread_where_no_thread_starts() {
     assert!(writers(false).iter().any(|&t| t != caller));
     assert!(writers(true).iter().all(|&t| t == caller));
 }
+
+#[test]
+fn the_pool_has_the_threads_asked_for_up_to_four_a_core() {
+    // Unset, empty, zero, negative or not a number: one a core, at least one.
+    for asked in [
+        None,
+        Some(""),
+        Some("0"),
+        Some("-1"),
+        Some("abc"),
+        Some("2.5"),
+    ] {
+        assert_eq!(threads_for(asked, 2), 2, "{asked:?}");
+        assert_eq!(threads_for(asked, 0), 1, "{asked:?} with no core known");
+    }
+    // A positive number: that many, spaces around it allowed, up to four a core.
+    assert_eq!(threads_for(Some("1"), 2), 1);
+    assert_eq!(threads_for(Some(" 3\n"), 2), 3);
+    assert_eq!(threads_for(Some("8"), 2), 8);
+    assert_eq!(threads_for(Some("9"), 2), 8);
+    assert_eq!(threads_for(Some("100000"), 2), 8);
+    assert_eq!(threads_for(Some("100000"), 64), 256);
+    assert_eq!(threads_for(Some("5"), 1), 4);
+    assert_eq!(threads_for(Some("5"), 0), 4, "no core known counts as one");
+    assert_eq!(
+        threads_for(Some("18446744073709551615"), usize::MAX),
+        usize::MAX
+    );
+    assert_eq!(
+        threads_for(Some("18446744073709551616"), 2),
+        2,
+        "not a usize"
+    );
+}
