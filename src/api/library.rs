@@ -51,8 +51,22 @@ impl Sampler {
     /// `vlSample`: dataset `id`'s normalised value at dataset coordinates (x, y, z), as
     /// [`Library::sample`] gives it (the same errors, without the scope check).
     pub fn sample(&self, id: DatasetId, x: f32, y: f32, z: f32) -> Result<f32> {
-        crate::model::program::sample_dataset(&self.datasets, id, [x, y, z], self.filter)
+        sample_caught(&self.datasets, id, [x, y, z], self.filter)
     }
+}
+
+/// `vlSample` outside a render: the node values a filter other than the trilinear one makes on
+/// first use are `NoMemory` where they cannot be allocated, returned rather than unwound out of
+/// the call (inside a render the render's own catch stops it).
+fn sample_caught(
+    datasets: &crate::model::program::Datasets,
+    id: DatasetId,
+    p: [f32; 3],
+    filter: Filter,
+) -> Result<f32> {
+    crate::error::catch("vlSample", || {
+        crate::model::program::sample_dataset(datasets, id, p, filter)
+    })
 }
 
 /// What a successful `vlEnd` closed.
@@ -592,10 +606,13 @@ impl Library {
     }
 
     /// `vlSample` outside sample scope: dataset `id`'s normalised value at dataset coordinates
-    /// (x, y, z), under the interpolation in force.
+    /// (x, y, z), under the interpolation in force. `BadScope` inside a scene's object,
+    /// `BadId` for an unknown dataset, `BadValue` for a point not finite, `NoMemory` where the
+    /// node values that a filter other than the trilinear one reads (made on first use, four
+    /// bytes a voxel, then kept) cannot be allocated.
     pub fn sample(&self, id: DatasetId, x: f32, y: f32, z: f32) -> Result<f32> {
         self.check(Command::Sample)?;
-        crate::model::program::sample_dataset(&self.datasets, id, [x, y, z], self.filter())
+        sample_caught(&self.datasets, id, [x, y, z], self.filter())
     }
 
     /// A snapshot of what `vlSample` reads (the datasets and the interpolation in force), for

@@ -148,6 +148,12 @@ impl Dataset {
     /// The interpolated normalised value at object coordinates `p`, in [0, 1]: 0 where the
     /// dataset does not [cover](Dataset::covers) `p`, and 0 everywhere under a
     /// [`Filter::Cubic`] whose B or C is not finite (one [`Filter::new`] refuses).
+    ///
+    /// # Panics
+    ///
+    /// A filter other than [`Filter::Trilinear`] reads the node values ([`Dataset::values`]):
+    /// where they are not made yet and cannot be allocated, it unwinds as that does
+    /// (the library's `vlSample` returns the `NoMemory` instead).
     #[inline]
     pub fn sample(&self, p: [f32; 3], filter: Filter) -> f32 {
         if filter == Filter::Trilinear {
@@ -284,6 +290,11 @@ impl Dataset {
     /// node gradients interpolated with `filter`: 0 where the dataset does not
     /// [cover](Dataset::covers) `p`, and 0 everywhere under a [`Filter::Cubic`] whose B or C
     /// is not finite (whose values [`Dataset::sample`] gives as 0).
+    ///
+    /// # Panics
+    ///
+    /// Under a [`Filter::Cubic`] it reads the node values ([`Dataset::values`]): where they are
+    /// not made yet and cannot be allocated, it unwinds as that does.
     #[inline]
     pub fn gradient(&self, p: [f32; 3], filter: Filter) -> [f64; 3] {
         self.gradient_cached(p, filter, &mut CellGradients::default())

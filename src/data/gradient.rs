@@ -124,6 +124,12 @@ impl Dataset {
     /// [`GradientFilter::Nodes`] interpolates the node differences with). A
     /// [`GradientFilter::Cubic`] whose B or C is not finite (one `vlGradientFilter` refuses)
     /// gives 0 everywhere, as [`Dataset::gradient`] does under such a [`Filter::Cubic`].
+    ///
+    /// # Panics
+    ///
+    /// A [`GradientFilter::Cubic`], or [`GradientFilter::Nodes`] under a [`Filter::Cubic`],
+    /// reads the node values ([`Dataset::values`]): where they are not made yet and cannot be
+    /// allocated, it unwinds as that does.
     #[inline]
     pub fn gradient_with(&self, p: [f32; 3], filter: Filter, gradient: GradientFilter) -> [f64; 3] {
         self.gradient_by(p, filter, gradient, &mut CellGradients::default())
