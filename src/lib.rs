@@ -88,8 +88,9 @@ pub use types::{
 /// - [`MAX_DEPTH`](limits::MAX_DEPTH), objects nested: `BadValue` (`vlObject`).
 /// - [`MAX_VOLUME_NODES`](limits::MAX_VOLUME_NODES), a voxelization's nodes: `NoMemory`
 ///   (`vlVolume`, as `docs/commands.md` gives it).
-/// - [`MAX_VOXELS`](limits::MAX_VOXELS), a dataset's voxels: `BadDimensions` (`vlLoad`,
-///   [`Dataset::load`], [`Dataset::from_vlb_bytes`], [`Dataset::new`]).
+/// - [`MAX_VOXELS`](limits::MAX_VOXELS), a dataset's voxels, and
+///   [`MAX_AXIS_NODES`](limits::MAX_AXIS_NODES), its nodes along one axis: `BadDimensions`
+///   (`vlLoad`, [`Dataset::load`], [`Dataset::from_vlb_bytes`], [`Dataset::new`]).
 /// - [`MAX_POINTS`](limits::MAX_POINTS) and [`MAX_OUTPUTS`](limits::MAX_OUTPUTS), a transfer
 ///   function's rows and outputs: `BadValue` (`vlMapping`).
 /// - [`MAX_SAMPLES_PER_RAY`](limits::MAX_SAMPLES_PER_RAY), the samples of a ray through one
@@ -100,7 +101,7 @@ pub mod limits {
         MAX_DEPTH, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_RECURSION, MAX_SUPER_SAMPLE, MAX_SURFACES,
         MAX_VOLUME_NODES,
     };
-    pub use crate::data::MAX_VOXELS;
+    pub use crate::data::{MAX_AXIS_NODES, MAX_VOXELS};
     pub use crate::model::mapping::{MAX_OUTPUTS, MAX_POINTS};
     pub use crate::render::MAX_SAMPLES_PER_RAY;
 }

@@ -135,7 +135,10 @@ impl Vlb {
             .dims
             .iter()
             .try_fold(1u64, |acc, &d| acc.checked_mul(d as u64));
-        if self.dims.contains(&0) || voxels.is_none_or(|v| v > MAX_VOXELS) {
+        if self.dims.contains(&0)
+            || self.dims.iter().any(|&d| d > i32::MAX as u32)
+            || voxels.is_none_or(|v| v > MAX_VOXELS)
+        {
             return ErrorCode::BadDimensions;
         }
         if self.width != 1 && self.width != 2 {
@@ -172,6 +175,8 @@ fn dim() -> impl Strategy<Value = u32> {
         1 => Just(1u32 << 16),
         1 => Just(100_000u32),
         1 => Just(1u32 << 22),
+        1 => Just(i32::MAX as u32),
+        1 => Just(1u32 << 31),
         1 => Just(u32::MAX),
     ]
 }
@@ -225,20 +230,41 @@ fn vlb_reader_structured_headers_give_the_documented_code() {
     );
 }
 
+/// A well-formed 8-bit header of dimensions `dims` (a = 0, b = 1), with the voxels it claims
+/// where they are few.
+fn header(dims: [u32; 3]) -> Vlb {
+    Vlb {
+        magic: *b"VLB1",
+        dims,
+        width: 1,
+        a: 0.0,
+        b: 1.0,
+        delta: 0,
+        cut: usize::MAX,
+    }
+}
+
+/// An axis of more than 2³¹ − 1 nodes is refused whatever the product (a sample's cell index
+/// is an i32; 2³² along x with the others 1 is within `MAX_VOXELS`); one of 2³¹ − 1 passes the
+/// dimension check and meets the length check.
+#[test]
+fn vlb_header_axis_beyond_i32_is_refused() {
+    let big = 1u32 << 31;
+    for dims in [[big, 1, 1], [1, big, 1], [1, 1, u32::MAX], [u32::MAX, 1, 1]] {
+        let e = Dataset::from_vlb_bytes(&header(dims).bytes()).unwrap_err();
+        assert_eq!(e.code, ErrorCode::BadDimensions, "{dims:?}: {e}");
+        assert!(e.message.contains("along an axis"), "{dims:?}: {e}");
+    }
+    let e = Dataset::from_vlb_bytes(&header([i32::MAX as u32, 1, 1]).bytes()).unwrap_err();
+    assert_eq!(e.code, ErrorCode::BadSize, "{e}");
+}
+
 /// Dimensions whose product overflows u64 (2^22 × 2^22 × 2^22 wraps to 0) are refused as too
 /// large, never wrapped: once a gap, found by the fuzzer (docs/dev/robustness.md).
 #[test]
 fn vlb_header_dims_product_overflow() {
     for dims in [[1u32 << 22; 3], [u32::MAX; 3], [1 << 21, 1 << 21, 1 << 22]] {
-        let v = Vlb {
-            magic: *b"VLB1",
-            dims,
-            width: 1,
-            a: 0.0,
-            b: 1.0,
-            delta: 0,
-            cut: usize::MAX,
-        };
+        let v = header(dims);
         let r = std::panic::catch_unwind(|| Dataset::from_vlb_bytes(&v.bytes()).map(|_| ()));
         match r {
             Ok(Err(e)) => assert_eq!(e.code, ErrorCode::BadDimensions, "{dims:?}: {e}"),

@@ -60,6 +60,31 @@ use crate::error::{err, Error, ErrorCode, Result};
 /// The largest number of voxels a dataset may have (2^32; 16 GiB of normalised values).
 pub const MAX_VOXELS: u64 = 1 << 32;
 
+/// The most nodes a dataset may have along one axis (2^31 − 1): a sample's cell is found as an
+/// i32 index, and a `.vlb` header's u32 could not say 2^32 (with the others 1, the most
+/// [`MAX_VOXELS`] would allow).
+pub const MAX_AXIS_NODES: usize = i32::MAX as usize;
+
+/// The voxels of a dataset of dimensions `dims`, or `BadDimensions` (its message starting with
+/// `what`) for a dimension of 0, one of more than [`MAX_AXIS_NODES`], or more than
+/// [`MAX_VOXELS`] voxels in all, in that order.
+pub(crate) fn voxels_of(dims: [usize; 3], what: &str) -> Result<u64> {
+    let refuse = |why: String| err(ErrorCode::BadDimensions, format!("{what} {dims:?} {why}"));
+    if dims.contains(&0) {
+        return refuse("contain 0".into());
+    }
+    if dims.iter().any(|&d| d > MAX_AXIS_NODES) {
+        return refuse(format!("exceed {MAX_AXIS_NODES} nodes along an axis"));
+    }
+    match dims
+        .iter()
+        .try_fold(1u64, |acc, &d| acc.checked_mul(d as u64))
+    {
+        Some(n) if n <= MAX_VOXELS => Ok(n),
+        _ => refuse(format!("exceed {MAX_VOXELS} voxels")),
+    }
+}
+
 /// The raw voxels of a dataset, as stored in the file.
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
@@ -185,36 +210,19 @@ impl Dataset {
 
     /// A dataset from raw voxels (x fastest, then y, then z) and normalisation a, b. Refused,
     /// with the codes `vlLoad` gives a file of the same header: `BadDimensions` for a
-    /// dimension of 0 or more than [`MAX_VOXELS`] voxels, `BadRange` for an a or b that is not
-    /// finite or a = b; and `BadValue` for voxels fewer or more than the dimensions call for.
+    /// dimension of 0, one of more than [`MAX_AXIS_NODES`] or more than [`MAX_VOXELS`]
+    /// voxels, `BadRange` for an a or b that is not finite or a = b; and `BadValue` for
+    /// voxels fewer or more than the dimensions call for.
     pub fn new(dims: [usize; 3], raw: Voxels, a: f32, b: f32) -> Result<Dataset> {
-        if dims.contains(&0) {
+        let n = voxels_of(dims, "dataset dimensions")?;
+        if n != raw.len() as u64 {
             return err(
-                ErrorCode::BadDimensions,
-                format!("dataset dimensions {dims:?} contain 0"),
+                ErrorCode::BadValue,
+                format!(
+                    "dataset dimensions {dims:?} call for {n} voxels, not {}",
+                    raw.len()
+                ),
             );
-        }
-        let n = dims
-            .iter()
-            .try_fold(1u64, |acc, &d| acc.checked_mul(d as u64));
-        match n {
-            Some(n) if n <= MAX_VOXELS => {
-                if n != raw.len() as u64 {
-                    return err(
-                        ErrorCode::BadValue,
-                        format!(
-                            "dataset dimensions {dims:?} call for {n} voxels, not {}",
-                            raw.len()
-                        ),
-                    );
-                }
-            }
-            _ => {
-                return err(
-                    ErrorCode::BadDimensions,
-                    format!("dataset dimensions {dims:?} exceed {MAX_VOXELS} voxels"),
-                )
-            }
         }
         if !a.is_finite() || !b.is_finite() || a == b {
             return err(

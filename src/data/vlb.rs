@@ -10,7 +10,7 @@
 //! [`Dataset::new`]'s; the atomic write is `output`'s; other formats are converted to this one
 //! by the `vlconvert` tool.
 
-use super::{Dataset, Voxels, MAX_VOXELS};
+use super::{voxels_of, Dataset, Voxels};
 use crate::error::{Error, ErrorCode, Result};
 use crate::num::{no_memory, try_vec, try_with_capacity};
 use std::io::Read;
@@ -317,18 +317,7 @@ fn parse_header(h: &[u8]) -> Result<Header> {
     let u = |o: usize| u32::from_le_bytes([h[o], h[o + 1], h[o + 2], h[o + 3]]);
     let f = |o: usize| f32::from_le_bytes([h[o], h[o + 1], h[o + 2], h[o + 3]]);
     let dims = [u(4) as usize, u(8) as usize, u(12) as usize];
-    if dims.contains(&0) {
-        return Err(bad(
-            ErrorCode::BadDimensions,
-            format!("dimensions {dims:?} contain 0"),
-        ));
-    }
-    if voxel_count(dims).is_none_or(|v| v > MAX_VOXELS) {
-        return Err(bad(
-            ErrorCode::BadDimensions,
-            format!("dimensions {dims:?} exceed {MAX_VOXELS} voxels"),
-        ));
-    }
+    voxels_of(dims, "dimensions")?;
     let bytes = u(16);
     if bytes != 1 && bytes != 2 {
         return Err(bad(

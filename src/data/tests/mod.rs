@@ -66,7 +66,8 @@ fn random_u8(dims: [usize; 3], seed: u64) -> Dataset {
 }
 
 /// `Dataset::new` refuses what `vlLoad` refuses in a header with the same codes (a dimension
-/// of 0 or more than 2³² voxels `BadDimensions`, a normalisation that is not finite or has
+/// of 0, one of more than 2³¹ − 1 nodes or more than 2³² voxels `BadDimensions`, before the
+/// voxels are counted; a normalisation that is not finite or has
 /// a = b `BadRange`), and voxels that disagree with the dimensions with `BadValue`.
 #[test]
 fn new_datasets_are_refused_with_the_codes_of_their_fault() {
@@ -89,6 +90,19 @@ fn new_datasets_are_refused_with_the_codes_of_their_fault() {
             "{dims:?}"
         );
     }
+    // An axis beyond an i32 (2³² along x is within MAX_VOXELS, and `save` could not write it
+    // in a u32); 2³¹ − 1 passes the dimension check and meets the voxels' count.
+    for dims in [[1 << 31, 1, 1], [1, 1 << 32, 1], [1, 1, (1 << 31) + 5]] {
+        assert_eq!(
+            refused(dims, u8s(1), 0.0, 1.0),
+            ErrorCode::BadDimensions,
+            "{dims:?}"
+        );
+    }
+    assert_eq!(
+        refused([i32::MAX as usize, 1, 1], u8s(1), 0.0, 1.0),
+        ErrorCode::BadValue
+    );
     for (a, b) in [
         (1.0, 1.0),
         (f32::NAN, 1.0),
