@@ -698,6 +698,16 @@ fn refusals() {
     assert_eq!(e.code, ErrorCode::BadFile);
     let e = vlib::write_image(&dir.join("w.png"), 2, 1, &[1, 2, 3]).unwrap_err();
     assert_eq!(e.code, ErrorCode::BadValue);
+    // A PNG's header says each side in 31 bits: 2³¹ is refused before the slice's length (a
+    // PPM of that size is refused for the length alone).
+    for (name, width, height) in [("w.png", 1 << 31, 1), ("w.png", 1, u32::MAX)] {
+        let e = vlib::write_image(&dir.join(name), width, height, &[1, 2, 3]).unwrap_err();
+        assert_eq!(e.code, ErrorCode::BadValue);
+        assert!(e.message.contains("at most 2147483647"), "{e}");
+    }
+    let e = vlib::write_image(&dir.join("w.ppm"), 1 << 31, 1, &[1, 2, 3]).unwrap_err();
+    assert_eq!(e.code, ErrorCode::BadValue);
+    assert!(e.message.contains("bytes for a"), "{e}");
     assert_eq!(
         std::fs::read_dir(&dir).unwrap().count(),
         0,

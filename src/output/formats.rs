@@ -99,7 +99,26 @@ impl ImageFormat {
         };
         Ok(ImageFormat { container, pixels })
     }
+
+    /// `BadValue` where a side of a `width × height` image is more than the format can
+    /// say: a PNG's header holds each side in 31 bits (at most 2³¹ − 1); PPM and PFM write
+    /// them as decimal text, without a limit.
+    fn check_sides(self, path: &Path, width: u32, height: u32) -> Result<()> {
+        if self.container == Container::Png && width.max(height) > PNG_MAX_SIDE {
+            return err(
+                ErrorCode::BadValue,
+                format!(
+                    "{}: size {width}x{height} (a PNG's sides are at most {PNG_MAX_SIDE})",
+                    path.display()
+                ),
+            );
+        }
+        Ok(())
+    }
 }
+
+/// The longest side a PNG file can have (its header's 31-bit width and height).
+const PNG_MAX_SIDE: u32 = i32::MAX as u32;
 
 /// A writer that keeps the first error its inner writer gave (and gives it back as well), for
 /// an encoder that may drop it.
@@ -251,8 +270,8 @@ pub(crate) fn encode_into(
 /// written by [`crate::Image::save`]) and writes them atomically, straight into the file: no
 /// copy of the pixels is made (nor of the PNG's compressed stream).
 /// A side of 0 (an image of no pixels, which no format is asked to hold, as no render makes
-/// one) and a slice that is not `3 · width · height` bytes long are `BadValue`; nothing is
-/// written then.
+/// one), a PNG side over 2³¹ − 1 (more than its header can say) and a slice that is not
+/// `3 · width · height` bytes long are `BadValue`, in that order; nothing is written then.
 pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
     let format = ImageFormat::from_path(path)?;
     if format.pixels != PixelFormat::Rgb8 {
@@ -275,6 +294,7 @@ pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(
             ),
         );
     }
+    format.check_sides(path, width, height)?;
     if Some(rgb.len()) != PixelFormat::Rgb8.image_bytes(width, height) {
         return err(
             ErrorCode::BadValue,
