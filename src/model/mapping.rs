@@ -36,7 +36,18 @@ pub struct Mapping {
     /// them, or [`SCAN`] where a breakpoint falls in the bucket (the inputs are then counted
     /// against the breakpoints).
     buckets: Vec<u16>,
+    /// Per block of [`BLOCK`] rows and output j, at `block · outputs + j`: the least and
+    /// greatest of the values [`Mapping::range`] takes for the block's rows where they lie
+    /// inside its interval (Φ_r at the breakpoint a_i, Φ_t the output b_{i+1} of the step
+    /// after it), so that a wide interval costs a look per block, not per row. Empty for
+    /// tables of at most [`SCANNED_ROWS`] rows.
+    blocks: Vec<(f32, f32)>,
 }
+
+/// Rows a block of `Mapping::blocks` spans.
+const BLOCK: usize = 64;
+/// Tables of up to this many rows have no blocks: `range` scans their rows.
+const SCANNED_ROWS: usize = 4 * BLOCK;
 
 /// Input buckets of [`Mapping::locate`]'s table: v·BUCKETS is exact in f32 (a power of two).
 const BUCKETS: usize = 1024;
@@ -141,14 +152,55 @@ impl Mapping {
                 segments.push((b1 - b0) / (a[i] as f64 - a[i - 1] as f64));
             }
         }
-        Ok(Mapping {
+        let mut m = Mapping {
             kind,
             buckets: buckets(&a),
             a,
             b,
             outputs: k,
             segments,
-        })
+            blocks: Vec::new(),
+        };
+        m.blocks = m.blocks()?;
+        Ok(m)
+    }
+
+    /// The value [`Mapping::range`] takes for row i inside its interval, output j: Φ_r at the
+    /// breakpoint a_i (evaluated on its segment: i breakpoints lie below it), or Φ_t's output
+    /// b_{i+1} (for i below n − 1).
+    #[inline]
+    fn row_value(&self, i: usize, j: usize) -> f32 {
+        match self.kind {
+            MappingType::Ramp => self.eval_at(self.a[i], i, j),
+            MappingType::Lookup => self.b(i + 1, j),
+        }
+    }
+
+    /// `Mapping::blocks` of this table (allocated fallibly: it grows with the rows).
+    fn blocks(&self) -> Result<Vec<(f32, f32)>> {
+        let n = self.a.len();
+        if n <= SCANNED_ROWS {
+            return Ok(Vec::new());
+        }
+        // The rows `range` can take: every one of a ramp, all but the last of a lookup table.
+        let rows = match self.kind {
+            MappingType::Ramp => n,
+            MappingType::Lookup => n - 1,
+        };
+        let k = self.outputs;
+        let mut blocks = try_with_capacity(n.div_ceil(BLOCK) * k, "vlMapping's row blocks")?;
+        for start in (0..n).step_by(BLOCK) {
+            for j in 0..k {
+                let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+                for i in start..(start + BLOCK).min(rows) {
+                    let v = self.row_value(i, j);
+                    lo = lo.min(v);
+                    hi = hi.max(v);
+                }
+                blocks.push((lo, hi));
+            }
+        }
+        Ok(blocks)
     }
 
     /// The kind of transfer function.
@@ -302,12 +354,39 @@ impl Mapping {
     }
 
     /// The largest input z such that Φ(v, j) = 0 for every v in [0, z] (NaN counts as 0), found
-    /// among 0 and the breakpoints with the exact [`Mapping::range`]; `None` if Φ(0, j) ≠ 0.
-    /// A sample whose input is at most z needs no evaluation: its output is 0.
+    /// among 0 and the breakpoints as the last c whose exact [`Mapping::range`] over [0, c] has
+    /// a largest value of at most 0; `None` if Φ(0, j) ≠ 0. A sample whose input is at most z
+    /// needs no evaluation: its output is 0.
+    ///
+    /// One pass over the rows: as c moves from one breakpoint to the next, [0, c] takes in
+    /// the one breakpoint (Φ_r) or step (Φ_t) that `range` sees inside it and the last did
+    /// not, so the largest value of `range(0, c, j)` is kept as a running maximum, from the
+    /// same evaluations (a `range` per candidate would make every compile of a scene
+    /// quadratic in the rows: 18 s at 2¹⁶ rows).
     pub fn zero_below(&self, j: usize) -> Option<f32> {
+        let (a, n) = (&self.a, self.a.len());
+        // What `range(0, c, j)` takes besides Φ at c: Φ at 0, and the 0 a lookup table
+        // takes for an interval that starts at or before a_1 (every one here, a_1 ≥ 0).
+        let mut inside = match self.kind {
+            MappingType::Lookup => self.eval(0.0, j).max(0.0),
+            MappingType::Ramp => self.eval(0.0, j),
+        };
         let mut z = None;
-        for c in std::iter::once(0.0).chain(self.a.iter().copied()) {
-            if self.range(0.0, c, j).1 <= 0.0 {
+        for k in 0..=n {
+            // Candidate k: 0, then a_1 … a_n (a_k as the kth, counted from 1).
+            let c = if k == 0 { 0.0 } else { a[k - 1] };
+            if k >= 2 {
+                // Newly inside [0, c]: Φ_r's breakpoint a_{k−1} (where above 0), Φ_t's step
+                // (a_{k−2}, a_{k−1}], of output b_{k−1}.
+                match self.kind {
+                    MappingType::Ramp if a[k - 2] > 0.0 => {
+                        inside = inside.max(self.eval(a[k - 2], j))
+                    }
+                    MappingType::Ramp => {}
+                    MappingType::Lookup => inside = inside.max(self.b(k - 1, j)),
+                }
+            }
+            if inside.max(self.eval(c, j)) <= 0.0 {
                 z = Some(c);
             } else {
                 break;
@@ -330,26 +409,33 @@ impl Mapping {
             min = min.min(v);
             max = max.max(v);
         };
-        let n = self.a.len();
-        match self.kind {
+        let (a, n) = (&self.a, self.a.len());
+        // The rows in play, found by bisection (the breakpoints increase strictly): those
+        // below `hi`, and from the first at or above `lo` (Φ_t) or above it (Φ_r).
+        let below_hi = a.partition_point(|&x| x < hi);
+        let rows = match self.kind {
             MappingType::Lookup => {
-                // Φ_t is b_{i+1} on (a_i, a_{i+1}] and 0 outside (a_1, a_n].
-                if lo <= self.a[0] || hi > self.a[n - 1] {
+                // Φ_t is b_{i+1} on (a_i, a_{i+1}] and 0 outside (a_1, a_n]: the steps i with
+                // a_i < hi and a_{i+1} ≥ lo.
+                if lo <= a[0] || hi > a[n - 1] {
                     take(0.0);
                 }
-                for i in 0..n.saturating_sub(1) {
-                    if hi > self.a[i] && lo <= self.a[i + 1] {
-                        take(self.b(i + 1, j));
-                    }
-                }
+                a.partition_point(|&x| x < lo).saturating_sub(1)..below_hi.min(n - 1)
             }
-            MappingType::Ramp => {
-                // Piecewise linear: extremes at the ends or at breakpoints inside.
-                for &a in &self.a {
-                    if a > lo && a < hi {
-                        take(self.eval(a, j));
-                    }
-                }
+            // Piecewise linear: extremes at the ends or at the breakpoints inside.
+            MappingType::Ramp => a.partition_point(|&x| x <= lo)..below_hi,
+        };
+        // Each row's value, or a whole block's least and greatest at once.
+        let mut i = rows.start;
+        while i < rows.end {
+            if i % BLOCK == 0 && i + BLOCK <= rows.end && !self.blocks.is_empty() {
+                let (lo, hi) = self.blocks[i / BLOCK * self.outputs + j];
+                take(lo);
+                take(hi);
+                i += BLOCK;
+            } else {
+                take(self.row_value(i, j));
+                i += 1;
             }
         }
         (min, max)

@@ -225,3 +225,171 @@ fn range_bounds_every_value_in_the_interval() {
         }
     }
 }
+
+/// A linear congruential generator from `seed`: 32 bits a call.
+fn lcg(mut state: u64) -> impl FnMut() -> u32 {
+    move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 33) as u32
+    }
+}
+
+/// `zero_below`'s one pass finds what its definition asks: the last of 0, a_1, …, a_n (in
+/// order, stopping at the first that fails) over which `range(0, c, j)` has a largest value of
+/// at most 0, for lookup tables and ramps of 1 to 40 rows and three outputs, whose first rows
+/// are zero in some outputs and not others, with and without a first row at input 0, and
+/// whose z is 0 or lies further.
+#[test]
+fn zero_below_is_the_last_breakpoint_range_proves_transparent() {
+    let by_definition = |m: &Mapping, j: usize| {
+        let mut z = None;
+        for c in std::iter::once(0.0).chain(m.breakpoints().iter().copied()) {
+            if m.range(0.0, c, j).1 > 0.0 {
+                break;
+            }
+            z = Some(c);
+        }
+        z
+    };
+    let mut next = lcg(0x2545_f491_4f6c_dd1d);
+    // (Φ(0) is 0 for both kinds, so z is at least 0: count how far the cases reach.)
+    let (mut past_zero, mut at_zero_only) = (0, 0);
+    for case in 0..3000 {
+        let n = 1 + next() as usize % 40;
+        let zeros = next() as usize % (n + 2);
+        let at_zero = next().is_multiple_of(3);
+        let mut table = Vec::new();
+        for i in 0..n {
+            // Strictly increasing inputs in [0, 1], the first at 0 in a third of the cases.
+            let a = if at_zero {
+                i as f32 / n as f32
+            } else {
+                (i + 1) as f32 / (n + 1) as f32
+            };
+            table.push(a);
+            for j in 0..3 {
+                let zero = i < zeros + j;
+                table.push(if zero { 0.0 } else { (next() % 5) as f32 / 4.0 });
+            }
+        }
+        for kind in [MappingType::Lookup, MappingType::Ramp] {
+            let m = Mapping::new(kind, n as i32, 3, &table).unwrap();
+            for j in 0..3 {
+                let z = m.zero_below(j);
+                assert_eq!(z, by_definition(&m, j), "case {case} {kind:?} n={n} j={j}");
+                if z.is_some_and(|z| z > 0.0) {
+                    past_zero += 1
+                } else {
+                    at_zero_only += 1
+                }
+            }
+        }
+    }
+    assert!(
+        past_zero > 400 && at_zero_only > 400,
+        "{past_zero} past 0, {at_zero_only} at 0 only"
+    );
+}
+
+/// `range` by bisection (and by blocks of rows, in tables of more than 256) gives what a scan
+/// of every row gives (the definition: Φ at both ends, for Φ_r Φ at every breakpoint strictly
+/// inside, for Φ_t the 0 outside (a_1, a_n] where the interval reaches it and the output of
+/// every step it meets), for random tables of 1 to 40 rows and intervals with ends on
+/// breakpoints, between them and outside [0, 1], and for tables of 257 to 1000 rows and
+/// random intervals, some wider than many blocks, ends on breakpoints or not.
+#[test]
+fn range_by_bisection_is_the_scan_of_every_row() {
+    let scan = |m: &Mapping, lo: f32, hi: f32, j: usize| {
+        let clamp = |v: f32| if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+        let (lo, hi) = (clamp(lo), clamp(hi.max(lo)));
+        let (a, n) = (m.breakpoints(), m.breakpoints().len());
+        let mut values = vec![m.eval(lo, j), m.eval(hi, j)];
+        match m.kind {
+            MappingType::Lookup => {
+                if lo <= a[0] || hi > a[n - 1] {
+                    values.push(0.0);
+                }
+                for i in 0..n - 1 {
+                    if hi > a[i] && lo <= a[i + 1] {
+                        values.push(m.b(i + 1, j));
+                    }
+                }
+            }
+            MappingType::Ramp => values.extend(
+                a.iter()
+                    .filter(|&&x| x > lo && x < hi)
+                    .map(|&x| m.eval(x, j)),
+            ),
+        }
+        let min = values.iter().copied().fold(f32::INFINITY, f32::min);
+        let max = values.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        (min, max)
+    };
+    let mut next = lcg(0x9e37_79b9_7f4a_7c15);
+    for case in 0..500 {
+        let n = 1 + next() as usize % 40;
+        let mut table = Vec::new();
+        for i in 0..n {
+            table.push((i + (case % 2)) as f32 / (n + 1) as f32);
+            table.extend((0..2).map(|_| (next() % 5) as f32 / 4.0));
+        }
+        let ends: Vec<f32> = (0..=2 * n + 2)
+            .map(|k| k as f32 / (2 * n + 2) as f32)
+            .chain([-0.5, 1.5, f32::NAN])
+            .collect();
+        for kind in [MappingType::Lookup, MappingType::Ramp] {
+            let m = Mapping::new(kind, n as i32, 2, &table).unwrap();
+            for &lo in &ends {
+                for &hi in &ends {
+                    for j in 0..2 {
+                        assert_eq!(
+                            m.range(lo, hi, j),
+                            scan(&m, lo, hi, j),
+                            "case {case} {kind:?} n={n} [{lo}, {hi}] j={j}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+    for case in 0..20 {
+        let n = 257 + next() as usize % 744;
+        let mut table = Vec::new();
+        for i in 0..n {
+            table.push((i + 1) as f32 / (n + 1) as f32);
+            // Mostly 0 (blocks of zeros, as a transfer function's clear stretch has), else
+            // one of five levels.
+            let level = |x: u32| {
+                if x.is_multiple_of(3) {
+                    (x % 5) as f32 / 4.0
+                } else {
+                    0.0
+                }
+            };
+            table.extend((0..2).map(|_| level(next())));
+        }
+        let a: Vec<f32> = table.iter().step_by(3).copied().collect();
+        let end = |x: u32| match x % 3 {
+            0 => a[x as usize / 3 % n],
+            1 => (x % 10007) as f32 / 10006.0,
+            _ => a[x as usize / 3 % n] + 0.3 / (n + 1) as f32,
+        };
+        for kind in [MappingType::Lookup, MappingType::Ramp] {
+            let m = Mapping::new(kind, n as i32, 2, &table).unwrap();
+            assert!(!m.blocks.is_empty());
+            for _ in 0..3000 {
+                let (x, y) = (end(next()), end(next()));
+                let (lo, hi) = (x.min(y), x.max(y));
+                for j in 0..2 {
+                    assert_eq!(
+                        m.range(lo, hi, j),
+                        scan(&m, lo, hi, j),
+                        "case {case} {kind:?} n={n} [{lo}, {hi}] j={j}"
+                    );
+                }
+            }
+        }
+    }
+}
