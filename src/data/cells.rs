@@ -59,8 +59,47 @@ pub(crate) struct CellMask {
     words32: std::sync::OnceLock<Vec<u32>>,
 }
 
-/// The cell masks of a dataset, each with the bits of its bound.
-pub(super) type CellMasks = Vec<(u32, std::sync::Arc<CellMask>)>;
+/// The cell masks of a dataset: each mask still in use, by the bits of its bound, held weakly
+/// (the compiled objects of the scenes that use it hold it), and the one asked for last, held
+/// (so that scenes one after another with the same transfer function share it). A bound no
+/// longer used loses its mask, so a threshold moved from scene to scene does not leave one bit
+/// a node behind per position.
+#[derive(Debug, Default)]
+pub(super) struct CellMasks {
+    masks: Vec<(u32, std::sync::Weak<CellMask>)>,
+    last: Option<std::sync::Arc<CellMask>>,
+}
+
+impl CellMasks {
+    /// The mask of the bound of bits `bound`, if one is still in use; it becomes the last
+    /// asked for.
+    fn take(&mut self, bound: u32) -> Option<std::sync::Arc<CellMask>> {
+        let found = self
+            .masks
+            .iter()
+            .find(|(b, _)| *b == bound)
+            .and_then(|(_, m)| m.upgrade())?;
+        self.last = Some(found.clone());
+        Some(found)
+    }
+
+    /// Files `mask` under the bound of bits `bound` as the last asked for, dropping the
+    /// entries of masks that nothing holds.
+    fn keep(&mut self, bound: u32, mask: &std::sync::Arc<CellMask>) {
+        self.last = Some(mask.clone());
+        self.masks.retain(|(_, m)| m.strong_count() > 0);
+        self.masks.push((bound, std::sync::Arc::downgrade(mask)));
+    }
+
+    /// How many masks are in use (held by the dataset or elsewhere).
+    #[cfg(test)]
+    pub(super) fn in_use(&self) -> usize {
+        self.masks
+            .iter()
+            .filter(|(_, m)| m.strong_count() > 0)
+            .count()
+    }
+}
 
 impl CellMask {
     /// The mask of `bits` (bit c of word c >> 6 for the cell with first node c).
@@ -139,8 +178,8 @@ pub(super) fn reaches(bits: &[u64], c: usize) -> bool {
 
 impl Dataset {
     /// The [`CellMask`] of bound `z`, built on first use (in parallel, holding no lock, as
-    /// [`crate::pool::try_once`] makes a cache) and kept for the dataset's life: an object's
-    /// zero test asks for one bound, so a dataset holds few.
+    /// [`crate::pool::try_once`] makes a cache) and shared while it is in use ([`CellMasks`]:
+    /// the dataset holds the last one asked for, the scenes that use a mask hold theirs).
     /// Where it cannot be allocated this unwinds ([`super::or_unwind`]);
     /// [`Dataset::try_cells_above`] reports it instead.
     pub(crate) fn cells_above(&self, z: f32) -> std::sync::Arc<CellMask> {
@@ -157,21 +196,17 @@ impl Dataset {
                 .lock()
                 .unwrap_or_else(std::sync::PoisonError::into_inner)
         };
-        let find = |masks: &CellMasks| {
-            let kept = masks.iter().find(|(b, _)| *b == z.to_bits());
-            kept.map(|(_, m)| m.clone())
-        };
-        if let Some(m) = find(&masks()) {
+        if let Some(m) = masks().take(z.to_bits()) {
             return Ok(m);
         }
         // Made holding no lock, as `pool::try_once` makes a cache: the first mask kept for the
         // bound is the one every caller gets.
         let made = std::sync::Arc::new(self.compute_cell_mask(z)?);
         let mut masks = masks();
-        if let Some(m) = find(&masks) {
+        if let Some(m) = masks.take(z.to_bits()) {
             return Ok(m);
         }
-        masks.push((z.to_bits(), made.clone()));
+        masks.keep(z.to_bits(), &made);
         Ok(made)
     }
 

@@ -209,7 +209,7 @@ impl CObj {
                 .filter(|_| {
                     optimise.skip_empty && r.render_type == RenderType::Dvr && o.normals.is_empty()
                 })
-                .map(|(data, z)| data.cells_above(z)),
+                .map(|(data, z)| crate::pool::once(&cache.cells, || data.cells_above(z)).clone()),
             lean,
             preint,
             env: SampleEnv {
@@ -356,14 +356,17 @@ fn compile_children(
 }
 
 /// What later compilations of a scene share of one root object: its empty-space grid, built
-/// once (`None`: the object has no grid), and its pre-integration tables with the κ (slab
-/// length in reference lengths, as bits) they were built for. A closed root object does not
-/// change, so its tables depend on κ alone: they are rebuilt only where κ changes.
+/// once (`None`: the object has no grid), its dataset's cell mask for its zero test's bound
+/// (which the dataset keeps only while it is in use), and its pre-integration tables with
+/// the κ (slab length in reference lengths, as bits) they were built for. A closed root object
+/// does not change, so its tables depend on κ alone: they are rebuilt only where κ changes.
 #[derive(Default)]
 pub(super) struct ObjectCache {
     grid: std::sync::OnceLock<Option<Arc<SkipGrid>>>,
     /// The grid by the values' bound, for the object pre-integrated (`SkipGrid::build`).
     value_grid: std::sync::OnceLock<Option<Arc<SkipGrid>>>,
+    /// The cell mask of the object's value head (`Dataset::cells_above`).
+    cells: std::sync::OnceLock<Arc<crate::data::CellMask>>,
     preint: std::sync::Mutex<Option<(u64, Arc<PreIntegrated>)>>,
 }
 

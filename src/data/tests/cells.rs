@@ -230,3 +230,39 @@ fn a_masks_32_bit_words_hold_its_bits() {
         }
     }
 }
+
+/// A dataset keeps the cell mask asked for last and those still held elsewhere (a scene's
+/// compiled objects), not one per bound ever asked for: a bound asked for again while its mask
+/// is in use gets that mask; a hundred bounds asked for one after another, each mask dropped,
+/// leave one in use; a mask held elsewhere stays shared.
+#[test]
+fn cell_masks_are_kept_while_in_use_and_the_last_one() {
+    let n = 4 * 4 * 4;
+    let d = Dataset::new([4, 4, 4], Voxels::U8((0..n as u8).collect()), 0.0, 63.0).unwrap();
+    let in_use = || d.cell_masks.lock().unwrap().in_use();
+    let held = d.cells_above(0.5);
+    assert!(std::sync::Arc::ptr_eq(&held, &d.cells_above(0.5)), "shared");
+    for k in 0..100 {
+        drop(d.cells_above(k as f32 / 100.0 + 0.001));
+    }
+    // The last bound's mask (the dataset holds it) and 0.5's (held here).
+    assert_eq!(in_use(), 2);
+    assert!(
+        std::sync::Arc::ptr_eq(&held, &d.cells_above(0.5)),
+        "still shared"
+    );
+    drop(held);
+    // 0.5's mask was asked for last: the dataset holds it alone now.
+    assert_eq!(in_use(), 1);
+    let again = d.cells_above(0.5);
+    assert_eq!(
+        std::sync::Arc::strong_count(&again),
+        2,
+        "the dataset's and this one"
+    );
+    // Each answer is its bound's: the mask of 0.5 passes the cells with a node above 0.5.
+    let above = (0..n).filter(|&c| again.may_reach(c)).count();
+    let fresh = Dataset::new([4, 4, 4], Voxels::U8((0..n as u8).collect()), 0.0, 63.0).unwrap();
+    let want = fresh.cells_above(0.5);
+    assert_eq!(above, (0..n).filter(|&c| want.may_reach(c)).count());
+}
