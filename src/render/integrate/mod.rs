@@ -274,14 +274,31 @@ impl Compiled {
         layers.sort_by(|a, b| a.t.total_cmp(&b.t));
         let mut layers = layers.into_iter().peekable();
         let mut acc = Integral::new(self);
+        // Among many volumes along the ray, each cursor's next segment waits in a heap, and
+        // a cursor is looked at again only once a segment is taken from it: a sample costs
+        // O(log k) among k, not a look at every one (k² per ray). A few are scanned.
+        let mut heap = (cursors.len() > SCANNED_CURSORS).then(|| {
+            let mut heap = std::collections::BinaryHeap::with_capacity(cursors.len());
+            for (ci, c) in cursors.iter_mut().enumerate() {
+                if let Some(mid) = c.peek(self.objects[c.object].skip.as_deref()) {
+                    heap.push(Next::new(mid, ci));
+                }
+            }
+            heap
+        });
         'march: loop {
             // The next segment in depth order (ties: object order).
             let mut best: Option<(usize, f64)> = None;
-            for (ci, c) in cursors.iter_mut().enumerate() {
-                let grid = self.objects[c.object].skip.as_deref();
-                if let Some(mid) = c.peek(grid) {
-                    if best.is_none_or(|(_, m)| mid < m) {
-                        best = Some((ci, mid));
+            match &heap {
+                Some(heap) => best = heap.peek().map(|n| (n.cursor, n.mid)),
+                None => {
+                    for (ci, c) in cursors.iter_mut().enumerate() {
+                        let grid = self.objects[c.object].skip.as_deref();
+                        if let Some(mid) = c.peek(grid) {
+                            if best.is_none_or(|(_, m)| mid < m) {
+                                best = Some((ci, mid));
+                            }
+                        }
                     }
                 }
             }
@@ -335,10 +352,17 @@ impl Compiled {
             let Some((ci, mid)) = best else { break };
             let c = &mut cursors[ci];
             let len = c.take();
+            let obj = &self.objects[c.object];
+            if let Some(mut heap) = heap.as_mut().and_then(|h| h.peek_mut()) {
+                // The cursor's next segment takes the place of the one taken.
+                match c.peek(obj.skip.as_deref()) {
+                    Some(next) => *heap = Next::new(next, ci),
+                    None => drop(std::collections::binary_heap::PeekMut::pop(heap)),
+                }
+            }
             if len <= 0.0 {
                 continue;
             }
-            let obj = &self.objects[c.object];
             if let Some((alpha, colour)) =
                 self.shade(obj, origin + mid * dir, c.object_point(mid), dir, len)
             {
@@ -349,5 +373,44 @@ impl Compiled {
         }
         let (col, t) = acc.result();
         (col + t * background, t)
+    }
+}
+
+/// Up to this many DVR volumes along a ray, [`Compiled::trace_ray`] finds the next sample by
+/// looking at every volume's next segment; beyond, through a heap ([`Next`]).
+const SCANNED_CURSORS: usize = 8;
+
+/// A cursor's next segment in [`Compiled::trace_ray`]'s heap: its midpoint and the cursor's
+/// index, ordered so that the heap's greatest is the nearest midpoint, of the first cursor
+/// where several are as near (what the scan in cursor order, keeping the first strictly
+/// nearer one, picks). Midpoints are finite (a cursor's ends are); −0 is taken as 0, which
+/// `<` does not tell apart.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Next {
+    mid: f64,
+    cursor: usize,
+}
+
+impl Next {
+    fn new(mid: f64, cursor: usize) -> Next {
+        Next {
+            mid: mid + 0.0,
+            cursor,
+        }
+    }
+}
+
+impl Eq for Next {}
+
+impl PartialOrd for Next {
+    fn partial_cmp(&self, other: &Next) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Next {
+    fn cmp(&self, other: &Next) -> std::cmp::Ordering {
+        // Reversed: the nearest, then the first cursor, is the greatest.
+        (other.mid.total_cmp(&self.mid)).then(other.cursor.cmp(&self.cursor))
     }
 }
