@@ -16,7 +16,7 @@
 //! intensity functions are ignored too: ITK does not apply them.
 
 use crate::progress::{Progress, Reading, Unit};
-use crate::volume::{Source, Type};
+use crate::volume::{Type, Volume};
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -347,6 +347,12 @@ fn elements(h: &Header, bytes: &[u8], from: usize, need: usize, name: &Path) -> 
 
 /// Converts the MetaImage `input` (`.mha`, or `.mhd` with its data file) to `output`.
 pub fn convert(input: &Path, output: &Path, window: &super::Window) -> Res<()> {
+    let v = read(input)?;
+    super::convert(&v, window, output).map_err(|e| format!("{}: {e}", input.display()))
+}
+
+/// Reads the MetaImage `input` (`.mha`, or `.mhd` with its data file).
+pub fn read(input: &Path) -> Res<Volume> {
     let at = |e: String| format!("{}: {e}", input.display());
     let text = crate::volume::read_regular(input, None).map_err(at)?;
     let dir = input.parent().unwrap_or(Path::new(""));
@@ -364,14 +370,6 @@ pub fn convert(input: &Path, output: &Path, window: &super::Window) -> Res<()> {
             elements(&h, &bytes, 0, need, p)?
         }
     };
-    let source = Source {
-        dims: h.dims,
-        bytes: &data,
-        ty: h.ty,
-        big: h.big,
-        slope: 1.0,
-        inter: 0.0,
-    };
     let placement = match geometry(&h) {
         Ok(g) => Some(g),
         Err(e) => {
@@ -379,5 +377,13 @@ pub fn convert(input: &Path, output: &Path, window: &super::Window) -> Res<()> {
             None
         }
     };
-    super::convert(&source, window, output, placement).map_err(at)
+    Ok(Volume {
+        dims: h.dims,
+        bytes: data,
+        ty: h.ty,
+        big: h.big,
+        slope: 1.0,
+        inter: 0.0,
+        geometry: placement,
+    })
 }

@@ -14,7 +14,7 @@
 
 use crate::gunzip::Gunzip;
 use crate::progress::{Progress, Reading, Unit};
-use crate::volume::{self, Source, Type};
+use crate::volume::{self, Type, Volume};
 use nifti::{Endianness, NiftiHeader, NiftiType};
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -322,6 +322,12 @@ fn geometry(h: &NiftiHeader, note: impl Fn(String)) -> Res<vlib::Geometry> {
 
 /// Converts the NIfTI-1 file `input` (a single file, or a header with its image file).
 pub fn convert(input: &Path, output: &Path, window: &super::Window) -> Res<()> {
+    let v = read(input)?;
+    super::convert(&v, window, output).map_err(|e| format!("{}: {e}", input.display()))
+}
+
+/// Reads the NIfTI-1 file `input` (a single file, or a header with its image file).
+pub fn read(input: &Path) -> Res<Volume> {
     let at = |e: String| format!("{}: {e}", input.display());
     let (mut r, gz) = stream(input, true)?;
     let h = header(&mut r, gz).map_err(at)?;
@@ -377,13 +383,13 @@ pub fn convert(input: &Path, output: &Path, window: &super::Window) -> Res<()> {
             None
         }
     };
-    let source = Source {
+    Ok(Volume {
         dims,
-        bytes: &data,
+        bytes: data,
         ty,
         big: h.endianness == Endianness::Big,
         slope,
         inter,
-    };
-    super::convert(&source, window, output, placement).map_err(at)
+        geometry: placement,
+    })
 }

@@ -17,32 +17,8 @@
 
 use crate::gunzip::Gunzip;
 use crate::progress::{Progress, Reading, Unit};
-use crate::volume::{inflate_rest, read_regular, Source, Type};
+use crate::volume::{inflate_rest, read_regular, Type, Volume};
 use std::path::{Path, PathBuf};
-
-/// A NRRD file's volume: its dimensions, type, byte order and decoded bytes.
-pub struct Nrrd {
-    pub dims: [usize; 3],
-    pub ty: Type,
-    pub big: bool,
-    pub bytes: Vec<u8>,
-    /// Where its nodes lie, in RAS millimetres, when the header says.
-    pub geometry: Option<vlib::Geometry>,
-}
-
-impl Nrrd {
-    /// The volume as a conversion source.
-    pub fn source(&self) -> Source<'_> {
-        Source {
-            dims: self.dims,
-            bytes: &self.bytes,
-            ty: self.ty,
-            big: self.big,
-            slope: 1.0,
-            inter: 0.0,
-        }
-    }
-}
 
 /// The file name of `path`, for a progress line.
 fn name(path: &Path) -> String {
@@ -160,8 +136,8 @@ fn geometry(
     Ok(None)
 }
 
-/// Reads the NRRD file `path`.
-pub fn read(path: &Path) -> Result<Nrrd, String> {
+/// Reads the NRRD file `path`: its volume, unscaled, placed where the header says.
+pub fn read(path: &Path) -> Result<Volume, String> {
     let file = read_regular(path, None)?;
     if !is_nrrd(&file) {
         return Err(format!(
@@ -370,11 +346,13 @@ pub fn read(path: &Path) -> Result<Nrrd, String> {
             crate::counted(count, what)
         );
     }
-    Ok(Nrrd {
+    Ok(Volume {
         dims,
         ty,
         big,
         bytes,
+        slope: 1.0,
+        inter: 0.0,
         geometry,
     })
 }

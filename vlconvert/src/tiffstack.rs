@@ -22,19 +22,21 @@
 //! - Hostile sizes: before a page is decoded, its strips or tiles must lie inside the file and
 //!   be able to hold the page, and each tile its tile (at most 1 byte a byte uncompressed, 64
 //!   PackBits, 1032 Deflate, 3641 LZW): no page allocates more than its file's bytes can decode
-//!   to. A page directory's tags are read under limits of the file's size (`directory_limits`):
-//!   a tag counting more values than the file holds is an error, not an allocation.
+//!   to. A page directory's tags are read under limits of the file's size (`directory_limits`;
+//!   the first directory, which the `tiff` crate reads as it opens the file, is checked before:
+//!   `page::first_directory`): a tag counting more values than the file holds is an error, not
+//!   an allocation.
 
 use crate::counted;
 use crate::progress::{Progress, Unit};
-use crate::volume::{Source, Type};
-use ::tiff::decoder::{ChunkType, Decoder, DecodingResult, Limits};
+use crate::volume::{Type, Volume};
+use ::tiff::decoder::Decoder;
 use ::tiff::tags::Tag;
-use ::tiff::ColorType;
-use std::fs::File;
-use std::io::{BufReader, Read, Seek};
+use page::{decode_in, inspect, open, tiff_error, Page};
+use std::io::{Read, Seek};
 use std::path::{Path, PathBuf};
 
+mod page;
 #[cfg(test)]
 mod tests;
 
@@ -61,40 +63,6 @@ pub fn is_tiff(head: &[u8]) -> bool {
     )
 }
 
-/// What a page holds, as far as the stack needs to know.
-#[derive(Clone, Copy, PartialEq, Eq)]
-struct Page {
-    width: u32,
-    height: u32,
-    /// `SampleFormat` (1 unsigned, 2 signed, 3 float) and bits per sample.
-    format: u16,
-    bits: u8,
-    /// The element type its samples convert as.
-    ty: Type,
-}
-
-impl Page {
-    /// Bytes of its samples as [`Page::ty`].
-    fn bytes(&self) -> Res<usize> {
-        (self.width as usize)
-            .checked_mul(self.height as usize)
-            .and_then(|n| n.checked_mul(self.ty.bytes()))
-            .ok_or_else(|| format!("{} x {} pixels overflow", self.width, self.height))
-    }
-
-    fn describe(&self) -> String {
-        let kind = match self.format {
-            2 => "signed",
-            3 => "float",
-            _ => "unsigned",
-        };
-        format!(
-            "{} x {} pixels of {kind} {}-bit samples",
-            self.width, self.height, self.bits
-        )
-    }
-}
-
 /// The stack read: its dimensions, element type and little-endian elements (x fastest, node
 /// rows upwards), and what the files say of its spacing.
 struct Stack {
@@ -109,19 +77,6 @@ struct Stack {
 struct Spacing {
     xy: Option<[f64; 2]>,
     z: Option<f64>,
-}
-
-/// The `tiff` crate's error, said plainly where it is the file ending early.
-fn tiff_error(e: ::tiff::TiffError) -> String {
-    match e {
-        ::tiff::TiffError::IoError(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
-            "the file ends before its data does (cut short?)".into()
-        }
-        ::tiff::TiffError::LimitsExceeded => "a tag of its page directory counts more values \
-            than the file holds (or over 256 MiB of them)"
-            .into(),
-        e => e.to_string(),
-    }
 }
 
 /// Millimetres per unit of an ImageJ `unit=` name.
@@ -205,204 +160,6 @@ fn spacing_of<R: Read + Seek>(d: &mut Decoder<R>, ij: &[(String, String)]) -> Sp
         .and_then(positive)
         .map(|s| s * mm);
     Spacing { xy, z }
-}
-
-/// The current page, checked: grey, of a bit depth and compression that convert, its data
-/// inside the file (`len` bytes) and able to hold it.
-fn inspect<R: Read + Seek>(d: &mut Decoder<R>, len: u64) -> Res<Page> {
-    let (width, height) = d.dimensions().map_err(tiff_error)?;
-    let bits = match d.colortype().map_err(tiff_error)? {
-        ColorType::Gray(b) => b,
-        other => {
-            return Err(format!(
-                "{other:?} pixels: only grey pages of one sample a pixel convert (split colour \
-                 channels into files of their own first)"
-            ))
-        }
-    };
-    let format = match d.find_tag_unsigned_vec::<u16>(Tag::SampleFormat) {
-        Ok(Some(v)) => v.first().copied().unwrap_or(1),
-        Ok(None) => 1,
-        Err(e) => return Err(tiff_error(e)),
-    };
-    let ty = match (format, bits) {
-        (1 | 4, 8) => Type::U8,
-        (1 | 4, 16) => Type::U16,
-        (1 | 4, 32) => Type::U32,
-        (1 | 4, 64) => Type::U64,
-        (2, 8) => Type::I8,
-        (2, 16) => Type::I16,
-        (2, 32) => Type::I32,
-        (2, 64) => Type::I64,
-        (3, 16 | 32) => Type::F32,
-        (3, 64) => Type::F64,
-        _ => {
-            return Err(format!(
-                "{bits}-bit samples of SampleFormat {format}: only 8, 16, 32 and 64-bit integers \
-                 and 16, 32 and 64-bit floats convert"
-            ))
-        }
-    };
-    let page = Page {
-        width,
-        height,
-        format,
-        bits,
-        ty,
-    };
-    // Bytes out per byte in, at most, for each compression that converts.
-    let compression = d
-        .find_tag_unsigned::<u16>(Tag::Compression)
-        .map_err(tiff_error)?
-        .unwrap_or(1);
-    let ratio: u64 = match compression {
-        1 => 1,
-        32773 => 64,       // PackBits: 2 bytes give at most 128
-        8 | 32946 => 1032, // Deflate: 258 bytes from 2 bits at best
-        5 => 3641,         // LZW: 4096 bytes at most from a code of at least 9 bits
-        c => {
-            let name = match c {
-                2..=4 => "CCITT fax",
-                6 | 7 => "JPEG",
-                34925 => "LZMA",
-                50000 | 34926 => "Zstandard",
-                50001 | 34927 => "WebP",
-                _ => "unknown",
-            };
-            return Err(format!(
-                "compression {c} ({name}) does not convert (none, LZW, Deflate and PackBits do)"
-            ));
-        }
-    };
-    let (offsets, counts) = match d.get_chunk_type() {
-        ChunkType::Strip => (Tag::StripOffsets, Tag::StripByteCounts),
-        ChunkType::Tile => (Tag::TileOffsets, Tag::TileByteCounts),
-    };
-    let mut chunks = |tag| -> Res<Vec<u64>> {
-        Ok(d.find_tag_unsigned_vec::<u64>(tag)
-            .map_err(tiff_error)?
-            .unwrap_or_default())
-    };
-    let (offsets, counts) = (chunks(offsets)?, chunks(counts)?);
-    let mut held: u64 = 0;
-    for (&at, &n) in offsets.iter().zip(&counts) {
-        if at.checked_add(n).is_none_or(|end| end > len) {
-            return Err(format!(
-                "data at bytes {at} … {at}+{n}, past the end of the file ({})",
-                counted(len, "byte")
-            ));
-        }
-        held = held.saturating_add(n);
-    }
-    // The page's bytes as stored (16-bit floats: 2 a sample).
-    let need = (width as u64) * (height as u64) * (bits as u64 / 8);
-    // Each tile decodes whole, padding and all: each must be able to hold its tile.
-    if d.get_chunk_type() == ChunkType::Tile {
-        let (tw, th) = d.chunk_dimensions();
-        let tile = (tw as u64) * (th as u64) * (bits as u64 / 8);
-        if let Some(&n) = counts.iter().find(|&&n| tile > n.saturating_mul(ratio)) {
-            return Err(format!(
-                "tiles of {tw} x {th} pixels: {}, more than a tile's {} of data can hold",
-                counted(tile, "byte"),
-                counted(n, "byte")
-            ));
-        }
-    }
-    if need > held.saturating_mul(ratio) {
-        return Err(format!(
-            "{}: {}, more than its {} of data can hold",
-            page.describe(),
-            counted(need, "byte"),
-            counted(held, "byte")
-        ));
-    }
-    Ok(page)
-}
-
-/// Decodes the current page (`page`) and appends its elements to `out`, little-endian, rows
-/// from the bottom up.
-fn decode<R: Read + Seek>(d: &mut Decoder<R>, page: &Page, out: &mut Vec<u8>) -> Res<()> {
-    let w = page.width as usize;
-    let n = w * page.height as usize;
-    macro_rules! rows {
-        ($v:expr $(, $f:path)?) => {{
-            let v = $v;
-            if v.len() < n {
-                return Err(format!("{} samples decoded, {n} expected", v.len()));
-            }
-            for row in v[..n].chunks_exact(w).rev() {
-                for &x in row {
-                    $(let x = $f(x);)?
-                    out.extend_from_slice(&x.to_le_bytes());
-                }
-            }
-        }};
-    }
-    let image = match d.read_image() {
-        Err(::tiff::TiffError::LimitsExceeded) => {
-            return Err("its data decodes to more than 3641 times the file's bytes".into())
-        }
-        image => image.map_err(tiff_error)?,
-    };
-    match image {
-        DecodingResult::U8(v) => rows!(v),
-        DecodingResult::U16(v) => rows!(v),
-        DecodingResult::U32(v) => rows!(v),
-        DecodingResult::U64(v) => rows!(v),
-        DecodingResult::I8(v) => rows!(v),
-        DecodingResult::I16(v) => rows!(v),
-        DecodingResult::I32(v) => rows!(v),
-        DecodingResult::I64(v) => rows!(v),
-        DecodingResult::F16(v) => rows!(v, f32::from),
-        DecodingResult::F32(v) => rows!(v),
-        DecodingResult::F64(v) => rows!(v),
-    }
-    Ok(())
-}
-
-/// The `tiff` crate's limits while it reads page directories of a file of `len` bytes: a
-/// tag's values take at most 32 bytes of memory (one value) for each byte of the file, and
-/// never more than the crate's default of 256 MiB (under which it reads the first directory).
-fn directory_limits(len: u64) -> Limits {
-    let mut limits = Limits::default();
-    let bound = usize::try_from(len.saturating_mul(32)).unwrap_or(usize::MAX);
-    limits.decoding_buffer_size = limits.decoding_buffer_size.min(bound);
-    limits.intermediate_buffer_size = limits.intermediate_buffer_size.min(bound);
-    limits
-}
-
-/// Its limits while it decodes a page `inspect` has checked: the page, at most the file's bytes
-/// at the largest expansion of a compression that converts (LZW's 3641), in chunks of at most
-/// the file's bytes. No directory is read under them.
-fn page_limits(len: u64) -> Limits {
-    let mut limits = Limits::default();
-    let size = |n: u64| usize::try_from(n).unwrap_or(usize::MAX);
-    limits.decoding_buffer_size = size(len.saturating_mul(3641));
-    limits.intermediate_buffer_size = size(len);
-    limits
-}
-
-/// Decodes the current page of a file of `len` bytes under [`page_limits`], then puts back
-/// [`directory_limits`] for the next page's directory.
-fn decode_in<R: Read + Seek>(
-    d: Decoder<R>,
-    page: &Page,
-    out: &mut Vec<u8>,
-    len: u64,
-) -> (Decoder<R>, Res<()>) {
-    let mut d = d.with_limits(page_limits(len));
-    let done = decode(&mut d, page, out);
-    (d.with_limits(directory_limits(len)), done)
-}
-
-/// A decoder for the regular file `path`, and its length.
-fn open(path: &Path) -> Res<(Decoder<BufReader<File>>, u64)> {
-    let at = |e: String| format!("{}: {e}", path.display());
-    let (f, meta) = crate::volume::open_regular(path)?;
-    let d = Decoder::new(BufReader::new(f))
-        .map_err(|e| at(tiff_error(e)))?
-        .with_limits(directory_limits(meta.len()));
-    Ok((d, meta.len()))
 }
 
 /// The description's ImageJ fields, if it is ImageJ's.
@@ -754,7 +511,14 @@ fn geometry(stack: &Stack, given: &[f64], input: &Path) -> Res<Option<vlib::Geom
 
 /// `vlconvert tiff IN OUT`: converts the stack (file or folder) `args.input`.
 pub fn convert(args: &Args) -> Res<()> {
-    let input = &args.input;
+    let v = read(&args.input, &args.spacing)?;
+    super::convert(&v, &args.window, &args.output)
+        .map_err(|e| format!("{}: {e}", args.input.display()))
+}
+
+/// Reads the stack (file or folder) `input`, placed by `spacing` (`--spacing`: none, or three
+/// positive numbers) or else by what its files say; a folder's files are said in their order.
+pub fn read(input: &Path, spacing: &[f64]) -> Res<Volume> {
     let (stack, files) = if input.is_dir() {
         let (s, f) = read_folder(input)?;
         (s, Some(f))
@@ -773,20 +537,19 @@ pub fn convert(args: &Args) -> Res<()> {
             names.len()
         ))?;
     }
-    if !args.spacing.is_empty() && !args.spacing.iter().all(|&v| positive(v).is_some()) {
-        return Err(format!("--spacing {:?}: positive numbers", args.spacing));
+    if !spacing.is_empty() && !spacing.iter().all(|&v| positive(v).is_some()) {
+        return Err(format!("--spacing {spacing:?}: positive numbers"));
     }
-    let geometry = geometry(&stack, &args.spacing, input)?;
-    let source = Source {
+    let geometry = geometry(&stack, spacing, input)?;
+    Ok(Volume {
         dims: stack.dims,
-        bytes: &stack.bytes,
         ty: stack.ty,
+        bytes: stack.bytes,
         big: false,
         slope: 1.0,
         inter: 0.0,
-    };
-    super::convert(&source, &args.window, &args.output, geometry)
-        .map_err(|e| format!("{}: {e}", input.display()))
+        geometry,
+    })
 }
 
 /// `vlconvert IN OUT` with a TIFF file or folder `input`.

@@ -150,6 +150,32 @@ pub struct Source<'a> {
     pub inter: f64,
 }
 
+/// A volume as a reader has read it: its elements (which [`Volume::source`] lends to the
+/// conversion) and, where the file says, where its nodes lie (RAS millimetres).
+pub struct Volume {
+    pub dims: [usize; 3],
+    pub ty: Type,
+    pub big: bool,
+    pub bytes: Vec<u8>,
+    pub slope: f64,
+    pub inter: f64,
+    pub geometry: Option<vlib::Geometry>,
+}
+
+impl Volume {
+    /// The volume as a conversion source.
+    pub fn source(&self) -> Source<'_> {
+        Source {
+            dims: self.dims,
+            bytes: &self.bytes,
+            ty: self.ty,
+            big: self.big,
+            slope: self.slope,
+            inter: self.inter,
+        }
+    }
+}
+
 /// What a conversion made: the dataset, a line saying how values became voxels, and a note
 /// where values were replaced (values that are not finite).
 pub struct Converted {

@@ -10,7 +10,7 @@ mod common;
 
 use common::{normalised, run, s, text, tmp};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use vlib::Dataset;
 
 fn fixture(name: &str) -> PathBuf {
@@ -400,20 +400,7 @@ fn a_missing_slice_is_named_by_its_gap() {
 /// `vlconvert dicom input` run with its address space limited to 1 GiB, far less than the
 /// sizes a hostile header declares: it must exit 1 with `says`, not abort on an allocation.
 fn refused_in_little_memory(input: &Path, says: &str) {
-    let out = input.with_extension("vlb");
-    let o = Command::new("sh")
-        .arg("-c")
-        .arg("ulimit -v 1048576 && exec \"$0\" dicom \"$1\" \"$2\"")
-        .arg(env!("CARGO_BIN_EXE_vlconvert"))
-        .arg(input)
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = text(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{}: {err}", input.display());
-    assert!(err.contains(says), "{err}");
-    assert!(err.contains(s(input)), "names the file: {err}");
-    assert!(!out.exists());
+    common::refused_within(1 << 20, &["dicom"], input, &[says]);
 }
 
 /// A DICOM file: preamble, `DICM`, a file meta group naming transfer syntax `ts`, then

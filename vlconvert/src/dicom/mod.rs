@@ -22,7 +22,7 @@ pub(crate) mod scan;
 mod slice;
 mod stack;
 
-use crate::volume::{Source, Type};
+use crate::volume::{Type, Volume};
 use std::path::{Path, PathBuf};
 
 type Res<T> = Result<T, String>;
@@ -72,6 +72,14 @@ pub fn convert(
     window: &super::Window,
     series: Option<&str>,
 ) -> Res<()> {
+    let (v, dir) = read(input, series)?;
+    super::convert(&v, window, output).map_err(|e| format!("{dir}: {e}"))
+}
+
+/// Reads the DICOM series at `input` (a folder, or one of its files, which chooses its
+/// series; `series` chooses one by its SeriesInstanceUID), saying what it found; and the
+/// folder's name, for errors.
+pub fn read(input: &Path, series: Option<&str>) -> Res<(Volume, String)> {
     let (folder, file) = if std::fs::metadata(input).is_ok_and(|m| m.is_dir()) {
         (input.to_path_buf(), None)
     } else {
@@ -199,15 +207,16 @@ pub fn convert(
         Some(_) => (first.slope, first.inter),
         None => (1.0, 0.0),
     };
-    let source = Source {
+    let volume = Volume {
         dims: [first.cols as usize, first.rows as usize, n],
-        bytes: &bytes,
+        bytes,
         ty,
         big: false,
         slope,
         inter,
+        geometry: stack.geometry,
     };
-    super::convert(&source, window, output, stack.geometry).map_err(|e| format!("{dir}: {e}"))
+    Ok((volume, dir.to_string()))
 }
 
 /// The narrowest integer element type that holds every value from `lo` to `hi`.

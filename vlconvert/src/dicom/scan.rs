@@ -8,8 +8,11 @@
 //!
 //! The walk reads element headers only (tag, VR, length) in the data set's encoding:
 //! explicit or implicit VR, little or big endian; a sequence of defined length in implicit
-//! VR is known by the standard dictionary, as the parser knows it. Deflated data sets are
-//! not walked: they are refused by their transfer syntax before parsing.
+//! VR is known by the standard dictionary, as the parser knows it. A binary element's length
+//! must be a whole number of its values (2 bytes for US, 4 for UL, …; in implicit VR, of the
+//! dictionary's VR): the parser reads whole values and would read the next element's header
+//! from the bytes left over. Deflated data sets are not walked: they are refused by their
+//! transfer syntax before parsing.
 
 use dicom_core::dictionary::{DataDictionary, DataDictionaryEntry, VirtualVr};
 use dicom_core::{Tag, VR};
@@ -44,13 +47,27 @@ pub fn check(bytes: &[u8]) -> Result<(String, usize), String> {
         explicit: true,
         big: false,
     };
-    // The file meta group: explicit VR little endian, group 0002.
+    // The file meta group: explicit VR little endian, group 0002; where it starts with its
+    // group length (0002,0000), up to where that says, as the parser reads it (whole elements
+    // until that many bytes are read: the data set starts after them, whatever their group).
     let mut ts = None;
-    while w.pos + 4 <= bytes.len() && w.u16_at(w.pos) == 0x0002 {
+    let mut meta_end: Option<usize> = None;
+    loop {
+        let more = match meta_end {
+            Some(end) => w.pos < end,
+            None => w.pos + 4 <= bytes.len() && w.u16_at(w.pos) == 0x0002,
+        };
+        if !more {
+            break;
+        }
+        let first = w.pos == 132;
         let (tag, vr, len, header) = w.header()?;
         let start = w.pos + header;
         if len == UNDEFINED || start + len as usize > bytes.len() {
             return Err(w.overrun(tag, len, bytes.len().saturating_sub(start)));
+        }
+        if first && tag == Tag(0x0002, 0x0000) && len == 4 {
+            meta_end = Some((start + 4).saturating_add(w.u32_at(start) as usize));
         }
         if tag == Tag(0x0002, 0x0010) && vr == Some(VR::UI) {
             let uid = &bytes[start..start + len as usize];
@@ -71,6 +88,17 @@ pub fn check(bytes: &[u8]) -> Result<(String, usize), String> {
     }
     w.dataset(Some(bytes.len()), 0)?;
     Ok((ts, w.pos))
+}
+
+/// The bytes of one value of `vr` (1 for text and bytes).
+fn unit(vr: VR) -> u32 {
+    use VR::*;
+    match vr {
+        US | SS | OW => 2,
+        AT | FL | OF | SL | UL | OL => 4,
+        FD | OD | SV | UV | OV => 8,
+        _ => 1,
+    }
 }
 
 struct Walk<'a> {
@@ -228,6 +256,19 @@ impl Walk<'_> {
         }
         if start + len as usize > limit {
             return Err(self.overrun(tag, len, limit - start));
+        }
+        // The parser reads whole values of the VR (the dictionary's, in implicit VR) and goes
+        // on after them: bytes left over would have it read the next element from inside
+        // this one.
+        let read_as = vr.or_else(|| StandardDataDictionary.by_tag(tag).map(|e| e.vr().relaxed()));
+        if let Some(vr) = read_as.filter(|&vr| len % unit(vr) != 0) {
+            return Err(format!(
+                "element {tag} at byte {}: {} of {vr:?}, not a whole number of its {}-byte \
+                 values",
+                self.pos,
+                crate::counted(len, "byte"),
+                unit(vr)
+            ));
         }
         self.pos = start;
         if self.is_sequence(tag, vr) {

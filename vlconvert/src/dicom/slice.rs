@@ -9,6 +9,7 @@
 
 use super::scan;
 use crate::volume::{read_regular, Type};
+use dicom_core::DicomValue;
 use dicom_core::Tag;
 use dicom_dictionary_std::tags;
 use dicom_object::file::{OpenFileOptions, ReadPreamble};
@@ -314,6 +315,7 @@ impl Slice {
         if Slice::from(&self.path, &obj).as_ref() != Ok(self) {
             return Err(at("the file changed while it was read".into()));
         }
+        rle_headers(&self.ts, &obj).map_err(at)?;
         let px = guarded("the pixel data decoder", || {
             obj.decode_pixel_data().map_err(|e| chain(&e))
         })
@@ -372,6 +374,36 @@ impl Slice {
         }
         Ok(())
     }
+}
+
+/// RLE Lossless.
+const RLE: &str = "1.2.840.10008.1.2.5";
+
+/// Checks the header of each RLE fragment of `obj` (transfer syntax `ts`) before
+/// `dicom-pixeldata` decodes it: it allocates as many segment offsets as the header's first
+/// word says before it reads them (up to 16 GiB from 4 bytes), where RLE Lossless allows at
+/// most 15, in a 64-byte header.
+fn rle_headers(ts: &str, obj: &DefaultDicomObject) -> Res<()> {
+    let Some(DicomValue::PixelSequence(seq)) = obj.get(tags::PIXEL_DATA).map(|e| e.value()) else {
+        return Ok(());
+    };
+    if ts != RLE {
+        return Ok(());
+    }
+    for (k, f) in seq.fragments().iter().enumerate() {
+        let segments = f
+            .get(..4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]));
+        if f.len() < 64 || segments.is_none_or(|n| n > 15) {
+            return Err(format!(
+                "pixel data fragment {k}: {}, {}: not an RLE Lossless header (64 bytes, at \
+                 most 15 segments)",
+                crate::counted(f.len(), "byte"),
+                segments.map_or("no segment count".into(), |n| crate::counted(n, "segment"))
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Reads the header of the file at `path`: what it is, and for an image, its slice.

@@ -41,6 +41,29 @@ pub fn run_within(args: &[&str]) -> Output {
     child.wait_with_output().unwrap()
 }
 
+/// Runs `vlconvert args… input input.vlb` with its address space limited to `kib` KiB (far
+/// less than what a hostile header declares) and asserts that it is refused: exit 1, a
+/// message with each of `says` and the input's name, no panic, no output file.
+pub fn refused_within(kib: u64, args: &[&str], input: &Path, says: &[&str]) {
+    let out = input.with_extension("vlb");
+    let o = Command::new("sh")
+        .arg("-c")
+        .arg(format!("ulimit -v {kib} && exec \"$0\" \"$@\""))
+        .arg(BIN)
+        .args(args)
+        .arg(input)
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{}: {err}", input.display());
+    for say in says.iter().chain(&[s(input)]) {
+        assert!(err.contains(say), "{say:?} not in {err}");
+    }
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!out.exists());
+}
+
 /// Bytes a program wrote, as text.
 pub fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
