@@ -12,8 +12,9 @@
 //! samples are exactly the ones that would have been taken, so skipping never changes a pixel.
 //!
 //! The module owns these acceleration structures, not their use: the renderer asks a [`Walk`]
-//! whether a sample lies in an empty block and where to resume, and an [`EntryMap`] where each
-//! primary ray may start; nothing here depends on the renderer. Nothing here caches either:
+//! whether a sample lies in an empty block and where to resume, an [`EntryMap`] where each
+//! primary ray may start, and a [`BoxTree`] which of a scene's many objects a ray or a point
+//! may meet at all; nothing here depends on the renderer. Nothing here caches either:
 //! the renderer's `Caches`, which the state machine keeps per open scene, holds each object's
 //! grid.
 //!
@@ -26,8 +27,11 @@
 //!   meets a block that may hold opacity.
 //! - `project`: the entry map's projection of boxes, eight boxes to the f64 lanes.
 //! - `rect`: the entry map's rasterisation (lowering a rectangle of the map).
+//! - `boxes`: [`BoxTree`], a bounding volume hierarchy over a scene's objects: which of them
+//!   a ray or a point may meet.
 //! - `tests`: every unit test of the module and the brute-force references they check against.
 
+mod boxes;
 mod entry;
 mod grid;
 mod passing;
@@ -37,6 +41,7 @@ mod rect;
 mod tests;
 mod walk;
 
+pub(crate) use boxes::BoxTree;
 pub(crate) use entry::{EntryMap, EntryMarks, Pinhole, MAX_MAP_SIDE};
 pub(crate) use grid::SkipGrid;
 pub(crate) use walk::Walk;

@@ -219,7 +219,9 @@ pub struct Settings {
 /// are on by default except `preintegrate`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Optimise {
-    /// Skip blocks where opacity is provably 0.
+    /// Skip blocks where opacity is provably 0, and, in a scene of more than eight objects,
+    /// find the objects a ray (or a voxelization's node) may meet through a tree of their
+    /// world boxes instead of testing every one.
     pub skip_empty: bool,
     /// Stop rays whose transmittance falls below `termination`.
     pub early_termination: bool,

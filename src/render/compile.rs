@@ -3,10 +3,11 @@
 //! (its matrices, box, step, opacity exponent, program prefixes, empty-space grid and cell
 //! mask, toggles), with the object-level queries on it that do not shade: the ray's interval in
 //! its box ([`CObj::clip`]) and its fields and opacity at a point. It also decides the scene's
-//! [`Plan`], and it holds what later compilations of a scene share ([`Caches`]: each root
-//! object's empty-space grid, built by `accel` the first time a compilation needs it, and its
-//! pre-integration tables, built by `preint`). It does not trace, shade or composite
-//! (`integrate`, `shade`).
+//! [`Plan`], puts the world boxes of a scene of many objects in a [`BoxTree`] (which objects
+//! a ray or a point may meet: [`Compiled::met_by_ray`], [`Compiled::holding`]), and it holds
+//! what later compilations of a scene share ([`Caches`]: each root object's empty-space grid,
+//! built by `accel` the first time a compilation needs it, and its pre-integration tables,
+//! built by `preint`). It does not trace, shade or composite (`integrate`, `shade`).
 
 use super::*;
 use crate::render::preint::PreIntegrated;
@@ -452,6 +453,69 @@ pub struct Compiled {
     pub(super) plan: Plan,
     /// The pixel buffers of the scene's renders, kept between frames (the caches').
     pub(super) recycled: Arc<Recycled>,
+    /// Under empty-space skipping, for a scene of more than [`SCANNED_OBJECTS`] objects: their
+    /// world boxes in a tree, which finds the objects a ray or a point may meet
+    /// ([`Compiled::met_by_ray`], [`Compiled::holding`]).
+    pub(super) tree: Option<BoxTree>,
+}
+
+/// Up to this many objects, a ray or a point is tested against every one; beyond, the scene's
+/// [`BoxTree`] finds those it may meet.
+pub(super) const SCANNED_OBJECTS: usize = 8;
+
+/// A box tree's boxes are the objects' world boxes widened by this fraction of their largest
+/// coordinate and extent, and a ray's query by this fraction of its origin's largest
+/// coordinate: far more than rounding moves the clip in an object's space by, for a
+/// transform whose condition number is at most [`TREE_CONDITION`] (ε times the condition,
+/// 2·10⁻¹⁰), so that the tree leaves out no object whose clip would find the ray.
+const TREE_SLACK: f64 = 1e-6;
+
+/// An object whose transform's condition number (the Frobenius norms of its linear part and
+/// its inverse's, multiplied) is above this, or not finite, is tested by every ray.
+const TREE_CONDITION: f64 = 1e6;
+
+/// The objects a ray or a point may meet: every one, or those a [`BoxTree`] found, in
+/// increasing order.
+pub(super) enum Met {
+    All(std::ops::Range<usize>),
+    Found(std::vec::IntoIter<usize>),
+}
+
+impl Iterator for Met {
+    type Item = usize;
+    #[inline]
+    fn next(&mut self) -> Option<usize> {
+        match self {
+            Met::All(r) => r.next(),
+            Met::Found(f) => f.next(),
+        }
+    }
+}
+
+/// `obj`'s box in world space (the box of its eight corners) widened by [`TREE_SLACK`], or
+/// `None` where that is not finite or its transform's condition is above [`TREE_CONDITION`].
+fn world_box(obj: &CObj) -> Option<(DVec3, DVec3)> {
+    let (lo, hi) = (obj.box_min, obj.box_max);
+    let (mut min, mut max) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for k in 0..8 {
+        let pick = |bit: usize, l: f64, h: f64| if k >> bit & 1 == 0 { l } else { h };
+        let c = obj.to_world.transform_point3(DVec3::new(
+            pick(0, lo.x, hi.x),
+            pick(1, lo.y, hi.y),
+            pick(2, lo.z, hi.z),
+        ));
+        min = min.min(c);
+        max = max.max(c);
+    }
+    let norm = |m: glam::DMat3| {
+        (m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()).sqrt()
+    };
+    let condition =
+        norm(glam::DMat3::from_mat4(obj.to_world)) * norm(glam::DMat3::from_mat4(obj.to_object));
+    let size = min.abs().max(max.abs()).max_element() + (max - min).max_element();
+    let pad = TREE_SLACK * size;
+    (min.is_finite() && max.is_finite() && pad.is_finite() && condition <= TREE_CONDITION)
+        .then(|| (min - pad, max + pad))
 }
 
 impl Compiled {
@@ -517,7 +581,12 @@ impl Compiled {
             settings: desc.settings.clone(),
             plan,
             recycled: caches.pixels.clone(),
+            tree: None,
         };
+        if desc.settings.optimise.skip_empty && scene.objects.len() > SCANNED_OBJECTS {
+            let boxes: Vec<_> = scene.objects.iter().map(world_box).collect();
+            scene.tree = Some(crate::data::or_unwind(BoxTree::build(&boxes)));
+        }
         scene.lanes = scene
             .objects
             .iter()
@@ -568,6 +637,34 @@ impl Compiled {
         Ok(())
     }
 
+    /// The objects whose boxes the world ray `origin + t·dir` (t ≥ 0) may meet, in increasing
+    /// order: every one, or, with a tree, a superset of those whose [`CObj::clip`] finds it.
+    #[inline]
+    pub(super) fn met_by_ray(&self, origin: DVec3, dir: DVec3) -> Met {
+        match &self.tree {
+            None => Met::All(0..self.objects.len()),
+            Some(tree) => {
+                let mut found = Vec::new();
+                let slack = TREE_SLACK * origin.abs().max_element();
+                tree.ray(origin, dir, slack, &mut found);
+                Met::Found(found.into_iter())
+            }
+        }
+    }
+
+    /// The objects whose boxes may hold world point `w`, in increasing order: every one, or,
+    /// with a tree, a superset of those whose [`CObj::inside`] holds it.
+    pub(super) fn holding(&self, w: DVec3) -> Met {
+        match &self.tree {
+            None => Met::All(0..self.objects.len()),
+            Some(tree) => {
+                let mut found = Vec::new();
+                tree.point(w, 0.0, &mut found);
+                Met::Found(found.into_iter())
+            }
+        }
+    }
+
     /// The render plan: which effects this scene calls for.
     pub fn plan(&self) -> Plan {
         self.plan
@@ -577,7 +674,7 @@ impl Compiled {
     /// the largest opacity (the first on ties), or all 0 (voxelization samples the scene with it).
     pub fn fields_at(&self, w: DVec3) -> [f32; crate::types::FIELD_COUNT] {
         let mut best: Option<[f32; crate::types::FIELD_COUNT]> = None;
-        for obj in &self.objects {
+        for obj in self.holding(w).map(|i| &self.objects[i]) {
             let p = obj.to_object.transform_point3(w);
             if !obj.inside(p) {
                 continue;

@@ -36,7 +36,7 @@
 
 // What the renderer's modules share of the crate: each of them (the packet march too) takes
 // the render module's names with `use super::*` (or `use crate::render::*`).
-use crate::accel::{EntryMap, EntryMarks, Pinhole, SkipGrid, Walk};
+use crate::accel::{BoxTree, EntryMap, EntryMarks, Pinhole, SkipGrid, Walk};
 use crate::control::Progress;
 use crate::data::{CellGradients, Cells8, Dataset, Filter, GradientFilter};
 use crate::error::{Error, ErrorCode, Result};

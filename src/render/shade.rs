@@ -568,7 +568,10 @@ impl Compiled {
             return 0.0;
         }
         let mut t_total = 1.0f64;
-        for obj in self.objects.iter().filter(|o| o.cast_shadows) {
+        for obj in self.met_by_ray(w, l).map(|i| &self.objects[i]) {
+            if !obj.cast_shadows {
+                continue;
+            }
             let (o, d) = obj.object_ray(w, l);
             let Some((t0, t1)) = obj.clip(o, d) else {
                 continue;

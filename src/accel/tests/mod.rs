@@ -1,8 +1,9 @@
-//! The unit tests of empty-space skipping, by module (`grid`, `passing`, `walk`, `entry`,
+//! The unit tests of empty-space skipping, by module (`boxes`, `grid`, `passing`, `walk`, `entry`,
 //! `rect`), and what they share: a deterministic generator, random grids, placements,
 //! cameras and datasets, the slab test, and the tally of rays checked against an entry map.
 //! Brute-force references live beside the tests that use them. Test code only.
 
+mod boxes;
 mod entry;
 mod grid;
 mod passing;

@@ -249,7 +249,8 @@ impl Compiled {
         }
         let mut cursors: Vec<Cursor> = Vec::new();
         let mut layers: Vec<Layer> = Vec::new();
-        for (i, obj) in self.objects.iter().enumerate() {
+        for i in self.met_by_ray(origin, dir) {
+            let obj = &self.objects[i];
             if !obj.seen_by(ray) {
                 continue;
             }
