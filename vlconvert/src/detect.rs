@@ -1,7 +1,7 @@
 //! Which format a file is, from its first bytes (`vlconvert IN OUT.vlb`): NRRD by its magic,
 //! NIfTI-1 by `n+1` at byte 344 (inside gzip too), MetaImage by its `ObjectType`/`NDims` header
 //! keys, DICOM by `DICM` at byte 128, TIFF (and BigTIFF) by `II*\0`/`MM\0*` (`II+\0`/`MM\0+`),
-//! PNG and PNM images by theirs; a folder holding TIFF files is a stack, one holding DICOM files
+//! PNG and PNM images (P1 to P7, PAM among them) by theirs; a folder holding TIFF files is a stack, one holding DICOM files
 //! a series; a folder of neither, or of both, is refused (`vlconvert tiff` or `vlconvert dicom`
 //! chooses). A headerless raw volume cannot be recognised: it needs `vlconvert raw` with its
 //! dimensions and type.
@@ -74,7 +74,7 @@ pub fn format(path: &Path) -> Result<Format, String> {
         return Ok(Format::Tiff);
     }
     if head.starts_with(b"\x89PNG")
-        || (head.len() > 2 && head[0] == b'P' && b"123456".contains(&head[1]))
+        || (head.len() > 2 && head[0] == b'P' && b"1234567".contains(&head[1]))
     {
         return Ok(Format::Image);
     }

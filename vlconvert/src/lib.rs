@@ -118,7 +118,7 @@ enum Endian {
 #[derive(Subcommand)]
 enum Cmd {
     /// Any volume or image whose format its first bytes tell (NIfTI-1, NRRD, MetaImage, DICOM,
-    /// TIFF, PNG, PNM), or a folder (of TIFFs: a stack; of DICOM files: a series):
+    /// TIFF, PNG, PNM and PAM), or a folder (of TIFFs: a stack; of DICOM files: a series):
     /// `vlconvert IN OUT.vlb` is short for `vlconvert convert IN OUT.vlb`.
     Convert {
         input: PathBuf,
@@ -162,7 +162,8 @@ enum Cmd {
         #[command(flatten)]
         window: Window,
     },
-    /// A 2D image (PGM, PPM or PNG): grey → one slab dataset; colour → OUTPUT_r/_g/_b.vlb.
+    /// A 2D image (PNG, or PBM, PGM, PPM or PAM): grey → one slab dataset; colour →
+    /// OUTPUT_r/_g/_b.vlb.
     Image {
         input: PathBuf,
         output: PathBuf,

@@ -121,6 +121,29 @@ fn images_become_slabs_with_rows_flipped_upwards() {
         let v = Dataset::load(&d.join(suffix)).unwrap();
         assert_eq!(v.raw(), &Voxels::U8(want.to_vec()), "{suffix}");
     }
+
+    // A PAM (P7) written by the image crate, named .pam and without a suffix: detected by
+    // `vlconvert IN OUT` as an image, with the rows flipped as `vlconvert image` flips them.
+    let mut pam = Vec::new();
+    image::DynamicImage::ImageLuma8(
+        image::GrayImage::from_raw(3, 2, vec![10, 20, 30, 40, 50, 60]).unwrap(),
+    )
+    .write_to(&mut std::io::Cursor::new(&mut pam), image::ImageFormat::Pnm)
+    .unwrap();
+    assert!(pam.starts_with(b"P7"), "{:?}", &pam[..8]);
+    for name in ["p.pam", "p"] {
+        let input = d.join(name);
+        std::fs::write(&input, &pam).unwrap();
+        let out = d.join(format!("{name}.vlb"));
+        let o = run(&[s(&input), s(&out)]);
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let v = Dataset::load(&out).unwrap();
+        assert_eq!(v.raw(), &Voxels::U8(vec![40, 50, 60, 10, 20, 30]), "{name}");
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }
 
