@@ -323,3 +323,70 @@ fn voxelization_quantises_to_8_and_16_bits() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A child read by several instructions at one point runs its program once there: nested
+/// objects combined by a union of their opacity and then a blend of their colours (as
+/// `docs/cvg.md` combines fields) call the innermost object's field function once a point at
+/// any depth (2^(depth − 1) times were each child run per read), and voxelize to the same
+/// opacity (a union of one child is that child); twelve children read twice (more than a
+/// sample looks up in its short list) run once each a point too.
+#[test]
+fn each_child_is_evaluated_once_a_point_however_often_it_is_read() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    let d = tmp("once");
+    let leaf = |calls: &Arc<AtomicUsize>| {
+        let calls = calls.clone();
+        move |s: &mut vlib::Sample| {
+            calls.fetch_add(1, Ordering::Relaxed);
+            let _ = s.set(Fields::O, vlib::vlaux::sphere(s.position()));
+            let _ = s.set(Fields::R, 0.25);
+        }
+    };
+    let nested = |depth: usize| {
+        let calls = Arc::new(AtomicUsize::new(0));
+        let mut vl = Library::new();
+        vl.scene().unwrap();
+        vl.object().unwrap();
+        vl.scale(10.0, 10.0, 10.0).unwrap();
+        for _ in 1..depth {
+            vl.object().unwrap();
+        }
+        vl.function(Fields::O | Fields::R, leaf(&calls)).unwrap();
+        for _ in 1..depth {
+            vl.end().unwrap();
+            vl.function(Fields::O, cvg::union).unwrap();
+            vl.function(Fields::R | Fields::G | Fields::B, cvg::blend)
+                .unwrap();
+        }
+        vl.end().unwrap();
+        let o = voxelize_o(&mut vl, &d, 9);
+        (calls.load(Ordering::Relaxed), o.values().to_vec())
+    };
+    let (calls, values) = nested(1);
+    // Every node of the 9³ grid lies in the object's closed box [0, 10]³.
+    assert_eq!(calls, 9 * 9 * 9);
+    for depth in [2, 6, 12] {
+        let (c, v) = nested(depth);
+        assert_eq!(c, calls, "depth {depth}");
+        assert!(v == values, "depth {depth}");
+    }
+
+    let calls = Arc::new(AtomicUsize::new(0));
+    let mut vl = Library::new();
+    vl.scene().unwrap();
+    vl.object().unwrap();
+    vl.scale(10.0, 10.0, 10.0).unwrap();
+    for _ in 0..12 {
+        vl.object().unwrap();
+        vl.function(Fields::O | Fields::R, leaf(&calls)).unwrap();
+        vl.end().unwrap();
+    }
+    vl.function(Fields::O, cvg::union).unwrap();
+    vl.function(Fields::R | Fields::G | Fields::B, cvg::blend)
+        .unwrap();
+    vl.end().unwrap();
+    voxelize_o(&mut vl, &d, 9);
+    assert_eq!(calls.load(Ordering::Relaxed), 12 * 9 * 9 * 9);
+    std::fs::remove_dir_all(&d).unwrap();
+}

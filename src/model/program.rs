@@ -137,6 +137,46 @@ pub struct Sample<'a> {
     /// then read through the BC-spline of their gradient filter where that is cubic.
     pub(crate) for_gradient: bool,
     env: Option<&'a SampleEnv>,
+    /// The fields of the children read at this sample.
+    children: std::cell::RefCell<ChildFields>,
+}
+
+/// The fields of the children a sample has read, by child and point: a child that several
+/// instructions read at one point (a union of its opacity, then a blend of its colours) runs
+/// its program once there, so that nested objects cost what their number does, not two to the
+/// power of their depth. A few are looked up in a list, more in a hash map.
+#[derive(Default)]
+struct ChildFields {
+    few: Vec<(i32, [u32; 3], [f32; FIELD_COUNT])>,
+    many: Option<std::collections::HashMap<ChildKey, [f32; FIELD_COUNT]>>,
+}
+
+/// A child read at a sample: its number and the bits of the sample's object-space point.
+type ChildKey = (i32, [u32; 3]);
+
+/// Children a sample looks up in a list before it files them in a hash map.
+const FEW_CHILDREN: usize = 8;
+
+impl ChildFields {
+    fn get(&self, key: ChildKey) -> Option<[f32; FIELD_COUNT]> {
+        match &self.many {
+            Some(map) => map.get(&key).copied(),
+            None => self.few.iter().find(|e| (e.0, e.1) == key).map(|e| e.2),
+        }
+    }
+
+    fn insert(&mut self, key: ChildKey, fields: [f32; FIELD_COUNT]) {
+        if let Some(map) = &mut self.many {
+            map.insert(key, fields);
+        } else if self.few.len() < FEW_CHILDREN {
+            self.few.push((key.0, key.1, fields));
+        } else {
+            let mut map: std::collections::HashMap<_, _> =
+                self.few.drain(..).map(|(i, p, f)| ((i, p), f)).collect();
+            map.insert(key, fields);
+            self.many = Some(map);
+        }
+    }
 }
 
 impl Sample<'static> {
@@ -153,6 +193,7 @@ impl Sample<'static> {
             role: SampleRole::Field,
             for_gradient: false,
             env: None,
+            children: Default::default(),
         }
     }
 }
@@ -168,6 +209,7 @@ impl<'a> Sample<'a> {
             role: SampleRole::Field,
             for_gradient: false,
             env: Some(env),
+            children: Default::default(),
         }
     }
 
@@ -223,14 +265,20 @@ impl<'a> Sample<'a> {
     /// current point in the child's space (0 outside the child's boundary).
     pub fn child_field(&self, i: i32, field: Fields) -> Result<f32> {
         let index = field.validate_single()?;
-        let c = self.child(i)?;
-        Ok(c.fields_at(self.child_point(c), self.world)[index])
+        Ok(self.child_fields(i)?[index])
     }
 
-    /// All ten fields of child `i` at the current point (what the CVG operators combine).
+    /// All ten fields of child `i` at the current point (what the CVG operators combine). A
+    /// child is evaluated once at a point, however many instructions read it there.
     pub fn child_fields(&self, i: i32) -> Result<[f32; FIELD_COUNT]> {
         let c = self.child(i)?;
-        Ok(c.fields_at(self.child_point(c), self.world))
+        let key = (i, self.p.map(f32::to_bits));
+        if let Some(fields) = self.children.borrow().get(key) {
+            return Ok(fields);
+        }
+        let fields = c.fields_at(self.child_point(c), self.world);
+        self.children.borrow_mut().insert(key, fields);
+        Ok(fields)
     }
 
     /// `vlChildNormal` (normal functions only): the world-space normal of child `i` at the current
