@@ -445,7 +445,9 @@ fn compile(program: &[Instr]) -> Option<Vec<Op>> {
                     outputs,
                 }) = ops.last_mut()
                 {
-                    let source_intact = outputs.iter().all(|&(t, _)| t & (1 << *s) == 0);
+                    // Whether no output of the group writes its source: each output was
+                    // checked against it when the next one joined, so the last one tells.
+                    let source_intact = outputs.last().is_none_or(|&(t, _)| t & (1 << *s) == 0);
                     if *s == *source && Arc::ptr_eq(mp, mapping) && source_intact {
                         outputs.push((m, *output));
                         continue;

@@ -83,6 +83,16 @@ fn programs() -> Vec<Vec<Instr>> {
         vec![ds(Fields::F)],
         // The scanned volume without a colour table (direct form, opacity alone).
         vec![ds(Fields::F), map(Fields::O, 9, &o, 0), set(Fields::R, 0.5)],
+        // A map that overwrites its own source in the middle of a group (after opacity, whose
+        // map the zero test splits off): the maps after it read the new value.
+        vec![
+            ds(Fields::F),
+            map(Fields::O, 9, &o, 0),
+            map(Fields::R, 9, &c, 0),
+            map(Fields::F, 9, &c, 1),
+            map(Fields::G, 9, &c, 2),
+            map(Fields::B, 9, &c, 0),
+        ],
     ]
 }
 
