@@ -66,38 +66,43 @@ pub(crate) struct CellMask {
 /// a node behind per position.
 #[derive(Debug, Default)]
 pub(super) struct CellMasks {
-    masks: Vec<(u32, std::sync::Weak<CellMask>)>,
+    masks: std::collections::HashMap<u32, std::sync::Weak<CellMask>>,
     last: Option<std::sync::Arc<CellMask>>,
+    /// The entries past which [`CellMasks::keep`] next drops those of masks nothing holds:
+    /// twice what it kept the last time, so that the dropping costs a constant a mask kept.
+    prune_at: usize,
 }
 
 impl CellMasks {
     /// The mask of the bound of bits `bound`, if one is still in use; it becomes the last
     /// asked for.
     fn take(&mut self, bound: u32) -> Option<std::sync::Arc<CellMask>> {
-        let found = self
-            .masks
-            .iter()
-            .find(|(b, _)| *b == bound)
-            .and_then(|(_, m)| m.upgrade())?;
+        let found = self.masks.get(&bound).and_then(std::sync::Weak::upgrade)?;
         self.last = Some(found.clone());
         Some(found)
     }
 
     /// Files `mask` under the bound of bits `bound` as the last asked for, dropping the
-    /// entries of masks that nothing holds.
+    /// entries of masks that nothing holds once they may be half of all.
     fn keep(&mut self, bound: u32, mask: &std::sync::Arc<CellMask>) {
         self.last = Some(mask.clone());
-        self.masks.retain(|(_, m)| m.strong_count() > 0);
-        self.masks.push((bound, std::sync::Arc::downgrade(mask)));
+        self.masks.insert(bound, std::sync::Arc::downgrade(mask));
+        if self.masks.len() > self.prune_at {
+            self.masks.retain(|_, m| m.strong_count() > 0);
+            self.prune_at = (2 * self.masks.len()).max(8);
+        }
     }
 
     /// How many masks are in use (held by the dataset or elsewhere).
     #[cfg(test)]
     pub(super) fn in_use(&self) -> usize {
-        self.masks
-            .iter()
-            .filter(|(_, m)| m.strong_count() > 0)
-            .count()
+        self.masks.values().filter(|m| m.strong_count() > 0).count()
+    }
+
+    /// How many entries are filed, in use or not.
+    #[cfg(test)]
+    pub(super) fn entries(&self) -> usize {
+        self.masks.len()
     }
 }
 

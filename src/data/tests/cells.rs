@@ -245,8 +245,11 @@ fn cell_masks_are_kept_while_in_use_and_the_last_one() {
     for k in 0..100 {
         drop(d.cells_above(k as f32 / 100.0 + 0.001));
     }
-    // The last bound's mask (the dataset holds it) and 0.5's (held here).
+    // The last bound's mask (the dataset holds it) and 0.5's (held here); the entries of the
+    // masks dropped are pruned once they outnumber those kept (at most 8 entries then, and the
+    // one filed after the prune).
     assert_eq!(in_use(), 2);
+    assert!(d.cell_masks.lock().unwrap().entries() <= 9);
     assert!(
         std::sync::Arc::ptr_eq(&held, &d.cells_above(0.5)),
         "still shared"
