@@ -617,7 +617,10 @@ impl Library {
 
     /// A snapshot of what `vlSample` reads (the datasets and the interpolation in force), for
     /// sampling from any thread while this library is busy, such as a helper thread of a field
-    /// function during a render. Cheap: the datasets are shared, not copied.
+    /// function during a render. Cheap: the datasets are shared, not copied. While a sampler
+    /// lives, the next `load`, `add_dataset` or `unload` copies the library's table of
+    /// datasets (a pointer each, not their voxels) so that the sampler keeps its snapshot:
+    /// drop samplers that are no longer needed before loading many datasets.
     pub fn sampler(&self) -> Sampler {
         Sampler {
             datasets: self.datasets.clone(),
