@@ -3,12 +3,12 @@
 //! instead of a look at every one.
 //!
 //! [`BoxTree`] holds axis-aligned boxes by the index of their item (the renderer's root objects,
-//! their world boxes padded by what rounding can move a clip by) and answers, for a ray
-//! `o + t·d` (t ≥ 0) or a point, a superset of the items whose box it meets, in increasing
-//! order: the caller then runs its own exact test on each, so that the tree changes which items
-//! are looked at, never what is found. An item whose box is not known (`None`: not finite, or
-//! a transform too ill-conditioned to pad for) is in every answer. The module owns the tree,
-//! not the boxes: the renderer decides them (`render::compile`).
+//! their world boxes padded by more than rounding can move a clip by) and answers, for a ray
+//! `o + t·d` (t ≥ 0) or a point, the items whose box it meets, in increasing order: a superset
+//! of those the caller's own exact test then finds, so that the tree changes which items are
+//! looked at, never what is found. An item whose box is not known (`None`: not finite, or a
+//! transform too ill-conditioned to pad for) is in every answer. The module owns the tree, not
+//! the boxes: the renderer decides them (`render::compile`).
 
 use crate::error::Result;
 use crate::num::try_with_capacity;
