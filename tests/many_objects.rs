@@ -231,3 +231,71 @@ fn each_of_many_objects_is_seen_where_it_is() {
         }
     }
 }
+
+/// A needle (stretched 7·10⁵ times along one axis between two turns: a condition number near
+/// 10⁶) 10⁸ from the origin, whose clip in its own space rounding moves by up to 10⁴ world
+/// units, and eight more objects: a ray that passes its tip by a hair, and a line of nodes
+/// beside it, find it as when every object is tested (found by a search for rays that tell
+/// the two apart; such an object is tested by every ray, outside the tree).
+#[test]
+fn an_ill_conditioned_object_far_away_is_found_as_when_every_object_is_tested() {
+    let scene = |vl: &mut Library| {
+        vl.scene().unwrap();
+        vl.camera(&Camera {
+            eye: [-97391420.0, 41802892.0, -3875505.3],
+            at: [2571477.3, 44526500.0, -3862560.0],
+            up: [0.0, 0.0, 1.0],
+            fov: 1.0,
+        })
+        .unwrap();
+        vl.ambient(1.0, 1.0, 1.0, 1.0).unwrap();
+        vl.object().unwrap();
+        vl.rotate(78.0, -135.0, 160.0).unwrap();
+        vl.scale(7.0e5, 1.0, 1.0).unwrap();
+        vl.rotate(114.0, 111.0, -105.0).unwrap();
+        vl.translate(-97391360.0, 41803028.0, -3875870.0).unwrap();
+        vl.set(Fields::O | Fields::KA | Fields::R, 1.0).unwrap();
+        vl.end().unwrap();
+        for i in 0..8 {
+            vl.object().unwrap();
+            vl.translate(10.0 * i as f32, 0.0, 0.0).unwrap();
+            vl.set(Fields::O | Fields::KA | Fields::G, 1.0).unwrap();
+            vl.end().unwrap();
+        }
+    };
+    let optimise = |vl: &mut Library, skip_empty| {
+        vl.set_optimise(Optimise {
+            skip_empty,
+            ..Default::default()
+        })
+        .unwrap();
+    };
+    let render = |skip_empty| {
+        let mut vl = Library::new();
+        scene(&mut vl);
+        optimise(&mut vl, skip_empty);
+        vl.render_preview(1, 1, 1.0).unwrap().to_rgb8()
+    };
+    assert_eq!(render(true), render(false));
+    let dir = std::env::temp_dir().join(format!("vlib-needle-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let voxelize = |skip_empty: bool| {
+        let prefix = dir.join(format!("n{skip_empty}"));
+        let mut vl = Library::new();
+        scene(&mut vl);
+        vl.volume(
+            &prefix,
+            Fields::O,
+            [-97391400.0, 41802896.0, -3875514.0],
+            [-97391392.0, 41802896.0, -3875514.0],
+            [20001, 1, 1],
+            1,
+        )
+        .unwrap();
+        optimise(&mut vl, skip_empty);
+        vl.end().unwrap();
+        std::fs::read(dir.join(format!("n{skip_empty}_o.vlb"))).unwrap()
+    };
+    assert!(voxelize(true) == voxelize(false));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -465,14 +465,19 @@ pub(super) const SCANNED_OBJECTS: usize = 8;
 
 /// A box tree's boxes are the objects' world boxes widened by this fraction of their largest
 /// coordinate and extent, and a ray's query by this fraction of its origin's largest
-/// coordinate: far more than rounding moves the clip in an object's space by, for a
-/// transform whose condition number is at most [`TREE_CONDITION`] (ε times the condition,
-/// 2·10⁻¹⁰), so that the tree leaves out no object whose clip would find the ray.
-const TREE_SLACK: f64 = 1e-6;
+/// coordinate: more than rounding moves the clip in an object's space by. That clip reads the
+/// ray through `to_object`, an inverse computed with a relative error of about the
+/// transform's condition number κ times ε, which the object's own matrix then magnifies by
+/// up to κ again: in world units about κ²·ε times the sizes of the origin and the point. For
+/// κ at most [`TREE_CONDITION`] that is 2·10⁻⁸ of them, 450 times less than this slack, so
+/// the tree leaves out no object whose clip would find the ray.
+const TREE_SLACK: f64 = 1e-5;
 
 /// An object whose transform's condition number (the Frobenius norms of its linear part and
-/// its inverse's, multiplied) is above this, or not finite, is tested by every ray.
-const TREE_CONDITION: f64 = 1e6;
+/// its inverse's, multiplied: at least the 2-norm one) is above this, or not finite, is
+/// tested by every ray (a needle 7·10⁵ long, κ near 10⁶, 10⁸ from the origin: rounding
+/// moves its clip's answer by up to 10⁴ world units along it, `tests/many_objects.rs`).
+const TREE_CONDITION: f64 = 1e4;
 
 /// The objects a ray or a point may meet: every one, or those a [`BoxTree`] found, in
 /// increasing order.
