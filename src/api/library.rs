@@ -620,7 +620,7 @@ impl Library {
     /// function during a render. Cheap: the datasets are shared, not copied. While a sampler
     /// lives, the next `load`, `add_dataset` or `unload` copies the library's table of
     /// datasets (a pointer each, not their voxels) so that the sampler keeps its snapshot:
-    /// drop samplers that are no longer needed before loading many datasets.
+    /// drop the samplers you are done with before loading many datasets.
     pub fn sampler(&self) -> Sampler {
         Sampler {
             datasets: self.datasets.clone(),
