@@ -232,6 +232,18 @@ impl CObj {
         }
     }
 
+    /// Corner `k` (0 … 7) of the object's box in world space: bit 0 of `k` picks the box's
+    /// low or high x, bit 1 y, bit 2 z (so corners k and 7 − k are opposite).
+    fn world_corner(&self, k: usize) -> DVec3 {
+        let pick = |bit: usize, lo: f64, hi: f64| if k >> bit & 1 == 0 { lo } else { hi };
+        let (lo, hi) = (self.box_min, self.box_max);
+        self.to_world.transform_point3(DVec3::new(
+            pick(0, lo.x, hi.x),
+            pick(1, lo.y, hi.y),
+            pick(2, lo.z, hi.z),
+        ))
+    }
+
     /// The world ray `origin + t·dir` in the object's coordinates, `o + t·d` (the same t).
     #[inline]
     pub(super) fn object_ray(&self, origin: DVec3, dir: DVec3) -> (DVec3, DVec3) {
@@ -500,15 +512,9 @@ impl Iterator for Met {
 /// `obj`'s box in world space (the box of its eight corners) widened by [`TREE_SLACK`], or
 /// `None` where that is not finite or its transform's condition is above [`TREE_CONDITION`].
 fn world_box(obj: &CObj) -> Option<(DVec3, DVec3)> {
-    let (lo, hi) = (obj.box_min, obj.box_max);
     let (mut min, mut max) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for k in 0..8 {
-        let pick = |bit: usize, l: f64, h: f64| if k >> bit & 1 == 0 { l } else { h };
-        let c = obj.to_world.transform_point3(DVec3::new(
-            pick(0, lo.x, hi.x),
-            pick(1, lo.y, hi.y),
-            pick(2, lo.z, hi.z),
-        ));
+        let c = obj.world_corner(k);
         min = min.min(c);
         max = max.max(c);
     }
@@ -609,15 +615,7 @@ impl Compiled {
     /// cancelled within [`PROBE_EVERY`] samples (`Cursor::stopping`).
     pub(crate) fn check_work(&self) -> Result<()> {
         for (i, obj) in self.objects.iter().enumerate() {
-            let corner = |k: usize| {
-                let pick = |bit: usize, lo: f64, hi: f64| if k >> bit & 1 == 0 { lo } else { hi };
-                let (lo, hi) = (obj.box_min, obj.box_max);
-                obj.to_world.transform_point3(DVec3::new(
-                    pick(0, lo.x, hi.x),
-                    pick(1, lo.y, hi.y),
-                    pick(2, lo.z, hi.z),
-                ))
-            };
+            let corner = |k: usize| obj.world_corner(k);
             // The longest chord of a parallelepiped is one of its four body diagonals.
             let diagonal =
                 (0..4)
