@@ -28,6 +28,8 @@
 //! transfer functions (`Optimise::preintegrate` on: the scalar pre-integrated march instead of
 //! the packet march's midpoint samples). `--ramp=LO,HI` replaces the opacity table by the
 //! accuracy study's steep ramp: 0 at and below F = LO, rising linearly to 1 at F = HI.
+//! Built with `RUSTFLAGS="--cfg vlib_counters"`, it also prints how many samples the packet
+//! march evaluated in the `--frames` frames (`docs/performance.md`, "Samples taken").
 
 #[path = "common/mni_scene.rs"]
 mod mni_scene;
@@ -122,6 +124,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "{frames} frames: fastest {:.1} ms, median {:.1} ms",
             times[0] * 1e3,
             times[frames / 2] * 1e3
+        ))?;
+    }
+    #[cfg(all(vlib_counters, target_arch = "x86_64"))]
+    {
+        let [taken, above, shown] = vlib::sample_counts();
+        say::say(format_args!(
+            "the packet march's samples in the frames timed: {taken} taken, {above} above the \
+             zero bound, {shown} with opacity"
         ))?;
     }
     vl.end()?;

@@ -64,6 +64,11 @@ pub use model::program::{FieldFn, NormalFn, Sample, SampleRole};
 pub use model::scene::{Camera, Optimise, DEFAULT_FOV};
 pub use model::{cvg, vlaux};
 pub use output::{write_atomic, write_image};
+/// The packet march's sample counts (`docs/performance.md`, "Samples taken"), only in builds
+/// with `RUSTFLAGS="--cfg vlib_counters"`.
+#[cfg(all(vlib_counters, target_arch = "x86_64"))]
+#[doc(hidden)]
+pub use render::sample_counts;
 pub use render::{Backdrop, Image, PixelFormat, Plan};
 pub use team::{RankStats, Team};
 pub use types::{

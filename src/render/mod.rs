@@ -81,6 +81,8 @@ pub const SUPER_SAMPLE_CONTRAST: f32 = 4.0 / 255.0;
 
 #[cfg(target_arch = "x86_64")]
 mod simd;
+#[cfg(all(vlib_counters, target_arch = "x86_64"))]
+pub use simd::step::counters::sample_counts;
 
 /// A pixel as the renderer computes it: linear RGB in [0, 1], then the transmittance `T` of
 /// its primary ray in [0, 1] (the weight of the backdrop in the colour).

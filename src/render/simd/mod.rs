@@ -131,7 +131,7 @@ mod runs;
 mod shade;
 mod slabs;
 mod starts;
-mod step;
+pub(super) mod step;
 mod tables;
 #[cfg(test)]
 mod tests;

@@ -49,6 +49,8 @@ impl Packets<'_> {
         let one = s.splat(1.0);
         // The lanes with a sample of positive length (`pass_bits`: a NaN length passes).
         let live = active & !s.le_zero_d(&st.len);
+        #[cfg(vlib_counters)]
+        counters::add(0, live);
         if live == 0 {
             return 0;
         }
@@ -68,6 +70,8 @@ impl Packets<'_> {
         };
         // The zero test.
         pass &= s.bits(s.gt(v, s.splat(self.z)));
+        #[cfg(vlib_counters)]
+        counters::add(1, pass);
         if pass == 0 {
             return 0;
         }
@@ -77,6 +81,8 @@ impl Packets<'_> {
         };
         // The samples with opacity.
         let shown = pass & s.bits(s.gt(o, zero));
+        #[cfg(vlib_counters)]
+        counters::add(2, shown);
         if shown == 0 {
             return 0;
         }
@@ -284,4 +290,26 @@ pub(super) fn trilinear_lanes<S: Simd<N>, const N: usize>(
 #[inline(always)]
 fn lerp<S: Simd<N>, const N: usize>(s: S, a: S::F, b: S::F, t: S::F) -> S::F {
     s.add(a, s.mul(s.sub(b, a), t))
+}
+
+/// Counts of the samples [`Packets::step`] evaluates since the process began, for measuring
+/// the march (`docs/performance.md`, "Samples taken"): compiled only with
+/// `RUSTFLAGS="--cfg vlib_counters"`, and then read by [`sample_counts`].
+#[cfg(vlib_counters)]
+pub(crate) mod counters {
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    static COUNTS: [AtomicU64; 3] = [const { AtomicU64::new(0) }; 3];
+
+    /// Adds the lanes set in `lanes` to count `k`.
+    #[inline]
+    pub(super) fn add(k: usize, lanes: u32) {
+        COUNTS[k].fetch_add(lanes.count_ones() as u64, Ordering::Relaxed);
+    }
+
+    /// The samples the packet march has evaluated (in cells the mask passes), those of them
+    /// above the opacity table's zero bound, and those with opacity above 0.
+    pub fn sample_counts() -> [u64; 3] {
+        COUNTS.each_ref().map(|c| c.load(Ordering::Relaxed))
+    }
 }
