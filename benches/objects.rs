@@ -3,7 +3,9 @@
 //! skipping inside each object: for constant boxes there is nothing inside to skip, so the
 //! difference is the tree's). A lattice of k³ small boxes of constant medium (k = 4, 8, 16: 64
 //! to 4096 objects), each a quarter of its lattice cell across, seen whole at 256², ambient and
-//! one point light; then the same with shadows at 128². Each case is timed in interleaved
+//! one point light up, left and in front of them; then the same with shadows at 128², and with
+//! the light among the boxes (at their centre: a shadow ray looks only at the boxes before its
+//! light, about half of those its line meets). Each case is timed in interleaved
 //! rounds (tree, then every object), and the table gives the median frames and their ratio.
 //!
 //! ```text
@@ -14,9 +16,14 @@
 use std::time::Instant;
 use vlib::{Attenuation, Camera, Feature, Fields, Library, Optimise};
 
+/// The point light: outside the lattice, or among its boxes.
+const OUTSIDE: [f32; 3] = [-300.0, 400.0, -350.0];
+const AMONG: [f32; 3] = [1.0, 2.0, 3.0];
+
 /// A lattice of k³ boxes in [−50, 50]³, each half its cell's side, of opacity 0.05 per
-/// reference length and a colour by its place; `shadows` toggles shadows for all.
-fn lattice(k: usize, shadows: bool, skip_empty: bool) -> Library {
+/// reference length and a colour by its place, lit by a point light at `light`; `shadows`
+/// toggles shadows for all.
+fn lattice(k: usize, shadows: bool, light: [f32; 3], skip_empty: bool) -> Library {
     let mut vl = Library::new();
     vl.scene().unwrap();
     vl.camera(&Camera {
@@ -27,7 +34,7 @@ fn lattice(k: usize, shadows: bool, skip_empty: bool) -> Library {
     })
     .unwrap();
     vl.ambient(1.0, 1.0, 1.0, 0.3).unwrap();
-    vl.point_light([-300.0, 400.0, -350.0], Attenuation::None, [1.0; 3], 0.9)
+    vl.point_light(light, Attenuation::None, [1.0; 3], 0.9)
         .unwrap();
     vl.toggle(Feature::CastShadows, shadows).unwrap();
     vl.toggle(Feature::ReceiveShadows, shadows).unwrap();
@@ -73,9 +80,16 @@ fn main() {
         "| objects | shadows | image | tree (ms) | every object tested (ms) | tree / every object |"
     );
     println!("|---|---|---|---|---|---|");
-    for (shadows, side) in [(false, 256u32), (true, 128)] {
+    for (shadows, side, light) in [
+        (false, 256u32, OUTSIDE),
+        (true, 128, OUTSIDE),
+        (true, 128, AMONG),
+    ] {
         for k in [4usize, 8, 16] {
-            let scenes = [lattice(k, shadows, true), lattice(k, shadows, false)];
+            let scenes = [
+                lattice(k, shadows, light, true),
+                lattice(k, shadows, light, false),
+            ];
             // The first frame compiles the scene; both images must be the same bytes.
             let first: Vec<Vec<u8>> = scenes
                 .iter()
@@ -94,7 +108,11 @@ fn main() {
             println!(
                 "| {} | {} | {side}² | {tree:.1} | {all:.1} | {:.3} |",
                 k * k * k,
-                if shadows { "on" } else { "off" },
+                match (shadows, light == AMONG) {
+                    (false, _) => "off",
+                    (true, false) => "on",
+                    (true, true) => "on, light among the boxes",
+                },
                 tree / all
             );
         }

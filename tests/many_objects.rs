@@ -66,12 +66,20 @@ fn mixed_object(vl: &mut Library, i: usize, at: [f32; 3], size: f32) {
     vl.end().unwrap();
 }
 
+/// Where [`mixed_scene`]'s point light is: up, left and in front of the objects, or among
+/// them, inside the lattice's object at (−8, 8, 0), so that shadow rays from the others enter
+/// that object just before they reach the light, and have objects beyond it that they must
+/// not look at.
+const LIGHT_OUTSIDE: [f32; 3] = [-150.0, 200.0, -250.0];
+const LIGHT_AMONG: [f32; 3] = [-7.0, 9.0, 1.0];
+
 /// A scene of 48 mixed objects on a 4 × 4 × 3 lattice and a wall of 16 constant boxes split
-/// by the planes x = 0 and y = 0 behind it, with a point light, shadows and mirrors as asked,
-/// and `skip_empty` as given; rendered at 49², or voxelized into `volume` (a prefix) instead.
+/// by the planes x = 0 and y = 0 behind it, with a point light at `light`, shadows and
+/// mirrors as asked, and `skip_empty` as given; rendered at 49², or voxelized into `volume`
+/// (a prefix) instead.
 fn mixed_scene(
     skip_empty: bool,
-    shadows: bool,
+    (shadows, light): (bool, [f32; 3]),
     mirrors: bool,
     volume: Option<&std::path::Path>,
 ) -> Option<Vec<u8>> {
@@ -79,7 +87,7 @@ fn mixed_scene(
     vl.scene().unwrap();
     camera(&mut vl, 200.0, 18.0);
     vl.ambient(1.0, 1.0, 1.0, 0.5).unwrap();
-    vl.point_light([-150.0, 200.0, -250.0], Attenuation::None, [1.0; 3], 0.8)
+    vl.point_light(light, Attenuation::None, [1.0; 3], 0.8)
         .unwrap();
     vl.step_size(0.7, 1.0).unwrap();
     vl.toggle(Feature::CastShadows, shadows).unwrap();
@@ -141,21 +149,26 @@ fn mixed_scene(
     Some(vl.render_preview(49, 49, 1.0).unwrap().to_rgb8())
 }
 
+/// The same images through the tree as with every object tested: shadow rays to a light
+/// outside the objects and to one among them (a shadow ray looks only at the objects before
+/// its light: one that left out an object it enters before the light would lose its shadow).
 #[test]
 fn many_objects_render_as_when_every_object_is_tested() {
-    let plain = mixed_scene(true, false, false, None).unwrap();
-    for (shadows, mirrors) in [(false, false), (true, false), (false, true)] {
-        let found = mixed_scene(true, shadows, mirrors, None).unwrap();
-        // Shadow rays and mirror rays were traced (and change the image).
-        assert_eq!(found != plain, shadows || mirrors);
-        let scanned = mixed_scene(false, shadows, mirrors, None).unwrap();
-        assert!(
-            found == scanned,
-            "shadows {shadows}, mirrors {mirrors}: the images differ"
-        );
-        // The image shows the scene, not the background alone.
-        let lit = found.chunks(3).filter(|p| p.iter().any(|&c| c > 0)).count();
-        assert!(lit > 49 * 49 / 2, "{lit} pixels lit");
+    for light in [LIGHT_OUTSIDE, LIGHT_AMONG] {
+        let plain = mixed_scene(true, (false, light), false, None).unwrap();
+        for (shadows, mirrors) in [(false, false), (true, false), (false, true)] {
+            let found = mixed_scene(true, (shadows, light), mirrors, None).unwrap();
+            // Shadow rays and mirror rays were traced (and change the image).
+            assert_eq!(found != plain, shadows || mirrors);
+            let scanned = mixed_scene(false, (shadows, light), mirrors, None).unwrap();
+            assert!(
+                found == scanned,
+                "light {light:?}, shadows {shadows}, mirrors {mirrors}: the images differ"
+            );
+            // The image shows the scene, not the background alone.
+            let lit = found.chunks(3).filter(|p| p.iter().any(|&c| c > 0)).count();
+            assert!(lit > 49 * 49 / 2, "{lit} pixels lit");
+        }
     }
 }
 
@@ -164,8 +177,8 @@ fn many_objects_voxelize_as_when_every_object_is_tested() {
     let dir = std::env::temp_dir().join(format!("vlib-many-objects-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (found, scanned) = (dir.join("found"), dir.join("scanned"));
-    mixed_scene(true, false, false, Some(&found));
-    mixed_scene(false, false, false, Some(&scanned));
+    mixed_scene(true, (false, LIGHT_OUTSIDE), false, Some(&found));
+    mixed_scene(false, (false, LIGHT_OUTSIDE), false, Some(&scanned));
     for field in ["o", "r", "f"] {
         let read = |prefix: &std::path::Path| {
             let name = format!(

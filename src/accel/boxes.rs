@@ -4,11 +4,12 @@
 //!
 //! [`BoxTree`] holds axis-aligned boxes by the index of their item (the renderer's root objects,
 //! their world boxes padded by more than rounding can move a clip by) and answers, for a ray
-//! `o + t·d` (t ≥ 0) or a point, the items whose box it meets, in increasing order: a superset
-//! of those the caller's own exact test then finds, so that the tree changes which items are
-//! looked at, never what is found. An item whose box is not known (`None`: not finite, or a
-//! transform too ill-conditioned to pad for) is in every answer. The module owns the tree, not
-//! the boxes: the renderer decides them (`render::compile`).
+//! `o + t·d` (0 ≤ t ≤ a reach: infinite, or a shadow ray's distance to its light) or a point,
+//! the items whose box it meets, in increasing order: a superset of those the caller's own
+//! exact test then finds, so that the tree changes which items are looked at, never what is
+//! found. An item whose box is not known (`None`: not finite, or a transform too
+//! ill-conditioned to pad for) is in every answer. The module owns the tree, not the boxes: the
+//! renderer decides them (`render::compile`).
 
 use crate::error::Result;
 use crate::num::try_with_capacity;
@@ -66,16 +67,21 @@ impl BoxTree {
     }
 
     /// Appends to `out` (cleared first), in increasing order, every item whose box, widened by
-    /// `slack` on every side, the ray `o + t·d` meets at some t ≥ 0, and every item without a
-    /// box. A ray of a coordinate that is not finite gets every item.
-    pub(crate) fn ray(&self, o: DVec3, d: DVec3, slack: f64, out: &mut Vec<usize>) {
+    /// `slack` on every side, the ray `o + t·d` meets at some t in [0, `reach`], and every item
+    /// without a box. A ray of a coordinate that is not finite gets every item; a `reach` that
+    /// is not a number bounds nothing.
+    pub(crate) fn ray(&self, o: DVec3, d: DVec3, slack: f64, reach: f64, out: &mut Vec<usize>) {
         out.clear();
         if !(o.is_finite() && d.is_finite()) {
             out.extend(0..self.items.len() + self.always.len());
             return;
         }
         let inv = d.recip();
-        self.visit(|min, max| meets(min - slack, max + slack, o, d, inv), out);
+        let reach = if reach.is_nan() { f64::INFINITY } else { reach };
+        self.visit(
+            |min, max| meets(min - slack, max + slack, o, d, inv, reach),
+            out,
+        );
     }
 
     /// Appends to `out` (cleared first), in increasing order, every item whose box, widened by
@@ -161,13 +167,13 @@ fn split(nodes: &mut Vec<Node>, items: &mut [(usize, DVec3, DVec3)], start: usiz
     nodes[at].count = 0;
 }
 
-/// Whether the ray `o + t·d` (t ≥ 0; `inv` = 1 / d) meets the box [min, max], its faces
-/// included. An axis where the ray's parameters are not numbers (d = 0 or a subnormal d whose
-/// inverse is infinite, with o on a face) puts no bound on t but o's own within the slab where
-/// d = 0: the answer errs only towards meeting.
+/// Whether the ray `o + t·d` (0 ≤ t ≤ `reach`; `inv` = 1 / d) meets the box [min, max], its
+/// faces included. An axis where the ray's parameters are not numbers (d = 0 or a subnormal d
+/// whose inverse is infinite, with o on a face) puts no bound on t but o's own within the slab
+/// where d = 0: the answer errs only towards meeting.
 #[inline]
-pub(super) fn meets(min: DVec3, max: DVec3, o: DVec3, d: DVec3, inv: DVec3) -> bool {
-    let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
+pub(super) fn meets(min: DVec3, max: DVec3, o: DVec3, d: DVec3, inv: DVec3, reach: f64) -> bool {
+    let (mut lo, mut hi) = (0.0f64, reach);
     for a in 0..3 {
         if d[a] == 0.0 {
             if o[a] < min[a] || o[a] > max[a] {

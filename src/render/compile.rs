@@ -640,16 +640,21 @@ impl Compiled {
         Ok(())
     }
 
-    /// The objects whose boxes the world ray `origin + t·dir` (t ≥ 0) may meet, in increasing
-    /// order: every one, or, with a tree, a superset of those whose [`CObj::clip`] finds it.
+    /// The objects whose boxes the world ray `origin + t·dir` may meet at 0 ≤ t ≤ `reach`
+    /// (infinite, or a shadow ray's distance to its light along a unit `dir`), in increasing
+    /// order: every one, or, with a tree, a superset of those whose [`CObj::clip`] finds it
+    /// entering before `reach`. (The clip's entry, like its point, moves by less than the
+    /// slack: the reach is widened by the same fraction of it and the origin.)
     #[inline]
-    pub(super) fn met_by_ray(&self, origin: DVec3, dir: DVec3) -> Met {
+    pub(super) fn met_by_ray(&self, origin: DVec3, dir: DVec3, reach: f64) -> Met {
         match &self.tree {
             None => Met::All(0..self.objects.len()),
             Some(tree) => {
                 let mut found = Vec::new();
-                let slack = TREE_SLACK * origin.abs().max_element();
-                tree.ray(origin, dir, slack, &mut found);
+                let size = origin.abs().max_element();
+                let slack = TREE_SLACK * size;
+                let reach = reach + TREE_SLACK * (size + reach);
+                tree.ray(origin, dir, slack, reach, &mut found);
                 Met::Found(found.into_iter())
             }
         }

@@ -568,7 +568,7 @@ impl Compiled {
             return 0.0;
         }
         let mut t_total = 1.0f64;
-        for obj in self.met_by_ray(w, l).map(|i| &self.objects[i]) {
+        for obj in self.met_by_ray(w, l, dist).map(|i| &self.objects[i]) {
             if !obj.cast_shadows {
                 continue;
             }

@@ -57,13 +57,22 @@ fn direction(rng: &mut Rng) -> DVec3 {
     DVec3::new(c(), c(), c())
 }
 
-/// What the tree must answer for a ray: every item whose box `meets` it, and every item
-/// without a box, in increasing order.
-fn ray_reference(boxes: &[Option<(DVec3, DVec3)>], o: DVec3, d: DVec3, slack: f64) -> Vec<usize> {
+/// What the tree must answer for a ray up to `reach`: every item whose box `meets` it, and
+/// every item without a box, in increasing order.
+fn ray_reference(
+    boxes: &[Option<(DVec3, DVec3)>],
+    o: DVec3,
+    d: DVec3,
+    slack: f64,
+    reach: f64,
+) -> Vec<usize> {
     let everything = !(o.is_finite() && d.is_finite());
+    let reach = if reach.is_nan() { f64::INFINITY } else { reach };
     (0..boxes.len())
         .filter(|&i| match boxes[i] {
-            Some((min, max)) if !everything => meets(min - slack, max + slack, o, d, d.recip()),
+            Some((min, max)) if !everything => {
+                meets(min - slack, max + slack, o, d, d.recip(), reach)
+            }
             _ => true,
         })
         .collect()
@@ -86,9 +95,19 @@ fn ray_queries_are_the_test_of_every_box() {
                     _ => direction(&mut rng),
                 };
                 let slack = if k % 3 == 0 { 0.0 } else { 1e-6 };
-                tree.ray(o, d, slack, &mut found);
-                let want = ray_reference(&boxes, o, d, slack);
-                assert_eq!(found, want, "{n} boxes, ray {o} + t·{d}, slack {slack}");
+                // Whole rays, and rays up to a reach (a shadow ray's light), NaN bounding
+                // nothing.
+                let reach = match k % 4 {
+                    0 => f64::INFINITY,
+                    1 => f64::NAN,
+                    _ => rng.next() * 8.0,
+                };
+                tree.ray(o, d, slack, reach, &mut found);
+                let want = ray_reference(&boxes, o, d, slack, reach);
+                assert_eq!(
+                    found, want,
+                    "{n} boxes, ray {o} + t·{d} to {reach}, slack {slack}"
+                );
                 nonempty += usize::from(!want.is_empty() && want.len() < n);
             }
         }
@@ -145,16 +164,19 @@ fn large_trees_answer_as_the_test_of_every_box() {
     let same = vec![Some((DVec3::ZERO, DVec3::ONE)); 100_000];
     let tree = BoxTree::build(&same).unwrap();
     let mut found = Vec::new();
-    tree.ray(DVec3::new(0.5, 0.5, -1.0), DVec3::Z, 0.0, &mut found);
+    let inf = f64::INFINITY;
+    tree.ray(DVec3::new(0.5, 0.5, -1.0), DVec3::Z, 0.0, inf, &mut found);
     assert_eq!(found, (0..100_000).collect::<Vec<_>>());
-    tree.ray(DVec3::new(1.5, 0.5, -1.0), DVec3::Z, 0.0, &mut found);
+    tree.ray(DVec3::new(1.5, 0.5, -1.0), DVec3::Z, 0.0, inf, &mut found);
+    assert!(found.is_empty());
+    tree.ray(DVec3::new(0.5, 0.5, -1.0), DVec3::Z, 0.0, 0.5, &mut found);
     assert!(found.is_empty());
     let many = boxes(&mut rng, 100_000);
     let tree = BoxTree::build(&many).unwrap();
     for _ in 0..50 {
         let (o, d) = (point(&mut rng, 5.0), direction(&mut rng));
-        tree.ray(o, d, 0.0, &mut found);
-        assert_eq!(found, ray_reference(&many, o, d, 0.0));
+        tree.ray(o, d, 0.0, inf, &mut found);
+        assert_eq!(found, ray_reference(&many, o, d, 0.0, inf));
     }
 }
 
@@ -187,13 +209,19 @@ fn meets_finds_rays_through_the_box_and_not_away_from_it() {
         }
         let slack = 1e-9 * 10.0;
         let d = q - o;
+        let inf = f64::INFINITY;
         assert!(
-            meets(min - slack, max + slack, o, d, d.recip()),
+            meets(min - slack, max + slack, o, d, d.recip(), inf),
             "through {q}: {o} + t·{d} misses [{min}, {max}]"
+        );
+        // Up to its point in the box, too (a shadow ray whose light is there).
+        assert!(
+            meets(min - slack, max + slack, o, d, d.recip(), 1.0 + 1e-9),
+            "through {q}: {o} + t·{d} up to t = 1 misses [{min}, {max}]"
         );
         let away = o - q;
         assert!(
-            !meets(min, max, o, away, away.recip()),
+            !meets(min, max, o, away, away.recip(), inf),
             "away from {q}: {o} + t·{away} meets [{min}, {max}]"
         );
         met += 1;
@@ -220,7 +248,50 @@ fn axis_parallel_rays_on_faces_meet_the_box() {
             (DVec3::new(0.5, -1.0, 0.0), DVec3::new(z, 1.0, z), true),
             (DVec3::new(0.0, 0.0, 0.0), DVec3::new(z, z, z), true),
         ] {
-            assert_eq!(meets(min, max, o, d, d.recip()), want, "{o} + t·{d}");
+            assert_eq!(
+                meets(min, max, o, d, d.recip(), f64::INFINITY),
+                want,
+                "{o} + t·{d}"
+            );
         }
     }
+}
+
+/// A ray's reach: the unit box, entered at t = 1 and left at t = 2 by a ray along z (at
+/// t = 0.5 and 1 with twice the direction), is met up to a reach from its entry on (the face
+/// included), and not up to a reach before it; a ray from inside meets it at any reach.
+#[test]
+fn a_reach_before_the_box_misses_it() {
+    let (min, max) = (DVec3::ZERO, DVec3::ONE);
+    let o = DVec3::new(0.5, 0.5, -1.0);
+    for (d, entry) in [(DVec3::Z, 1.0), (2.0 * DVec3::Z, 0.5)] {
+        for (reach, want) in [
+            (0.0, false),
+            (entry * (1.0 - 1e-12), false),
+            (entry, true),
+            (entry * 1.5, true),
+            (f64::INFINITY, true),
+        ] {
+            assert_eq!(
+                meets(min, max, o, d, d.recip(), reach),
+                want,
+                "{d}, reach {reach}"
+            );
+        }
+    }
+    // From inside, and from a corner along a diagonal.
+    let inside = DVec3::splat(0.5);
+    assert!(meets(min, max, inside, DVec3::X, DVec3::X.recip(), 0.0));
+    let d = DVec3::ONE;
+    assert!(meets(min, max, -DVec3::ONE, d, d.recip(), 1.0));
+    assert!(!meets(min, max, -DVec3::ONE, d, d.recip(), 0.999_999));
+    // A tree answers the same.
+    let tree = BoxTree::build(&[Some((min, max)), Some((min + 3.0, max + 3.0))]).unwrap();
+    let mut found = Vec::new();
+    tree.ray(o, DVec3::Z, 0.0, 1.5, &mut found);
+    assert_eq!(found, [0]);
+    tree.ray(-DVec3::ONE, d, 0.0, 3.5, &mut found);
+    assert_eq!(found, [0]);
+    tree.ray(-DVec3::ONE, d, 0.0, 4.0, &mut found);
+    assert_eq!(found, [0, 1]);
 }

@@ -249,7 +249,7 @@ impl Compiled {
         }
         let mut cursors: Vec<Cursor> = Vec::new();
         let mut layers: Vec<Layer> = Vec::new();
-        for i in self.met_by_ray(origin, dir) {
+        for i in self.met_by_ray(origin, dir, f64::INFINITY) {
             let obj = &self.objects[i];
             if !obj.seen_by(ray) {
                 continue;
