@@ -349,6 +349,19 @@ fn chess_renders_a_board_with_pieces() {
         (SMALL as u32, (SMALL * 5 / 8) as u32)
     );
     let img = read_png(&png);
+    // The whole board is in the frame: every pixel of the image's border is the background
+    // (the corner's colour).
+    let bg = img.pixel(0, 0);
+    let border = (0..img.width)
+        .flat_map(|x| [(x, 0), (x, img.height - 1)])
+        .chain((0..img.height).flat_map(|y| [(0, y), (img.width - 1, y)]));
+    let cut: Vec<_> = border
+        .filter(|&(x, y)| differs(img.pixel(x, y), bg))
+        .collect();
+    assert!(
+        cut.is_empty(),
+        "the board reaches the image's edge at {cut:?}"
+    );
     let (coverage, lum) = foreground(&img);
     // Measured: the board and pieces fill 35 % of the frame at 160 × 100.
     assert!(

@@ -187,7 +187,7 @@ int main(int argc, char **argv)
         cam.eye[0] = -175.0f; cam.eye[1] = 320.0f; cam.eye[2] = -435.0f;
         cam.at[0] = 12.0f;    cam.at[1] = -12.0f;  cam.at[2] = 8.0f;
         cam.up[0] = 0.0f;     cam.up[1] = 1.0f;    cam.up[2] = 0.0f;
-        cam.fov = 38.0f;
+        cam.fov = 41.0f; /* the whole board in the frame, with a margin */
         vlCamera(&cam);
     }
     vlBackground(0.58, 0.63, 0.70);
