@@ -184,8 +184,11 @@ impl CObj {
             cast_shadows: r.toggle(Feature::CastShadows),
             receive_shadows: r.toggle(Feature::ReceiveShadows),
             cast_reflections: r.toggle(Feature::CastReflections),
-            receive_reflections: r.toggle(Feature::ReceiveReflections),
-            refract: r.toggle(Feature::Refract),
+            // A mirror of ks 0 everywhere reflects nothing, and an index of 1 everywhere (RF 0)
+            // bends nothing: neither asks for secondary rays.
+            receive_reflections: r.toggle(Feature::ReceiveReflections)
+                && !zero_field(&prefixes, &constants, Fields::KS),
+            refract: r.toggle(Feature::Refract) && !zero_field(&prefixes, &constants, Fields::RF),
             reflect_background: r.toggle(Feature::ReflectBackground),
             recursion: r.recursion,
             skip: match (&preint, lean.as_ref().and_then(Lean::value_head)) {
@@ -435,15 +438,30 @@ impl std::fmt::Debug for Caches {
     }
 }
 
+/// Whether `fields` are 0 wherever an object's program runs: each never written (fields start
+/// at 0), or last written by a constant 0.
+fn zero_field(
+    prefixes: &[usize; FIELD_COUNT],
+    constants: &[Option<f32>; FIELD_COUNT],
+    fields: Fields,
+) -> bool {
+    fields
+        .indices()
+        .all(|i| prefixes[i] == 0 || constants[i] == Some(0.0))
+}
+
 /// What a scene calls for: effects its objects, toggles and lights can actually show. An
 /// effect that nothing in the scene can exhibit costs nothing (see `docs/dev/render-plan.md`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Plan {
-    /// Shadow rays: some object casts, some object receives, and a light exists.
+    /// Shadow rays: some object casts, some object receives, and a light of some radiance
+    /// exists.
     pub shadows: bool,
-    /// Mirror rays: some object receives reflections (with recursion above 0).
+    /// Mirror rays: some object receives reflections (with recursion above 0) and its ks is not
+    /// 0 everywhere.
     pub reflections: bool,
-    /// Refracted rays: some object refracts (with recursion above 0).
+    /// Refracted rays: some object refracts (with recursion above 0) and its RF is not 0
+    /// everywhere (an index of 1).
     pub refraction: bool,
 }
 
@@ -559,15 +577,9 @@ impl Compiled {
                 )
             })
             .collect();
-        let plan = Plan {
-            shadows: !desc.lights.is_empty()
-                && objects.iter().any(|o| o.cast_shadows)
-                && objects.iter().any(|o| o.receive_shadows),
-            reflections: objects
-                .iter()
-                .any(|o| o.receive_reflections && o.recursion > 0),
-            refraction: objects.iter().any(|o| o.refract && o.recursion > 0),
-        };
+        // A light of no radiance (colour or intensity 0) adds nothing anywhere: the scene is
+        // compiled without it, so it costs nothing (no shadow rays, and the paths of one light
+        // or none stay open).
         let lights: Vec<(Light, DVec3)> = desc
             .lights
             .iter()
@@ -575,7 +587,17 @@ impl Compiled {
                 let (Light::Point { radiance, .. } | Light::Directional { radiance, .. }) = light;
                 (light, crate::model::scene::v3(radiance))
             })
+            .filter(|&(_, radiance)| radiance != DVec3::ZERO)
             .collect();
+        let plan = Plan {
+            shadows: !lights.is_empty()
+                && objects.iter().any(|o| o.cast_shadows)
+                && objects.iter().any(|o| o.receive_shadows),
+            reflections: objects
+                .iter()
+                .any(|o| o.receive_reflections && o.recursion > 0),
+            refraction: objects.iter().any(|o| o.refract && o.recursion > 0),
+        };
         let directional = lights
             .iter()
             .map(|&(light, radiance)| match light {

@@ -10,7 +10,8 @@ impl Compiled {
     /// The iso-surface hits of a DSR object along its ray interval, in depth order: for each
     /// surface, crossings of its threshold between consecutive samples (the field is 0 outside
     /// the boundary, so an object's faces count too), each refined by bisection to 10⁻⁶ of the
-    /// step; returns (t, α, colour) per hit, α the surface's opacity there.
+    /// step; returns (t, α, colour) per hit, α the surface's opacity there. On a ray that
+    /// shows colour, an opaque hit that does not refract ends its surface's search.
     pub(in crate::render) fn surface_hits(
         &self,
         obj: &CObj,
@@ -151,6 +152,13 @@ impl Compiled {
                             bend,
                             mirror,
                         });
+                        // An opaque hit that does not refract hides the rest of the surface:
+                        // every later hit is behind it, where the ray's transmittance is 0.
+                        // (A shadow ray, above, does not count the hit at its own start, so
+                        // it reads on.)
+                        if o >= 1.0 && bend.is_none() {
+                            break;
+                        }
                     }
                 }
                 if k >= c.n {
