@@ -216,3 +216,122 @@ fn an_opaque_surface_ends_the_search_behind_it() {
         .unwrap();
     assert!(largest <= 1, "the images differ by {largest} levels");
 }
+
+/// The ball of [`lit_ball`] (one bright light, no shadows) beside a second object no ray can
+/// see anything of, made so by `hide` (called before its `object` and inside it); its image at
+/// 32², the ball's calls and the second object's (a counted function giving its F, searched
+/// for a surface at 0.5).
+type Hide = (fn(&mut Library), fn(&mut Library));
+fn ball_beside(hide: Option<Hide>) -> (Vec<u8>, usize, usize) {
+    let (calls, read) = counter();
+    let (other_calls, read_other) = counter();
+    let mut vl = Library::new();
+    vl.scene().unwrap();
+    camera(&mut vl);
+    vl.ambient(1.0, 1.0, 1.0, 0.3).unwrap();
+    vl.point_light([-200.0, 250.0, -200.0], Attenuation::None, [1.0; 3], 0.9)
+        .unwrap();
+    vl.step_size(2.0, 1.0).unwrap();
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, -0.5).unwrap();
+    vl.scale(100.0, 100.0, 100.0).unwrap();
+    vl.function(Fields::F | Fields::O, move |s| {
+        calls.fetch_add(1, Ordering::Relaxed);
+        let p = s.position();
+        let r2 = p.iter().map(|&c| (c - 0.5) * (c - 0.5)).sum::<f32>();
+        let f = (1.0 - 4.0 * r2).max(0.0);
+        let _ = s.set(Fields::F, f);
+        let _ = s.set(Fields::O, 0.05 * f);
+    })
+    .unwrap();
+    vl.set(Fields::R | Fields::G | Fields::KA | Fields::KD, 0.7)
+        .unwrap();
+    vl.end().unwrap();
+    if let Some((before, inside)) = hide {
+        vl.render_type(RenderType::Dsr).unwrap();
+        vl.surface(Fields::F, 0.5).unwrap();
+        before(&mut vl);
+        vl.object().unwrap();
+        vl.translate(-0.5, -0.5, -0.5).unwrap();
+        vl.scale(60.0, 60.0, 60.0).unwrap();
+        vl.translate(30.0, 10.0, -20.0).unwrap();
+        vl.function(Fields::F, move |s| {
+            other_calls.fetch_add(1, Ordering::Relaxed);
+            let x = s.position()[0];
+            let _ = s.set(Fields::F, x);
+        })
+        .unwrap();
+        vl.set(Fields::R | Fields::KA, 0.6).unwrap();
+        inside(&mut vl);
+        vl.end().unwrap();
+    }
+    let image = vl.render_preview(32, 32, 1.0).unwrap().to_rgb8();
+    (image, read(), read_other())
+}
+
+/// An object of opacity 0 everywhere (never written, or set to 0) and an invisible one that
+/// casts nothing are left out of what rays meet: the image and the ball's work are those of the
+/// ball alone, and the hidden object's function never runs.
+#[test]
+fn an_object_that_shows_nothing_costs_nothing() {
+    let (alone, alone_calls, _) = ball_beside(None);
+    let hides: [(&str, Hide); 3] = [
+        ("opacity never written", (|_| {}, |_| {})),
+        ("opacity 0", (|_| {}, |vl| vl.set(Fields::O, 0.0).unwrap())),
+        (
+            "invisible, casting nothing",
+            (
+                |vl| vl.toggle(Feature::Visible, false).unwrap(),
+                |vl| vl.set(Fields::O, 1.0).unwrap(),
+            ),
+        ),
+    ];
+    for (how, hide) in hides {
+        let (image, calls, other) = ball_beside(Some(hide));
+        assert!(image == alone, "{how}: another image");
+        assert_eq!(calls, alone_calls, "{how}");
+        assert_eq!(other, 0, "{how}: the hidden object's function ran");
+    }
+    // Shown (opacity 1), it is searched and seen.
+    let (image, _, other) = ball_beside(Some((|_| {}, |vl| vl.set(Fields::O, 1.0).unwrap())));
+    assert!(image != alone && other > 0);
+}
+
+/// A voxelization still sees an object no ray can see anything of: where it alone holds a node,
+/// the node takes its fields (opacity 0, its red 0.6), and where the ball holds one too, the
+/// ball's (the greater opacity).
+#[test]
+fn voxelization_keeps_an_object_that_shows_nothing() {
+    let dir = std::env::temp_dir().join(format!("vlib-inert-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let prefix = dir.join("v");
+    let mut vl = Library::new();
+    vl.scene().unwrap();
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, -0.5).unwrap();
+    vl.scale(20.0, 20.0, 20.0).unwrap();
+    vl.set(Fields::O, 0.5).unwrap();
+    vl.set(Fields::R, 0.2).unwrap();
+    vl.end().unwrap();
+    // Opacity 0 (never written): hidden from rays; it spans x from −30 to 30.
+    vl.object().unwrap();
+    vl.translate(-0.5, -0.5, -0.5).unwrap();
+    vl.scale(60.0, 20.0, 20.0).unwrap();
+    vl.set(Fields::R, 0.6).unwrap();
+    vl.end().unwrap();
+    // Nodes at x = −25, −15, −5, 5, 15, 25 on the axis.
+    vl.volume(
+        &prefix,
+        Fields::R,
+        [-25.0, 0.0, 0.0],
+        [25.0, 0.0, 0.0],
+        [6, 1, 1],
+        1,
+    )
+    .unwrap();
+    vl.end().unwrap();
+    let bytes = std::fs::read(dir.join("v_r.vlb")).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    // Header of 28 bytes, then one byte a node: round(255 · r).
+    assert_eq!(&bytes[28..], &[153, 153, 51, 51, 153, 153]);
+}

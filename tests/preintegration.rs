@@ -287,17 +287,17 @@ fn balls(skip_empty: bool, step: f32, packets: bool) -> Vec<u8> {
 
 /// [`balls`] on a pool of `threads` threads (0: rayon's default).
 fn balls_on(skip_empty: bool, step: f32, threads: usize, packets: bool) -> Vec<u8> {
-    balls_and(skip_empty, step, threads, packets, (true, false))
+    balls_and(skip_empty, step, threads, packets, (true, None))
 }
 
-/// [`balls_on`], pre-integrated as `preintegrate` says, with a second object where `second`:
-/// a clear box (opacity 0) over the left half of the balls.
+/// [`balls_on`], pre-integrated as `preintegrate` says, with a second object where `second`
+/// is its opacity: a box over the left half of the balls, faint or clear.
 fn balls_and(
     skip_empty: bool,
     step: f32,
     threads: usize,
     packets: bool,
-    (preintegrate, second): (bool, bool),
+    (preintegrate, second): (bool, Option<f32>),
 ) -> Vec<u8> {
     let mut vl = Library::new();
     let data = two_balls::two_balls(32);
@@ -336,11 +336,11 @@ fn balls_and(
     vl.set(Fields::KA, 0.3).unwrap();
     vl.set(Fields::KD, 0.7).unwrap();
     vl.end().unwrap();
-    if second {
+    if let Some(o) = second {
         vl.object().unwrap();
         vl.translate(-0.6, -0.6, -0.6).unwrap();
         vl.scale(0.6, 1.2, 1.2).unwrap();
-        vl.set(Fields::O, 0.0).unwrap();
+        vl.set(Fields::O, o).unwrap();
         vl.end().unwrap();
     }
     rayon::ThreadPoolBuilder::new()
@@ -466,22 +466,28 @@ fn skipping_keeps_the_slabs_that_cross_an_opacity_band() {
 
 #[test]
 fn a_scene_of_two_objects_takes_midpoint_samples() {
-    // Pre-integration is for a volume rendered alone: where a second object (here a clear box
+    // Pre-integration is for a volume rendered alone: where a second object (here a faint box
     // over half of the balls) is in the scene, every ray is composited by midpoint samples,
     // with or without the switch (were the rays that meet one object alone pre-integrated,
     // the box's edge would show as a seam), in both marches.
     for packets in [true, false] {
-        let midpoint = balls_and(true, 0.05, 0, packets, (false, true));
+        let faint = Some(0.002);
+        let midpoint = balls_and(true, 0.05, 0, packets, (false, faint));
         assert!(midpoint.iter().any(|&b| b > 40), "the balls are visible");
         assert!(
-            balls_and(true, 0.05, 0, packets, (true, true)) == midpoint,
+            balls_and(true, 0.05, 0, packets, (true, faint)) == midpoint,
             "packets {packets}: pre-integrated with a second object"
         );
         // Alone, the switch changes the image.
+        let alone = balls_and(true, 0.05, 0, packets, (true, None));
         assert!(
-            balls_and(true, 0.05, 0, packets, (true, false))
-                != balls_and(true, 0.05, 0, packets, (false, false)),
+            alone != balls_and(true, 0.05, 0, packets, (false, None)),
             "packets {packets}: pre-integration alone changed nothing"
+        );
+        // A clear box (opacity 0) is no object rays meet: the balls are pre-integrated alone.
+        assert!(
+            balls_and(true, 0.05, 0, packets, (true, Some(0.0))) == alone,
+            "packets {packets}: a clear box changed the image"
         );
     }
 }

@@ -187,8 +187,8 @@ impl CObj {
             // A mirror of ks 0 everywhere reflects nothing, and an index of 1 everywhere (RF 0)
             // bends nothing: neither asks for secondary rays.
             receive_reflections: r.toggle(Feature::ReceiveReflections)
-                && !zero_field(&prefixes, &constants, Fields::KS),
-            refract: r.toggle(Feature::Refract) && !zero_field(&prefixes, &constants, Fields::RF),
+                && !zero_field(&o.program, Fields::KS),
+            refract: r.toggle(Feature::Refract) && !zero_field(&o.program, Fields::RF),
             reflect_background: r.toggle(Feature::ReflectBackground),
             recursion: r.recursion,
             skip: match (&preint, lean.as_ref().and_then(Lean::value_head)) {
@@ -438,16 +438,29 @@ impl std::fmt::Debug for Caches {
     }
 }
 
-/// Whether `fields` are 0 wherever an object's program runs: each never written (fields start
+/// Whether `fields` are 0 wherever an object's `program` runs: each never written (fields start
 /// at 0), or last written by a constant 0.
-fn zero_field(
-    prefixes: &[usize; FIELD_COUNT],
-    constants: &[Option<f32>; FIELD_COUNT],
-    fields: Fields,
-) -> bool {
-    fields
-        .indices()
-        .all(|i| prefixes[i] == 0 || constants[i] == Some(0.0))
+fn zero_field(program: &[Instr], fields: Fields) -> bool {
+    fields.indices().all(
+        |i| match prefix_for(program, Fields::from_index(i)).checked_sub(1) {
+            None => true,
+            Some(k) => matches!(program[k], Instr::Set { value, .. } if value == 0.0),
+        },
+    )
+}
+
+/// Whether no ray can see anything of object `o`: its opacity is 0 everywhere and it bends no
+/// ray, or no ray looks at it (not visible, and casting neither shadows nor reflections). Such
+/// an object is left out of the objects rays meet, and kept for voxelization.
+fn shows_nothing(o: &ObjectDesc) -> bool {
+    let r = &o.state;
+    let refracts =
+        r.toggle(Feature::Refract) && !zero_field(&o.program, Fields::RF) && r.recursion > 0;
+    let clear = zero_field(&o.program, Fields::O) && !refracts;
+    let unseen = !r.toggle(Feature::Visible)
+        && !r.toggle(Feature::CastShadows)
+        && !r.toggle(Feature::CastReflections);
+    clear || unseen
 }
 
 /// What a scene calls for: effects its objects, toggles and lights can actually show. An
@@ -467,7 +480,13 @@ pub struct Plan {
 
 /// A scene compiled for tracing: immutable, shared by all worker threads.
 pub struct Compiled {
+    /// The objects rays may see something of, in the scene's order.
     pub(super) objects: Vec<CObj>,
+    /// Each of those objects' number in the scene.
+    shown_index: Vec<usize>,
+    /// The objects no ray sees anything of (see `shows_nothing`), with their numbers: only
+    /// voxelization reads them.
+    hidden: Vec<(usize, CObj)>,
     /// The lights, each with its radiance in f64.
     pub(super) lights: Vec<(Light, DVec3)>,
     /// The ambient light's radiance in f64.
@@ -560,23 +579,28 @@ impl Compiled {
     /// (built there by the first compilation that needs them). Unwinds where a cache cannot be
     /// allocated ([`Compiled::build`] returns that as an error).
     pub fn new(desc: &SceneDesc, caches: &Caches) -> Compiled {
-        let objects: Vec<CObj> = desc
-            .objects
-            .iter()
-            .enumerate()
-            .map(|(i, o)| {
-                // Pre-integration is for an object rendered alone: with others, a ray that meets
-                // several is composited by midpoint samples, which would leave seams.
-                let alone = desc.objects.len() == 1;
-                CObj::new(
-                    o,
-                    &desc.datasets,
-                    desc.settings.optimise,
-                    alone,
-                    &caches.cell(i),
-                )
-            })
-            .collect();
+        // The objects rays meet, and those no ray can see anything of (voxelization's alone).
+        let shown: Vec<bool> = desc.objects.iter().map(|o| !shows_nothing(o)).collect();
+        // Pre-integration is for an object rendered alone: with others, a ray that meets
+        // several is composited by midpoint samples, which would leave seams.
+        let alone = shown.iter().filter(|&&s| s).count() == 1;
+        let (mut objects, mut shown_index, mut hidden) = (Vec::new(), Vec::new(), Vec::new());
+        for (i, o) in desc.objects.iter().enumerate() {
+            let alone = alone && shown[i];
+            let obj = CObj::new(
+                o,
+                &desc.datasets,
+                desc.settings.optimise,
+                alone,
+                &caches.cell(i),
+            );
+            if shown[i] {
+                objects.push(obj);
+                shown_index.push(i);
+            } else {
+                hidden.push((i, obj));
+            }
+        }
         // A light of no radiance (colour or intensity 0) adds nothing anywhere: the scene is
         // compiled without it, so it costs nothing (no shadow rays, and the paths of one light
         // or none stay open).
@@ -607,6 +631,8 @@ impl Compiled {
             .collect();
         let mut scene = Compiled {
             objects,
+            shown_index,
+            hidden,
             lights,
             directional,
             lanes: Vec::new(),
@@ -636,7 +662,7 @@ impl Compiled {
     /// square of a ray's samples where shadow rays leave each sample; every ray can be
     /// cancelled within [`PROBE_EVERY`] samples (`Cursor::stopping`).
     pub(crate) fn check_work(&self) -> Result<()> {
-        for (i, obj) in self.objects.iter().enumerate() {
+        for (i, obj) in self.every_object() {
             let corner = |k: usize| obj.world_corner(k);
             // The longest chord of a parallelepiped is one of its four body diagonals.
             let diagonal =
@@ -695,6 +721,19 @@ impl Compiled {
         }
     }
 
+    /// Every object of the scene with its number, in the scene's order.
+    fn every_object(&self) -> impl Iterator<Item = (usize, &CObj)> {
+        let mut all: Vec<(usize, &CObj)> = self
+            .shown_index
+            .iter()
+            .copied()
+            .zip(&self.objects)
+            .collect();
+        all.extend(self.hidden.iter().map(|(i, o)| (*i, o)));
+        all.sort_unstable_by_key(|&(i, _)| i);
+        all.into_iter()
+    }
+
     /// The render plan: which effects this scene calls for.
     pub fn plan(&self) -> Plan {
         self.plan
@@ -704,10 +743,10 @@ impl Compiled {
     /// the largest opacity (the first on ties), or all 0 (voxelization samples the scene with it).
     pub fn fields_at(&self, w: DVec3) -> [f32; crate::types::FIELD_COUNT] {
         let mut best: Option<[f32; crate::types::FIELD_COUNT]> = None;
-        for obj in self.holding(w).map(|i| &self.objects[i]) {
+        let mut consider = |obj: &CObj| {
             let p = obj.to_object.transform_point3(w);
             if !obj.inside(p) {
-                continue;
+                return;
             }
             let mut s = Sample::with_env(p.as_vec3().to_array(), w.to_array(), &obj.env);
             run(&obj.program, &mut s);
@@ -715,6 +754,18 @@ impl Compiled {
             if best.is_none_or(|b| f[0] > b[0]) {
                 best = Some(f);
             }
+        };
+        if self.hidden.is_empty() {
+            self.holding(w).for_each(|i| consider(&self.objects[i]));
+        } else {
+            // (The hidden objects among the others, in the scene's order: the first wins ties.)
+            let mut held: Vec<(usize, &CObj)> = self
+                .holding(w)
+                .map(|i| (self.shown_index[i], &self.objects[i]))
+                .chain(self.hidden.iter().map(|(i, o)| (*i, o)))
+                .collect();
+            held.sort_unstable_by_key(|&(i, _)| i);
+            held.into_iter().for_each(|(_, o)| consider(o));
         }
         best.unwrap_or([0.0; crate::types::FIELD_COUNT])
     }

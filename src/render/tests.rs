@@ -121,12 +121,18 @@ fn powi_is_the_library_powi() {
     );
 }
 
-/// A scene of one object (receiving and casting shadows if `shadows`) under `lights`,
-/// compiled.
+/// A scene of one object of opacity ½ (receiving and casting shadows if `shadows`) under
+/// `lights`, compiled.
 fn lit_scene(lights: Vec<Light>, shadows: bool) -> Compiled {
     let mut state = crate::model::scene::RenderState::default();
     state.toggles[Feature::CastShadows as usize] = shadows;
     state.toggles[Feature::ReceiveShadows as usize] = shadows;
+    let mut object = ObjectDesc::new(state);
+    // (An object of opacity 0 everywhere would be left out of what rays meet.)
+    object.program.push(Instr::Set {
+        fields: Fields::O,
+        value: 0.5,
+    });
     Compiled::new(
         &SceneDesc {
             settings: Settings {
@@ -136,7 +142,7 @@ fn lit_scene(lights: Vec<Light>, shadows: bool) -> Compiled {
             lights,
             images: Vec::new(),
             volumes: Vec::new(),
-            objects: vec![ObjectDesc::new(state)],
+            objects: vec![object],
             datasets: Default::default(),
         },
         &Caches::default(),
