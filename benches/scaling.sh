@@ -13,10 +13,12 @@
 # Then it rewrites the block between the scaling markers of docs/performance.md.
 #
 #   bash benches/scaling.sh                 # about 2.5 GB of volumes in target/scaling
-#   SCALING_ONLY="mni rep2" bash benches/scaling.sh   # some volumes (the table keeps the others)
+#   SCALING_ONLY="mni rep2" bash benches/scaling.sh   # some volumes (the table keeps the others
+#                                                     # whose results target/scaling/out holds)
 #   SCALING_NO_VTK=1 bash benches/scaling.sh           # vlib only
 #
-# Needs a C compiler, /usr/bin/time, ../shared/data's template; VTK with pip (vtk, numpy).
+# Needs a C compiler, /usr/bin/time, the template (target/bench-data/mni.vlb as the benches make
+# it, or $VLIB_MNI_VLB, else ../shared/data's NIfTI, converted); VTK with pip (vtk, numpy).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
@@ -31,8 +33,21 @@ if [ -z "${SCALING_NO_VTK:-}" ]; then
   python3 -c "import vtk, numpy" 2>/dev/null || pip install -q vtk numpy
 fi
 vol=target/release/examples/scaling_volumes
-[ -f "$work/mni.vlb" ] || target/release/vlconvert -q nifti \
-  ../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz "$work/mni.vlb" >/dev/null
+# The template: the benches' converted copy where there is one, else converted here.
+if [ ! -f "$work/mni.vlb" ]; then
+  nifti=$root/../shared/data/mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz
+  converted=${VLIB_MNI_VLB:-$root/target/bench-data/mni.vlb}
+  if [ -f "$converted" ]; then
+    cp "$converted" "$work/mni.vlb"
+    # (Its placement too, as vlconvert writes it.)
+    if [ -f "$converted.geom" ]; then cp "$converted.geom" "$work/mni.vlb.geom"; fi
+  elif [ -f "$nifti" ]; then
+    target/release/vlconvert -q nifti "$nifti" "$work/mni.vlb" >/dev/null
+  else
+    echo "scaling.sh: no MNI template: neither $converted nor $nifti" >&2
+    exit 1
+  fi
+fi
 # name: how it is made
 make_volume() {
   case $1 in
