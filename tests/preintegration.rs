@@ -12,7 +12,7 @@ mod two_balls;
 
 use slab::{head_on, slab_object};
 use vlib::{Camera, Dataset, Fields, Library, MappingType, Optimise, Voxels};
-use vlib::{DatasetId, MappingId};
+use vlib::{DatasetId, MappingId, RenderType};
 
 /// Slab depth (world units) and the opacity reference length.
 const DEPTH: f64 = 10.0;
@@ -290,14 +290,22 @@ fn balls_on(skip_empty: bool, step: f32, threads: usize, packets: bool) -> Vec<u
     balls_and(skip_empty, step, threads, packets, (true, None))
 }
 
-/// [`balls_on`], pre-integrated as `preintegrate` says, with a second object where `second`
-/// is its opacity: a box over the left half of the balls, faint or clear.
+/// A second object over the left half of the balls.
+#[derive(Clone, Copy)]
+enum Second {
+    /// A box of this opacity, faint or clear.
+    Box(f32),
+    /// An opaque DSR box whose surface (F = 0.5) does not exist: its F is the constant 0.3.
+    NoSurface,
+}
+
+/// [`balls_on`], pre-integrated as `preintegrate` says, with `second` where given.
 fn balls_and(
     skip_empty: bool,
     step: f32,
     threads: usize,
     packets: bool,
-    (preintegrate, second): (bool, Option<f32>),
+    (preintegrate, second): (bool, Option<Second>),
 ) -> Vec<u8> {
     let mut vl = Library::new();
     let data = two_balls::two_balls(32);
@@ -336,11 +344,22 @@ fn balls_and(
     vl.set(Fields::KA, 0.3).unwrap();
     vl.set(Fields::KD, 0.7).unwrap();
     vl.end().unwrap();
-    if let Some(o) = second {
+    if let Some(second) = second {
+        let o = match second {
+            Second::Box(o) => o,
+            Second::NoSurface => {
+                vl.render_type(RenderType::Dsr).unwrap();
+                vl.surface(Fields::F, 0.5).unwrap();
+                1.0
+            }
+        };
         vl.object().unwrap();
         vl.translate(-0.6, -0.6, -0.6).unwrap();
         vl.scale(0.6, 1.2, 1.2).unwrap();
         vl.set(Fields::O, o).unwrap();
+        if let Second::NoSurface = second {
+            vl.set(Fields::F, 0.3).unwrap();
+        }
         vl.end().unwrap();
     }
     rayon::ThreadPoolBuilder::new()
@@ -471,7 +490,7 @@ fn a_scene_of_two_objects_takes_midpoint_samples() {
     // with or without the switch (were the rays that meet one object alone pre-integrated,
     // the box's edge would show as a seam), in both marches.
     for packets in [true, false] {
-        let faint = Some(0.002);
+        let faint = Some(Second::Box(0.002));
         let midpoint = balls_and(true, 0.05, 0, packets, (false, faint));
         assert!(midpoint.iter().any(|&b| b > 40), "the balls are visible");
         assert!(
@@ -484,10 +503,13 @@ fn a_scene_of_two_objects_takes_midpoint_samples() {
             alone != balls_and(true, 0.05, 0, packets, (false, None)),
             "packets {packets}: pre-integration alone changed nothing"
         );
-        // A clear box (opacity 0) is no object rays meet: the balls are pre-integrated alone.
-        assert!(
-            balls_and(true, 0.05, 0, packets, (true, Some(0.0))) == alone,
-            "packets {packets}: a clear box changed the image"
-        );
+        // A clear box (opacity 0), or a box whose surface does not exist, is no object rays
+        // meet: the balls are pre-integrated alone.
+        for second in [Second::Box(0.0), Second::NoSurface] {
+            assert!(
+                balls_and(true, 0.05, 0, packets, (true, Some(second))) == alone,
+                "packets {packets}: a box that shows nothing changed the image"
+            );
+        }
     }
 }

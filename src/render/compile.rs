@@ -10,6 +10,7 @@
 //! built by `preint`). It does not trace, shade or composite (`integrate`, `shade`).
 
 use super::*;
+use crate::render::inert::{shows_nothing, zero_field};
 use crate::render::preint::PreIntegrated;
 
 /// One object of a scene compiled for tracing: immutable, read by every ray that meets it.
@@ -436,31 +437,6 @@ impl std::fmt::Debug for Caches {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str("Caches")
     }
-}
-
-/// Whether `fields` are 0 wherever an object's `program` runs: each never written (fields start
-/// at 0), or last written by a constant 0.
-fn zero_field(program: &[Instr], fields: Fields) -> bool {
-    fields.indices().all(
-        |i| match prefix_for(program, Fields::from_index(i)).checked_sub(1) {
-            None => true,
-            Some(k) => matches!(program[k], Instr::Set { value, .. } if value == 0.0),
-        },
-    )
-}
-
-/// Whether no ray can see anything of object `o`: its opacity is 0 everywhere and it bends no
-/// ray, or no ray looks at it (not visible, and casting neither shadows nor reflections). Such
-/// an object is left out of the objects rays meet, and kept for voxelization.
-fn shows_nothing(o: &ObjectDesc) -> bool {
-    let r = &o.state;
-    let refracts =
-        r.toggle(Feature::Refract) && !zero_field(&o.program, Fields::RF) && r.recursion > 0;
-    let clear = zero_field(&o.program, Fields::O) && !refracts;
-    let unseen = !r.toggle(Feature::Visible)
-        && !r.toggle(Feature::CastShadows)
-        && !r.toggle(Feature::CastReflections);
-    clear || unseen
 }
 
 /// What a scene calls for: effects its objects, toggles and lights can actually show. An

@@ -51,6 +51,7 @@ use std::sync::Arc;
 mod compile;
 mod cursor;
 mod image;
+mod inert;
 mod integrate;
 mod kernel;
 mod lanes;
