@@ -29,20 +29,9 @@ fn camera(vl: &mut Library) {
     .unwrap();
 }
 
-/// A smooth ball of medium (opacity rising towards its centre, from a counted field function)
-/// that casts and receives shadows, lit by the `lights` given as (position, colour,
-/// intensity) and an ambient light; its image at 32² and the field function's calls.
-fn lit_ball(lights: &[([f32; 3], [f32; 3], f32)], shadows: bool) -> (Vec<u8>, usize) {
-    let (calls, read) = counter();
-    let mut vl = Library::new();
-    vl.scene().unwrap();
-    camera(&mut vl);
-    vl.ambient(1.0, 1.0, 1.0, 0.3).unwrap();
-    for &(at, rgb, i) in lights {
-        vl.point_light(at, Attenuation::None, rgb, i).unwrap();
-    }
-    vl.toggle(Feature::CastShadows, shadows).unwrap();
-    vl.toggle(Feature::ReceiveShadows, shadows).unwrap();
+/// Adds a smooth ball of medium of diameter 100 at the origin, opacity rising towards its
+/// centre, from a field function that counts its calls in `calls`; step 2.
+fn ball(vl: &mut Library, calls: Arc<AtomicUsize>) {
     vl.step_size(2.0, 1.0).unwrap();
     vl.object().unwrap();
     vl.translate(-0.5, -0.5, -0.5).unwrap();
@@ -60,11 +49,26 @@ fn lit_ball(lights: &[([f32; 3], [f32; 3], f32)], shadows: bool) -> (Vec<u8>, us
     vl.set(Fields::B, 0.4).unwrap();
     vl.set(Fields::KA | Fields::KD, 0.7).unwrap();
     vl.end().unwrap();
+}
+
+/// The [`ball`] (casting and receiving shadows), lit by the `lights` given as (position,
+/// colour, intensity) and an ambient light; its image at 32² and the field function's calls.
+fn lit_ball(lights: &[([f32; 3], [f32; 3], f32)], shadows: bool) -> (Vec<u8>, usize) {
+    let (calls, read) = counter();
+    let mut vl = Library::new();
+    vl.scene().unwrap();
+    camera(&mut vl);
+    vl.ambient(1.0, 1.0, 1.0, 0.3).unwrap();
+    for &(at, rgb, i) in lights {
+        vl.point_light(at, Attenuation::None, rgb, i).unwrap();
+    }
+    vl.toggle(Feature::CastShadows, shadows).unwrap();
+    vl.toggle(Feature::ReceiveShadows, shadows).unwrap();
+    ball(&mut vl, calls);
     let plan = vl.render_plan().unwrap();
     let image = vl.render_preview(32, 32, 1.0).unwrap().to_rgb8();
-    let shadow_rays = plan.shadows;
     assert_eq!(
-        shadow_rays,
+        plan.shadows,
         shadows && lights.iter().any(|l| l.1 != [0.0; 3] && l.2 != 0.0),
         "the plan's shadows for lights {lights:?}"
     );
@@ -217,7 +221,7 @@ fn an_opaque_surface_ends_the_search_behind_it() {
     assert!(largest <= 1, "the images differ by {largest} levels");
 }
 
-/// The ball of [`lit_ball`] (one bright light, no shadows) beside a second object no ray can
+/// The [`ball`] (one bright light, no shadows) beside a second object no ray can
 /// see anything of, made so by `hide` (called before its `object` and inside it); its image at
 /// 32², the ball's calls and the second object's (a counted function giving its F, searched
 /// for a surface at 0.5).
@@ -231,22 +235,7 @@ fn ball_beside(hide: Option<Hide>) -> (Vec<u8>, usize, usize) {
     vl.ambient(1.0, 1.0, 1.0, 0.3).unwrap();
     vl.point_light([-200.0, 250.0, -200.0], Attenuation::None, [1.0; 3], 0.9)
         .unwrap();
-    vl.step_size(2.0, 1.0).unwrap();
-    vl.object().unwrap();
-    vl.translate(-0.5, -0.5, -0.5).unwrap();
-    vl.scale(100.0, 100.0, 100.0).unwrap();
-    vl.function(Fields::F | Fields::O, move |s| {
-        calls.fetch_add(1, Ordering::Relaxed);
-        let p = s.position();
-        let r2 = p.iter().map(|&c| (c - 0.5) * (c - 0.5)).sum::<f32>();
-        let f = (1.0 - 4.0 * r2).max(0.0);
-        let _ = s.set(Fields::F, f);
-        let _ = s.set(Fields::O, 0.05 * f);
-    })
-    .unwrap();
-    vl.set(Fields::R | Fields::G | Fields::KA | Fields::KD, 0.7)
-        .unwrap();
-    vl.end().unwrap();
+    ball(&mut vl, calls);
     if let Some((before, inside)) = hide {
         vl.render_type(RenderType::Dsr).unwrap();
         vl.surface(Fields::F, 0.5).unwrap();
