@@ -539,10 +539,6 @@ impl Compiled {
                     Light::Directional { to_light, .. } => (to_light, 1.0, f64::INFINITY),
                 };
                 let mut rad = radiance * att;
-                // A light that gives nothing here adds nothing, and sends no shadow ray.
-                if rad == DVec3::ZERO {
-                    continue;
-                }
                 if shadowed {
                     rad *= self.transmittance(w, l, dist);
                     if rad == DVec3::ZERO {
