@@ -1,7 +1,8 @@
 //! The MNI brain at 512×512, sample distance 0.5 voxel, shaded (the VTK peer scene of
 //! `../shared/bench/README.md`): the steady frame with and without empty-space skipping and
 //! early ray termination, measured in one process so the ratios are meaningful, plus the first
-//! frame (dataset load and precomputation included) and the unshaded frame.
+//! frame (dataset load and precomputation included) and the unshaded frame; and at 256×256,
+//! adaptive super-sampling with its rays in packets and by the scalar march.
 //!
 //! ```text
 //! cargo bench --bench mni            # or benches/peer.sh for the side-by-side with VTK
@@ -102,6 +103,29 @@ fn bench(c: &mut Criterion) {
                 b.iter(|| vl.render_preview(512, 512, 1.0).unwrap())
             });
         }
+    }
+    g.finish();
+
+    // Adaptive super-sampling at 256×256 (the brain's texture has most pixels refined), its
+    // rays in packets against the scalar march (`packets` off), with one ray a pixel as the
+    // baseline: `docs/performance.md`, "Super-sampling".
+    let mut g = c.benchmark_group("mni_256_super_sampled");
+    g.sample_size(10).measurement_time(Duration::from_secs(5));
+    for (n, packets) in [(1, true), (2, true), (2, false), (4, true), (4, false)] {
+        let mut vl = scene(
+            &vlb,
+            0.5,
+            true,
+            Optimise {
+                packets,
+                ..Optimise::default()
+            },
+        );
+        vl.super_sample(n).unwrap();
+        let name = format!("ss{n}_{}", if packets { "packets" } else { "scalar" });
+        g.bench_function(name, |b| {
+            b.iter(|| vl.render_preview(256, 256, 1.0).unwrap())
+        });
     }
     g.finish();
 }

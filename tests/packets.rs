@@ -167,6 +167,18 @@ fn render_made_as(
     threads: usize,
     sixteen: bool,
 ) -> (Vec<[f32; 3]>, bool) {
+    let vl = library(case, packets, sixteen);
+    let image = on_threads(threads, || vl.render_preview(W, H, 1.2)).unwrap();
+    let pixels = (0..H)
+        .flat_map(|y| (0..W).map(move |x| (x, y)))
+        .map(|(x, y)| image.pixel(x, y))
+        .collect();
+    (pixels, vl.dataset_of(DatasetId(1)).unwrap().values_made())
+}
+
+/// The scene of `case` (packets on or off; 16-bit voxels where `sixteen`, as
+/// [`render_made_as`] renders it).
+fn library(case: &Case, packets: bool, sixteen: bool) -> Library {
     let mut rng = Lcg(case.seed);
     let data = if case.hard {
         hard_volume(&mut rng, case.dims)
@@ -245,12 +257,7 @@ fn render_made_as(
             .unwrap();
     }
     vl.end().unwrap();
-    let image = on_threads(threads, || vl.render_preview(W, H, 1.2)).unwrap();
-    let pixels = (0..H)
-        .flat_map(|y| (0..W).map(move |x| (x, y)))
-        .map(|(x, y)| image.pixel(x, y))
-        .collect();
-    (pixels, vl.dataset_of(DatasetId(1)).unwrap().values_made())
+    vl
 }
 
 /// Whether pixel `p` shows the volume: it differs from the backdrop (0.1, 0.2, 0.3) of
@@ -958,4 +965,134 @@ fn lit_packets_hold_at_extreme_scales_and_lights() {
             assert!(scalar.contains(&1.0), "{what}");
         }
     }
+}
+
+/// Super-sampling with the packet march (`compat.md`): a pixel the rule leaves alone is the
+/// first pass, the image of one ray a pixel, bit for bit; a pixel it refines is the mean of its
+/// n × n rays, which are the pixels of the image n times finer along each axis (the same view:
+/// its pixel (n·x + i, n·y + j) is centred on ray (i, j) of pixel (x, y)), summed in f64 row by
+/// row, bit for bit: the first pass and the finer image each a render of one ray a pixel in
+/// packets. The rule is computed here from the first pass: a colour channel more than 4/255
+/// from a 4-neighbour's. And the same bytes on one and three
+/// threads, and within one 8-bit level of the scalar march's super-sampled image wherever
+/// both refine a pixel or neither does.
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn super_sampled_packets_are_the_mean_of_the_finer_image() {
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        eprintln!("no AVX2 and FMA: the packet march never runs here");
+        return;
+    }
+    // The rule's contrast (`compat.md`: more than 4/255 in a channel).
+    const CONTRAST: f32 = 4.0 / 255.0;
+    let bits = |v: &[[f32; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let image = |vl: &mut Library, ss: i32, (w, h): (u32, u32), threads: usize| {
+        vl.super_sample(ss).unwrap();
+        let image = on_threads(threads, || vl.render_preview(w, h, 1.2)).unwrap();
+        (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| image.pixel(x, y))
+            .collect::<Vec<_>>()
+    };
+    let (mut refined, mut kept, mut compared) = (0usize, 0usize, 0usize);
+    for (k, case) in cases().iter().enumerate().filter(|(k, _)| k % 3 == 0) {
+        let (n, preintegrate) = [(2, false), (3, true), (4, false)][k / 3 % 3];
+        let case = Case {
+            optimise: Optimise {
+                preintegrate,
+                ..case.optimise
+            },
+            ..*case
+        };
+        let mut vl = library(&case, true, false);
+        let first = image(&mut vl, 1, (W, H), 1);
+        let fine = image(&mut vl, 1, (n * W, n * H), 1);
+        let got = image(&mut vl, n as i32, (W, H), 1);
+        let threads = image(&mut vl, n as i32, (W, H), 3);
+        assert_eq!(bits(&got), bits(&threads), "case {k}: threads");
+        let at = |x: u32, y: u32| first[(y * W + x) as usize];
+        let differs = |x: u32, y: u32| {
+            let p = at(x, y);
+            [
+                (x.wrapping_sub(1), y),
+                (x + 1, y),
+                (x, y.wrapping_sub(1)),
+                (x, y + 1),
+            ]
+            .iter()
+            .any(|&(nx, ny)| {
+                nx < W && ny < H && {
+                    let q = at(nx, ny);
+                    (0..3).any(|c| (p[c] - q[c]).abs() > CONTRAST)
+                }
+            })
+        };
+        let mut scalar_vl = library(&case, false, false);
+        let scalar = image(&mut scalar_vl, n as i32, (W, H), 1);
+        let scalar_first = image(&mut scalar_vl, 1, (W, H), 1);
+        for y in 0..H {
+            for x in 0..W {
+                let want = if differs(x, y) {
+                    refined += 1;
+                    let mut sum = [0.0f64; 3];
+                    for j in 0..n {
+                        for i in 0..n {
+                            let q = fine[((n * y + j) * n * W + n * x + i) as usize];
+                            for c in 0..3 {
+                                sum[c] += q[c] as f64;
+                            }
+                        }
+                    }
+                    sum.map(|s| (s / (n * n) as f64).clamp(0.0, 1.0) as f32)
+                } else {
+                    kept += 1;
+                    at(x, y)
+                };
+                let i = (y * W + x) as usize;
+                assert_eq!(
+                    got[i].map(f32::to_bits),
+                    want.map(f32::to_bits),
+                    "case {k}, n {n}, pixel ({x}, {y}): {:?} against {want:?}",
+                    got[i]
+                );
+                // The scalar march's refinement decides from its own first pass.
+                let scalar_refines = {
+                    let p = scalar_first[i];
+                    let near = [
+                        (x.wrapping_sub(1), y),
+                        (x + 1, y),
+                        (x, y.wrapping_sub(1)),
+                        (x, y + 1),
+                    ];
+                    near.iter().any(|&(nx, ny)| {
+                        nx < W && ny < H && {
+                            let q = scalar_first[(ny * W + nx) as usize];
+                            (0..3).any(|c| (p[c] - q[c]).abs() > CONTRAST)
+                        }
+                    })
+                };
+                if scalar_refines == differs(x, y) {
+                    compared += 1;
+                    for c in 0..3 {
+                        assert!(
+                            (got[i][c] - scalar[i][c]).abs() <= 1.0 / 255.0,
+                            "case {k}, n {n}, pixel ({x}, {y}): {:?} against the scalar {:?}",
+                            got[i],
+                            scalar[i]
+                        );
+                    }
+                }
+            }
+        }
+    }
+    // Both kinds of pixel were there, and most pixels compared with the scalar march.
+    assert!(
+        refined > 500 && kept > 500,
+        "{refined} refined, {kept} kept"
+    );
+    assert!(
+        compared * 100 >= (refined + kept) * 95,
+        "{compared} of {}",
+        refined + kept
+    );
 }

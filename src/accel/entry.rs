@@ -211,6 +211,28 @@ impl EntryMap {
     pub(crate) fn bound(&self, x: u32, y: u32) -> f64 {
         self.bound[(y as usize - self.first_row) * self.width + (x as usize - self.first_col)]
     }
+
+    /// The map, in the image `n` times finer along each axis, of the `n` rows of fine pixels
+    /// that pixels `xs` of row `y` (pixels this map holds) cover: each fine pixel takes the
+    /// bound of the pixel it lies in, a bound for a ray through any point of that pixel. What
+    /// super-sampling's n × n rays over a pixel start from.
+    pub(crate) fn finer(&self, xs: std::ops::Range<u32>, y: u32, n: u32) -> EntryMap {
+        let n = n as usize;
+        let (width, first_col) = (xs.len() * n, xs.start as usize * n);
+        let row: Vec<f64> = xs
+            .flat_map(|x| std::iter::repeat_n(self.bound(x, y), n))
+            .collect();
+        let mut bound = Vec::with_capacity(width * n);
+        for _ in 0..n {
+            bound.extend_from_slice(&row);
+        }
+        EntryMap {
+            width,
+            first_row: y as usize * n,
+            first_col,
+            bound,
+        }
+    }
 }
 
 impl EntryMarks {

@@ -160,7 +160,8 @@ pub fn render_image(
 /// Adaptive super-sampling: one ray through each pixel centre, then pixels that differ from a
 /// neighbour by more than [`SUPER_SAMPLE_CONTRAST`] in a colour channel (or, against a
 /// transparent backdrop, in transmittance) are replaced by the mean of an n×n grid of rays
-/// (colour and transmittance). Every pixel is computed on its own, so strips change no pixel.
+/// (colour and transmittance), traced in packets where the first pass is (`FineRays`). Every
+/// pixel is computed on its own, so strips change no pixel.
 ///
 /// Errors: the scene's work bound ([`Compiled::check_work`]), `VL_NOMEMORY`, `VL_CANCELLED`
 /// (within a tile of work of the flag), the sink's, and a panic (`VL_INTERNAL`).
@@ -213,6 +214,10 @@ fn render_in_strips(
         #[cfg(target_arch = "x86_64")]
         let packet_side = packet_side(width, height, progress);
         let n = scene.settings.super_sample.max(1) as u32;
+        // With super-sampling, the image n times finer along each axis (at most 2¹⁹ pixels a
+        // side): its pixel (n·x + i, n·y + j) is centred on ray (i, j) of pixel (x, y).
+        #[cfg(target_arch = "x86_64")]
+        let fine = tiles::view(&scene.settings, width * n, height * n, aspect);
         // The entry map of a tile, made by the tile's task.
         let entry_of = |(tx, ty, tw, th): (u32, u32, u32, u32)| -> Option<EntryMap> {
             let (tx, ty) = (tx as usize, ty as usize);
@@ -308,37 +313,59 @@ fn render_in_strips(
                         }
                     })
                 };
+                // The pixels' n × n rays in packets where the first pass took them: each run of
+                // pixels to refine along a row of a tile is a tile of the n times finer image,
+                // whose pixel centres are those rays' image positions.
+                #[cfg(target_arch = "x86_64")]
+                let refined = packets.as_ref().map(|p| {
+                    let rays = FineRays {
+                        packets: p,
+                        fine: &fine,
+                        image: &image,
+                        unbounded,
+                        recycled,
+                        n,
+                    };
+                    per_tile(width, y0..y1, TILE, progress, recycled, |tile, out| {
+                        rays.refine_tile(tile, out, &at, &differs, &entry_of)
+                    })
+                });
+                #[cfg(not(target_arch = "x86_64"))]
+                let refined = None;
                 // The tile's entry map, made at its first pixel to refine.
                 let lazy = |tile| (tile, std::cell::OnceCell::new());
-                let refined = per_pixel(
-                    width,
-                    y0..y1,
-                    progress,
-                    recycled,
-                    lazy,
-                    |(tile, entry), x, y| {
-                        if !differs(x, y) {
-                            return at(x, y);
-                        }
-                        let bound = entry
-                            .get_or_init(|| entry_of(*tile))
-                            .as_ref()
-                            .map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
-                        let (mut sum, mut t_sum) = (DVec3::ZERO, 0.0);
-                        for j in 0..n {
-                            for i in 0..n {
-                                let sx = x as f64 + (i as f64 + 0.5) / n as f64;
-                                let sy = y as f64 + (j as f64 + 0.5) / n as f64;
-                                let (c, t) = scene.trace(view.eye, &image, view.ray(sx, sy), bound);
-                                let p = pixel(c, t);
-                                sum += crate::model::scene::v3([p[0], p[1], p[2]]);
-                                t_sum += p[3] as f64;
+                let refined = refined.unwrap_or_else(|| {
+                    per_pixel(
+                        width,
+                        y0..y1,
+                        progress,
+                        recycled,
+                        lazy,
+                        |(tile, entry), x, y| {
+                            if !differs(x, y) {
+                                return at(x, y);
                             }
-                        }
-                        let samples = (n * n) as f64;
-                        pixel(sum / samples, t_sum / samples)
-                    },
-                )?;
+                            let bound = entry
+                                .get_or_init(|| entry_of(*tile))
+                                .as_ref()
+                                .map_or(f64::NEG_INFINITY, |m| m.bound(x, y));
+                            let (mut sum, mut t_sum) = (DVec3::ZERO, 0.0);
+                            for j in 0..n {
+                                for i in 0..n {
+                                    let sx = x as f64 + (i as f64 + 0.5) / n as f64;
+                                    let sy = y as f64 + (j as f64 + 0.5) / n as f64;
+                                    let (c, t) =
+                                        scene.trace(view.eye, &image, view.ray(sx, sy), bound);
+                                    let p = pixel(c, t);
+                                    sum += crate::model::scene::v3([p[0], p[1], p[2]]);
+                                    t_sum += p[3] as f64;
+                                }
+                            }
+                            let samples = (n * n) as f64;
+                            pixel(sum / samples, t_sum / samples)
+                        },
+                    )
+                })?;
                 if !progress.holds() {
                     progress.hold(crate::error::catch("rendering", || sink(y0, &refined)))?;
                 }
@@ -352,6 +379,96 @@ fn render_in_strips(
         progress.settle()
     };
     crate::error::catch("rendering", run)
+}
+
+/// Super-sampling's rays in packets: the n × n rays of pixel (x, y) are the pixels
+/// (n·x + i, n·y + j) of `fine`, the image n times finer along each axis, traced by `packets`.
+#[cfg(target_arch = "x86_64")]
+struct FineRays<'a> {
+    packets: &'a simd::Packets<'a>,
+    fine: &'a Pinhole,
+    image: &'a ImageRays,
+    unbounded: Option<Pixel>,
+    recycled: &'a Recycled,
+    n: u32,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl FineRays<'_> {
+    /// The pixels of tile (x, y, width, height) of a super-sampled strip, into `out` (the
+    /// tile's buffer): `at(x, y)`, the first pass, where `differs(x, y)` is false, and else the
+    /// mean of its rays, each run of such pixels along a row at once ([`FineRays::refine`]),
+    /// from the tile's entry map (`entry_of`, made for the first run).
+    fn refine_tile(
+        &self,
+        (tx, ty, tw, th): (u32, u32, u32, u32),
+        mut out: Vec<Pixel>,
+        at: &impl Fn(u32, u32) -> Pixel,
+        differs: &impl Fn(u32, u32) -> bool,
+        entry_of: &impl Fn((u32, u32, u32, u32)) -> Option<EntryMap>,
+    ) -> Vec<Pixel> {
+        let entry = std::cell::OnceCell::new();
+        for y in ty..ty + th {
+            let row = &mut out[((y - ty) * tw) as usize..][..tw as usize];
+            let mut x = tx;
+            while x < tx + tw {
+                let x0 = x;
+                if !differs(x, y) {
+                    row[(x - tx) as usize] = at(x, y);
+                    x += 1;
+                    continue;
+                }
+                while x < tx + tw && differs(x, y) {
+                    x += 1;
+                }
+                let map = entry.get_or_init(|| entry_of((tx, ty, tw, th)));
+                let place = &mut row[(x0 - tx) as usize..(x - tx) as usize];
+                self.refine(x0..x, y, map.as_ref(), place);
+            }
+        }
+        out
+    }
+
+    /// Pixels `xs` of row `y` into `out`, each the mean of its n × n rays: one tile of the
+    /// finer image, `n·len × n` pixels, started from the pixels' bounds in `entry` (made
+    /// finer, [`EntryMap::finer`]); per pixel its rays' colours and transmittances summed in
+    /// f64 row by row, as the scalar refinement sums them.
+    fn refine(
+        &self,
+        xs: std::ops::Range<u32>,
+        y: u32,
+        entry: Option<&EntryMap>,
+        out: &mut [Pixel],
+    ) {
+        let (p, n) = (self.packets, self.n);
+        let map = entry.map(|m| m.finer(xs.clone(), y, n));
+        let tile = (xs.start * n, y * n, xs.len() as u32 * n, n);
+        // (A run's buffer is small, at most a tile's width times n²: a failure is raised to
+        // the step's catch, as a tile's own.)
+        let rays = self
+            .recycled
+            .take((tile.2 * n) as usize, "a run's rays")
+            .unwrap_or_else(|e| crate::error::raise(e));
+        let (fine, image, unbounded) = (self.fine, self.image, self.unbounded);
+        let rays = if p.preintegrated() {
+            p.tile_pre(fine, map.as_ref(), image, unbounded, tile, rays)
+        } else {
+            p.tile(fine, map.as_ref(), image, unbounded, tile, rays)
+        };
+        let (side, n) = (tile.2 as usize, n as usize);
+        for (k, o) in out.iter_mut().enumerate() {
+            let (mut sum, mut t_sum) = (DVec3::ZERO, 0.0);
+            for j in 0..n {
+                for q in &rays[j * side + k * n..][..n] {
+                    sum += crate::model::scene::v3([q[0], q[1], q[2]]);
+                    t_sum += q[3] as f64;
+                }
+            }
+            let samples = (n * n) as f64;
+            *o = pixel(sum / samples, t_sum / samples);
+        }
+        self.recycled.give(rays);
+    }
 }
 
 #[cfg(test)]

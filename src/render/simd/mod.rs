@@ -256,7 +256,7 @@ impl<'a> Packets<'a> {
     /// The packet march of `scene`, where it applies and the processor has AVX2 and FMA;
     /// `None` otherwise (the scalar march then traces every ray).
     pub(super) fn new(scene: &'a Compiled) -> Option<Packets<'a>> {
-        if !scene.settings.optimise.packets || scene.settings.super_sample > 1 {
+        if !scene.settings.optimise.packets {
             return None;
         }
         if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
