@@ -67,9 +67,59 @@ struct AxisTaps {
     slope: [f64; 4],
 }
 
+/// The BC-spline kernel's two cubics (|x| < 1, inner; 1 ≤ |x| < 2, outer) and their
+/// derivatives as coefficients, each already divided by 6: what [`AxisTaps::new`] evaluates
+/// by Horner's rule where all four taps are nodes.
+struct Cubics {
+    inner: [f64; 3],
+    outer: [f64; 4],
+}
+
+impl Cubics {
+    fn new(b: f64, c: f64) -> Cubics {
+        let sixth = 1.0 / 6.0;
+        Cubics {
+            // x³, x², 1 (no x term).
+            inner: [
+                12.0 - 9.0 * b - 6.0 * c,
+                -18.0 + 12.0 * b + 6.0 * c,
+                6.0 - 2.0 * b,
+            ]
+            .map(|k| k * sixth),
+            // x³, x², x, 1.
+            outer: [
+                -b - 6.0 * c,
+                6.0 * b + 30.0 * c,
+                -12.0 * b - 48.0 * c,
+                8.0 * b + 24.0 * c,
+            ]
+            .map(|k| k * sixth),
+        }
+    }
+
+    /// The kernel and its derivative at x in [0, 1] (the inner cubic).
+    #[inline(always)]
+    fn inner(&self, x: f64) -> (f64, f64) {
+        let [a, b, c] = self.inner;
+        ((a * x + b) * (x * x) + c, (3.0 * a * x + 2.0 * b) * x)
+    }
+
+    /// The kernel and its derivative at x in [1, 2] (the outer cubic).
+    #[inline(always)]
+    fn outer(&self, x: f64) -> (f64, f64) {
+        let [a, b, c, d] = self.outer;
+        (
+            ((a * x + b) * x + c) * x + d,
+            (3.0 * a * x + 2.0 * b) * x + c,
+        )
+    }
+}
+
 impl AxisTaps {
-    /// The taps at continuous index `u` (in [0, n − 1]) of an axis of `n` nodes.
-    fn new(u: f64, n: usize, b: f64, c: f64) -> AxisTaps {
+    /// The taps at continuous index `u` (in [0, n − 1]) of an axis of `n` nodes, the kernel's
+    /// cubics `k`.
+    #[inline(always)]
+    fn new(u: f64, n: usize, b: f64, c: f64, k: &Cubics) -> AxisTaps {
         if n == 1 {
             // Constant along the axis: the value is the node's, the slope 0.
             return AxisTaps {
@@ -79,10 +129,26 @@ impl AxisTaps {
                 slope: [0.0; 4],
             };
         }
-        let f = u.floor();
+        // (u ≥ 0, `Dataset::index`: its truncation is its floor, without a call to libm's.)
+        debug_assert!(u >= 0.0);
+        let f = (u as i64) as f64;
         let t = u - f;
         let f = f as i64;
         let last = n as i64 - 1;
+        if f >= 1 && f + 2 <= last {
+            // Every tap a node: taps f − 1 … f + 2 at distances t + 1, t, 1 − t, 2 − t (the
+            // derivative odd: negative on the far side), each its own node's weight.
+            let (k0, d0) = k.outer(t + 1.0);
+            let (k1, d1) = k.inner(t);
+            let (k2, d2) = k.inner(1.0 - t);
+            let (k3, d3) = k.outer(2.0 - t);
+            return AxisTaps {
+                first: (f - 1) as usize,
+                len: 4,
+                value: [k0, k1, k2, k3],
+                slope: [d0, d1, -d2, -d3],
+            };
+        }
         // The window: four nodes around the taps f − 1 … f + 2, moved inside the grid (fewer
         // for a grid of fewer nodes); every in-grid tap and both nodes an outside tap folds
         // onto (0 and 1, or n − 2 and n − 1) lie in it.
@@ -157,9 +223,17 @@ impl Dataset {
     /// the weights k′⊗k⊗k, k⊗k′⊗k and k⊗k⊗k′, each row along x read once.
     #[inline(never)]
     pub(crate) fn cubic_gradient(&self, p: [f32; 3], b: f64, c: f64) -> [f64; 3] {
-        let [x, y, z] =
-            std::array::from_fn(|a| AxisTaps::new(self.index(p[a], a), self.dims[a], b, c));
+        let k = Cubics::new(b, c);
+        // (Three calls, not a closure, which the compiler may leave out of line.)
+        let (x, y, z) = (
+            AxisTaps::new(self.index(p[0], 0), self.dims[0], b, c, &k),
+            AxisTaps::new(self.index(p[1], 1), self.dims[1], b, c, &k),
+            AxisTaps::new(self.index(p[2], 2), self.dims[2], b, c, &k),
+        );
         let values = self.values();
+        if (x.len, y.len, z.len) == (4, 4, 4) {
+            return self.cubic_gradient4(values, [&x, &y, &z]);
+        }
         let mut g = [0.0f64; 3];
         for kz in 0..z.len {
             for ky in 0..y.len {
@@ -180,6 +254,47 @@ impl Dataset {
         }
         // Per grid step to per object unit: × (n − 1) (0 along an axis of one node, whose
         // slope weights are 0).
+        std::array::from_fn(|a| g[a] * self.last[a])
+    }
+
+    /// [`Dataset::cubic_gradient`] over a window of 4×4×4 nodes (`values`, the node values):
+    /// per row along x its sums with k and k′, then per layer along y, then along z.
+    #[inline(always)]
+    fn cubic_gradient4(&self, values: &[f32], [x, y, z]: [&AxisTaps; 3]) -> [f64; 3] {
+        // Per layer kz and row ky: the row's sums with x's value and slope weights.
+        let (mut value, mut slope) = ([[0.0f64; 4]; 4], [[0.0f64; 4]; 4]);
+        for kz in 0..4 {
+            for ky in 0..4 {
+                let o = self.node_index([x.first, y.first + ky, z.first + kz]);
+                // (Always there: the window lies inside the grid.)
+                let Some(&[v0, v1, v2, v3]) = values.get(o..o + 4) else {
+                    continue;
+                };
+                let r = [v0, v1, v2, v3].map(f64::from);
+                let dot = |w: &[f64; 4]| (w[0] * r[0] + w[1] * r[1]) + (w[2] * r[2] + w[3] * r[3]);
+                value[kz][ky] = dot(&x.value);
+                slope[kz][ky] = dot(&x.slope);
+            }
+        }
+        // Per layer: along y, the three sums the gradient's components take.
+        let dot =
+            |w: &[f64; 4], r: &[f64; 4]| (w[0] * r[0] + w[1] * r[1]) + (w[2] * r[2] + w[3] * r[3]);
+        let layers: [[f64; 3]; 4] = std::array::from_fn(|kz| {
+            [
+                dot(&y.value, &slope[kz]),
+                dot(&y.slope, &value[kz]),
+                dot(&y.value, &value[kz]),
+            ]
+        });
+        let along_z = |w: &[f64; 4], i: usize| {
+            (w[0] * layers[0][i] + w[1] * layers[1][i])
+                + (w[2] * layers[2][i] + w[3] * layers[3][i])
+        };
+        let g = [
+            along_z(&z.value, 0),
+            along_z(&z.value, 1),
+            along_z(&z.slope, 2),
+        ];
         std::array::from_fn(|a| g[a] * self.last[a])
     }
 }
