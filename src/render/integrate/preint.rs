@@ -297,7 +297,7 @@ impl<'a> PreMarch<'a> {
             headlit,
             origin,
             dir,
-            last: (c.k == 0).then(|| (0, c.t0, self.value(c, c.t0))),
+            last: (c.k == 0).then(|| (0, c.t0, self.end_value(c, c.t0))),
             px: 0,
             view: [0.0; 3],
         }
@@ -306,11 +306,28 @@ impl<'a> PreMarch<'a> {
     /// The dataset's value at ray parameter `t` of cursor `c`'s ray.
     #[inline]
     pub(in crate::render) fn value(&self, c: &Cursor, t: f64) -> f32 {
-        let p = ray_point(c.o, c.d, t);
+        self.value_at(ray_point(c.o, c.d, t))
+    }
+
+    /// The dataset's value at object point `p`.
+    #[inline]
+    fn value_at(&self, p: [f32; 3]) -> f32 {
         match &self.bytes {
             Some(b) => b.value(self.data, p),
             None => clamp_field(self.data.trilinear(p)),
         }
+    }
+
+    /// The dataset's value at an end of cursor `c`'s interval (`t` its t0 or t1): a point on
+    /// the box's surface, where the value may jump (a dataset is 0 outside [0, 1]³). Computed
+    /// as `o + t·d` it can land outside the box by far more than the 2⁻²⁰ a dataset forgives
+    /// (an object-space ray of huge `o` and `d`, under a near-singular transform or seen from
+    /// afar, cancels to the face with an absolute error of |o|·2⁻⁵³), so it is brought back
+    /// into the box first, where it lies exactly.
+    #[inline]
+    fn end_value(&self, c: &Cursor, t: f64) -> f32 {
+        let p = (c.o + t * c.d).clamp(self.obj.box_min, self.obj.box_max);
+        self.value_at(p.as_vec3().to_array())
     }
 
     /// The ray parameter of position `p` of cursor `c`'s ray (see [`PreMarch`]).
@@ -378,7 +395,7 @@ impl<'a> PreMarch<'a> {
         c: &Cursor,
         light: &mut impl PieceLighting,
     ) -> (DVec3, f64) {
-        let v = self.value(c, c.t1);
+        let v = self.end_value(c, c.t1);
         self.take_position(ray, c, c.n + 1, c.t1, v, light);
         ray.acc.result()
     }
