@@ -16,7 +16,8 @@
 //! normal from an f32 gradient, from 8- and 16-bit voxels from their integer differences, which
 //! the scalar march takes as differences of rounded node values: a relative 4·10⁻³ for 16-bit
 //! neighbours one unit apart, only where the gradient is that small; `rv^e` with e ≤ 12
-//! multiplying a relative error by e) and the composite (a sum of up to a few hundred terms):
+//! multiplying a relative error by e) and the composite (a sum of up to a few hundred terms;
+//! at most 2¹⁴, past which the scalar march traces the rays, `dev/simd.md`):
 //! relative errors of about 10⁻⁶ per sample, 10⁻⁴ over a ray (measured: at most 4·10⁻⁷, root
 //! mean square 2·10⁻⁸). Where a ray's transmittance lands within that of the termination bound,
 //! the two marches may stop one sample apart: at most the bound (1/512) times a colour. So 1/255
@@ -1095,4 +1096,61 @@ fn super_sampled_packets_are_the_mean_of_the_finer_image() {
         "{compared} of {}",
         refined + kept
     );
+}
+
+/// A step so fine that a ray takes over a million samples (1.7·10⁶ through a unit cube of
+/// constant 8-bit value 0.9, step 10⁻⁶ against a reference of 10, early termination off): the
+/// lanes composite in f32, an error of about 2⁻²⁴ a sample, which here came to three 8-bit
+/// levels against the scalar march's f64. Past 2¹⁴ samples a ray (`dev/simd.md`) the scalar
+/// march traces every ray, so the two switches give the same image.
+#[test]
+fn a_million_samples_a_ray_stay_within_a_level_of_the_scalar_march() {
+    let image = |packets: bool, step: f32| {
+        let mut vl = Library::new();
+        let data = Dataset::new([8; 3], Voxels::U8(vec![230; 512]), 0.0, 255.0).unwrap();
+        vl.add_dataset(DatasetId(1), data).unwrap();
+        let opacity = [0.3, 0.0, 0.5, 0.2, 0.7, 0.6, 0.95, 0.9];
+        vl.mapping(MappingId(1), MappingType::Ramp, 4, 1, &opacity)
+            .unwrap();
+        let colours = [0.25, 0.9, 0.2, 0.1, 0.75, 0.1, 0.7, 0.95];
+        vl.mapping(MappingId(2), MappingType::Ramp, 2, 3, &colours)
+            .unwrap();
+        vl.scene().unwrap();
+        vl.set_optimise(Optimise {
+            packets,
+            early_termination: false,
+            ..Optimise::default()
+        })
+        .unwrap();
+        vl.camera(&Camera {
+            eye: [0.3, 0.2, -3.0],
+            at: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            fov: 40.0,
+        })
+        .unwrap();
+        vl.background(1.0, 1.0, 1.0).unwrap();
+        vl.step_size(step, 10.0).unwrap();
+        vl.object().unwrap();
+        vl.translate(-0.5, -0.5, -0.5).unwrap();
+        colour_program(&mut vl, None);
+        vl.end().unwrap();
+        let img = vl.render_preview(4, 4, 1.0).unwrap();
+        (0..4)
+            .flat_map(|y| (0..4).map(move |x| (x, y)))
+            .map(|(x, y)| img.pixel(x, y))
+            .collect::<Vec<_>>()
+    };
+    for step in [1e-6, 1e-2] {
+        let (lanes, scalar) = (image(true, step), image(false, step));
+        let worst = lanes
+            .iter()
+            .flatten()
+            .zip(scalar.iter().flatten())
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(worst <= 1.0 / 255.0, "step {step}: {worst}");
+        // The cube absorbs: the comparison means something.
+        assert!(scalar.iter().any(|p| p[0] < 0.9), "step {step}: {scalar:?}");
+    }
 }

@@ -236,6 +236,18 @@ impl CObj {
         }
     }
 
+    /// The longest chord of the object's box in world space, which bounds every ray through
+    /// it: the longest of the parallelepiped's four body diagonals (+∞ where one is NaN).
+    pub(super) fn world_diagonal(&self) -> f64 {
+        let corner = |k: usize| self.world_corner(k);
+        (0..4)
+            .map(|k| corner(k).distance(corner(7 - k)))
+            .fold(
+                0.0f64,
+                |a, b| if b.is_nan() { f64::INFINITY } else { a.max(b) },
+            )
+    }
+
     /// Corner `k` (0 … 7) of the object's box in world space: bit 0 of `k` picks the box's
     /// low or high x, bit 1 y, bit 2 z (so corners k and 7 − k are opposite).
     fn world_corner(&self, k: usize) -> DVec3 {
@@ -639,15 +651,7 @@ impl Compiled {
     /// cancelled within [`PROBE_EVERY`] samples (`Cursor::stopping`).
     pub(crate) fn check_work(&self) -> Result<()> {
         for (i, obj) in self.every_object() {
-            let corner = |k: usize| obj.world_corner(k);
-            // The longest chord of a parallelepiped is one of its four body diagonals.
-            let diagonal =
-                (0..4)
-                    .map(|k| corner(k).distance(corner(7 - k)))
-                    .fold(
-                        0.0f64,
-                        |a, b| if b.is_nan() { f64::INFINITY } else { a.max(b) },
-                    );
+            let diagonal = obj.world_diagonal();
             let samples = diagonal / obj.step;
             if samples.is_nan() || samples > MAX_SAMPLES_PER_RAY {
                 return Err(Error::new(

@@ -252,6 +252,9 @@ pub(super) struct Packets<'a> {
     untested: std::sync::atomic::AtomicU64,
 }
 
+/// The most samples a ray of the packet march may take through its object (see [`Packets::new`]).
+const MAX_PACKET_SAMPLES: f64 = (1u32 << 14) as f64;
+
 impl<'a> Packets<'a> {
     /// The packet march of `scene`, where it applies and the processor has AVX2 and FMA;
     /// `None` otherwise (the scalar march then traces every ray).
@@ -266,6 +269,14 @@ impl<'a> Packets<'a> {
             return None;
         };
         if !(obj.seen_by(Ray::PRIMARY) && obj.render_type == RenderType::Dvr) {
+            return None;
+        }
+        // The lanes composite in f32 (each sample's transmittance rounded to f32, colour and
+        // transmittance summed and multiplied in f32): the error grows with the samples of a
+        // ray, about 2⁻²⁴ each, so beyond 2¹⁴ samples (a quarter of an 8-bit level) the
+        // scalar march, in f64, traces every ray.
+        let samples = obj.world_diagonal() / obj.step;
+        if samples.is_nan() || samples > MAX_PACKET_SAMPLES {
             return None;
         }
         let lean = obj.lean.as_ref()?;

@@ -620,3 +620,22 @@ fn cell_nodes_of_16_bit_voxels_are_the_node_values() {
         "some quotient rounds to another f32 than its node value"
     );
 }
+
+/// Past [`MAX_PACKET_SAMPLES`] samples a ray (the object's world diagonal over its step) the
+/// scalar march traces every ray: the lanes' f32 composite drifts by about 2⁻²⁴ a sample.
+#[test]
+fn rays_of_more_samples_than_the_bound_take_the_scalar_march() {
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        return;
+    }
+    let vl = slabs_scene(1.0, true, false, Default::default());
+    let scene = vl.compiled().unwrap();
+    let diagonal = scene.objects[0].world_diagonal();
+    assert!(Packets::new(&scene).is_some());
+    for (samples, packets) in [(0.99, true), (1.01, false)] {
+        let step = (diagonal / (samples * MAX_PACKET_SAMPLES)) as f32;
+        let vl = slabs_scene(step, true, false, Default::default());
+        let scene = vl.compiled().unwrap();
+        assert_eq!(Packets::new(&scene).is_some(), packets, "step {step}");
+    }
+}
