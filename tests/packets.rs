@@ -995,6 +995,22 @@ fn super_sampled_packets_are_the_mean_of_the_finer_image() {
             .map(|(x, y)| image.pixel(x, y))
             .collect::<Vec<_>>()
     };
+    // Whether the rule refines pixel (x, y) of first pass `first` (W × H pixels).
+    let refines = |first: &[[f32; 3]], x: u32, y: u32| {
+        let p = first[(y * W + x) as usize];
+        let near = [
+            (x.wrapping_sub(1), y),
+            (x + 1, y),
+            (x, y.wrapping_sub(1)),
+            (x, y + 1),
+        ];
+        near.iter().any(|&(nx, ny)| {
+            nx < W && ny < H && {
+                let q = first[(ny * W + nx) as usize];
+                (0..3).any(|c| (p[c] - q[c]).abs() > CONTRAST)
+            }
+        })
+    };
     let (mut refined, mut kept, mut compared) = (0usize, 0usize, 0usize);
     for (k, case) in cases().iter().enumerate().filter(|(k, _)| k % 3 == 0) {
         let (n, preintegrate) = [(2, false), (3, true), (4, false)][k / 3 % 3];
@@ -1012,22 +1028,7 @@ fn super_sampled_packets_are_the_mean_of_the_finer_image() {
         let threads = image(&mut vl, n as i32, (W, H), 3);
         assert_eq!(bits(&got), bits(&threads), "case {k}: threads");
         let at = |x: u32, y: u32| first[(y * W + x) as usize];
-        let differs = |x: u32, y: u32| {
-            let p = at(x, y);
-            [
-                (x.wrapping_sub(1), y),
-                (x + 1, y),
-                (x, y.wrapping_sub(1)),
-                (x, y + 1),
-            ]
-            .iter()
-            .any(|&(nx, ny)| {
-                nx < W && ny < H && {
-                    let q = at(nx, ny);
-                    (0..3).any(|c| (p[c] - q[c]).abs() > CONTRAST)
-                }
-            })
-        };
+        let differs = |x, y| refines(&first, x, y);
         let mut scalar_vl = library(&case, false, false);
         let scalar = image(&mut scalar_vl, n as i32, (W, H), 1);
         let scalar_first = image(&mut scalar_vl, 1, (W, H), 1);
@@ -1057,21 +1058,7 @@ fn super_sampled_packets_are_the_mean_of_the_finer_image() {
                     got[i]
                 );
                 // The scalar march's refinement decides from its own first pass.
-                let scalar_refines = {
-                    let p = scalar_first[i];
-                    let near = [
-                        (x.wrapping_sub(1), y),
-                        (x + 1, y),
-                        (x, y.wrapping_sub(1)),
-                        (x, y + 1),
-                    ];
-                    near.iter().any(|&(nx, ny)| {
-                        nx < W && ny < H && {
-                            let q = scalar_first[(ny * W + nx) as usize];
-                            (0..3).any(|c| (p[c] - q[c]).abs() > CONTRAST)
-                        }
-                    })
-                };
+                let scalar_refines = refines(&scalar_first, x, y);
                 if scalar_refines == differs(x, y) {
                     compared += 1;
                     for c in 0..3 {
