@@ -106,6 +106,77 @@ pub fn bc_kernel(x: f64, b: f64, c: f64) -> f64 {
     }
 }
 
+/// The BC-spline kernel's two cubics (|x| < 1, inner; 1 ≤ |x| < 2, outer) as coefficients,
+/// each already divided by 6, evaluated by Horner's rule: [`bc_kernel`] (to rounding) without
+/// its branches and divisions, for the four taps around a point (the cubic value filter's
+/// weights, `Cubics::weights`, and the cubic gradient's taps, `gradient::AxisTaps`).
+pub(crate) struct Cubics {
+    inner: [f64; 3],
+    outer: [f64; 4],
+}
+
+impl Cubics {
+    pub(crate) fn new(b: f64, c: f64) -> Cubics {
+        let sixth = 1.0 / 6.0;
+        Cubics {
+            // x³, x², 1 (no x term).
+            inner: [
+                12.0 - 9.0 * b - 6.0 * c,
+                -18.0 + 12.0 * b + 6.0 * c,
+                6.0 - 2.0 * b,
+            ]
+            .map(|k| k * sixth),
+            // x³, x², x, 1.
+            outer: [
+                -b - 6.0 * c,
+                6.0 * b + 30.0 * c,
+                -12.0 * b - 48.0 * c,
+                8.0 * b + 24.0 * c,
+            ]
+            .map(|k| k * sixth),
+        }
+    }
+
+    /// The kernel and its derivative at x in [0, 1] (the inner cubic).
+    #[inline(always)]
+    pub(crate) fn inner(&self, x: f64) -> (f64, f64) {
+        let [a, b, c] = self.inner;
+        ((a * x + b) * (x * x) + c, (3.0 * a * x + 2.0 * b) * x)
+    }
+
+    /// The kernel and its derivative at x in [1, 2] (the outer cubic).
+    #[inline(always)]
+    pub(crate) fn outer(&self, x: f64) -> (f64, f64) {
+        let [a, b, c, d] = self.outer;
+        (
+            ((a * x + b) * x + c) * x + d,
+            (3.0 * a * x + 2.0 * b) * x + c,
+        )
+    }
+
+    /// The weights k(t + 1), k(t), k(1 − t), k(2 − t) of taps i − 1 … i + 2 of a point at
+    /// t ∈ [0, 1) past node i.
+    #[inline(always)]
+    pub(crate) fn weights(&self, t: f64) -> [f64; 4] {
+        let [a, b, c] = self.inner;
+        let [p, q, r, s] = self.outer;
+        let inner = |x: f64| (a * x + b) * (x * x) + c;
+        let outer = |x: f64| ((p * x + q) * x + r) * x + s;
+        [outer(t + 1.0), inner(t), inner(1.0 - t), outer(2.0 - t)]
+    }
+}
+
+/// ⌊x⌋ of a continuous index (x ≥ 0, [`Dataset::index`]: its truncation, without a call to
+/// libm's `floor`; NaN and negative x by `floor`).
+#[inline(always)]
+pub(crate) fn floor(x: f64) -> i64 {
+    if x >= 0.0 {
+        x as i64
+    } else {
+        x.floor() as i64
+    }
+}
+
 /// How far outside [0, 1] an object coordinate may lie and still read the dataset (at its
 /// face): 2⁻²⁰, far above the round-off of a point computed on a face (from a ray in f64,
 /// then rounded to f32: at most an f32 ulp of the coordinate) and far below a node's spacing
@@ -239,20 +310,18 @@ impl Dataset {
         c: f64,
         derivative_axis: Option<usize>,
     ) -> Option<([usize; 3], [[f64; 4]; 3])> {
+        let k = Cubics::new(b, c);
         let mut i0 = [0usize; 3];
         let mut w = [[0.0f64; 4]; 3];
         for a in 0..3 {
-            let f = u[a].floor();
+            let f = floor(u[a]) as f64;
             // Taps f − 1 … f + 2; along the derivative's axis their neighbours f − 2 … f + 3.
             let margin = if derivative_axis == Some(a) { 1.0 } else { 0.0 };
             if f < 1.0 + margin || f + 2.0 + margin > (self.dims[a] - 1) as f64 {
                 return None;
             }
             i0[a] = f as usize - 1;
-            let t = u[a] - f;
-            for (m, wm) in w[a].iter_mut().enumerate() {
-                *wm = bc_kernel(t - (m as f64 - 1.0), b, c);
-            }
+            w[a] = k.weights(u[a] - f);
         }
         Some((i0, w))
     }
@@ -399,17 +468,13 @@ impl Dataset {
             }
             Filter::Cubic { b, c } => {
                 let (b, c) = (b as f64, c as f64);
+                let k = Cubics::new(b, c);
                 let taps = |x: f64, n: usize| {
-                    let i0 = x.floor() as i64;
+                    let i0 = floor(x);
                     let t = x - i0 as f64;
-                    let mut idx = [0usize; 4];
-                    let mut w = [0.0f64; 4];
-                    for m in 0..4 {
-                        let i = i0 - 1 + m as i64;
-                        idx[m] = i.clamp(0, n as i64 - 1) as usize;
-                        w[m] = bc_kernel(t - (m as f64 - 1.0), b, c);
-                    }
-                    (idx, w)
+                    let at = |m: i64| (i0 - 1 + m).clamp(0, n as i64 - 1) as usize;
+                    let idx = [at(0), at(1), at(2), at(3)];
+                    (idx, k.weights(t))
                 };
                 let (ix, wx) = taps(u[0], d[0]);
                 let (iy, wy) = taps(u[1], d[1]);

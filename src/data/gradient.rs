@@ -20,7 +20,7 @@
 //! value filters, the paper's gradient paths and their caches (`filter`, `trilinear`), or which
 //! render path calls which (`render`).
 
-use super::filter::{bc_finite, bc_kernel};
+use super::filter::{bc_finite, bc_kernel, floor, Cubics};
 use super::{CellGradients, Dataset, Filter};
 
 /// How a dataset field's gradient (its samples' normals) is reconstructed from the nodes
@@ -67,54 +67,6 @@ struct AxisTaps {
     slope: [f64; 4],
 }
 
-/// The BC-spline kernel's two cubics (|x| < 1, inner; 1 ≤ |x| < 2, outer) and their
-/// derivatives as coefficients, each already divided by 6: what [`AxisTaps::new`] evaluates
-/// by Horner's rule where all four taps are nodes.
-struct Cubics {
-    inner: [f64; 3],
-    outer: [f64; 4],
-}
-
-impl Cubics {
-    fn new(b: f64, c: f64) -> Cubics {
-        let sixth = 1.0 / 6.0;
-        Cubics {
-            // x³, x², 1 (no x term).
-            inner: [
-                12.0 - 9.0 * b - 6.0 * c,
-                -18.0 + 12.0 * b + 6.0 * c,
-                6.0 - 2.0 * b,
-            ]
-            .map(|k| k * sixth),
-            // x³, x², x, 1.
-            outer: [
-                -b - 6.0 * c,
-                6.0 * b + 30.0 * c,
-                -12.0 * b - 48.0 * c,
-                8.0 * b + 24.0 * c,
-            ]
-            .map(|k| k * sixth),
-        }
-    }
-
-    /// The kernel and its derivative at x in [0, 1] (the inner cubic).
-    #[inline(always)]
-    fn inner(&self, x: f64) -> (f64, f64) {
-        let [a, b, c] = self.inner;
-        ((a * x + b) * (x * x) + c, (3.0 * a * x + 2.0 * b) * x)
-    }
-
-    /// The kernel and its derivative at x in [1, 2] (the outer cubic).
-    #[inline(always)]
-    fn outer(&self, x: f64) -> (f64, f64) {
-        let [a, b, c, d] = self.outer;
-        (
-            ((a * x + b) * x + c) * x + d,
-            (3.0 * a * x + 2.0 * b) * x + c,
-        )
-    }
-}
-
 impl AxisTaps {
     /// The taps at continuous index `u` (in [0, n − 1]) of an axis of `n` nodes, the kernel's
     /// cubics `k`.
@@ -129,11 +81,8 @@ impl AxisTaps {
                 slope: [0.0; 4],
             };
         }
-        // (u ≥ 0, `Dataset::index`: its truncation is its floor, without a call to libm's.)
-        debug_assert!(u >= 0.0);
-        let f = (u as i64) as f64;
-        let t = u - f;
-        let f = f as i64;
+        let f = floor(u);
+        let t = u - f as f64;
         let last = n as i64 - 1;
         if f >= 1 && f + 2 <= last {
             // Every tap a node: taps f − 1 … f + 2 at distances t + 1, t, 1 − t, 2 − t (the
