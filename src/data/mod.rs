@@ -347,13 +347,29 @@ impl Dataset {
     /// Where they cannot be allocated: it unwinds, with the `NoMemory` [`Error`] as the
     /// payload and printing nothing, instead of aborting; [`Dataset::try_values`] returns
     /// that error instead.
+    #[inline]
     pub fn values(&self) -> &[f32] {
-        or_unwind(self.try_values())
+        match self.values.get() {
+            Some(v) => v,
+            None => or_unwind(self.make_values()),
+        }
     }
 
     /// [`Dataset::values`], or `NoMemory` where they cannot be allocated (nothing is kept then:
     /// a later call tries again).
+    #[inline]
     pub fn try_values(&self) -> Result<&[f32]> {
+        match self.values.get() {
+            Some(v) => Ok(v),
+            None => self.make_values(),
+        }
+    }
+
+    /// [`Dataset::try_values`] where they are not made yet (out of line: the renderer reads
+    /// the values at every sample of a cubic filter).
+    #[cold]
+    #[inline(never)]
+    fn make_values(&self) -> Result<&[f32]> {
         get_or_try_init(&self.values, || self.compute_values()).map(|v| v.as_slice())
     }
 
