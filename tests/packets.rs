@@ -968,13 +968,15 @@ fn lit_packets_hold_at_extreme_scales_and_lights() {
     }
 }
 
-/// Super-sampling with the packet march (`compat.md`): a pixel the rule leaves alone is the
-/// first pass, the image of one ray a pixel, bit for bit; a pixel it refines is the mean of its
-/// n × n rays, which are the pixels of the image n times finer along each axis (the same view:
-/// its pixel (n·x + i, n·y + j) is centred on ray (i, j) of pixel (x, y)), summed in f64 row by
-/// row, bit for bit: the first pass and the finer image each a render of one ray a pixel in
-/// packets. The rule is computed here from the first pass: a colour channel more than 4/255
-/// from a 4-neighbour's. And the same bytes on one and three
+/// Super-sampling with the packet march (`compat.md`), against a transparent backdrop (so
+/// that the transmittance is compared and averaged too) in an image whose width leaves a
+/// partial tile: a pixel the rule leaves alone is the first pass, the image of one ray a
+/// pixel, bit for bit; a pixel it refines is the mean of its n × n rays, which are the pixels
+/// of the image n times finer along each axis (the same view: its pixel (n·x + i, n·y + j) is
+/// centred on ray (i, j) of pixel (x, y)), colour and transmittance summed in f64 row by row,
+/// bit for bit: the first pass and the finer image each a render of one ray a pixel in
+/// packets. The rule is computed here from the first pass: a colour channel or the
+/// transmittance more than 4/255 from a 4-neighbour's. And the same bytes on one and three
 /// threads, and within one 8-bit level of the scalar march's super-sampled image wherever
 /// both refine a pixel or neither does.
 #[test]
@@ -986,18 +988,26 @@ fn super_sampled_packets_are_the_mean_of_the_finer_image() {
     }
     // The rule's contrast (`compat.md`: more than 4/255 in a channel).
     const CONTRAST: f32 = 4.0 / 255.0;
-    let bits = |v: &[[f32; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+    // 51 = three tiles of 16 and three columns.
+    let (w, h) = (W + 3, H);
+    let bits = |v: &[[f32; 4]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+    // Colour and transmittance of every pixel, row by row.
     let image = |vl: &mut Library, ss: i32, (w, h): (u32, u32), threads: usize| {
         vl.super_sample(ss).unwrap();
-        let image = on_threads(threads, || vl.render_preview(w, h, 1.2)).unwrap();
-        (0..h)
-            .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .map(|(x, y)| image.pixel(x, y))
+        let image = on_threads(threads, || {
+            vl.render(w, h, 1.2, vlib::Backdrop::Transparent)
+        })
+        .unwrap();
+        (0..(w * h) as usize)
+            .map(|i| {
+                let [r, g, b] = image.pixels[i];
+                [r, g, b, image.transmittance[i]]
+            })
             .collect::<Vec<_>>()
     };
-    // Whether the rule refines pixel (x, y) of first pass `first` (W × H pixels).
-    let refines = |first: &[[f32; 3]], x: u32, y: u32| {
-        let p = first[(y * W + x) as usize];
+    // Whether the rule refines pixel (x, y) of first pass `first` (w × h pixels).
+    let refines = |first: &[[f32; 4]], x: u32, y: u32| {
+        let p = first[(y * w + x) as usize];
         let near = [
             (x.wrapping_sub(1), y),
             (x + 1, y),
@@ -1005,9 +1015,9 @@ fn super_sampled_packets_are_the_mean_of_the_finer_image() {
             (x, y + 1),
         ];
         near.iter().any(|&(nx, ny)| {
-            nx < W && ny < H && {
-                let q = first[(ny * W + nx) as usize];
-                (0..3).any(|c| (p[c] - q[c]).abs() > CONTRAST)
+            nx < w && ny < h && {
+                let q = first[(ny * w + nx) as usize];
+                (0..4).any(|c| (p[c] - q[c]).abs() > CONTRAST)
             }
         })
     };
@@ -1022,25 +1032,23 @@ fn super_sampled_packets_are_the_mean_of_the_finer_image() {
             ..*case
         };
         let mut vl = library(&case, true, false);
-        let first = image(&mut vl, 1, (W, H), 1);
-        let fine = image(&mut vl, 1, (n * W, n * H), 1);
-        let got = image(&mut vl, n as i32, (W, H), 1);
-        let threads = image(&mut vl, n as i32, (W, H), 3);
+        let first = image(&mut vl, 1, (w, h), 1);
+        let fine = image(&mut vl, 1, (n * w, n * h), 1);
+        let got = image(&mut vl, n as i32, (w, h), 1);
+        let threads = image(&mut vl, n as i32, (w, h), 3);
         assert_eq!(bits(&got), bits(&threads), "case {k}: threads");
-        let at = |x: u32, y: u32| first[(y * W + x) as usize];
-        let differs = |x, y| refines(&first, x, y);
         let mut scalar_vl = library(&case, false, false);
-        let scalar = image(&mut scalar_vl, n as i32, (W, H), 1);
-        let scalar_first = image(&mut scalar_vl, 1, (W, H), 1);
-        for y in 0..H {
-            for x in 0..W {
-                let want = if differs(x, y) {
+        let scalar = image(&mut scalar_vl, n as i32, (w, h), 1);
+        let scalar_first = image(&mut scalar_vl, 1, (w, h), 1);
+        for y in 0..h {
+            for x in 0..w {
+                let want = if refines(&first, x, y) {
                     refined += 1;
-                    let mut sum = [0.0f64; 3];
+                    let mut sum = [0.0f64; 4];
                     for j in 0..n {
                         for i in 0..n {
-                            let q = fine[((n * y + j) * n * W + n * x + i) as usize];
-                            for c in 0..3 {
+                            let q = fine[((n * y + j) * n * w + n * x + i) as usize];
+                            for c in 0..4 {
                                 sum[c] += q[c] as f64;
                             }
                         }
@@ -1048,9 +1056,9 @@ fn super_sampled_packets_are_the_mean_of_the_finer_image() {
                     sum.map(|s| (s / (n * n) as f64).clamp(0.0, 1.0) as f32)
                 } else {
                     kept += 1;
-                    at(x, y)
+                    first[(y * w + x) as usize]
                 };
-                let i = (y * W + x) as usize;
+                let i = (y * w + x) as usize;
                 assert_eq!(
                     got[i].map(f32::to_bits),
                     want.map(f32::to_bits),
@@ -1058,10 +1066,9 @@ fn super_sampled_packets_are_the_mean_of_the_finer_image() {
                     got[i]
                 );
                 // The scalar march's refinement decides from its own first pass.
-                let scalar_refines = refines(&scalar_first, x, y);
-                if scalar_refines == differs(x, y) {
+                if refines(&scalar_first, x, y) == refines(&first, x, y) {
                     compared += 1;
-                    for c in 0..3 {
+                    for c in 0..4 {
                         assert!(
                             (got[i][c] - scalar[i][c]).abs() <= 1.0 / 255.0,
                             "case {k}, n {n}, pixel ({x}, {y}): {:?} against the scalar {:?}",

@@ -215,7 +215,8 @@ impl EntryMap {
     /// The map, in the image `n` times finer along each axis, of the `n` rows of fine pixels
     /// that pixels `xs` of row `y` (pixels this map holds) cover: each fine pixel takes the
     /// bound of the pixel it lies in, a bound for a ray through any point of that pixel. What
-    /// super-sampling's n × n rays over a pixel start from.
+    /// super-sampling's n × n rays over a pixel start from in the packet march.
+    #[cfg(target_arch = "x86_64")]
     pub(crate) fn finer(&self, xs: std::ops::Range<u32>, y: u32, n: u32) -> EntryMap {
         let n = n as usize;
         let (width, first_col) = (xs.len() * n, xs.start as usize * n);

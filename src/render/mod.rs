@@ -204,8 +204,7 @@ fn render_in_strips(
             Ok((view, marks, image, unbounded, here))
         });
         let (view, marks, image, unbounded, here) = crate::team::agree(team, prologue)?;
-        // Rays in packets of SIMD lanes, where that applies (one ray per pixel) on every rank
-        // of a team: ranks of other processors take the same march and cut the image alike.
+        // Rays in packets of SIMD lanes, where that applies, on every rank of a team: ranks of other processors take the same march and cut the image alike.
         let everywhere = crate::team::all(team, here.is_some())?;
         #[cfg(target_arch = "x86_64")]
         let packets = here.filter(|_| everywhere);
@@ -398,7 +397,9 @@ impl FineRays<'_> {
     /// The pixels of tile (x, y, width, height) of a super-sampled strip, into `out` (the
     /// tile's buffer): `at(x, y)`, the first pass, where `differs(x, y)` is false, and else the
     /// mean of its rays, each run of such pixels along a row at once ([`FineRays::refine`]),
-    /// from the tile's entry map (`entry_of`, made for the first run).
+    /// from the tile's entry map (`entry_of`, made for the first run). Once the render is to
+    /// stop (`control::stop_requested`) no run starts: the rest of `out` is left as it is (a
+    /// cancelled render's pixels are discarded), as the scalar refinement starts no pixel.
     fn refine_tile(
         &self,
         (tx, ty, tw, th): (u32, u32, u32, u32),
@@ -418,8 +419,14 @@ impl FineRays<'_> {
                     x += 1;
                     continue;
                 }
+                x += 1;
                 while x < tx + tw && differs(x, y) {
                     x += 1;
+                }
+                // (A ray of the packet march looks at the flag only every `PROBE_EVERY`
+                // samples: a run of up to 16·n² short rays would not.)
+                if crate::control::stop_requested() {
+                    return out;
                 }
                 let map = entry.get_or_init(|| entry_of((tx, ty, tw, th)));
                 let place = &mut row[(x0 - tx) as usize..(x - tx) as usize];

@@ -3,7 +3,8 @@
 //! bit.
 
 use super::*;
-use crate::data::filter::bc_kernel;
+use crate::data::filter::{bc_kernel, Cubics};
+use crate::data::gradient::bc_derivative;
 
 #[test]
 fn trilinear_reproduces_linear_functions() {
@@ -99,6 +100,62 @@ fn nearest_returns_node_values_between_nodes() {
         let p = [rng.next() as f32, rng.next() as f32, rng.next() as f32];
         let idx = p.map(|x| (x as f64 * 3.0).round() as usize);
         assert_eq!(d.sample(p, Filter::Nearest), d.node(idx[0], idx[1], idx[2]));
+    }
+}
+
+/// The kernel's cubics by Horner's rule ([`Cubics`], what the cubic filters evaluate) are the
+/// kernel and its derivative ([`bc_kernel`], [`bc_derivative`], by their textbook branches)
+/// at the four taps of every offset t in [0, 1), t = 0 and the last f64 below 1 among them,
+/// for the usual kernels and large B and C: each a cubic of |x| ≤ 2 whose terms (the
+/// derivative's among them) reach some 36 + 48|C| + 12|B| in size, so the two ways of
+/// rounding differ by a few units of 10⁻¹⁶ times that (the tolerance: 10⁻¹⁴ times it; a wrong
+/// coefficient or sign is off by 10⁻³ or more).
+#[test]
+fn the_kernels_cubics_are_the_kernel() {
+    let kernels = [
+        (0.0, 0.5),
+        (1.0, 0.0),
+        (1.0 / 3.0, 1.0 / 3.0),
+        (0.0, 0.0),
+        (0.7, -0.2),
+        (100.0, -40.0),
+    ];
+    let mut rng = Lcg(11);
+    let ts: Vec<f64> = [0.0, 0.5, 1.0 - f64::EPSILON / 2.0, f64::MIN_POSITIVE]
+        .into_iter()
+        .chain((0..2000).map(|_| rng.next()))
+        .collect();
+    for (b, c) in kernels {
+        let k = Cubics::new(b, c);
+        let tolerance = 1e-14 * (36.0 + 48.0 * f64::abs(c) + 12.0 * f64::abs(b));
+        for &t in &ts {
+            let w = k.weights(t);
+            let taps = [
+                k.outer(t + 1.0),
+                k.inner(t),
+                k.inner(1.0 - t),
+                k.outer(2.0 - t),
+            ];
+            for m in 0..4 {
+                let x = t - (m as f64 - 1.0);
+                let (want, slope) = (bc_kernel(x, b, c), bc_derivative(x, b, c));
+                assert!(
+                    (w[m] - want).abs() <= tolerance,
+                    "b {b} c {c} t {t} tap {m}"
+                );
+                assert!(
+                    (taps[m].0 - want).abs() <= tolerance,
+                    "b {b} c {c} t {t} tap {m}"
+                );
+                // The cubics' derivative is k′(|x|): the far taps' (x < 0) is its negative.
+                let sign = if m >= 2 { -1.0 } else { 1.0 };
+                assert!(
+                    (sign * taps[m].1 - slope).abs() <= tolerance,
+                    "b {b} c {c} t {t} tap {m}: {} against {slope}",
+                    sign * taps[m].1
+                );
+            }
+        }
     }
 }
 

@@ -7,8 +7,9 @@
 //! direct-shading form (a dataset read trilinearly, an opacity table, a colour table writing
 //! r, g and b, constant coefficients) with no normal functions, lit as [`HeadlitLanes`] lights
 //! it (one directional light, an integer specular exponent, no shadows) or not lit at all
-//! (kd and ks 0: the unshaded scene), one ray per pixel. Everything else is traced by the
-//! scalar march, unchanged. Sixteen lanes also need tables of at most seven rows
+//! (kd and ks 0: the unshaded scene), at most 2¹⁴ samples a ray ([`MAX_PACKET_SAMPLES`]); with
+//! super-sampling both passes (the refined pixels' rays as pixels of the finer image,
+//! `render::FineRays`). Everything else is traced by the scalar march, unchanged. Sixteen lanes also need tables of at most seven rows
 //! ([`Segments`]; any tables for a pre-integrated object) and the AVX-512 features of
 //! [`detected`]; they read 8-bit voxels as voxels ([`Raw8`]), and node values and 16-bit
 //! voxels by the eight lanes' reads on each half of their registers. On by

@@ -639,3 +639,50 @@ fn rays_of_more_samples_than_the_bound_take_the_scalar_march() {
         assert_eq!(Packets::new(&scene).is_some(), packets, "step {step}");
     }
 }
+
+/// Once a render is to stop, super-sampling's packet refinement starts no run of rays (a run
+/// is up to 16·n² rays too short to look at the flag themselves: a cancelled 32² render at
+/// n = 16 went on for up to half a second): every pixel of a tile is refined while the flag
+/// is clear, and none once it is set.
+#[test]
+fn a_cancel_stops_super_sampling_runs_in_packets() {
+    use crate::control::{working_for, CancelFlag, Progress, RenderControl};
+    use crate::render::{tiles::view, Backdrop, FineRays, Recycled};
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        return;
+    }
+    let mut vl = slabs_scene(0.5, true, false, Default::default());
+    vl.super_sample(4).unwrap();
+    let scene = vl.compiled().unwrap();
+    let packets = Packets::new(&scene).unwrap();
+    let (side, n) = (16u32, 4u32);
+    let fine = view(&scene.settings, side * n, side * n, 1.0);
+    let image = scene.image_rays(fine.eye, Backdrop::Background);
+    let recycled = Recycled::default();
+    let rays = FineRays {
+        packets: &packets,
+        fine: &fine,
+        image: &image,
+        unbounded: None,
+        recycled: &recycled,
+        n,
+    };
+    let flag = CancelFlag::new();
+    let control = RenderControl {
+        cancel: Some(flag.clone()),
+        progress: None,
+    };
+    let progress = Progress::new(&control, (side * side) as u64);
+    let refine = || {
+        let zeros = vec![[0.0f32; 4]; (side * side) as usize];
+        let (first, every, none) = (|_, _| [0.0; 4], |_, _| true, |_| None);
+        working_for(&progress, || {
+            rays.refine_tile((0, 0, side, side), zeros, &first, &every, &none)
+        })
+    };
+    // Every pixel refined: each is its rays' mean, whose transmittance is above 0 here or
+    // whose colour is (a ray that misses shows the background, 0.1, 0.2, 0.3).
+    assert!(refine().iter().all(|p| p != &[0.0; 4]));
+    flag.cancel();
+    assert!(refine().iter().all(|p| p == &[0.0; 4]));
+}
