@@ -204,7 +204,8 @@ fn render_in_strips(
             Ok((view, marks, image, unbounded, here))
         });
         let (view, marks, image, unbounded, here) = crate::team::agree(team, prologue)?;
-        // Rays in packets of SIMD lanes, where that applies, on every rank of a team: ranks of other processors take the same march and cut the image alike.
+        // Rays in packets of SIMD lanes, where that applies, on every rank of a team: ranks of
+        // other processors take the same march and cut the image alike.
         let everywhere = crate::team::all(team, here.is_some())?;
         #[cfg(target_arch = "x86_64")]
         let packets = here.filter(|_| everywhere);

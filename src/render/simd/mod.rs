@@ -9,8 +9,9 @@
 //! it (one directional light, an integer specular exponent, no shadows) or not lit at all
 //! (kd and ks 0: the unshaded scene), at most 2¹⁴ samples a ray ([`MAX_PACKET_SAMPLES`]); with
 //! super-sampling both passes (the refined pixels' rays as pixels of the finer image,
-//! `render::FineRays`). Everything else is traced by the scalar march, unchanged. Sixteen lanes also need tables of at most seven rows
-//! ([`Segments`]; any tables for a pre-integrated object) and the AVX-512 features of
+//! `render::FineRays`). Everything else is traced by the scalar march, unchanged. Sixteen
+//! lanes also need tables of at most seven rows ([`Segments`]; any tables for a
+//! pre-integrated object) and the AVX-512 features of
 //! [`detected`]; they read 8-bit voxels as voxels ([`Raw8`]), and node values and 16-bit
 //! voxels by the eight lanes' reads on each half of their registers. On by
 //! default where it applies (`Optimise::packets` switches it off, `Optimise::wide_lanes` the
