@@ -349,10 +349,7 @@ impl Dataset {
     /// that error instead.
     #[inline]
     pub fn values(&self) -> &[f32] {
-        match self.values.get() {
-            Some(v) => v,
-            None => or_unwind(self.make_values()),
-        }
+        or_unwind(self.try_values())
     }
 
     /// [`Dataset::values`], or `NoMemory` where they cannot be allocated (nothing is kept then:
