@@ -146,6 +146,17 @@ fn on_threads<T: Send>(threads: usize, render: impl FnOnce() -> T + Send) -> T {
         .install(render)
 }
 
+/// Whether this processor lacks what the packet march needs (AVX2 and FMA), said on standard
+/// error: a test of the packet march then has nothing to compare and returns.
+#[cfg(target_arch = "x86_64")]
+fn no_packet_march() -> bool {
+    let none = !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"));
+    if none {
+        eprintln!("no AVX2 and FMA: the packet march never runs here");
+    }
+    none
+}
+
 /// The tests' image size.
 const W: u32 = 48;
 const H: u32 = 40;
@@ -330,8 +341,7 @@ fn cases() -> Vec<Case> {
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn packets_are_the_scalar_march() {
-    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
-        eprintln!("no AVX2 and FMA: the packet march never runs here");
+    if no_packet_march() {
         return;
     }
     if !is_x86_feature_detected!("avx512f") {
@@ -418,7 +428,7 @@ fn packets_are_the_scalar_march() {
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn packets_of_bytes_leave_the_node_values_unmade() {
-    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+    if no_packet_march() {
         return;
     }
     let mut shown = 0;
@@ -438,7 +448,7 @@ fn packets_of_bytes_leave_the_node_values_unmade() {
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn preintegrated_packets_of_bytes_leave_the_node_values_unmade() {
-    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+    if no_packet_march() {
         return;
     }
     let mut shown = 0;
@@ -466,7 +476,7 @@ fn preintegrated_packets_of_bytes_leave_the_node_values_unmade() {
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn packets_of_16_bit_voxels_leave_the_node_values_unmade() {
-    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+    if no_packet_march() {
         return;
     }
     let mut shown = 0;
@@ -514,8 +524,7 @@ fn packets_are_on_by_default() {
 fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
     use proptest::prelude::*;
     use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
-    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
-        eprintln!("no AVX2 and FMA: the packet march never runs here");
+    if no_packet_march() {
         return;
     }
     let scale = prop_oneof![4 => 0.1f32..100.0, 1 => 1e-4f32..1e-2, 1 => 1e3f32..1e5];
@@ -706,8 +715,7 @@ fn hostile_scanned_scenes_stay_finite_and_near_the_scalar_march() {
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn preintegrated_packets_are_the_scalar_march() {
-    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
-        eprintln!("no AVX2 and FMA: the packet march never runs here");
+    if no_packet_march() {
         return;
     }
     let (mut worst, mut differ, mut shown_cases) = (0.0f32, 0usize, 0usize);
@@ -814,8 +822,7 @@ fn preintegrated_packets_are_the_scalar_march() {
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn unlit_preintegrated_packets_of_node_values_are_the_scalar_march_bit_for_bit() {
-    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
-        eprintln!("no AVX2 and FMA: the packet march never runs here");
+    if no_packet_march() {
         return;
     }
     let (mut shown, mut bytes_apart) = (0, 0);
@@ -872,8 +879,7 @@ fn unlit_preintegrated_packets_of_node_values_are_the_scalar_march_bit_for_bit()
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn lit_packets_hold_at_extreme_scales_and_lights() {
-    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
-        eprintln!("no AVX2 and FMA: the packet march never runs here");
+    if no_packet_march() {
         return;
     }
     // A ball whose value falls from 1 at its centre to 0 at its surface.
@@ -982,8 +988,7 @@ fn lit_packets_hold_at_extreme_scales_and_lights() {
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn super_sampled_packets_are_the_mean_of_the_finer_image() {
-    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
-        eprintln!("no AVX2 and FMA: the packet march never runs here");
+    if no_packet_march() {
         return;
     }
     // The rule's contrast (`compat.md`: more than 4/255 in a channel).

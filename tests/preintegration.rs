@@ -561,11 +561,7 @@ fn a_constant_medium_stays_exact_where_the_object_space_ray_is_huge() {
         ];
         vl.matrix(&shear).unwrap();
         vl.scale(10.0, 10.0, 10.0).unwrap();
-        vl.dataset(Fields::F, DatasetId(1)).unwrap();
-        vl.map(Fields::O, Fields::F, MappingId(1), 1).unwrap();
-        for (f, k) in [(Fields::R, 1), (Fields::G, 2), (Fields::B, 3)] {
-            vl.map(f, Fields::F, MappingId(2), k).unwrap();
-        }
+        direct_shading(&mut vl);
         vl.set(Fields::KA, 1.0).unwrap();
         vl.end().unwrap();
         let img = vl.render_preview(32, 32, 1.0).unwrap();
