@@ -10,7 +10,7 @@
 //! built by `preint`). It does not trace, shade or composite (`integrate`, `shade`).
 
 use super::*;
-use crate::render::inert::{shows_nothing, zero_field};
+use crate::render::inert::{refracts, shows_nothing, zero_field};
 use crate::render::preint::PreIntegrated;
 
 /// One object of a scene compiled for tracing: immutable, read by every ray that meets it.
@@ -189,7 +189,7 @@ impl CObj {
             // bends nothing: neither asks for secondary rays.
             receive_reflections: r.toggle(Feature::ReceiveReflections)
                 && !zero_field(&o.program, Fields::KS),
-            refract: r.toggle(Feature::Refract) && !zero_field(&o.program, Fields::RF),
+            refract: refracts(o),
             reflect_background: r.toggle(Feature::ReflectBackground),
             recursion: r.recursion,
             skip: match (&preint, lean.as_ref().and_then(Lean::value_head)) {
@@ -703,13 +703,19 @@ impl Compiled {
 
     /// Every object of the scene with its number, in the scene's order.
     fn every_object(&self) -> impl Iterator<Item = (usize, &CObj)> {
-        let mut all: Vec<(usize, &CObj)> = self
-            .shown_index
-            .iter()
-            .copied()
-            .zip(&self.objects)
+        self.with_hidden(0..self.objects.len())
+    }
+
+    /// The objects `shown` (indices into [`Compiled::objects`], increasing) and the hidden
+    /// ones, each with its number in the scene, in the scene's order.
+    fn with_hidden(
+        &self,
+        shown: impl Iterator<Item = usize>,
+    ) -> impl Iterator<Item = (usize, &CObj)> {
+        let mut all: Vec<(usize, &CObj)> = shown
+            .map(|i| (self.shown_index[i], &self.objects[i]))
+            .chain(self.hidden.iter().map(|(i, o)| (*i, o)))
             .collect();
-        all.extend(self.hidden.iter().map(|(i, o)| (*i, o)));
         all.sort_unstable_by_key(|&(i, _)| i);
         all.into_iter()
     }
@@ -739,13 +745,8 @@ impl Compiled {
             self.holding(w).for_each(|i| consider(&self.objects[i]));
         } else {
             // (The hidden objects among the others, in the scene's order: the first wins ties.)
-            let mut held: Vec<(usize, &CObj)> = self
-                .holding(w)
-                .map(|i| (self.shown_index[i], &self.objects[i]))
-                .chain(self.hidden.iter().map(|(i, o)| (*i, o)))
-                .collect();
-            held.sort_unstable_by_key(|&(i, _)| i);
-            held.into_iter().for_each(|(_, o)| consider(o));
+            self.with_hidden(self.holding(w))
+                .for_each(|(_, o)| consider(o));
         }
         best.unwrap_or([0.0; crate::types::FIELD_COUNT])
     }

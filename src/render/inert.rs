@@ -28,6 +28,12 @@ pub(super) fn zero_field(program: &[Instr], fields: Fields) -> bool {
         .all(|i| constant_field(program, i) == Some(0.0))
 }
 
+/// Whether object `o` can bend a ray: `VL_REFRACT` on, and its RF not 0 everywhere (an index
+/// of 1 bends nothing).
+pub(super) fn refracts(o: &ObjectDesc) -> bool {
+    o.state.toggle(Feature::Refract) && !zero_field(&o.program, Fields::RF)
+}
+
 /// Whether no ray can see anything of object `o`: its opacity is 0 everywhere and it bends no
 /// ray; or it is a DSR object none of whose surfaces exists (each surface's field a constant
 /// below its threshold, and so is the 0 outside the boundary); or no ray looks at it (not
@@ -35,9 +41,7 @@ pub(super) fn zero_field(program: &[Instr], fields: Fields) -> bool {
 /// objects rays meet, and kept for voxelization.
 pub(super) fn shows_nothing(o: &ObjectDesc) -> bool {
     let r = &o.state;
-    let refracts =
-        r.toggle(Feature::Refract) && !zero_field(&o.program, Fields::RF) && r.recursion > 0;
-    let clear = zero_field(&o.program, Fields::O) && !refracts;
+    let clear = zero_field(&o.program, Fields::O) && !(refracts(o) && r.recursion > 0);
     let no_surface = r.render_type == RenderType::Dsr
         && r.surfaces.iter().all(|&(field, threshold)| {
             threshold > 0.0 && constant_field(&o.program, field).is_some_and(|c| c < threshold)
